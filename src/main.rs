@@ -1,0 +1,47 @@
+//! The `propid` binary: parses the command line and hands over to [`propid::cli`].
+
+use clap::{Parser, Subcommand};
+use propid::cli;
+
+/// Identify the dynamics of a motor + propeller on a thrust stand.
+#[derive(Debug, Parser)]
+#[command(name = "propid", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run the daemon against the built-in simulated stand for ~10 s and print the models.
+    Demo(cli::demo::Args),
+    /// Identify a model from a recording or CSV file.
+    Identify(cli::identify::Args),
+    /// Reproduce the ERA derivation on a simulated mass-spring-damper.
+    Walkthrough(cli::walkthrough::Args),
+    /// Run the simulated stand on a pseudo-terminal, or write a recording.
+    Sim(cli::sim::Args),
+    /// Run the identification daemon against a stand.
+    Run(cli::run::Args),
+    /// Replay a recording through the daemon's decoder and worker.
+    Replay(cli::replay::Args),
+    /// Show what the 2nd-order model gets wrong, name the cause, extend the model.
+    Diagnose(cli::diagnose::Args),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Demo(a) => cli::demo::run(a),
+        Command::Identify(a) => cli::identify::run(a),
+        Command::Walkthrough(a) => cli::walkthrough::run(a),
+        Command::Sim(a) => cli::sim::run(a),
+        Command::Run(a) => cli::run::run(a),
+        Command::Replay(a) => cli::replay::run(a),
+        Command::Diagnose(a) => cli::diagnose::run(a),
+    };
+    if let Err(e) = result {
+        eprintln!("propid: {e}");
+        std::process::exit(e.exit_code());
+    }
+}
