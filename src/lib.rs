@@ -20,6 +20,7 @@ pub mod cli;
 pub mod core;
 pub mod daemon;
 pub mod diagnose;
+pub mod experiment;
 pub mod ingest;
 pub mod protocol;
 pub mod record;

@@ -1,0 +1,1 @@
+//! Host-side experiment plan (to be written).
