@@ -21,12 +21,15 @@
 // several matrices at once would hide them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod eig;
 pub mod error;
 pub mod hankel;
+pub mod linalg;
 pub mod markov;
 pub mod nullable;
 pub mod okid;
 pub mod operating_points;
+pub mod pulses;
 pub mod report;
 pub mod statespace;
 pub mod svd;
