@@ -35,8 +35,9 @@ pub const NOISE_SV_FACTOR: f64 = 1.5;
 pub const RANK_TOL: f64 = 1e-9;
 
 /// Last Markov index `k >= 1` at which the response is above the noise, plus the window.
-/// `noise[i]` is the Markov-parameter noise of output `i` (NaN or 0: unknown/none).
-pub fn signal_length(markov: &MarkovSeq, noise: &[f64]) -> usize {
+/// `noise[i]` is the Markov-parameter noise of output `i` (NaN or 0: unknown/none), scaled by
+/// `growth[k]` at index `k` when `growth` is not empty (the width deconvolution's noise growth).
+pub fn signal_length(markov: &MarkovSeq, noise: &[f64], growth: &[f64]) -> usize {
     let (q, p, len) = (markov.outputs(), markov.inputs(), markov.len());
     if len < 2 {
         return 0;
@@ -57,7 +58,8 @@ pub fn signal_length(markov: &MarkovSeq, noise: &[f64]) -> usize {
         let mut e = 0.0;
         for i in 0..q.min(64) {
             for j in 0..p {
-                let z = markov.get(k, i, j) / floor[i];
+                let g = growth.get(k).copied().unwrap_or(1.0).max(1.0);
+                let z = markov.get(k, i, j) / (floor[i] * g);
                 e += z * z;
             }
         }
@@ -163,9 +165,26 @@ pub fn explicit_dims(
     Ok(HankelDims { q, p, r, c })
 }
 
-/// The noise singular value `NOISE_SV_FACTOR · σ (√rows + √cols)`.
-pub fn noise_singular_value(sigma_markov: f64, dims: &HankelDims) -> f64 {
-    NOISE_SV_FACTOR * sigma_markov * ((dims.rows() as f64).sqrt() + (dims.cols() as f64).sqrt())
+/// The largest singular value expected from noise alone. For white Markov noise (one-sample
+/// pulses, `growth` empty or all ones) `NOISE_SV_FACTOR · σ (√rows + √cols)`. After the
+/// deconvolution of wider pulses the noise is a random walk (strongly correlated), whose
+/// Hankel matrix concentrates its energy in a few singular values; then the bound is the
+/// Frobenius norm of the noise Hankel, `σ √(Σ_(a,b) q p g²_{a+b+1})`.
+pub fn noise_singular_value(sigma_markov: f64, dims: &HankelDims, growth: &[f64]) -> f64 {
+    let white = NOISE_SV_FACTOR
+        * sigma_markov
+        * ((dims.rows() as f64).sqrt() + (dims.cols() as f64).sqrt());
+    if growth.iter().all(|g| *g <= 1.0 + 1e-12) {
+        return white;
+    }
+    let mut fro2 = 0.0;
+    for a in 0..dims.r {
+        for b in 0..dims.c {
+            let g = growth.get(a + b + 1).copied().unwrap_or(1.0);
+            fro2 += g * g;
+        }
+    }
+    white.max(sigma_markov * (fro2 * (dims.q * dims.p) as f64).sqrt())
 }
 
 /// Count of singular values above the noise and rounding floors, capped at `max_order`.
@@ -188,10 +207,10 @@ mod tests {
         // 0.8^k above a noise floor of 1e-3: 0.8^k = 2e-3 at k ≈ 28.
         let data: Vec<f64> = (0..200).map(|k| 0.8f64.powi(k)).collect();
         let m = MarkovSeq::from_data(1, 1, data).unwrap();
-        let n = signal_length(&m, &[1e-3]);
+        let n = signal_length(&m, &[1e-3], &[]);
         assert!((25..=40).contains(&n), "{n}");
         // Noise-free: down to 1e-8 of the peak, 0.8^k = 1e-8 at k ≈ 82.
-        let n = signal_length(&m, &[0.0]);
+        let n = signal_length(&m, &[0.0], &[]);
         assert!((80..=95).contains(&n), "{n}");
     }
 

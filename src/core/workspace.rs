@@ -207,7 +207,7 @@ impl Workspace {
         }
         let out_noise = self.ensemble.output_noise();
         let rms = (out_noise.iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
-        e.run(&self.markov, input.dt_s, opts)?;
+        e.run(&self.markov, input.dt_s, self.ensemble.growth(), opts)?;
         e.model.pulses = self.ensemble.kept();
         e.model.skipped = self.ensemble.skipped();
         e.model.noise_rms = rms;
@@ -263,7 +263,7 @@ impl Workspace {
         let e = &mut self.engine;
         sizing::tail_noise(markov, &mut e.noise[..q]);
         let rms = (e.noise[..q].iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
-        e.run(markov, dt_s, opts)?;
+        e.run(markov, dt_s, &[], opts)?;
         e.model.pulses = 0;
         e.model.skipped = 0;
         e.model.noise_rms = rms;
@@ -313,6 +313,7 @@ impl Engine {
         &mut self,
         markov: &MarkovSeq,
         dt_s: f64,
+        growth: &[f64],
         opts: &IdentOptions,
     ) -> Result<(), IdentError> {
         let l = self.limits;
@@ -335,7 +336,7 @@ impl Engine {
                 sizing::explicit_dims(q, p, r, c, avail, l.max_block_rows, l.max_block_cols)?
             }
             None => {
-                let signal = sizing::signal_length(markov, &self.noise[..q]);
+                let signal = sizing::signal_length(markov, &self.noise[..q], growth);
                 if signal == 0 {
                     return Err(IdentError::RankDeficient {
                         rank: 0,
@@ -392,7 +393,7 @@ impl Engine {
             .sum::<f64>()
             / q as f64)
             .sqrt();
-        let noise_sv = sizing::noise_singular_value(pooled, &dims);
+        let noise_sv = sizing::noise_singular_value(pooled, &dims, growth);
         let n = match opts.order {
             Some(n) => {
                 let rank = sizing::auto_order(sig, 0.0, wide);
