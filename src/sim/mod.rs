@@ -19,8 +19,10 @@
 
 pub mod config;
 pub mod dedup;
+pub mod effects;
 pub mod faults;
 pub mod pace;
+pub mod plant;
 
 pub use config::{ConfigError, SimConfig};
 
