@@ -37,7 +37,8 @@ pub struct FaultStats {
     pub corrupted_frames: u64,
     /// Of those, SAMPLE frames (each also costs the host one sample).
     pub corrupted_samples: u64,
-    /// Garbage bursts inserted (each costs the host one dropped frame).
+    /// Garbage bursts inserted (each costs the host one dropped frame; the chance that random
+    /// bytes pass COBS, the CRC, `ver` and `type` together is below 1e-7 per burst).
     pub garbage_bursts: u64,
     /// Garbage bytes inserted, delimiters included.
     pub garbage_bytes: u64,
@@ -73,6 +74,7 @@ pub struct FaultInjector {
     next_stall_us: Option<u64>,
     stall_until_us: u64,
     pending: Vec<u8>,
+    delimiter: u8,
 }
 
 impl FaultInjector {
@@ -86,10 +88,18 @@ impl FaultInjector {
             next_stall_us: None,
             stall_until_us: 0,
             pending: Vec::new(),
+            delimiter: 0,
         };
         inj.next_garbage_us = inj.gap_us(cfg.garbage_bursts_per_s, 0);
         inj.next_stall_us = inj.gap_us(cfg.stalls_per_s, 0);
         inj
+    }
+
+    /// Uses `delimiter` as the frame end (0x00 for TSP/1, `\n` for CSV lines): flips never
+    /// create it and garbage bursts end with it.
+    pub fn with_delimiter(mut self, delimiter: u8) -> Self {
+        self.delimiter = delimiter;
+        self
     }
 
     /// The counts so far.
@@ -135,24 +145,31 @@ impl FaultInjector {
     fn burst(&mut self) {
         let n = self.cfg.garbage_burst_bytes as usize;
         for _ in 0..n {
-            let b: u8 = self.rng.gen_range(1..=255);
+            let mut b: u8 = self.rng.gen_range(1..=255);
+            if b == self.delimiter {
+                b = b.wrapping_add(1).max(1);
+            }
             self.pending.push(b);
         }
-        self.pending.push(0);
+        self.pending.push(self.delimiter);
         self.stats.garbage_bursts += 1;
         self.stats.garbage_bytes += n as u64 + 1;
+    }
+
+    /// Decides whether the next SAMPLE is dropped by the device (counted). The firmware asks
+    /// before it gives the sample a link `seq`, so the host sees a `sample_index` jump without a
+    /// `seq` jump: a device-side drop (PROTOCOL.md §3).
+    pub fn drop_sample(&mut self) -> bool {
+        let drop = self.cfg.drop_sample_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_sample_prob);
+        if drop {
+            self.stats.dropped_samples += 1;
+        }
+        drop
     }
 
     /// Passes one encoded frame (ending in its 0x00 delimiter) through the faults into the
     /// output queue.
     pub fn push_frame(&mut self, frame: &[u8], kind: FrameKind) {
-        if kind == FrameKind::Sample
-            && self.cfg.drop_sample_prob > 0.0
-            && self.rng.gen_bool(self.cfg.drop_sample_prob)
-        {
-            self.stats.dropped_samples += 1;
-            return;
-        }
         let start = self.pending.len();
         self.pending.extend_from_slice(frame);
         let body = frame.len().saturating_sub(1);
@@ -169,11 +186,12 @@ impl FaultInjector {
         }
     }
 
-    /// Flips one bit of `pending[i]` (a non-zero byte), choosing a bit that keeps it non-zero.
+    /// Flips one bit of `pending[i]` (not a delimiter), choosing a bit that does not turn it
+    /// into the delimiter (two different bits cannot both do that).
     fn flip(&mut self, i: usize) {
         let byte = self.pending[i];
         let mut bit = self.rng.gen_range(0..8u32);
-        if byte ^ (1 << bit) == 0 {
+        if byte ^ (1 << bit) == self.delimiter {
             bit = (bit + 1) % 8;
         }
         self.pending[i] = byte ^ (1 << bit);
@@ -249,7 +267,9 @@ mod tests {
         };
         let mut inj = FaultInjector::new(&cfg, 3);
         for _ in 0..100 {
-            inj.push_frame(&frame(5), FrameKind::Sample);
+            if !inj.drop_sample() {
+                inj.push_frame(&frame(5), FrameKind::Sample);
+            }
             inj.push_frame(&frame(3), FrameKind::Other);
         }
         let mut out = Vec::new();

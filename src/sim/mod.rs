@@ -18,11 +18,16 @@
 //! - [`config::SimConfig`]: `config/sim.toml`, validated with the key and value named on refusal.
 
 pub mod config;
+pub mod csv;
 pub mod dedup;
+pub mod dynamics;
 pub mod effects;
+mod execute;
 pub mod faults;
+pub mod firmware;
 pub mod pace;
 pub mod plant;
+pub mod rx;
 
 pub use config::{ConfigError, SimConfig};
 
