@@ -8,6 +8,7 @@
 use serde::Deserialize;
 use std::path::Path;
 
+use super::plant::{PlantConfig, PlantError};
 use crate::experiment::ExperimentConfig;
 
 /// A refused configuration.
@@ -141,6 +142,9 @@ pub struct SimConfig {
     pub stand: StandConfig,
     /// Link faults.
     pub faults: FaultConfig,
+    /// The simulated motor + propeller + load cell and its effects (`[plant]`,
+    /// `[plant.effects.*]`; keys as defined by [`PlantConfig`]).
+    pub plant: PlantConfig,
     /// The host-side plan that `propid sim --record` runs against the firmware.
     pub experiment: ExperimentConfig,
 }
@@ -169,6 +173,17 @@ impl SimConfig {
     pub fn validate(&self) -> Result<(), ConfigError> {
         self.stand.validate()?;
         self.faults.validate()?;
+        let dt_s = 1.0 / self.stand.sample_rate_hz as f64;
+        self.plant.validate(dt_s).map_err(|e| match e {
+            PlantError::InvalidParameter { key, value, reason } => {
+                let key = if key.starts_with("plant.") {
+                    key.to_string()
+                } else {
+                    format!("plant.{key}")
+                };
+                invalid(&key, &value.to_string(), reason)
+            }
+        })?;
         self.experiment
             .validate()
             .map_err(|e| invalid(&format!("experiment.{}", e.key), &e.value, &e.reason))
@@ -329,6 +344,30 @@ mod tests {
             msg.contains("stand.sample_rate_hz") && msg.contains("= 5"),
             "{msg}"
         );
+    }
+
+    #[test]
+    fn plant_values_are_checked_against_the_sample_rate() {
+        let text = "[stand]\nsample_rate_hz = 100\n[plant]\nfn_hz = 80.0\n";
+        let msg = SimConfig::from_toml_str(text, "t").unwrap_err().to_string();
+        assert!(msg.contains("plant.fn_hz") && msg.contains("80"), "{msg}");
+        let text = "[plant.effects.dead_time]\ndelay_s = 0.004\n";
+        let cfg = SimConfig::from_toml_str(text, "t").unwrap();
+        assert!(cfg.plant.effects.dead_time.is_some());
+    }
+
+    #[test]
+    fn shipped_config_effect_examples_are_valid_when_uncommented() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sim.toml");
+        let text = std::fs::read_to_string(path).unwrap();
+        let (head, tail) = text.split_once("# Effects (issue 5)").unwrap();
+        let (effects, rest) = tail.split_once("[experiment]").unwrap();
+        let mut lines = effects.lines();
+        lines.next(); // the rest of the heading comment
+        let uncommented: Vec<&str> = lines.map(|l| l.strip_prefix("# ").unwrap_or(l)).collect();
+        let all = format!("{head}\n{}\n[experiment]{rest}", uncommented.join("\n"));
+        let cfg = SimConfig::from_toml_str(&all, "uncommented").unwrap();
+        assert_eq!(cfg.plant.effects.names().len(), 7);
     }
 
     #[test]
