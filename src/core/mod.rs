@@ -22,20 +22,30 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod eig;
+pub mod era;
 pub mod error;
 pub mod hankel;
+pub mod indicators;
 pub mod linalg;
 pub mod markov;
+pub mod modal;
+pub mod model;
 pub mod nullable;
 pub mod okid;
 pub mod operating_points;
 pub mod pulses;
 pub mod report;
+pub mod sizing;
 pub mod statespace;
 pub mod svd;
+pub mod uncertainty;
+pub mod workspace;
 
 pub use error::IdentError;
 pub use markov::MarkovSeq;
+pub use model::Model;
+pub use pulses::PulseInput;
 pub use report::ModelReport;
 pub use statespace::StateSpace;
 pub use svd::{SvdChoice, SvdError};
+pub use workspace::{IdentOptions, Limits, Workspace};

@@ -90,6 +90,7 @@ pub struct PulseEnsemble {
     sum: Vec<f64>,
     one: Vec<f64>,
     weight: f64,
+    growth: Vec<f64>,
     noise: Vec<f64>,
     len: usize,
     q: usize,
@@ -108,6 +109,7 @@ impl PulseEnsemble {
             sum: vec![0.0; max_samples * max_outputs],
             one: vec![0.0; max_samples * max_outputs],
             weight: 0.0,
+            growth: vec![0.0; max_samples],
             noise: vec![0.0; max_outputs],
             len: 0,
             q: 0,
@@ -146,9 +148,28 @@ impl PulseEnsemble {
         &self.noise[..self.q]
     }
 
-    /// Noise standard deviation of the averaged Markov parameters, channel `c`: `σ_c/√Σa²`.
+    /// Noise standard deviation of the averaged Markov parameters, channel `c`, before the
+    /// width deconvolution: `σ_c/√Σa²`. Multiply by [`PulseEnsemble::growth`] for `Y_k`.
     pub fn markov_noise(&self, c: usize) -> f64 {
         self.noise[c] / self.weight.sqrt()
+    }
+
+    /// Noise growth of the width deconvolution per Markov index `k` (length `L`):
+    /// `√(Σ_i a_i² g_i,k² / Σ_i a_i²)` with `g² = 1` for one-sample pulses and
+    /// `g² = 2(⌊k/w⌋ + 1)` for width `w > 1` (the recursion sums `⌊k/w⌋ + 1` differences of
+    /// independent noise samples).
+    pub fn growth(&self) -> &[f64] {
+        &self.growth[..self.len]
+    }
+
+    /// Widest kept pulse.
+    pub fn max_width(&self) -> usize {
+        self.pulses[..self.count]
+            .iter()
+            .filter(|p| p.kept)
+            .map(|p| p.width)
+            .max()
+            .unwrap_or(0)
     }
 
     /// Validates the input, segments the pulses, averages them into `markov` (`q × 1` blocks).
@@ -351,13 +372,35 @@ impl PulseEnsemble {
             }
             weight += w;
         }
-        if leave.is_none() {
-            self.weight = weight;
-        }
         for (m, s) in markov.as_mut_slice().iter_mut().zip(sum.iter()) {
             *m = s / weight;
         }
+        if leave.is_none() {
+            self.weight = weight;
+            self.noise_growth();
+        }
         Ok(())
+    }
+}
+
+impl PulseEnsemble {
+    fn noise_growth(&mut self) {
+        let g = &mut self.growth[..self.len];
+        g.fill(0.0);
+        for p in self.pulses[..self.count].iter().filter(|p| p.kept) {
+            let a2 = p.amplitude * p.amplitude;
+            for (k, gk) in g.iter_mut().enumerate() {
+                let amp = if p.width == 1 {
+                    1.0
+                } else {
+                    2.0 * (k / p.width + 1) as f64
+                };
+                *gk += a2 * amp;
+            }
+        }
+        for gk in g.iter_mut() {
+            *gk = (*gk / self.weight).sqrt();
+        }
     }
 }
 
