@@ -75,6 +75,8 @@
 
 use nalgebra::{DMatrix, SVD};
 
+pub mod select;
+
 /// Rows per block of the streaming QR.
 const QR_BLOCK_ROWS: usize = 512;
 /// Largest automatically chosen number of observer Markov parameters.
