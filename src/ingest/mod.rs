@@ -1,4 +1,5 @@
 //! (to be written)
 
+pub mod csv_file;
 pub mod resample;
 pub mod steps;
