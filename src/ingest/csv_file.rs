@@ -168,7 +168,11 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     };
     let sep = separator(first);
     let header = !split(first, sep).all(|f| f.is_empty() || f.parse::<f64>().is_ok());
-    let columns = header_columns(&lines, sep, header, opts);
+    let mut columns = header_columns(&lines, sep, header, opts);
+    // A header ending in a separator (benchmark files) has an empty, unnamed last column.
+    if columns.last().is_some_and(|c| c.name.is_empty()) {
+        columns.pop();
+    }
     let data = &lines[usize::from(header)..];
     if data.is_empty() {
         return Err(CsvFileError::Empty);
@@ -462,10 +466,7 @@ fn default_name(q: Quantity) -> &'static str {
 
 /// Fields of a line, trimmed and unquoted.
 fn split(line: &str, sep: char) -> impl Iterator<Item = &str> {
-    let fields = line.split(sep).map(|f| f.trim().trim_matches('"').trim());
-    // A trailing separator (an empty last column in benchmark files) is not a column.
-    let n = line.split(sep).count() - usize::from(line.ends_with(sep));
-    fields.take(n)
+    line.split(sep).map(|f| f.trim().trim_matches('"').trim())
 }
 
 /// An empty field is "not measured" (NaN); text is `None`.
