@@ -216,3 +216,41 @@ fn errors_map_to_exit_codes() {
     let (code, _, _) = propid(&["identify", flat.to_str().unwrap(), "--svd", "fast"]);
     assert_eq!(code, 2);
 }
+
+#[test]
+fn tsp1_binary_recording_is_identified() {
+    use propid::protocol::encode_frame;
+    use propid::protocol::message::{Message, Sample, SampleFlags};
+    let plant = Plant::new(15.0, 0.3, 6.0, 0.001);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(9);
+    let levels: Vec<u16> = (0..2000).map(|_| rng.gen_range(3500..4500)).collect();
+    let u: Vec<f64> = levels.iter().map(|&l| f64::from(l) / 1e4).collect();
+    let y = plant.simulate(&u, 2.0);
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; 300];
+    for (k, &level) in levels.iter().enumerate() {
+        let s = Sample {
+            sample_index: k as u32,
+            t_us: 1000 * k as u32,
+            throttle: level,
+            flags: SampleFlags::ARMED | SampleFlags::THRUST_VALID,
+            thrust_n: y[0][k] as f32,
+            torque_nm: f32::NAN,
+            rpm: f32::NAN,
+            voltage_v: f32::NAN,
+            current_a: f32::NAN,
+        };
+        let n = encode_frame(k as u16, &Message::Sample(s), &mut buf);
+        bytes.extend_from_slice(&buf[..n]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("run.tsp");
+    std::fs::write(&f, bytes).unwrap();
+    let v = json(&["identify", f.to_str().unwrap(), "--json", "--order", "2"]);
+    assert_eq!(v["source"]["format"], "tsp1");
+    assert_eq!(v["source"]["path"], "okid");
+    assert_eq!(v["source"]["samples"], 2000);
+    let m = &v["model"];
+    assert!(rel(m["fn_hz"].as_f64().unwrap(), 15.0) < 1e-3, "{m}");
+    assert!(rel(m["zeta"].as_f64().unwrap(), 0.3) < 1e-2, "{m}");
+}

@@ -6,7 +6,9 @@ use super::Args;
 use crate::cli::CliError;
 use crate::ingest::csv_file::{read_csv, CsvFileOptions, CsvSource};
 use crate::ingest::steps::{find_steps, FoundStep};
+use crate::ingest::{read_record_with, IngestOptions, IngestStats};
 use crate::protocol::detect::{detect, Detection, WireFormat};
+use crate::record::names;
 
 /// What `identify` works on.
 #[derive(Debug, Clone)]
@@ -44,6 +46,9 @@ pub struct Source {
     pub missing: usize,
     /// `"pulse"` or `"okid"` (filled in after identification).
     pub path: &'static str,
+    /// TSP/1 decoding counters (binary recordings).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tsp1: Option<IngestStats>,
     /// CSV details (columns, time base, jitter, skipped rows).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub csv: Option<CsvSource>,
@@ -77,10 +82,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         return Err(CliError::Input(format!("{name}: the file is empty")));
     }
     match detect(&bytes, true) {
-        Detection::Format(WireFormat::Binary) => Err(CliError::Input(format!(
-            "{name}: a TSP/1 binary recording; this build reads TSP/1 recordings with \
-             `propid replay` only (the recording reader is not merged into identify yet)"
-        ))),
+        Detection::Format(WireFormat::Binary) => load_tsp(args, name, &bytes),
         _ => load_csv(args, name, &bytes),
     }
 }
@@ -143,8 +145,62 @@ fn load_csv(args: &Args, name: String, bytes: &[u8]) -> Result<Loaded, CliError>
             samples: rec.len(),
             missing: rec.missing_count(),
             path: "",
+            tsp1: None,
             csv: Some(file.source),
             steps,
+            okid: None,
+        },
+    })
+}
+
+/// A binary TSP/1 recording: channels by canonical name (`--input`, `--output` pick others),
+/// device impulse events as pulse starts.
+fn load_tsp(args: &Args, name: String, bytes: &[u8]) -> Result<Loaded, CliError> {
+    let opts = IngestOptions {
+        fs_hz: args.fs,
+        ..IngestOptions::default()
+    };
+    let (rec, stats) =
+        read_record_with(bytes, &opts).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
+    let pick = |want: &str| {
+        rec.channel(want).map(|c| c.data.clone()).ok_or_else(|| {
+            let have: Vec<&str> = rec.channels.iter().map(|c| c.name.as_str()).collect();
+            CliError::Input(format!(
+                "{name}: no channel {want}; the recording has {}",
+                have.join(", ")
+            ))
+        })
+    };
+    let input_name = args.input.clone().unwrap_or(names::THROTTLE.into());
+    let output_names = if args.output.is_empty() {
+        vec![names::THRUST.to_string()]
+    } else {
+        args.output.clone()
+    };
+    let input = pick(&input_name)?;
+    let outputs = output_names
+        .iter()
+        .map(|n| pick(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let starts: Vec<usize> = rec.impulse_starts().collect();
+    Ok(Loaded {
+        dt_s: rec.dt_s,
+        input,
+        outputs,
+        missing: rec.missing.clone(),
+        pulse_starts: (!starts.is_empty()).then_some(starts),
+        source: Source {
+            file: name,
+            format: "tsp1",
+            input: input_name,
+            outputs: output_names,
+            rate_hz: 1.0 / rec.dt_s,
+            samples: rec.len(),
+            missing: rec.missing_count(),
+            path: "",
+            tsp1: Some(stats),
+            csv: None,
+            steps: None,
             okid: None,
         },
     })
