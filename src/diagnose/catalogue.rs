@@ -98,8 +98,9 @@ impl Ctx<'_> {
 }
 
 /// The 2nd-order baseline: a grid over `fn` and `ζ` (gain and offset by least squares), then
-/// Levenberg–Marquardt from the best two grid points.
-pub fn baseline(ctx: &Ctx, spec: Spec) -> Fit {
+/// Levenberg–Marquardt from the best two grid points and from every extra start (the core's
+/// ERA model); the best result wins.
+pub fn baseline(ctx: &Ctx, spec: Spec, extra_starts: &[super::model::Params]) -> Fit {
     let dt = ctx.sig.dt_s;
     let n = ctx.est.len().max(2) as f64;
     let f_lo = (5.0 / (n * dt)).min(0.1 / dt);
@@ -114,7 +115,13 @@ pub fn baseline(ctx: &Ctx, spec: Spec) -> Fit {
             starts.push(p);
         }
     }
-    ctx.best_of(spec, starts, 2)
+    let grid = ctx.best_of(spec, starts, 2);
+    let extra = ctx.best_of(spec, extra_starts.iter().copied(), 1);
+    if extra.sse < grid.sse {
+        extra
+    } else {
+        grid
+    }
 }
 
 /// Fits `effect` on top of `cur`; `None` when the effect does not apply to this data.

@@ -17,6 +17,7 @@
 //! record has one), never the simulator's configuration.
 
 pub mod catalogue;
+pub mod era_start;
 pub mod fit;
 pub mod model;
 
@@ -209,12 +210,14 @@ pub fn diagnose(
         findings.push(sensor_finding(level, count, ctx.est.len()));
         found.push("saturation".into());
     }
-    let base = catalogue::baseline(&ctx, Spec::default());
+    let era = era_start::era_start(&ctx);
+    let era_starts: Vec<model::Params> = era.iter().map(|e| e.0).collect();
+    let base = catalogue::baseline(&ctx, Spec::default(), &era_starts);
     if !base.sse.is_finite() || base.n == 0 {
         return Err(DiagnoseError::FitFailed);
     }
     let mut cur = if spec0.clip_sensor.is_some() {
-        catalogue::baseline(&ctx, spec0)
+        catalogue::baseline(&ctx, spec0, &era_starts)
     } else {
         base
     };
@@ -244,7 +247,7 @@ pub fn diagnose(
         found.push(name.to_string());
         cur = f;
     }
-    Ok(assemble(&ctx, &base, &cur, findings, found))
+    Ok(assemble(&ctx, &base, &cur, findings, found, era))
 }
 
 fn check_varies(x: &[f64], what: &'static str) -> Result<(), DiagnoseError> {
@@ -293,14 +296,27 @@ fn assemble(
     cur: &Fit,
     findings: Vec<Finding>,
     found: Vec<String>,
+    era: Option<(model::Params, crate::core::okid::select::PathTaken)>,
 ) -> Diagnosis {
     let dt = ctx.sig.dt_s;
     let mut sim_b = Vec::new();
     let mut sim_e = Vec::new();
     let (fit_b, rms_b) = validate(ctx, base, &mut sim_b);
+    let core_model = era.map(|(p, path)| {
+        let q = era_start::with_offset(ctx, &p);
+        let f = Fit {
+            spec: Spec::default(),
+            params: q,
+            sse: 0.0,
+            n: 0,
+        };
+        let (fit, _) = validate(ctx, &f, &mut sim_e);
+        era_start::summary(&q, path, fit)
+    });
     let baseline = Stage {
         model: ModelSummary::from_fit(base, dt),
         fit_percent: fit_b,
+        core_model,
     };
     let (extended, gain) = if found.is_empty() {
         sim_e = sim_b.clone();

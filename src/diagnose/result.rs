@@ -163,6 +163,10 @@ pub struct Stage {
     pub model: ModelSummary,
     /// `100 (1 − ‖y − ŷ‖ / ‖y − mean y‖)` on the validation samples.
     pub fit_percent: f64,
+    /// The identification core's own model of the estimation part (ERA / OKID, what
+    /// `propid identify` publishes) and its validation fit; absent when the core refused.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub core_model: Option<super::era_start::EraBaseline>,
 }
 
 /// The extended model.
