@@ -58,6 +58,14 @@
 //! minimum-norm solution still reproduces the record exactly, and so the Markov parameters, which
 //! the record determines uniquely (`Y_k = s_k − s_{k−1}` for a step response `s`).
 //!
+//! # Noise of the Markov parameters
+//!
+//! With residual standard deviation `σ_e` of output `i` and the (pseudo-)inverse Gram matrix
+//! `(ΦᵀΦ)⁺ = V Σ⁻² Vᵀ` (kept directions only), the standard error of the coefficient of column
+//! `c` is `σ_e √[(ΦᵀΦ)⁺]_cc`. The input-lag coefficients `M_k^u` are the leading term of `Y_k`,
+//! so [`OkidResult::markov_noise`] = `σ_e · √(mean over input-lag columns of [(ΦᵀΦ)⁺]_cc)` in
+//! output units per input unit: the noise floor ERA's order choice compares against.
+//!
 //! # Recovery of the system Markov parameters (JPHL eqs. 11–13)
 //!
 //! With `Ȳ_i⁽¹⁾ = C Ā^(i−1) (B + G D)` and `Ȳ_i⁽²⁾ = C Ā^(i−1) G`:
@@ -184,6 +192,9 @@ pub struct OkidResult {
     pub regularised: bool,
     /// RMS of the one-step-ahead residual of the observer model, per output, in output units.
     pub residual_rms: Vec<f64>,
+    /// Standard error of the Markov parameters per output (see the module docs), output units
+    /// per input unit (averaged over inputs).
+    pub markov_noise: Vec<f64>,
 }
 
 impl OkidResult {
@@ -258,7 +269,7 @@ pub fn okid(
         None => choose_by_bic(&r_aug, p, q, ell_max, rows),
     };
     let params = params_for(p, q, ell);
-    let solve = solve_truncated(&r_aug, params, params_max, q, opts.rcond);
+    let solve = solve_truncated(&r_aug, (p, q), params, params_max, opts.rcond);
     let theta = unscale(&solve.theta, &scaled, ell);
     if theta.0.iter().chain(&theta.1).any(|v| !v.is_finite()) {
         return Err(OkidError::NonFiniteSolution);
@@ -268,8 +279,13 @@ pub fn okid(
     if markov.iter().any(|v| !v.is_finite()) {
         return Err(OkidError::NonFiniteSolution);
     }
-    let residual_rms = (0..q)
+    let residual_rms: Vec<f64> = (0..q)
         .map(|i| solve.residual_scaled[i] * y_stats[i].1 / (rows as f64).sqrt())
+        .collect();
+    let u_scale = (u_stats.iter().map(|s| s.1 * s.1).sum::<f64>() / p as f64).sqrt();
+    let markov_noise = residual_rms
+        .iter()
+        .map(|r| r * solve.input_var_factor.sqrt() / u_scale)
         .collect();
     Ok(OkidResult {
         q,
@@ -286,6 +302,7 @@ pub fn okid(
         rank: solve.rank,
         regularised: solve.rank < params,
         residual_rms,
+        markov_noise,
     })
 }
 
@@ -476,15 +493,17 @@ struct Solve {
     rank: usize,
     /// Norm of the least-squares residual per output (scaled units).
     residual_scaled: Vec<f64>,
+    /// Mean of `[(ΦᵀΦ)⁺]_cc` over the input-lag columns (scaled units).
+    input_var_factor: f64,
 }
 
 /// Truncated-SVD solve of `R_φ θ = z` for the first `params` columns, from the augmented
 /// triangular factor `[[R_φ, z], [0, R_res]]` of all `params_max` columns.
 fn solve_truncated(
     r_aug: &DMatrix<f64>,
+    (p, q): (usize, usize),
     params: usize,
     params_max: usize,
-    q: usize,
     rcond: f64,
 ) -> Solve {
     let r_phi = r_aug.view((0, 0), (params, params)).into_owned();
@@ -524,12 +543,37 @@ fn solve_truncated(
     let residual_scaled = (0..q)
         .map(|c| (prefix_rss(r_aug, params, params_max, c) + dropped[c]).sqrt())
         .collect();
+    let input_var_factor = vt.map_or(f64::NAN, |vt| {
+        let cols = input_lag_columns(p, q, params);
+        let total: f64 = cols
+            .iter()
+            .map(|&c| {
+                (0..sig.len())
+                    .filter(|&i| sig[i] > rcond * smax)
+                    .map(|i| (vt[(i, c)] / sig[i]).powi(2))
+                    .sum::<f64>()
+            })
+            .sum();
+        total / cols.len().max(1) as f64
+    });
     Solve {
         theta,
         condition,
         rank,
         residual_scaled,
+        input_var_factor,
     }
+}
+
+/// Columns holding `u_{k−i}` (`i = 0..ℓ`) among the first `params` regression columns.
+fn input_lag_columns(p: usize, q: usize, params: usize) -> Vec<usize> {
+    let mut cols: Vec<usize> = (1..=p).collect();
+    let mut c = 1 + p;
+    while c + p + q <= params {
+        cols.extend(c..c + p);
+        c += p + q;
+    }
+    cols
 }
 
 /// Observer coefficients in physical units: `M_i^u` (q×p, i = 0..ℓ) and `M_i^y` (q×q, i = 1..ℓ),

@@ -5,11 +5,21 @@
 //! and keeps at least one pulse in it. Everything else (random, chirp, multisine, steps,
 //! staircases, ramps, several inputs) goes through [`okid`](super::okid) and then ERA on the
 //! recovered Markov parameters ([`Workspace::identify_markov`]). The path taken is reported.
+//!
+//! **Hankel size and order on the OKID path.** The recovered sequence is smooth (it is the pulse
+//! response of the fitted observer model), so the RMS of its tail says nothing about how well it
+//! is known. The noise floor used instead is OKID's standard error of the Markov parameters
+//! ([`OkidResult::markov_noise`]): the Hankel size follows from where the sequence sinks below
+//! it ([`sizing::signal_length`], [`sizing::hankel_dims`]), and the order from the singular
+//! values above `NOISE_SV_FACTOR · σ (√rows + √cols)` ([`sizing::noise_singular_value`],
+//! [`sizing::auto_order`]), the same rules as the pulse path with this σ.
 
 use serde::Serialize;
 
 use super::{okid, OkidError, OkidOptions, OkidResult};
+use crate::core::hankel::HankelDims;
 use crate::core::pulses::PulseInput;
+use crate::core::sizing;
 use crate::core::workspace::{IdentOptions, Limits, Workspace};
 use crate::core::{IdentError, MarkovSeq, ModelReport};
 
@@ -154,12 +164,43 @@ pub fn identify_okid(
     let markov = MarkovSeq::from_data(r.q, r.p, r.markov.clone())?;
     let limits = limits_for(r.len, r.q, r.p, ident);
     let mut ws = Workspace::new(&limits)?;
-    ws.identify_markov(&markov, input.dt_s, ident)?;
+    let mut opts = *ident;
+    if opts.hankel_blocks.is_none() {
+        let signal = sizing::signal_length(&markov, &r.markov_noise, &[]).max(8);
+        let min_size = opts.order.map_or(3, |n| n + 1);
+        let (rmax, cmax) = (limits.max_block_rows, limits.max_block_cols);
+        let avail = r.len.saturating_sub(1);
+        let dims = sizing::hankel_dims(r.q, r.p, avail, signal, min_size, rmax, cmax)?;
+        opts.hankel_blocks = Some((dims.r, dims.c));
+    }
+    ws.identify_markov(&markov, input.dt_s, &opts)?;
+    if opts.order.is_none() {
+        let order = okid_order(&ws.to_report(), &r, limits.max_order);
+        if order != ws.model().order() {
+            opts.order = Some(order);
+            ws.identify_markov(&markov, input.dt_s, &opts)?;
+        }
+    }
     Ok(AnyModel {
         report: ws.to_report(),
         path: PathTaken::Okid,
         okid: Some(OkidSummary::from(&r)),
     })
+}
+
+/// The order from the singular values of the last identification against OKID's noise floor
+/// (RMS of [`OkidResult::markov_noise`] over outputs); at least 1.
+fn okid_order(report: &ModelReport, r: &OkidResult, max_order: usize) -> usize {
+    let dims = HankelDims {
+        q: r.q,
+        p: r.p,
+        r: report.hankel_block_rows,
+        c: report.hankel_block_cols,
+    };
+    let n = r.markov_noise.len().max(1) as f64;
+    let sigma = (r.markov_noise.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    let noise_sv = sizing::noise_singular_value(sigma, &dims, &[]);
+    sizing::auto_order(&report.singular_values, noise_sv, max_order).max(1)
 }
 
 /// True when `u` changes (by more than 1e-9) on at most an eighth of its samples.
