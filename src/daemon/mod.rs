@@ -15,10 +15,14 @@
 //! run and the replay of its recording publish the same model lines.
 
 pub mod config;
+pub mod item;
 pub mod publish;
 pub mod shutdown;
 pub mod source;
 pub mod stats;
+pub mod tracker;
+pub mod window;
+pub mod worker;
 
 pub use config::{Config, ConfigError};
 pub use publish::Publisher;
