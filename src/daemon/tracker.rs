@@ -70,18 +70,18 @@ pub struct Tracker {
 
 impl Tracker {
     /// A HELLO arrived; returns true when its `boot_id` starts a new segment.
+    /// The first HELLO of a stream joined mid-segment adopts its boot without a restart.
     pub fn hello(&mut self, boot_id: u32) -> bool {
         if self.boot_id == Some(boot_id) {
+            return false;
+        }
+        if self.boot_id.is_none() && self.last_index.is_some() {
+            self.boot_id = Some(boot_id);
             return false;
         }
         self.boot_id = Some(boot_id);
         self.restart();
         true
-    }
-
-    /// The link was reopened: the device may have reset; the next HELLO decides.
-    pub fn reconnected(&mut self) {
-        self.boot_id = None;
     }
 
     /// Places one SAMPLE (`sample_index`, `t_us` as sent).
@@ -233,6 +233,16 @@ mod tests {
         assert!(p.new_segment);
         assert_eq!(p.lost_before, 0, "a reboot is not a gap");
         assert_eq!(t.segments, 2);
+    }
+
+    #[test]
+    fn first_hello_after_joining_mid_stream_is_no_new_segment() {
+        let mut t = Tracker::default();
+        t.sample(500, 0);
+        assert!(!t.hello(9));
+        let p = t.sample(501, 1);
+        assert!(!p.new_segment);
+        assert!(t.hello(10));
     }
 
     #[test]
