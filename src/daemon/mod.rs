@@ -15,11 +15,15 @@
 //! run and the replay of its recording publish the same model lines.
 
 pub mod config;
+pub mod identify;
 pub mod item;
 pub mod publish;
+pub mod runner;
+pub mod sampler;
 pub mod shutdown;
 pub mod source;
 pub mod stats;
+pub mod synth;
 pub mod tracker;
 pub mod window;
 pub mod worker;
@@ -55,6 +59,9 @@ pub enum DaemonError {
     /// The device stopped answering commands.
     #[error("link failed: {0}")]
     LinkFailed(String),
+    /// The identification workspace could not be set up.
+    #[error("identification: {0}")]
+    Identify(String),
     /// A thread of the daemon panicked (a bug).
     #[error("internal error: {0}")]
     Internal(String),
