@@ -13,7 +13,11 @@
 
 pub mod cobs;
 pub mod crc;
+pub mod csv;
+pub mod csv_columns;
+pub mod csv_command;
 pub mod decoder;
+pub mod detect;
 pub mod encode;
 pub mod error;
 pub mod message;
