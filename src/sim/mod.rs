@@ -27,9 +27,19 @@ pub mod faults;
 pub mod firmware;
 pub mod pace;
 pub mod plant;
+pub mod record;
 pub mod rx;
 
 pub use config::{ConfigError, SimConfig};
+
+/// The boot id of boot number `boot` of a stand seeded with `seed`: random-looking, different
+/// for every boot, the same for the same seed (so runs are reproducible).
+pub fn boot_id(seed: u64, boot: u64) -> u32 {
+    use rand::{Rng, SeedableRng};
+    let mut rng =
+        rand::rngs::StdRng::seed_from_u64(seed ^ boot.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    rng.gen::<u32>() | 1
+}
 
 /// What can go wrong in the simulated stand.
 #[derive(Debug, thiserror::Error)]
