@@ -61,6 +61,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         cfg.daemon.record = Some(r);
     }
     let shutdown = Shutdown::install().map_err(daemon_error)?;
+    let plan = crate::daemon::plan::from_config(&cfg).map_err(daemon_error)?;
     let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg).map_err(daemon_error)?;
     let source = SerialSource::open(&cfg.device.port, cfg.device.baud, cfg.device.read_timeout)
         .map_err(|e| CliError::Device(e.to_string()))?;
@@ -74,7 +75,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let publisher = Publisher::open(&cfg.publish).map_err(daemon_error)?;
     let parts = RunParts {
         source: Box::new(source),
-        plan: None, // the experiment plan is wired in when `sim` delivers it
+        plan: Some(plan),
         identifier,
         publisher,
         record,

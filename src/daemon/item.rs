@@ -71,12 +71,6 @@ pub enum Notice {
     Disconnected,
     /// The link was reopened.
     Reconnected,
-    /// The device stopped answering commands.
-    LinkFailed,
-    /// The device reset while armed (new boot): it is disarmed and the plan will not re-arm.
-    DeviceReset,
-    /// The experiment plan finished.
-    PlanDone,
     /// STOP was acknowledged at shutdown.
     Stopped,
     /// STOP was not acknowledged within the shutdown timeout.
@@ -89,24 +83,64 @@ impl Notice {
         match self {
             Notice::Disconnected => "disconnected",
             Notice::Reconnected => "reconnected",
-            Notice::LinkFailed => "link_failed",
-            Notice::DeviceReset => "device_reset",
-            Notice::PlanDone => "plan_done",
-            Notice::Stopped => "stopped",
-            Notice::StopUnacknowledged => "stop_unacknowledged",
+            Notice::Stopped => "shutdown_stop_acknowledged",
+            Notice::StopUnacknowledged => "shutdown_stop_unacknowledged",
         }
     }
 
     /// Whether it is published as a warning rather than an event.
     pub fn is_warning(self) -> bool {
-        matches!(
-            self,
-            Notice::Disconnected
-                | Notice::LinkFailed
-                | Notice::DeviceReset
-                | Notice::StopUnacknowledged
-        )
+        matches!(self, Notice::Disconnected | Notice::StopUnacknowledged)
     }
+}
+
+/// What the experiment plan reported, published as an `"event"` or `"warning"` line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlanNote {
+    /// Handshake done.
+    Connected {
+        /// The device's boot id.
+        boot_id: u32,
+    },
+    /// ARM acknowledged.
+    Armed,
+    /// An operating point is reached and settled.
+    LevelReached {
+        /// Index in the configured list.
+        index: usize,
+        /// Throttle fraction.
+        level: f64,
+    },
+    /// A pulse was acknowledged (not published: pulses are counted).
+    PulseFired,
+    /// The pulses at an operating point are done.
+    LevelDone {
+        /// Index in the configured list.
+        index: usize,
+        /// Throttle fraction.
+        level: f64,
+    },
+    /// All operating points done, ramped down, disarmed.
+    Finished,
+    /// STOP acknowledged.
+    Stopped,
+    /// The device reset; the plan is over and does not re-arm.
+    DeviceReset {
+        /// The new boot id.
+        new_boot_id: u32,
+    },
+    /// The device's watchdog stopped the motor; the plan is over.
+    WatchdogTripped,
+    /// The device refused a command the plan needs; the plan is over.
+    Refused {
+        /// Protocol name of the command.
+        command: &'static str,
+    },
+    /// A command went unanswered after its re-sends.
+    LinkFailed {
+        /// Protocol name of the command.
+        command: &'static str,
+    },
 }
 
 /// One item on the sampler → worker queue.
@@ -128,6 +162,8 @@ pub enum Item {
     },
     /// A device event.
     Event(EventItem),
-    /// A link or plan fact.
+    /// A link fact.
     Notice(Notice),
+    /// An experiment-plan fact.
+    Plan(PlanNote),
 }

@@ -17,6 +17,7 @@
 pub mod config;
 pub mod identify;
 pub mod item;
+pub mod plan;
 pub mod publish;
 pub mod runner;
 pub mod sampler;

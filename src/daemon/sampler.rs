@@ -23,7 +23,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::time::{Duration, Instant};
 
-use super::item::{EventItem, Item, Notice, SampleItem};
+use super::item::{EventItem, Item, Notice, PlanNote, SampleItem};
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
@@ -37,25 +37,31 @@ use crate::protocol::{encode_frame, DecodeStats, Decoder, MAX_FRAME_LEN};
 pub enum PlanStatus {
     /// Still running.
     Running,
-    /// Finished: ramped down and disarmed.
+    /// Finished: ramped down and disarmed. The run ends.
     Done,
-    /// The device stopped acknowledging commands.
+    /// Over (device reset, watchdog trip, refusal, stop): no more commands, sampling goes on.
+    Halted,
+    /// The device stopped acknowledging commands. The run ends with an error.
     LinkFailed,
 }
 
-/// The host-side experiment as the sampler drives it (implemented over `crate::experiment`).
-/// Pure: it is given the host time and the device's frames, and says what to send.
+/// The host-side experiment as the sampler drives it (implemented over `crate::experiment` in
+/// [`super::plan`]). Pure: it is given the host time and the device's frames, and says what to
+/// send and what happened.
 pub trait Plan: Send {
-    /// The link was (re)opened: start with a HELLO handshake.
+    /// The link was (re)opened.
     fn on_connect(&mut self, now_us: u64);
     /// A frame from the device.
     fn on_frame(&mut self, now_us: u64, frame: &Frame);
-    /// Commands due now, as `(seq, message)`; re-sends keep their seq.
-    fn poll(&mut self, now_us: u64, send: &mut dyn FnMut(u16, &Message));
+    /// Timers (heartbeats, re-sends, waits).
+    fn poll(&mut self, now_us: u64);
+    /// Stop the motor now (shutdown): the plan sends STOP.
+    fn abort(&mut self, now_us: u64);
+    /// Drains what the plan wants sent (`(seq, message)`; a re-send keeps its seq) and what it
+    /// reports.
+    fn next(&mut self, send: &mut dyn FnMut(u16, &Message), notes: &mut dyn FnMut(PlanNote));
     /// Where the plan stands.
     fn status(&self) -> PlanStatus;
-    /// A fresh command seq (for the shutdown STOP).
-    fn next_seq(&mut self) -> u16;
 }
 
 /// Sampler settings.
@@ -81,6 +87,9 @@ pub struct SamplerOutcome {
 
 /// STOP re-send period (PROTOCOL.md §4: re-send after 50 ms without ACK).
 const RESEND: Duration = Duration::from_millis(50);
+
+/// Seq of the shutdown STOP when no plan assigns one.
+const STOP_SEQ: u16 = 0xFFF0;
 
 /// Frame handling, separate from the decoder so both can be borrowed at once.
 struct Handler {
@@ -112,9 +121,6 @@ impl Handler {
         match &frame.msg {
             Message::Hello(h) if self.tracker.hello(h.boot_id) => {
                 self.segment_announced = true;
-                if self.tracker.segments > 0 {
-                    self.send(Item::Notice(Notice::DeviceReset));
-                }
                 self.send(Item::Segment { boot_id: h.boot_id });
             }
             Message::Sample(s) => {
@@ -258,12 +264,8 @@ impl Sampler {
                 self.drive_plan()?;
             }
             match self.handler.plan.as_ref().map(|p| p.status()) {
-                Some(PlanStatus::Done) => {
-                    self.handler.send(Item::Notice(Notice::PlanDone));
-                    return Ok(());
-                }
+                Some(PlanStatus::Done) => return Ok(()),
                 Some(PlanStatus::LinkFailed) => {
-                    self.handler.send(Item::Notice(Notice::LinkFailed));
                     let _ = self.stop_device();
                     return Err(DaemonError::LinkFailed(format!(
                         "{} stopped acknowledging commands",
@@ -301,29 +303,47 @@ impl Sampler {
         Ok(())
     }
 
-    /// Sends the plan's due commands.
+    /// Sends the plan's due commands and queues its notes.
     fn drive_plan(&mut self) -> Result<(), DaemonError> {
         let now = self.now_us();
         let Some(plan) = self.handler.plan.as_mut() else {
             return Ok(());
         };
-        let mut failed = None;
-        let source = &mut self.source;
-        let cmd = &mut self.cmd;
-        plan.poll(now, &mut |seq, msg| {
-            if failed.is_some() {
-                return;
-            }
-            let n = encode_frame(seq, msg, &mut cmd[..]);
-            if let Err(e) = source.write_all(&cmd[..n]) {
-                failed = Some(e);
-            }
-        });
-        match failed {
+        plan.poll(now);
+        match self.send_plan_output() {
             None => Ok(()),
             Some(SourceError::Disconnected { .. }) => self.reconnect(),
             Some(e) => Err(e.into()),
         }
+    }
+
+    /// Writes what the plan wants sent; returns the first write error.
+    fn send_plan_output(&mut self) -> Option<SourceError> {
+        let plan = self.handler.plan.as_mut()?;
+        let mut failed = None;
+        let mut notes: Vec<PlanNote> = Vec::new();
+        let source = &mut self.source;
+        let cmd = &mut self.cmd;
+        let awaiting = &mut self.handler.awaiting_stop;
+        plan.next(
+            &mut |seq, msg| {
+                if matches!(msg, Message::Stop) && awaiting.is_none() {
+                    *awaiting = Some(seq);
+                }
+                if failed.is_some() {
+                    return;
+                }
+                let n = encode_frame(seq, msg, &mut cmd[..]);
+                if let Err(e) = source.write_all(&cmd[..n]) {
+                    failed = Some(e);
+                }
+            },
+            &mut |n| notes.push(n),
+        );
+        for n in notes {
+            self.handler.send(Item::Plan(n));
+        }
+        failed
     }
 
     /// Reopens the source with backoff until it works or a stop is requested.
@@ -350,28 +370,39 @@ impl Sampler {
         Ok(())
     }
 
-    /// Sends STOP until acknowledged or the stop timeout passes.
+    /// Sends STOP until acknowledged or the stop timeout passes: through the plan when there is
+    /// one (so it stops its heartbeats and pulses), re-sent every 50 ms with the same seq.
     fn stop_device(&mut self) -> Result<(), DaemonError> {
-        let seq = match self.handler.plan.as_mut() {
-            Some(p) => p.next_seq(),
-            None => 0,
+        let now = self.now_us();
+        self.handler.awaiting_stop = None;
+        if let Some(p) = self.handler.plan.as_mut() {
+            p.abort(now);
+        }
+        let _ = self.send_plan_output();
+        let seq = match self.handler.awaiting_stop {
+            Some(seq) => seq,
+            None => {
+                // No plan, or the plan was over: a STOP of our own.
+                self.handler.awaiting_stop = Some(STOP_SEQ);
+                STOP_SEQ
+            }
         };
-        self.handler.awaiting_stop = Some(seq);
         let n = encode_frame(seq, &Message::Stop, &mut self.cmd[..]);
+        let frame: [u8; MAX_FRAME_LEN] = self.cmd;
         let deadline = Instant::now() + self.cfg.stop_timeout;
         let mut next_send = Instant::now();
         while !self.handler.stop_acked && Instant::now() < deadline {
             if Instant::now() >= next_send {
-                if self.source.write_all(&self.cmd[..n]).is_err() {
+                if self.source.write_all(&frame[..n]).is_err() {
                     break;
                 }
                 next_send += RESEND;
             }
-            match self.read_once() {
-                Ok(()) => {}
-                Err(_) => break,
+            if self.read_once().is_err() {
+                break;
             }
         }
+        let _ = self.send_plan_output();
         let notice = if self.handler.stop_acked {
             Notice::Stopped
         } else {

@@ -21,7 +21,7 @@ use crossbeam_channel::Receiver;
 use serde_json::{json, Map, Value};
 use std::time::Instant;
 
-use super::item::{EventItem, Item, SampleItem};
+use super::item::{EventItem, Item, PlanNote, SampleItem};
 use super::publish::Publisher;
 use super::stats::WorkStats;
 use super::window::{Reason, Window, WindowView};
@@ -104,6 +104,7 @@ impl<I: Identifier> Worker<I> {
                 self.emit(json!({"type": "event", "kind": "segment", "boot_id": boot_id}));
             }
             Item::Event(e) => self.on_event(&e),
+            Item::Plan(n) => self.on_plan(n),
             Item::Notice(n) => {
                 let kind = if n.is_warning() { "warning" } else { "event" };
                 self.emit(json!({"type": kind, "kind": n.name()}));
@@ -148,6 +149,34 @@ impl<I: Identifier> Worker<I> {
                 "message": "window filled before K pulses; its samples were discarded",
                 "sample_index": s.index}));
         }
+    }
+
+    fn on_plan(&mut self, n: PlanNote) {
+        let line = match n {
+            PlanNote::PulseFired => return,
+            PlanNote::Connected { boot_id } => {
+                json!({"type": "event", "kind": "connected", "boot_id": boot_id})
+            }
+            PlanNote::Armed => json!({"type": "event", "kind": "armed"}),
+            PlanNote::LevelReached { index, level } => {
+                json!({"type": "event", "kind": "level_reached", "index": index, "operating_point": level})
+            }
+            PlanNote::LevelDone { index, level } => {
+                json!({"type": "event", "kind": "level_done", "index": index, "operating_point": level})
+            }
+            PlanNote::Finished => json!({"type": "event", "kind": "plan_finished"}),
+            PlanNote::Stopped => json!({"type": "event", "kind": "stop_acknowledged"}),
+            PlanNote::DeviceReset { new_boot_id } => json!({"type": "warning",
+                "kind": "device_reset", "boot_id": new_boot_id,
+                "message": "the device reset and is disarmed; the plan is over and will not re-arm"}),
+            PlanNote::WatchdogTripped => json!({"type": "warning", "kind": "plan_halted_watchdog",
+                "message": "the device watchdog stopped the motor; the plan is over"}),
+            PlanNote::Refused { command } => json!({"type": "warning", "kind": "command_refused",
+                "command": command, "message": "the device refused a command; the plan is over"}),
+            PlanNote::LinkFailed { command } => json!({"type": "warning", "kind": "link_failed",
+                "command": command, "message": "a command went unanswered after its re-sends"}),
+        };
+        self.emit(line);
     }
 
     fn on_event(&mut self, e: &EventItem) {
