@@ -258,3 +258,39 @@ fn bad_config_is_refused_with_key_and_value() {
         "{err}"
     );
 }
+
+#[test]
+fn replay_of_a_simulated_stand_recording_identifies_the_plant() {
+    // the sim's firmware + experiment plan, faster than real time, with noise and quantisation
+    let mut cfg = propid::sim::SimConfig::default();
+    cfg.experiment.levels = vec![0.35, 0.55];
+    cfg.experiment.pulses_per_level = 8;
+    let mut bytes = Vec::new();
+    propid::sim::record::record(&cfg, 30.0, &mut bytes).unwrap();
+    let (lines, status, err) = replay(&bytes, &[]);
+    assert!(status.success(), "{err}");
+    let models = of_type(&lines, "model");
+    assert_eq!(models.len(), 4, "{lines:#?}");
+    // One-sample pulses at 1 kHz in 0.01 N of noise: each model's scatter is large (its
+    // jackknife uncertainty says so); require agreement within 4 reported standard deviations.
+    let p = &cfg.plant;
+    for m in &models {
+        let u = &m["uncertainty"];
+        for (key, truth) in [
+            ("fn_hz", p.fn_hz),
+            ("zeta", p.zeta),
+            ("dc_gain", p.gain_n_per_throttle),
+        ] {
+            let est = m[key].as_f64().unwrap();
+            let sd = u[key].as_f64().unwrap();
+            assert!(sd.is_finite() && sd > 0.0, "{key} uncertainty {sd}");
+            assert!(
+                (est - truth).abs() < 4.0 * sd + 0.02 * truth,
+                "{key} {est} ± {sd} vs {truth}"
+            );
+        }
+    }
+    let s = stats(&lines);
+    assert_eq!(s["samples_lost"], 0);
+    assert_eq!(dropped_total(s), 0);
+}
