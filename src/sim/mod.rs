@@ -27,6 +27,7 @@ pub mod faults;
 pub mod firmware;
 pub mod pace;
 pub mod plant;
+pub mod pty;
 pub mod record;
 pub mod rx;
 
