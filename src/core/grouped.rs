@@ -177,7 +177,7 @@ impl WidthGroups {
     fn write(&self, out: &mut MarkovSeq, remove: Option<(usize, f64)>) -> Result<(), IdentError> {
         let (q, gcount) = (self.q, self.count);
         let wmax = self.widths[..gcount].iter().copied().max().unwrap_or(1);
-        let blocks = self.len + 1 - wmax;
+        let blocks = (self.len + 1).saturating_sub(wmax);
         out.set_len(q, gcount, blocks)?;
         let stride = self.max_samples * self.max_outputs;
         for g in 0..gcount {
