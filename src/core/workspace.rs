@@ -188,7 +188,9 @@ impl Workspace {
         &self.engine.model
     }
 
-    /// The averaged Markov parameters of the last pulse identification.
+    /// The averaged, width-deconvolved Markov parameters `Y_0 .. Y_{L-1}` of the last pulse
+    /// identification (for plots and export; ERA itself runs on the per-width responses, see
+    /// [`crate::core::grouped`], which equal these for one-sample pulses).
     pub fn markov(&self) -> &MarkovSeq {
         &self.markov
     }
