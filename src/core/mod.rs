@@ -1,1 +1,4 @@
-//! (to be written)
+//! The identification core (no I/O). Placeholder module list until branch `core` lands; the
+//! core engineer owns this file.
+
+pub mod svd;
