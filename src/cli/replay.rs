@@ -8,5 +8,7 @@ pub struct Args {}
 
 /// Runs `propid replay`.
 pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::Usage("propid replay is not implemented yet".into()))
+    Err(CliError::Usage(
+        "propid replay is not implemented yet".into(),
+    ))
 }

@@ -8,5 +8,7 @@ pub struct Args {}
 
 /// Runs `propid walkthrough`.
 pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::Usage("propid walkthrough is not implemented yet".into()))
+    Err(CliError::Usage(
+        "propid walkthrough is not implemented yet".into(),
+    ))
 }

@@ -7,3 +7,4 @@ pub mod hankel_op;
 pub mod truncated;
 
 pub use error::SvdError;
+pub mod small_jacobi;
