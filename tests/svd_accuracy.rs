@@ -6,8 +6,8 @@
 //! residuals ‖Hv − σu‖ and ‖Hᵀu − σv‖ below 1e-10 σ₁.
 
 use nalgebra::DMatrix;
+use propid::core::svd::truncated::TruncatedError;
 use propid::core::svd::truncated::TruncatedSvd;
-use propid::core::svd::SvdError;
 
 /// Markov blocks (q × p, column-major) of a sum of damped modes plus seeded uniform noise.
 fn markov(q: usize, p: usize, len: usize, modes: &[(f64, f64)], noise: f64, seed: u64) -> Vec<f64> {
@@ -55,7 +55,7 @@ fn truncated(
     c: usize,
     s: usize,
     k: usize,
-) -> Result<Result3, SvdError> {
+) -> Result<Result3, TruncatedError> {
     let mut svd = TruncatedSvd::new(r, c, q, p, k);
     let mut sigma = vec![0.0; k];
     let mut u = vec![0.0; r * q * k];
@@ -202,7 +202,7 @@ fn white_noise_into_cluster_reports_not_converged() {
     let (mut s, mut u, mut v) = (vec![0.0; 10], vec![0.0; r * 10], vec![0.0; c * 10]);
     let e = svd.compute(&m, 1, 1, r, c, 0, 10, &mut s, &mut u, &mut v);
     match e {
-        Err(SvdError::NotConverged {
+        Err(TruncatedError::NotConverged {
             k: 10,
             steps: 14,
             converged,
@@ -224,29 +224,29 @@ fn bad_input_is_a_typed_error() {
     let zero = vec![0.0; 30];
     assert_eq!(
         svd.compute(&zero, 1, 1, r, c, 0, 2, &mut s, &mut u, &mut v),
-        Err(SvdError::ZeroMatrix)
+        Err(TruncatedError::ZeroMatrix)
     );
     let mut m = markov(1, 1, 30, &MODES[..1], 0.0, 6);
     assert!(matches!(
         svd.compute(&m, 1, 1, r, c, 0, 4, &mut s, &mut u, &mut v),
-        Err(SvdError::Dimension { what: "k", .. })
+        Err(TruncatedError::Dimension { what: "k", .. })
     ));
     assert!(matches!(
         svd.compute(&m, 1, 1, r, c, 0, 2, &mut s[..1], &mut u, &mut v),
-        Err(SvdError::SliceLength { what: "sigma", .. })
+        Err(TruncatedError::SliceLength { what: "sigma", .. })
     ));
     assert!(matches!(
         svd.compute(&m, 1, 1, r + 1, c, 0, 2, &mut s, &mut u, &mut v),
-        Err(SvdError::Dimension { .. })
+        Err(TruncatedError::Dimension { .. })
     ));
     assert!(matches!(
         svd.compute(&m[..15], 1, 1, r, c, 0, 2, &mut s, &mut u, &mut v),
-        Err(SvdError::MarkovTooShort { .. })
+        Err(TruncatedError::MarkovTooShort { .. })
     ));
     m[5] = f64::INFINITY;
     assert!(matches!(
         svd.compute(&m, 1, 1, r, c, 0, 2, &mut s, &mut u, &mut v),
-        Err(SvdError::NonFinite {
+        Err(TruncatedError::NonFinite {
             what: "markov",
             index: 5
         })
@@ -255,6 +255,6 @@ fn bad_input_is_a_typed_error() {
     let m2 = markov(1, 1, 6, &MODES[..2], 0.0, 7);
     assert!(matches!(
         small.compute(&m2, 1, 1, 1, 2, 0, 2, &mut s, &mut u, &mut v),
-        Err(SvdError::TooManyTriplets { .. })
+        Err(TruncatedError::TooManyTriplets { .. })
     ));
 }

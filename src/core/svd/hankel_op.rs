@@ -31,7 +31,7 @@ use std::sync::Arc;
 use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
-use super::error::SvdError;
+use super::truncated::TruncatedError;
 
 /// Smallest FFT length for which a plan is made.
 const MIN_FFT_LEN: usize = 16;
@@ -154,7 +154,7 @@ impl HankelOp {
         r: usize,
         c: usize,
         shift: usize,
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         self.shape = None;
         check_dim("q", q, self.max_q)?;
         check_dim("p", p, self.max_p)?;
@@ -164,27 +164,27 @@ impl HankelOp {
         let len = r + c - 1;
         let needed = (len + 1 + shift) * qp;
         if markov.len() < needed {
-            return Err(SvdError::MarkovTooShort {
+            return Err(TruncatedError::MarkovTooShort {
                 needed,
                 got: markov.len(),
             });
         }
         let start = (1 + shift) * qp;
         if let Some(i) = markov[start..needed].iter().position(|v| !v.is_finite()) {
-            return Err(SvdError::NonFinite {
+            return Err(TruncatedError::NonFinite {
                 what: "markov",
                 index: start + i,
             });
         }
-        let plan = self
-            .plans
-            .iter()
-            .position(|pl| pl.len >= len)
-            .ok_or(SvdError::Dimension {
-                what: "block rows + block cols",
-                got: r + c,
-                max: self.max_rows + self.max_cols,
-            })?;
+        let plan =
+            self.plans
+                .iter()
+                .position(|pl| pl.len >= len)
+                .ok_or(TruncatedError::Dimension {
+                    what: "block rows + block cols",
+                    got: r + c,
+                    max: self.max_rows + self.max_cols,
+                })?;
         let n = self.plans[plan].len;
         let half = n / 2 + 1;
         let scale = 1.0 / n as f64;
@@ -200,7 +200,7 @@ impl HankelOp {
                 self.plans[plan]
                     .fwd
                     .process_with_scratch(time, out, &mut self.scratch)
-                    .map_err(|e| SvdError::Fft(e.to_string()))?;
+                    .map_err(|e| TruncatedError::Fft(e.to_string()))?;
             }
         }
         self.shape = Some(Shape { q, p, r, c, plan });
@@ -209,19 +209,19 @@ impl HankelOp {
 
     /// `y = H x` for the matrix loaded by the last [`prepare`](Self::prepare):
     /// `x` has `c p` entries, `y` receives `r q`.
-    pub fn apply_prepared(&mut self, x: &[f64], y: &mut [f64]) -> Result<(), SvdError> {
+    pub fn apply_prepared(&mut self, x: &[f64], y: &mut [f64]) -> Result<(), TruncatedError> {
         let s = self
             .shape
-            .ok_or(SvdError::Fft("no matrix prepared".into()))?;
+            .ok_or(TruncatedError::Fft("no matrix prepared".into()))?;
         self.product(s, false, x, y)
     }
 
     /// `y = Hᵀ x` for the matrix loaded by the last [`prepare`](Self::prepare):
     /// `x` has `r q` entries, `y` receives `c p`.
-    pub fn apply_t_prepared(&mut self, x: &[f64], y: &mut [f64]) -> Result<(), SvdError> {
+    pub fn apply_t_prepared(&mut self, x: &[f64], y: &mut [f64]) -> Result<(), TruncatedError> {
         let s = self
             .shape
-            .ok_or(SvdError::Fft("no matrix prepared".into()))?;
+            .ok_or(TruncatedError::Fft("no matrix prepared".into()))?;
         self.product(s, true, x, y)
     }
 
@@ -238,7 +238,7 @@ impl HankelOp {
         shift: usize,
         x: &[f64],
         y: &mut [f64],
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         self.prepare(markov, q, p, r, c, shift)?;
         self.apply_prepared(x, y)
     }
@@ -255,7 +255,7 @@ impl HankelOp {
         shift: usize,
         x: &[f64],
         y: &mut [f64],
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         self.prepare(markov, q, p, r, c, shift)?;
         self.apply_t_prepared(x, y)
     }
@@ -268,7 +268,7 @@ impl HankelOp {
         transpose: bool,
         x: &[f64],
         y: &mut [f64],
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         let (n_in, len_in, n_out, len_out) = if transpose {
             (s.q, s.r, s.p, s.c)
         } else {
@@ -278,7 +278,7 @@ impl HankelOp {
         check_slice("y", y.len(), n_out * len_out)?;
         let x = &x[..n_in * len_in];
         if let Some(index) = x.iter().position(|v| !v.is_finite()) {
-            return Err(SvdError::NonFinite { what: "x", index });
+            return Err(TruncatedError::NonFinite { what: "x", index });
         }
         let plan = &self.plans[s.plan];
         let n = plan.len;
@@ -294,7 +294,7 @@ impl HankelOp {
             let out = &mut self.xspec[ch * stride..ch * stride + half];
             plan.fwd
                 .process_with_scratch(time, out, &mut self.scratch)
-                .map_err(|e| SvdError::Fft(e.to_string()))?;
+                .map_err(|e| TruncatedError::Fft(e.to_string()))?;
         }
         // Each output channel: sum over input channels of spectrum products, one inverse FFT.
         for out_ch in 0..n_out {
@@ -320,7 +320,7 @@ impl HankelOp {
             let time = &mut self.time[..n];
             plan.inv
                 .process_with_scratch(acc, time, &mut self.scratch)
-                .map_err(|e| SvdError::Fft(e.to_string()))?;
+                .map_err(|e| TruncatedError::Fft(e.to_string()))?;
             for a in 0..len_out {
                 y[a * n_out + out_ch] = time[a + len_in - 1];
             }
@@ -344,16 +344,16 @@ fn fft_lengths(needed: usize) -> Vec<usize> {
     }
 }
 
-fn check_dim(what: &'static str, got: usize, max: usize) -> Result<(), SvdError> {
+fn check_dim(what: &'static str, got: usize, max: usize) -> Result<(), TruncatedError> {
     if got == 0 || got > max {
-        return Err(SvdError::Dimension { what, got, max });
+        return Err(TruncatedError::Dimension { what, got, max });
     }
     Ok(())
 }
 
-fn check_slice(what: &'static str, got: usize, expected: usize) -> Result<(), SvdError> {
+fn check_slice(what: &'static str, got: usize, expected: usize) -> Result<(), TruncatedError> {
     if got < expected {
-        return Err(SvdError::SliceLength {
+        return Err(TruncatedError::SliceLength {
             what,
             got,
             expected,
@@ -445,21 +445,24 @@ mod tests {
         let markov = vec![1.0; 20];
         let mut y = vec![0.0; 4];
         let e = op.apply(&markov, 1, 1, 5, 4, 0, &[0.0; 4], &mut y);
-        assert!(matches!(e, Err(SvdError::Dimension { .. })));
+        assert!(matches!(e, Err(TruncatedError::Dimension { .. })));
         let e = op.apply(&markov[..5], 1, 1, 4, 4, 0, &[0.0; 4], &mut y);
-        assert!(matches!(e, Err(SvdError::MarkovTooShort { .. })));
+        assert!(matches!(e, Err(TruncatedError::MarkovTooShort { .. })));
         let mut bad = markov.clone();
         bad[3] = f64::NAN;
         let e = op.apply(&bad, 1, 1, 4, 4, 0, &[0.0; 4], &mut y);
         assert_eq!(
             e,
-            Err(SvdError::NonFinite {
+            Err(TruncatedError::NonFinite {
                 what: "markov",
                 index: 3
             })
         );
         let e = op.apply(&markov, 1, 1, 4, 4, 0, &[0.0; 3], &mut y);
-        assert!(matches!(e, Err(SvdError::SliceLength { what: "x", .. })));
+        assert!(matches!(
+            e,
+            Err(TruncatedError::SliceLength { what: "x", .. })
+        ));
         let mut op2 = HankelOp::new(4, 4, 1, 1);
         assert!(op2.apply_prepared(&[0.0; 4], &mut y).is_err());
     }

@@ -2,9 +2,5 @@
 //! this file and the dense path / dispatch); the truncated FFT + Lanczos path lives in
 //! [`truncated`] and [`hankel_op`].
 
-pub mod error;
 pub mod hankel_op;
 pub mod truncated;
-
-pub use error::SvdError;
-pub mod small_jacobi;

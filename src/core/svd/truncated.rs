@@ -32,7 +32,7 @@
 //! Where the requested `k` lies inside a spectral gap (model order on data with noise), the
 //! singular values agree to ~1e-13 relative to σ₁ and the subspaces to ~1e-10 or better within
 //! a few dozen steps. When `k` reaches into a cluster of noise singular values the residual
-//! test may fail within the step budget: then [`SvdError::NotConverged`] is returned (with the
+//! test may fail within the step budget: then [`TruncatedError::NotConverged`] is returned (with the
 //! number of leading triplets that did converge), never unconverged vectors. The Ritz values of
 //! the last small SVD ([`TruncatedSvd::ritz_values`]) remain available as lower estimates of
 //! the leading singular values.
@@ -44,9 +44,13 @@
 //! length for a fixed step budget. Everything is allocated in [`TruncatedSvd::new`];
 //! `compute`, `apply`, `apply_t` and `project` allocate nothing.
 
-use super::error::SvdError;
+pub mod error;
+pub mod small_jacobi;
+
+pub use error::TruncatedError;
+
 use super::hankel_op::HankelOp;
-use super::small_jacobi::SmallJacobi;
+use small_jacobi::SmallJacobi;
 
 /// Default acceptance threshold for the residual `‖Hᵀu − σv‖ / σ₁` of every requested triplet.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -181,7 +185,7 @@ impl TruncatedSvd {
     }
 
     /// Relative residuals `‖Hᵀu_i − σ_i v_i‖ / σ₁` of the triplets of the last `compute`
-    /// (also after a [`SvdError::NotConverged`]).
+    /// (also after a [`TruncatedError::NotConverged`]).
     pub fn residuals(&self) -> &[f64] {
         &self.residuals[..self.residuals.len().min(self.last_k())]
     }
@@ -212,20 +216,20 @@ impl TruncatedSvd {
         sigma: &mut [f64],
         u: &mut [f64],
         v: &mut [f64],
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         self.steps = 0;
         self.n_ritz = 0;
         self.op.prepare(markov, q, p, r, c, shift)?;
         let (rows, cols) = (r * q, c * p);
         if k == 0 || k > self.max_k {
-            return Err(SvdError::Dimension {
+            return Err(TruncatedError::Dimension {
                 what: "k",
                 got: k,
                 max: self.max_k,
             });
         }
         if k > rows.min(cols) {
-            return Err(SvdError::TooManyTriplets { k, rows, cols });
+            return Err(TruncatedError::TooManyTriplets { k, rows, cols });
         }
         check_len("sigma", sigma.len(), k)?;
         check_len("u", u.len(), rows * k)?;
@@ -233,7 +237,7 @@ impl TruncatedSvd {
         let first = (1 + shift) * q * p;
         let last = (r + c + shift) * q * p;
         if markov[first..last].iter().all(|&x| x == 0.0) {
-            return Err(SvdError::ZeroMatrix);
+            return Err(TruncatedError::ZeroMatrix);
         }
         self.rng = 0x9E37_79B9_7F4A_7C15;
         self.lanczos(rows, cols, k)?;
@@ -243,7 +247,7 @@ impl TruncatedSvd {
 
     /// The Lanczos iteration proper; on success the small SVD of the last check holds the
     /// accepted Ritz triplets.
-    fn lanczos(&mut self, rows: usize, cols: usize, k: usize) -> Result<(), SvdError> {
+    fn lanczos(&mut self, rows: usize, cols: usize, k: usize) -> Result<(), TruncatedError> {
         let m_max = self.max_steps.min(rows.min(cols));
         let (rs, cs) = (self.row_stride, self.col_stride);
         self.random_unit(false, 0, cols);
@@ -310,7 +314,7 @@ impl TruncatedSvd {
             .iter()
             .take_while(|&&res| res <= self.tolerance)
             .count();
-        Err(SvdError::NotConverged {
+        Err(TruncatedError::NotConverged {
             k,
             converged,
             steps: self.steps,
@@ -320,14 +324,14 @@ impl TruncatedSvd {
     }
 
     /// Small SVD of `B_m`, residuals of the leading `k` Ritz triplets; `true` when all pass.
-    fn check(&mut self, k: usize) -> Result<bool, SvdError> {
+    fn check(&mut self, k: usize) -> Result<bool, TruncatedError> {
         let m = self.steps;
         if !self
             .small
             .load_bidiagonal(&self.alpha[..m], &self.beta[..m])
             || !self.small.decompose()
         {
-            return Err(SvdError::NotConverged {
+            return Err(TruncatedError::NotConverged {
                 k,
                 converged: 0,
                 steps: m,
@@ -340,7 +344,7 @@ impl TruncatedSvd {
         self.ritz[..m].copy_from_slice(s);
         let s1 = s[0];
         if s1 <= 0.0 {
-            return Err(SvdError::ZeroMatrix);
+            return Err(TruncatedError::ZeroMatrix);
         }
         let beta_m = self.beta[m - 1];
         for i in 0..k {
@@ -446,7 +450,7 @@ impl TruncatedSvd {
         shift: usize,
         x: &[f64],
         y: &mut [f64],
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         self.op.apply(markov, q, p, r, c, shift, x, y)
     }
 
@@ -462,7 +466,7 @@ impl TruncatedSvd {
         shift: usize,
         x: &[f64],
         y: &mut [f64],
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         self.op.apply_t(markov, q, p, r, c, shift, x, y)
     }
 
@@ -481,7 +485,7 @@ impl TruncatedSvd {
         u: &[f64],
         v: &[f64],
         out: &mut [f64],
-    ) -> Result<(), SvdError> {
+    ) -> Result<(), TruncatedError> {
         self.op.prepare(markov, q, p, r, c, shift)?;
         let (rows, cols) = (r * q, c * p);
         check_len("u", u.len(), rows * k)?;
@@ -503,9 +507,9 @@ impl TruncatedSvd {
     }
 }
 
-fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), SvdError> {
+fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), TruncatedError> {
     if got < expected {
-        return Err(SvdError::SliceLength {
+        return Err(TruncatedError::SliceLength {
             what,
             got,
             expected,

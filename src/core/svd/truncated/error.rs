@@ -5,7 +5,7 @@
 
 /// Why a Hankel product or a truncated SVD was refused or failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum SvdError {
+pub enum TruncatedError {
     /// A dimension is zero or exceeds what the workspace was sized for in `new()`.
     #[error("{what} = {got} is outside 1..={max} (the workspace was sized for at most {max})")]
     Dimension {
