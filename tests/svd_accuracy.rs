@@ -258,3 +258,48 @@ fn bad_input_is_a_typed_error() {
         Err(TruncatedError::TooManyTriplets { .. })
     ));
 }
+
+#[test]
+fn at_least_gives_converged_leading_triplets_and_ritz_estimates() {
+    // Two strong modes over strong noise: the 4 leading triplets converge quickly, the other
+    // 6 of k = 10 lie in the noise cluster and do not within 16 steps.
+    let (r, c) = (200, 200);
+    let m = markov(1, 1, r + c + 1, &MODES[..2], 0.05, 8);
+    let h = dense_hankel(&m, 1, 1, r, c, 0);
+    let k = 10;
+    let mut svd = TruncatedSvd::with_max_steps(r, c, 1, 1, k, 16);
+    let (mut s, mut u, mut v) = (vec![0.0; k], vec![0.0; r * k], vec![0.0; c * k]);
+    assert!(matches!(
+        svd.compute(&m, 1, 1, r, c, 0, k, &mut s, &mut u, &mut v),
+        Err(TruncatedError::NotConverged { .. })
+    ));
+    let got = svd
+        .compute_at_least(&m, 1, 1, r, c, 0, k, 4, &mut s, &mut u, &mut v)
+        .unwrap();
+    assert!((4..k).contains(&got), "converged {got}");
+    assert!(svd.residuals()[..got].iter().all(|&x| x <= svd.tolerance()));
+    let t = Result3 {
+        sigma: s[..got].to_vec(),
+        u: DMatrix::from_column_slice(r, k, &u)
+            .columns(0, got)
+            .into_owned(),
+        v: DMatrix::from_column_slice(c, k, &v)
+            .columns(0, got)
+            .into_owned(),
+    };
+    let (es, ev, er) = compare(&h, &t);
+    assert!(
+        es < 1e-11 && ev < 1e-8 && er < 1e-10,
+        "{es:e} {ev:e} {er:e}"
+    );
+    // The unconverged Ritz values are lower estimates of the next singular values.
+    let (s_ref, _, _) = dense_reference(&h, k);
+    for i in got..k {
+        assert!(
+            s[i] <= s_ref[i] * (1.0 + 1e-12),
+            "{i}: {} > {}",
+            s[i],
+            s_ref[i]
+        );
+    }
+}

@@ -210,18 +210,14 @@ impl HankelOp {
     /// `y = H x` for the matrix loaded by the last [`prepare`](Self::prepare):
     /// `x` has `c p` entries, `y` receives `r q`.
     pub fn apply_prepared(&mut self, x: &[f64], y: &mut [f64]) -> Result<(), TruncatedError> {
-        let s = self
-            .shape
-            .ok_or(TruncatedError::Fft("no matrix prepared".into()))?;
+        let s = self.shape.ok_or(TruncatedError::NotPrepared)?;
         self.product(s, false, x, y)
     }
 
     /// `y = Hᵀ x` for the matrix loaded by the last [`prepare`](Self::prepare):
     /// `x` has `r q` entries, `y` receives `c p`.
     pub fn apply_t_prepared(&mut self, x: &[f64], y: &mut [f64]) -> Result<(), TruncatedError> {
-        let s = self
-            .shape
-            .ok_or(TruncatedError::Fft("no matrix prepared".into()))?;
+        let s = self.shape.ok_or(TruncatedError::NotPrepared)?;
         self.product(s, true, x, y)
     }
 

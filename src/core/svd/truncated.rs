@@ -202,7 +202,8 @@ impl TruncatedSvd {
 
     /// The leading `k` singular triplets of `H(shift)` (`r × c` blocks of `q × p` from
     /// `markov`, layout in `docs/ARCHITECTURE.md`): `sigma[..k]` descending, `u` (`r q × k`,
-    /// column-major), `v` (`c p × k`, column-major). Allocates nothing.
+    /// column-major), `v` (`c p × k`, column-major), every triplet converged to
+    /// [`tolerance`](Self::tolerance). Allocates nothing.
     #[allow(clippy::too_many_arguments)]
     pub fn compute(
         &mut self,
@@ -217,6 +218,31 @@ impl TruncatedSvd {
         u: &mut [f64],
         v: &mut [f64],
     ) -> Result<(), TruncatedError> {
+        self.compute_at_least(markov, q, p, r, c, shift, k, k, sigma, u, v)
+            .map(|_| ())
+    }
+
+    /// As [`compute`](Self::compute), but succeeds as soon as the leading `need ≤ k` triplets
+    /// have converged within the step budget; returns how many leading triplets converged
+    /// (`need ..= k`). Triplets past that count are Ritz approximations (their residuals are in
+    /// [`residuals`](Self::residuals)): for ERA this gives the order-`n` factors to full
+    /// accuracy plus estimates of the following singular values for the order choice, without
+    /// iterating into the noise cluster. Allocates nothing.
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute_at_least(
+        &mut self,
+        markov: &[f64],
+        q: usize,
+        p: usize,
+        r: usize,
+        c: usize,
+        shift: usize,
+        k: usize,
+        need: usize,
+        sigma: &mut [f64],
+        u: &mut [f64],
+        v: &mut [f64],
+    ) -> Result<usize, TruncatedError> {
         self.steps = 0;
         self.n_ritz = 0;
         self.op.prepare(markov, q, p, r, c, shift)?;
@@ -226,6 +252,13 @@ impl TruncatedSvd {
                 what: "k",
                 got: k,
                 max: self.max_k,
+            });
+        }
+        if need == 0 || need > k {
+            return Err(TruncatedError::Dimension {
+                what: "need",
+                got: need,
+                max: k,
             });
         }
         if k > rows.min(cols) {
@@ -241,12 +274,33 @@ impl TruncatedSvd {
         }
         self.rng = 0x9E37_79B9_7F4A_7C15;
         self.lanczos(rows, cols, k)?;
+        let converged = self.converged(k);
+        if converged < need {
+            return Err(TruncatedError::NotConverged {
+                k: need,
+                converged,
+                steps: self.steps,
+                residual: self.residuals[..need]
+                    .iter()
+                    .fold(0.0, |a: f64, &b| a.max(b)),
+                tolerance: self.tolerance,
+            });
+        }
         self.write_triplets(rows, cols, k, sigma, u, v);
-        Ok(())
+        Ok(converged)
     }
 
-    /// The Lanczos iteration proper; on success the small SVD of the last check holds the
-    /// accepted Ritz triplets.
+    /// Number of leading triplets (of `k`) whose residual passes the tolerance.
+    fn converged(&self, k: usize) -> usize {
+        self.residuals[..k]
+            .iter()
+            .take_while(|&&res| res <= self.tolerance)
+            .count()
+    }
+
+    /// The Lanczos iteration proper: runs until the leading `k` Ritz triplets converge or the
+    /// step budget is spent; either way the small SVD of the last check (and `residuals`) hold
+    /// the Ritz triplets.
     fn lanczos(&mut self, rows: usize, cols: usize, k: usize) -> Result<(), TruncatedError> {
         let m_max = self.max_steps.min(rows.min(cols));
         let (rs, cs) = (self.row_stride, self.col_stride);
@@ -310,17 +364,8 @@ impl TruncatedSvd {
                 next_check = self.steps + (self.steps / 4).max(2);
             }
         }
-        let converged = self.residuals[..k]
-            .iter()
-            .take_while(|&&res| res <= self.tolerance)
-            .count();
-        Err(TruncatedError::NotConverged {
-            k,
-            converged,
-            steps: self.steps,
-            residual: self.residuals[..k].iter().fold(0.0, |a: f64, &b| a.max(b)),
-            tolerance: self.tolerance,
-        })
+        // The budget is spent; the last check (forced at `m_max`) holds the Ritz triplets.
+        Ok(())
     }
 
     /// Small SVD of `B_m`, residuals of the leading `k` Ritz triplets; `true` when all pass.

@@ -72,7 +72,46 @@ pub enum TruncatedError {
     /// The Hankel matrix is zero: there is no leading singular direction.
     #[error("the Hankel matrix is zero")]
     ZeroMatrix,
+    /// A product was asked before any matrix was loaded by `HankelOp::prepare` (or after a
+    /// failed one).
+    #[error("no Hankel matrix prepared for the product")]
+    NotPrepared,
     /// The FFT library refused a buffer (an internal sizing bug; never expected).
     #[error("internal FFT buffer error: {0}")]
     Fft(String),
+}
+
+impl From<TruncatedError> for super::super::SvdError {
+    /// Maps onto the dispatch's coarser error (the details stay in the message of the
+    /// [`TruncatedError`], which callers wanting them can keep instead).
+    fn from(e: TruncatedError) -> Self {
+        use super::super::SvdError;
+        match e {
+            TruncatedError::NotConverged { steps, .. } => SvdError::NotConverged { sweeps: steps },
+            TruncatedError::Dimension { .. } => {
+                SvdError::Dimensions("truncated SVD: dimension outside the workspace")
+            }
+            TruncatedError::MarkovTooShort { .. } => SvdError::Dimensions(
+                "truncated SVD: Markov sequence too short for the Hankel matrix",
+            ),
+            TruncatedError::SliceLength { .. } => {
+                SvdError::Dimensions("truncated SVD: output or input slice too short")
+            }
+            TruncatedError::NonFinite { .. } => {
+                SvdError::Dimensions("truncated SVD: non-finite Markov value")
+            }
+            TruncatedError::TooManyTriplets { .. } => {
+                SvdError::Dimensions("truncated SVD: more triplets than the matrix has")
+            }
+            TruncatedError::ZeroMatrix => {
+                SvdError::Dimensions("truncated SVD: the Hankel matrix is zero")
+            }
+            TruncatedError::NotPrepared => {
+                SvdError::Dimensions("truncated SVD: no Hankel matrix prepared")
+            }
+            TruncatedError::Fft(_) => {
+                SvdError::Unavailable("truncated SVD: internal FFT buffer error")
+            }
+        }
+    }
 }

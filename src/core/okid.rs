@@ -1,0 +1,1 @@
+//! Observer/Kalman filter identification, OKID (owned by the okid part; placeholder).

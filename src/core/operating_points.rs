@@ -1,0 +1,1 @@
+//! Models per operating point (owned by the okid part; placeholder).
