@@ -24,6 +24,7 @@
 pub mod eig;
 pub mod era;
 pub mod error;
+pub mod grouped;
 pub mod hankel;
 pub mod indicators;
 pub mod linalg;
