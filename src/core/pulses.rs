@@ -122,6 +122,16 @@ impl PulseEnsemble {
         &self.pulses[..self.count]
     }
 
+    /// Per-output baselines of pulse `i` (an index into [`PulseEnsemble::pulses`]).
+    pub fn baseline(&self, i: usize) -> &[f64] {
+        &self.baselines[i * self.max_outputs..i * self.max_outputs + self.q]
+    }
+
+    /// Number of output channels of the last build.
+    pub fn outputs(&self) -> usize {
+        self.q
+    }
+
     /// Pulses averaged.
     pub fn kept(&self) -> usize {
         self.kept

@@ -18,6 +18,7 @@ use nalgebra::Complex;
 
 use super::eig::eigenvalues;
 use super::era::realize;
+use super::grouped::{input_matrix, WidthGroups, MAX_GROUPS};
 use super::modal::{continuous, dc_gain, fn_zeta};
 use super::model::Model;
 use super::pulses::{PulseEnsemble, PulseInput};
@@ -101,8 +102,11 @@ impl Default for IdentOptions {
 pub struct Workspace {
     limits: Limits,
     ensemble: PulseEnsemble,
+    groups: WidthGroups,
     markov: MarkovSeq,
+    grouped: MarkovSeq,
     jk_markov: MarkovSeq,
+    jk_weights: [f64; MAX_GROUPS],
     engine: Engine,
 }
 
@@ -136,6 +140,9 @@ struct Lite {
     c: Vec<f64>,
     d: Vec<f64>,
     m: Vec<f64>,
+    s: Vec<f64>,
+    nrm: Vec<f64>,
+    b1: Vec<f64>,
     x: Vec<f64>,
     poles: Vec<C64>,
     dc: Vec<f64>,
@@ -162,8 +169,11 @@ impl Workspace {
         Ok(Self {
             limits: l,
             ensemble: PulseEnsemble::new(l.max_samples, l.max_outputs, l.max_pulses),
+            groups: WidthGroups::new(l.max_samples, l.max_outputs, l.max_pulses),
             markov: MarkovSeq::zeros(l.max_outputs, l.max_inputs, markov_cap),
-            jk_markov: MarkovSeq::zeros(l.max_outputs, l.max_inputs, markov_cap),
+            grouped: MarkovSeq::zeros(l.max_outputs, max_p(&l), markov_cap),
+            jk_markov: MarkovSeq::zeros(l.max_outputs, max_p(&l), markov_cap),
+            jk_weights: [0.0; MAX_GROUPS],
             engine: Engine::new(&l),
         })
     }
@@ -178,7 +188,9 @@ impl Workspace {
         &self.engine.model
     }
 
-    /// The averaged Markov parameters of the last pulse identification.
+    /// The averaged, width-deconvolved Markov parameters `Y_0 .. Y_{L-1}` of the last pulse
+    /// identification (for plots and export; ERA itself runs on the per-width responses, see
+    /// [`crate::core::grouped`], which equal these for one-sample pulses).
     pub fn markov(&self) -> &MarkovSeq {
         &self.markov
     }
@@ -188,8 +200,8 @@ impl Workspace {
         self.engine.model.to_report()
     }
 
-    /// Identifies from a pulse experiment: pulses → Markov parameters → ERA → modal summary,
-    /// indicators, jackknife uncertainty. No heap allocation.
+    /// Identifies from a pulse experiment: pulses → per-width averaged responses → ERA →
+    /// input matrix, modal summary, indicators, jackknife uncertainty. No heap allocation.
     pub fn identify(
         &mut self,
         input: &PulseInput<'_>,
@@ -197,17 +209,27 @@ impl Workspace {
     ) -> Result<&Model, IdentError> {
         self.ensemble
             .build(input, opts.max_pulse_width, &mut self.markov)?;
+        self.groups
+            .build(&self.ensemble, input, &mut self.grouped)?;
         let q = input.y.len();
         let e = &mut self.engine;
+        let wmin = self
+            .groups
+            .weights()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let out_noise = self.ensemble.output_noise();
         for c in 0..q {
-            e.noise[c] = self.ensemble.markov_noise(c);
+            e.noise[c] = out_noise[c] / wmin.sqrt();
         }
         if e.noise[..q].iter().any(|v| !v.is_finite()) {
-            sizing::tail_noise(&self.markov, &mut e.noise[..q]);
+            sizing::tail_noise(&self.grouped, &mut e.noise[..q]);
         }
-        let out_noise = self.ensemble.output_noise();
         let rms = (out_noise.iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
-        e.run(&self.markov, input.dt_s, self.ensemble.growth(), opts)?;
+        e.run(&self.grouped, input.dt_s, &[], opts)?;
+        e.single_input(self.groups.widths(), self.groups.weights(), self.groups.d())?;
+        e.model.finish_gain()?;
         e.model.pulses = self.ensemble.kept();
         e.model.skipped = self.ensemble.skipped();
         e.model.noise_rms = rms;
@@ -218,8 +240,21 @@ impl Workspace {
                 if !self.ensemble.pulses()[i].kept {
                     continue;
                 }
-                self.ensemble.leave_one_out(input, i, &mut self.jk_markov)?;
-                e.jackknife_one(&self.jk_markov, count)?;
+                self.groups.leave_one_out(
+                    &self.ensemble,
+                    input,
+                    i,
+                    &mut self.jk_markov,
+                    &mut self.jk_weights,
+                )?;
+                let w = &self.jk_weights[..self.groups.groups()];
+                e.jackknife_one(
+                    &self.jk_markov,
+                    count,
+                    self.groups.widths(),
+                    w,
+                    self.groups.d(),
+                )?;
                 count += 1;
             }
             e.finish_jackknife(count);
@@ -264,6 +299,7 @@ impl Workspace {
         sizing::tail_noise(markov, &mut e.noise[..q]);
         let rms = (e.noise[..q].iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
         e.run(markov, dt_s, &[], opts)?;
+        e.model.finish_gain()?;
         e.model.pulses = 0;
         e.model.skipped = 0;
         e.model.noise_rms = rms;
@@ -273,8 +309,9 @@ impl Workspace {
 
 impl Engine {
     fn new(l: &Limits) -> Self {
+        let pmax = max_p(l);
         let rows = l.max_block_rows * l.max_outputs;
-        let cols = l.max_block_cols * l.max_inputs;
+        let cols = l.max_block_cols * pmax;
         let wide = rows.min(cols);
         let kmax = (l.max_order + EXTRA_TRIPLETS).min(wide).max(1);
         let n = l.max_order;
@@ -293,18 +330,21 @@ impl Engine {
             noise: vec![0.0; l.max_outputs],
             lite: Lite {
                 a: vec![0.0; n * n],
-                b: vec![0.0; n * l.max_inputs],
+                b: vec![0.0; n * pmax],
                 c: vec![0.0; l.max_outputs * n],
-                d: vec![0.0; l.max_outputs * l.max_inputs],
+                d: vec![0.0; l.max_outputs * pmax],
                 m: vec![0.0; n * n],
-                x: vec![0.0; n * l.max_inputs],
+                s: vec![0.0; n * n],
+                nrm: vec![0.0; n * n],
+                b1: vec![0.0; n],
+                x: vec![0.0; n * pmax],
                 poles: vec![C64::new(0.0, 0.0); n],
-                dc: vec![0.0; l.max_outputs * l.max_inputs],
+                dc: vec![0.0; l.max_outputs * pmax],
             },
             theta_fn: vec![0.0; l.max_pulses],
             theta_zeta: vec![0.0; l.max_pulses],
             theta_dc: vec![0.0; l.max_pulses * l.max_outputs],
-            model: Model::new(n, l.max_outputs, l.max_inputs, wide),
+            model: Model::new(n, l.max_outputs, pmax, wide),
         }
     }
 
@@ -429,14 +469,51 @@ impl Engine {
             &mut m.c,
             &mut m.d,
         );
-        m.analyse(&self.u, &self.v)
+        m.analyse_modes(&self.u, &self.v)
+    }
+
+    /// Converts the realised per-width input matrices `B̃_g` into the single input `B` and
+    /// sets `D` ([`crate::core::grouped`]).
+    fn single_input(
+        &mut self,
+        widths: &[usize],
+        weights: &[f64],
+        d: &[f64],
+    ) -> Result<(), IdentError> {
+        let m = &mut self.model;
+        let n = m.n;
+        let lt = &mut self.lite;
+        if !input_matrix(
+            &m.a,
+            n,
+            &m.b,
+            widths,
+            weights,
+            &mut lt.m,
+            &mut lt.s,
+            &mut lt.nrm,
+            &mut lt.b1,
+        ) {
+            return Err(IdentError::InvalidInput(
+                "the pulse widths cannot excite a pole of the model: B is not identifiable",
+            ));
+        }
+        m.set_single_input(&lt.b1, d);
+        Ok(())
     }
 
     /// Re-identifies the leave-one-out sequence at the model's order and Hankel size and
     /// stores fn, ζ and the DC gains as estimate number `slot`.
-    fn jackknife_one(&mut self, markov: &MarkovSeq, slot: usize) -> Result<(), IdentError> {
+    fn jackknife_one(
+        &mut self,
+        markov: &MarkovSeq,
+        slot: usize,
+        widths: &[usize],
+        weights: &[f64],
+        d: &[f64],
+    ) -> Result<(), IdentError> {
         let m = &self.model;
-        let (n, q, p, dims) = (m.n, m.q, m.p, m.dims);
+        let (n, q, dims) = (m.n, m.q, m.dims);
         let b = (n + EXTRA_TRIPLETS)
             .min(self.kmax)
             .min(dims.rows().min(dims.cols()));
@@ -475,9 +552,24 @@ impl Engine {
         };
         self.theta_fn[slot] = f;
         self.theta_zeta[slot] = z;
-        dc_gain(
-            &lt.a, &lt.b, &lt.c, &lt.d, n, q, p, &mut lt.m, &mut lt.x, &mut lt.dc,
+        let ok = input_matrix(
+            &lt.a,
+            n,
+            &lt.b,
+            widths,
+            weights,
+            &mut lt.m,
+            &mut lt.s,
+            &mut lt.nrm,
+            &mut lt.b1,
         );
+        if ok {
+            dc_gain(
+                &lt.a, &lt.b1, &lt.c, d, n, q, 1, &mut lt.m, &mut lt.x, &mut lt.dc,
+            );
+        } else {
+            lt.dc[..q].fill(f64::NAN);
+        }
         for i in 0..q {
             self.theta_dc[slot * self.limits.max_outputs + i] = lt.dc[i];
         }
@@ -494,6 +586,12 @@ impl Engine {
             m.std_dc[i] = strided_jackknife(vals, count);
         }
     }
+}
+
+/// Most input columns the engine handles: the inputs of given Markov parameters, or one
+/// column per pulse width on the pulse path.
+fn max_p(l: &Limits) -> usize {
+    l.max_inputs.max(MAX_GROUPS)
 }
 
 /// [`jackknife_std`] over an iterator (no allocation).
