@@ -30,6 +30,7 @@ fn clean_recording_gives_a_complete_record_with_exact_impulse_edges() {
     assert_eq!(r.len() as u64, sum.firmware.samples);
     assert_eq!(s.assemble.samples_lost, 0);
     assert_eq!(s.frames.unwrap().dropped.total(), 0);
+    assert_eq!(s.build.link_frames_lost, 0);
     let rate = cfg.stand.sample_rate_hz as f64;
     assert!((r.dt_s * rate - 1.0).abs() < 1e-9, "dt {}", r.dt_s);
     assert!(r.channel("thrust_N").is_some());
@@ -69,6 +70,8 @@ fn faulty_recording_marks_exactly_the_lost_samples_missing() {
         s.frames.unwrap().dropped.total(),
         sum.faults.frames_dropped()
     );
+    // Corrupted frames are link losses; dropped samples are not.
+    assert_eq!(s.build.link_frames_lost, sum.faults.corrupted_frames);
     // NaN exactly at the missing samples.
     for c in &r.channels {
         for (k, v) in c.data.iter().enumerate() {

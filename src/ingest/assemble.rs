@@ -352,6 +352,10 @@ pub struct BuildStats {
     pub invalid_samples: u64,
     /// SAMPLEs without THRUST_FRESH: the load cell's value was held, not newly converted.
     pub thrust_held: u64,
+    /// Device frames lost on the link, from jumps of the 16-bit `seq` between successive
+    /// device frames (restarted by a HELLO with a new `boot_id`). Sample-index gaps without a
+    /// `seq` jump were dropped by the device itself.
+    pub link_frames_lost: u64,
 }
 
 /// Builds a [`Record`] from frames (or generic points), streaming.
@@ -363,6 +367,8 @@ pub struct BuildStats {
 pub struct RecordBuilder {
     asm: SampleAssembler,
     store: Store,
+    last_seq: Option<u16>,
+    boot_id: Option<u32>,
 }
 
 /// The growing record columns.
@@ -381,7 +387,7 @@ impl RecordBuilder {
     pub fn new(opts: AssembleOptions) -> Self {
         Self {
             asm: SampleAssembler::new(opts),
-            store: Store::default(),
+            ..Self::default()
         }
     }
 
@@ -407,6 +413,23 @@ impl RecordBuilder {
 
     /// Feed one decoded frame (SAMPLE, HELLO and EVENT matter; others are ignored).
     pub fn push_frame(&mut self, f: &Frame) {
+        if f.msg.is_command() {
+            return; // a host frame (an echo, a loopback): not part of the device's stream
+        }
+        if let Message::Hello(h) = &f.msg {
+            if self.boot_id.is_some_and(|b| b != h.boot_id) {
+                self.last_seq = None;
+            }
+            self.boot_id = Some(h.boot_id);
+        }
+        if let Some(last) = self.last_seq {
+            let jump = f.seq.wrapping_sub(last);
+            // A jump of half the range or more is a restart, not a loss.
+            if (2..0x8000).contains(&jump) {
+                self.store.stats.link_frames_lost += (jump - 1) as u64;
+            }
+        }
+        self.last_seq = Some(f.seq);
         match &f.msg {
             Message::Sample(s) => {
                 if !s.flags.contains(SampleFlags::THRUST_FRESH) {
