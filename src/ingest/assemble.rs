@@ -130,6 +130,9 @@ pub struct SampleAssembler {
     span_t_us: u64,
     span_samples: u64,
     nominal_rate_hz: Option<u16>,
+    /// The current segment began at an inferred reset after the last HELLO: the HELLO of
+    /// that new boot, when it comes, must not split it again.
+    reset_since_hello: bool,
     stats: AssembleStats,
 }
 
@@ -182,10 +185,11 @@ impl SampleAssembler {
     /// A HELLO: a new `boot_id` ends the current segment.
     pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) {
         self.nominal_rate_hz = Some(sample_rate_hz);
-        if self.boot_id.is_some_and(|b| b != boot_id) {
+        if self.boot_id.is_some_and(|b| b != boot_id) && !self.reset_since_hello {
             self.end_segment();
         }
         self.boot_id = Some(boot_id);
+        self.reset_since_hello = false;
     }
 
     /// A device event referring to `sample_index`.
@@ -239,6 +243,7 @@ impl SampleAssembler {
         let d = match seg.idx.step(sample_index) {
             Step::Backward => {
                 self.stats.resets_inferred += 1;
+                self.reset_since_hello = true;
                 self.end_segment();
                 return self.start_segment(sample_index, t_us, value, on);
             }

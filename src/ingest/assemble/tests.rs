@@ -252,3 +252,17 @@ fn seq_jumps_count_link_losses_not_device_drops() {
     assert_eq!(a.samples_lost, 2);
     assert_eq!(st.link_frames_lost, 1);
 }
+
+#[test]
+fn samples_of_a_new_boot_before_its_hello_make_one_segment() {
+    let mut frames = vec![hello(1)];
+    frames.extend((100..105).map(|i| sample(i, 1000 * i, ALL)));
+    frames.extend((0..2).map(|i| sample(i, 1000 * i, ALL))); // new boot, HELLO late
+    frames.push(hello(2));
+    frames.extend((2..5).map(|i| sample(i, 1000 * i, ALL)));
+    let (r, a, _) = build(&frames);
+    assert_eq!(r.len(), 10);
+    assert_eq!((a.segments, a.resets_inferred), (2, 1));
+    let starts: Vec<usize> = r.events.iter().map(|e| e.sample).collect();
+    assert_eq!(starts, [5]);
+}
