@@ -1,1 +1,51 @@
-//! (to be written)
+//! The identification core: from pulse experiments (or given Markov parameters) to a
+//! discrete-time state-space model, its modal summary, accuracy indicators and uncertainty.
+//! No I/O; every identification through a [`workspace::Workspace`] is allocation-free.
+//!
+//! Pipeline (Juang & Pappa 1985, "An Eigensystem Realization Algorithm for Modal Parameter
+//! Identification and Model Reduction", J. Guidance 8(5), 620–627):
+//!
+//! 1. [`pulses`]: segment throttle pulses, reference each to its own pre-pulse baseline, scale
+//!    by amplitude, ensemble-average, undo the pulse width → Markov parameters [`markov`]
+//!    (`Y_0 = D`, `Y_k = C A^(k-1) B`, response to a unit input held for one sample).
+//! 2. [`sizing`]: noise floor, Hankel size (near-square, up to where the response sinks into
+//!    the noise), order from the singular-value gap against the noise floor.
+//! 3. [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is `Y_{a+b+1+s}`).
+//! 4. [`era`]: `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` = first q rows
+//!    of `U Σ^½`, `D = Y_0`.
+//! 5. [`modal`], [`indicators`], [`uncertainty`]: poles, fn, ζ, DC gain, m-d-k; MSV, MAC,
+//!    EMAC, MPC, CMI; jackknife over pulses.
+//! 6. [`report`]: the published, serde-serialisable [`report::ModelReport`].
+
+// Index loops mirror the formulas (A[i][l] x[l]) in this numerical code; iterator chains over
+// several matrices at once would hide them.
+#![allow(clippy::needless_range_loop)]
+
+pub mod eig;
+pub mod era;
+pub mod error;
+pub mod hankel;
+pub mod indicators;
+pub mod linalg;
+pub mod markov;
+pub mod modal;
+pub mod model;
+pub mod nullable;
+pub mod okid;
+pub mod operating_points;
+pub mod pulses;
+pub mod report;
+pub mod sizing;
+pub mod statespace;
+pub mod svd;
+pub mod uncertainty;
+pub mod workspace;
+
+pub use error::IdentError;
+pub use markov::MarkovSeq;
+pub use model::Model;
+pub use pulses::PulseInput;
+pub use report::ModelReport;
+pub use statespace::StateSpace;
+pub use svd::{SvdChoice, SvdError};
+pub use workspace::{IdentOptions, Limits, Workspace};

@@ -1,0 +1,59 @@
+//! The Eigensystem Realization Algorithm (Juang & Pappa 1985, J. Guidance 8(5), eqs. 29–36).
+//!
+//! With `H(0) = U Σ Vᵀ` truncated to the order `n` (`U_n`: `rq × n`, `V_n`: `cp × n`),
+//! `P = U_n Σ_n^½` is the realised observability matrix and `Q = Σ_n^½ V_nᵀ` the realised
+//! controllability matrix, `H(0) ≈ P Q`. Since `H(1) = P A Q` for exact data,
+//!
+//! ```text
+//! A = Σ^-½ U_nᵀ H(1) V_n Σ^-½
+//! B = first p columns of Σ^½ V_nᵀ
+//! C = first q rows of U_n Σ^½
+//! D = Y_0
+//! ```
+//!
+//! `H(1) V_n` is computed from the Markov parameters directly, `H(1)` is never formed.
+//! Storage: `a` (`n × n`), `b` (`n × p`), `c` (`q × n`), `d` (`q × p`), all column-major.
+
+use super::hankel::HankelDims;
+
+/// Realises `(A, B, C, D)` of order `n` from the leading triplets (`u`: `rows × k`,
+/// `v`: `cols × k`, column-major, `k >= n`). `scratch` needs `rows * n` values.
+#[allow(clippy::too_many_arguments)]
+pub fn realize(
+    markov: &[f64],
+    dims: &HankelDims,
+    n: usize,
+    sigma: &[f64],
+    u: &[f64],
+    v: &[f64],
+    scratch: &mut [f64],
+    a: &mut [f64],
+    b: &mut [f64],
+    c: &mut [f64],
+    d: &mut [f64],
+) {
+    let (rows, cols, q, p) = (dims.rows(), dims.cols(), dims.q, dims.p);
+    // T = H(1) V_n, rows × n.
+    for l in 0..n {
+        let vl = &v[l * cols..(l + 1) * cols];
+        dims.apply(markov, 1, vl, &mut scratch[l * rows..(l + 1) * rows]);
+    }
+    for i in 0..n {
+        let ui = &u[i * rows..(i + 1) * rows];
+        for j in 0..n {
+            let tj = &scratch[j * rows..(j + 1) * rows];
+            let dot: f64 = ui.iter().zip(tj).map(|(x, y)| x * y).sum();
+            a[i + j * n] = dot / (sigma[i] * sigma[j]).sqrt();
+        }
+    }
+    for l in 0..n {
+        let s = sigma[l].sqrt();
+        for j in 0..p {
+            b[l + j * n] = s * v[j + l * cols];
+        }
+        for i in 0..q {
+            c[i + l * q] = u[i + l * rows] * s;
+        }
+    }
+    d[..q * p].copy_from_slice(&markov[..q * p]);
+}

@@ -1,0 +1,1 @@
+//! Hankel operator applied through FFT convolution (owned by the svd part; placeholder).

@@ -1,0 +1,1 @@
+//! Truncated Hankel SVD by FFT products and Lanczos (owned by the svd part; placeholder).
