@@ -437,6 +437,9 @@ mod tests {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/propid.toml");
         let c = Config::load(&path).unwrap();
         assert_eq!(c.identify.output, "thrust_N");
+        // the [experiment] table is the plan's, and the plan accepts it
+        assert_eq!(c.experiment["levels"].as_array().unwrap().len(), 3);
+        crate::daemon::plan::from_config(&c).unwrap();
     }
 
     #[test]
@@ -477,6 +480,22 @@ mod tests {
             e.contains("identify.output") && e.contains("voltage"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn bad_experiment_keys_are_refused_by_the_plan() {
+        for text in [
+            "[experiment]\nlevles = [0.3]\n",
+            "[experiment]\nlevels = [1.5]\n",
+            "[experiment]\npulse_spacing_ms = \"x\"\n",
+        ] {
+            let c = Config::parse(text, "t").unwrap();
+            let e = crate::daemon::plan::from_config(&c)
+                .err()
+                .unwrap()
+                .to_string();
+            assert!(e.contains("lev") || e.contains("pulse_spacing_ms"), "{e}");
+        }
     }
 
     #[test]

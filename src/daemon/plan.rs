@@ -29,6 +29,11 @@ pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
             message: format!("{e}"),
         })
     })?;
+    from_experiment(ecfg)
+}
+
+/// Builds the plan from an experiment configuration (validated here).
+pub fn from_experiment(ecfg: ExperimentConfig) -> Result<Box<dyn Plan>, DaemonError> {
     let exp = Experiment::new(ecfg, 1).map_err(|e| {
         DaemonError::Config(super::ConfigError::Parse {
             origin: "[experiment]".into(),

@@ -89,8 +89,10 @@ impl Tracker {
         let mut new_segment = std::mem::take(&mut self.segment_pending);
         let mut index = self.index.unwrap(raw_index);
         if matches!(self.last_index, Some(last) if index <= last) {
-            // Backwards or repeated with no new HELLO: the device restarted.
+            // Backwards or repeated with no new HELLO: the device restarted (its boot HELLO
+            // was lost). Its boot id is unknown: the next HELLO is adopted, not a new segment.
             self.restart();
+            self.boot_id = None;
             self.segment_pending = false;
             new_segment = true;
             index = self.index.unwrap(raw_index);
@@ -257,5 +259,8 @@ mod tests {
         let p = t.sample(4, 20);
         assert!(!p.new_segment);
         assert_eq!(p.lost_before, 0);
+        assert!(!t.hello(2), "the restarted device's HELLO is adopted");
+        assert!(!t.sample(5, 30).new_segment);
+        assert_eq!(t.segments, 2);
     }
 }

@@ -157,7 +157,7 @@ impl<I: Identifier> Worker<I> {
             PlanNote::Connected { boot_id } => {
                 json!({"type": "event", "kind": "connected", "boot_id": boot_id})
             }
-            PlanNote::Armed => json!({"type": "event", "kind": "armed"}),
+            PlanNote::Armed => json!({"type": "event", "kind": "arm_acknowledged"}),
             PlanNote::LevelReached { index, level } => {
                 json!({"type": "event", "kind": "level_reached", "index": index, "operating_point": level})
             }
