@@ -14,6 +14,9 @@
 //! read yet is kept up to [`MAX_BACKLOG`] bytes, beyond which whole batches are dropped and
 //! counted.
 //!
+//! Faults are injected only while a host has the slave open (the injector is switched off
+//! otherwise), so [`SimReport::faults`] counts what a connected host could see.
+//!
 //! A hang-up fault drops the master (the host sees EOF/EIO, i.e. an unplug); with
 //! `reopen_after_ms >= 0` a new pty is opened after that delay as a new boot (new boot id,
 //! disarmed, counters restarted) and `--link` is re-pointed to it.
@@ -314,6 +317,7 @@ fn serve(
             );
             return Ok(true);
         }
+        fw.faults_mut().set_enabled(reader_present);
         fw.advance(now);
         let before = backlog.len();
         fw.drain_output(now, &mut backlog);
