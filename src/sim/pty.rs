@@ -8,7 +8,7 @@
 //! opens late gets fresh data, not a backlog.
 //!
 //! A pty does not pace, so the runner does: the firmware schedules its samples on device time
-//! and the runner hands it a monotonic clock ([`MonoClock`](super::pace::MonoClock)), waiting
+//! and the runner hands it a monotonic clock ([`super::pace::MonoClock`]), waiting
 //! for host bytes with `ppoll` until the next sample deadline. A late wake-up emits every sample
 //! that became due (catch-up without drift). Writes are non-blocking; output the host does not
 //! read yet is kept up to [`MAX_BACKLOG`] bytes, beyond which whole batches are dropped and
