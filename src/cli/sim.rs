@@ -26,7 +26,8 @@ pub struct Args {
     /// Make a symlink at PATH to the pty slave (re-pointed after a hang-up and re-open).
     #[arg(long, value_name = "PATH")]
     pub link: Option<PathBuf>,
-    /// Stop after S seconds (with --record: the length of the recording).
+    /// Stop after S seconds (with --record: simulated seconds at most; the recording ends 0.5 s
+    /// after the experiment plan is over if that comes first).
     #[arg(long, value_name = "S")]
     pub seconds: Option<f64>,
     /// Write a recording (raw device bytes) of the experiment plan to FILE, faster than real
