@@ -164,13 +164,18 @@ fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
         seconds: args.seconds,
     };
     let mut print_err = None;
-    let report = pty::run(cfg, &opts, &stop, |p| {
+    let report = pty::run(cfg, &opts, &stop, |p, slave| {
         if let Err(e) = print_line(&p.display().to_string()) {
             print_err.get_or_insert(e);
         }
+        let via = if p == slave {
+            String::new()
+        } else {
+            format!(" (link {})", p.display())
+        };
         eprintln!(
-            "propid sim: stand on {} ({} Hz, {:?})",
-            p.display(),
+            "propid sim: stand on {}{via}, {} Hz, {:?}",
+            slave.display(),
             cfg.stand.sample_rate_hz,
             cfg.stand.protocol
         );

@@ -197,13 +197,13 @@ struct Shared {
 }
 
 /// Runs the simulated stand on a pty until `stop` is set, `opts.seconds` pass, or a hang-up
-/// without re-open. `on_path` is called with the path the host should open (the `--link` if
-/// given, else the slave) every time a pty is opened.
+/// without re-open. `on_path(host_path, slave_path)` is called every time a pty is opened:
+/// the path the host should open (the `--link` if given, else the slave) and the slave device.
 pub fn run(
     cfg: &SimConfig,
     opts: &RunOptions,
     stop: &AtomicBool,
-    mut on_path: impl FnMut(&Path),
+    mut on_path: impl FnMut(&Path, &Path),
 ) -> Result<SimReport, SimError> {
     let shared = Shared::default();
     let r = run_shared(cfg, opts, &shared, Some(stop), &mut on_path);
@@ -216,7 +216,7 @@ fn run_shared(
     opts: &RunOptions,
     shared: &Shared,
     extra_stop: Option<&AtomicBool>,
-    on_path: &mut dyn FnMut(&Path),
+    on_path: &mut dyn FnMut(&Path, &Path),
 ) -> Result<(), SimError> {
     let started = Instant::now();
     let deadline = opts
@@ -233,7 +233,7 @@ fn run_shared(
     let mut samples_before = 0u64;
     loop {
         let link = open_link(opts.link.as_deref())?;
-        on_path(opts.link.as_deref().unwrap_or(&link.path));
+        on_path(opts.link.as_deref().unwrap_or(&link.path), &link.path);
         let plant = PlantDynamics::new(&cfg.plant, dt_s, cfg.stand.seed.wrapping_add(boot))?;
         let id = super::boot_id(cfg.stand.seed, boot);
         let mut fw = Firmware::new(&cfg.stand, plant, id, faults);
@@ -408,7 +408,7 @@ impl SimHandle {
         let thread = std::thread::Builder::new()
             .name("propid-sim".into())
             .spawn(move || {
-                let mut on_path = |p: &Path| {
+                let mut on_path = |p: &Path, _slave: &Path| {
                     let _ = tx.send(p.to_path_buf());
                 };
                 let r = run_shared(&cfg, &opts, &thread_shared, None, &mut on_path);
