@@ -134,7 +134,9 @@ pub fn extend(ctx: &Ctx, cur: &Fit, effect: &str) -> Option<Fit> {
             if cur.spec.delay > 0 {
                 return None;
             }
-            let dmax = ((MAX_DELAY_S / dt).round() as usize).clamp(1, ctx.est.len() / 10);
+            // At most 0.15 s, 80 samples and a tenth of the estimation part (≥ 60 samples).
+            let cap = (ctx.est.len() / 10).clamp(1, 80);
+            let dmax = ((MAX_DELAY_S / dt).round() as usize).clamp(1, cap);
             // Coarse grid with a short refit of every parameter at each delay (the baseline's
             // fn and ζ have absorbed part of the delay), then every delay around the best.
             let lm_at = |d: usize, iters: usize| {
@@ -159,7 +161,9 @@ pub fn extend(ctx: &Ctx, cur: &Fit, effect: &str) -> Option<Fit> {
             best
         }
         "static_nonlinearity" => {
-            if cur.spec.static_map || ctx.sig.u_ref <= 0.0 {
+            // A power law needs a throttle-like input: non-negative, away from zero on average.
+            let throttle_like = ctx.sig.u[ctx.est.clone()].iter().all(|&x| x >= 0.0);
+            if cur.spec.static_map || !throttle_like || ctx.sig.u_ref <= 1e-3 {
                 return None;
             }
             let s = Spec {

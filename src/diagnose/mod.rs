@@ -20,7 +20,7 @@ pub mod catalogue;
 pub mod era_start;
 pub mod fit;
 pub mod model;
-
+pub mod report;
 pub mod result;
 pub mod spectrum;
 pub mod synth;
