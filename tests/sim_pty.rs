@@ -224,3 +224,29 @@ fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
     let r = sim.stop().unwrap();
     assert_eq!((r.faults.hangups, r.faults.reopens), (1, 1));
 }
+
+#[test]
+fn csv_dialect_over_the_pty() {
+    let mut cfg = SimConfig::default();
+    cfg.stand.protocol = propid::sim::config::WireProtocol::Csv;
+    let sim = SimHandle::spawn(cfg, RunOptions::default()).unwrap();
+    let mut port = open(sim.path());
+    std::io::Write::write_all(&mut port, b"PING\nARM 500\n").unwrap();
+    let mut text = String::new();
+    let mut buf = [0u8; 4096];
+    let t0 = Instant::now();
+    let row = |t: &str| {
+        t.lines()
+            .any(|l| l.split(',').count() == 7 && l.contains('*'))
+    };
+    while !(text.contains("#ACK ARM OK") && row(&text)) && t0.elapsed() < Duration::from_secs(2) {
+        if let Ok(n) = port.read(&mut buf) {
+            text.push_str(&String::from_utf8_lossy(&buf[..n]));
+        }
+    }
+    assert!(text.contains("#ACK PING OK"), "{text}");
+    assert!(text.contains("# HELLO propid-sim"), "{text}");
+    assert!(text.contains("#ACK ARM OK"), "{text}");
+    assert!(row(&text), "{text}");
+    drop(sim);
+}

@@ -26,7 +26,8 @@ pub struct Args {
     /// Make a symlink at PATH to the pty slave (re-pointed after a hang-up and re-open).
     #[arg(long, value_name = "PATH")]
     pub link: Option<PathBuf>,
-    /// Stop after S seconds (with --record: the length of the recording).
+    /// Stop after S seconds (with --record: simulated seconds at most; the recording ends 0.5 s
+    /// after the experiment plan is over if that comes first).
     #[arg(long, value_name = "S")]
     pub seconds: Option<f64>,
     /// Write a recording (raw device bytes) of the experiment plan to FILE, faster than real
@@ -163,13 +164,18 @@ fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
         seconds: args.seconds,
     };
     let mut print_err = None;
-    let report = pty::run(cfg, &opts, &stop, |p| {
+    let report = pty::run(cfg, &opts, &stop, |p, slave| {
         if let Err(e) = print_line(&p.display().to_string()) {
             print_err.get_or_insert(e);
         }
+        let via = if p == slave {
+            String::new()
+        } else {
+            format!(" (link {})", p.display())
+        };
         eprintln!(
-            "propid sim: stand on {} ({} Hz, {:?})",
-            p.display(),
+            "propid sim: stand on {}{via}, {} Hz, {:?}",
+            slave.display(),
             cfg.stand.sample_rate_hz,
             cfg.stand.protocol
         );

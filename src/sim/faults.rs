@@ -75,6 +75,7 @@ pub struct FaultInjector {
     stall_until_us: u64,
     pending: Vec<u8>,
     delimiter: u8,
+    enabled: bool,
 }
 
 impl FaultInjector {
@@ -89,6 +90,7 @@ impl FaultInjector {
             stall_until_us: 0,
             pending: Vec::new(),
             delimiter: 0,
+            enabled: true,
         };
         inj.next_garbage_us = inj.gap_us(cfg.garbage_bursts_per_s, 0);
         inj.next_stall_us = inj.gap_us(cfg.stalls_per_s, 0);
@@ -100,6 +102,14 @@ impl FaultInjector {
     pub fn with_delimiter(mut self, delimiter: u8) -> Self {
         self.delimiter = delimiter;
         self
+    }
+
+    /// Switches injection on or off (on by default). While off, frames pass unchanged and no
+    /// fault is drawn or counted; scheduled bursts and stalls that fall due are skipped. The pty
+    /// runner switches it off while no host has the slave open, so that the counts cover only
+    /// output a host could have received.
+    pub fn set_enabled(&mut self, on: bool) {
+        self.enabled = on;
     }
 
     /// The counts so far.
@@ -132,13 +142,19 @@ impl FaultInjector {
     /// Runs the time-driven faults (garbage bursts, stalls) up to `now_us`.
     pub fn poll(&mut self, now_us: u64) {
         while let Some(t) = self.next_garbage_us.filter(|&t| t <= now_us) {
-            self.burst();
+            if self.enabled {
+                self.burst();
+            }
             self.next_garbage_us = self.gap_us(self.cfg.garbage_bursts_per_s, t);
         }
         while let Some(t) = self.next_stall_us.filter(|&t| t <= now_us) {
-            self.stats.stalls += 1;
-            self.stall_until_us = t + self.cfg.stall_ms as u64 * 1000;
-            self.next_stall_us = self.gap_us(self.cfg.stalls_per_s, self.stall_until_us);
+            let mut end = t;
+            if self.enabled {
+                self.stats.stalls += 1;
+                self.stall_until_us = t + self.cfg.stall_ms as u64 * 1000;
+                end = self.stall_until_us;
+            }
+            self.next_stall_us = self.gap_us(self.cfg.stalls_per_s, end);
         }
     }
 
@@ -160,7 +176,9 @@ impl FaultInjector {
     /// before it gives the sample a link `seq`, so the host sees a `sample_index` jump without a
     /// `seq` jump: a device-side drop (PROTOCOL.md §3).
     pub fn drop_sample(&mut self) -> bool {
-        let drop = self.cfg.drop_sample_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_sample_prob);
+        let drop = self.enabled
+            && self.cfg.drop_sample_prob > 0.0
+            && self.rng.gen_bool(self.cfg.drop_sample_prob);
         if drop {
             self.stats.dropped_samples += 1;
         }
@@ -173,7 +191,7 @@ impl FaultInjector {
         let start = self.pending.len();
         self.pending.extend_from_slice(frame);
         let body = frame.len().saturating_sub(1);
-        if self.cfg.bit_flip_per_byte > 0.0 && body > 0 {
+        if self.enabled && self.cfg.bit_flip_per_byte > 0.0 && body > 0 {
             let p_frame = 1.0 - (1.0 - self.cfg.bit_flip_per_byte).powi(body as i32);
             if self.rng.gen_bool(p_frame.clamp(0.0, 1.0)) {
                 let at = start + self.rng.gen_range(0..body);
@@ -296,6 +314,30 @@ mod tests {
             out.iter().filter(|&&b| b == 0).count() as u64,
             s.garbage_bursts
         );
+    }
+
+    #[test]
+    fn disabled_injector_passes_everything_and_counts_nothing() {
+        let cfg = FaultConfig {
+            bit_flip_per_byte: 0.1,
+            garbage_bursts_per_s: 100.0,
+            drop_sample_prob: 0.5,
+            stalls_per_s: 50.0,
+            ..FaultConfig::default()
+        };
+        let mut inj = FaultInjector::new(&cfg, 9);
+        inj.set_enabled(false);
+        let mut out = Vec::new();
+        for k in 0..100 {
+            assert!(!inj.drop_sample());
+            inj.push_frame(&frame(20), FrameKind::Sample);
+            inj.drain_ready(k * 10_000, &mut out);
+        }
+        assert_eq!(out, frame(20).repeat(100));
+        assert_eq!(inj.stats(), FaultStats::default());
+        inj.set_enabled(true);
+        inj.drain_ready(2_000_000, &mut out);
+        assert!(inj.stats().garbage_bursts > 0, "on again");
     }
 
     #[test]

@@ -27,6 +27,7 @@ use super::csv::{CsvReader, CsvWriter};
 use super::dedup::Dedup;
 use super::dynamics::Dynamics;
 use super::faults::{FaultInjector, FaultStats, FrameKind};
+use super::plant::Measurement;
 use super::rx::{CommandReader, Incoming, RxStats};
 use crate::protocol::message::caps;
 use crate::protocol::{
@@ -349,7 +350,7 @@ impl<D: Dynamics> Firmware<D> {
         }
     }
 
-    fn send_sample(&mut self, b: u64, throttle: u16, mut flags: SampleFlags, m: &MeasurementRef) {
+    fn send_sample(&mut self, b: u64, throttle: u16, mut flags: SampleFlags, m: &Measurement) {
         self.stats.samples += 1;
         let thrust = m.thrust_n - self.tare.0;
         let torque = m.torque_nm - self.tare.1;
@@ -470,9 +471,6 @@ impl<D: Dynamics> Firmware<D> {
         self.tx_seq = self.tx_seq.wrapping_add(1);
     }
 }
-
-/// The plant's reading, as the firmware uses it.
-type MeasurementRef = super::plant::Measurement;
 
 #[cfg(test)]
 #[path = "firmware_tests.rs"]

@@ -16,6 +16,11 @@
 //! - [`record`]: firmware + host experiment plan in a loop on a simulated clock, writing a
 //!   recording faster than real time (`propid sim --record`).
 //! - [`config::SimConfig`]: `config/sim.toml`, validated with the key and value named on refusal.
+//!
+//! Smaller pieces: [`rx`] classifies host frames (so refused ones can still be ACKed with their
+//! seq), [`csv`] is the text dialect (`protocol = "csv"`), [`dedup`] the device's memory of its
+//! last 8 commands, [`pace`] the monotonic clock, and the command semantics live in `execute`.
+//! The [`plant`] and its [`effects`] are the diagnose part's model of the motor + propeller.
 
 pub mod config;
 pub mod csv;

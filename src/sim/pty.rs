@@ -8,11 +8,14 @@
 //! opens late gets fresh data, not a backlog.
 //!
 //! A pty does not pace, so the runner does: the firmware schedules its samples on device time
-//! and the runner hands it a monotonic clock ([`MonoClock`](super::pace::MonoClock)), waiting
+//! and the runner hands it a monotonic clock ([`super::pace::MonoClock`]), waiting
 //! for host bytes with `ppoll` until the next sample deadline. A late wake-up emits every sample
 //! that became due (catch-up without drift). Writes are non-blocking; output the host does not
 //! read yet is kept up to [`MAX_BACKLOG`] bytes, beyond which whole batches are dropped and
 //! counted.
+//!
+//! Faults are injected only while a host has the slave open (the injector is switched off
+//! otherwise), so [`SimReport::faults`] counts what a connected host could see.
 //!
 //! A hang-up fault drops the master (the host sees EOF/EIO, i.e. an unplug); with
 //! `reopen_after_ms >= 0` a new pty is opened after that delay as a new boot (new boot id,
@@ -194,13 +197,13 @@ struct Shared {
 }
 
 /// Runs the simulated stand on a pty until `stop` is set, `opts.seconds` pass, or a hang-up
-/// without re-open. `on_path` is called with the path the host should open (the `--link` if
-/// given, else the slave) every time a pty is opened.
+/// without re-open. `on_path(host_path, slave_path)` is called every time a pty is opened:
+/// the path the host should open (the `--link` if given, else the slave) and the slave device.
 pub fn run(
     cfg: &SimConfig,
     opts: &RunOptions,
     stop: &AtomicBool,
-    mut on_path: impl FnMut(&Path),
+    mut on_path: impl FnMut(&Path, &Path),
 ) -> Result<SimReport, SimError> {
     let shared = Shared::default();
     let r = run_shared(cfg, opts, &shared, Some(stop), &mut on_path);
@@ -213,7 +216,7 @@ fn run_shared(
     opts: &RunOptions,
     shared: &Shared,
     extra_stop: Option<&AtomicBool>,
-    on_path: &mut dyn FnMut(&Path),
+    on_path: &mut dyn FnMut(&Path, &Path),
 ) -> Result<(), SimError> {
     let started = Instant::now();
     let deadline = opts
@@ -230,7 +233,7 @@ fn run_shared(
     let mut samples_before = 0u64;
     loop {
         let link = open_link(opts.link.as_deref())?;
-        on_path(opts.link.as_deref().unwrap_or(&link.path));
+        on_path(opts.link.as_deref().unwrap_or(&link.path), &link.path);
         let plant = PlantDynamics::new(&cfg.plant, dt_s, cfg.stand.seed.wrapping_add(boot))?;
         let id = super::boot_id(cfg.stand.seed, boot);
         let mut fw = Firmware::new(&cfg.stand, plant, id, faults);
@@ -314,6 +317,7 @@ fn serve(
             );
             return Ok(true);
         }
+        fw.faults_mut().set_enabled(reader_present);
         fw.advance(now);
         let before = backlog.len();
         fw.drain_output(now, &mut backlog);
@@ -404,7 +408,7 @@ impl SimHandle {
         let thread = std::thread::Builder::new()
             .name("propid-sim".into())
             .spawn(move || {
-                let mut on_path = |p: &Path| {
+                let mut on_path = |p: &Path, _slave: &Path| {
                     let _ = tx.send(p.to_path_buf());
                 };
                 let r = run_shared(&cfg, &opts, &thread_shared, None, &mut on_path);

@@ -218,6 +218,24 @@ mod tests {
     }
 
     #[test]
+    fn byte_at_a_time_gives_the_same_commands() {
+        let mut bytes = b"junk\0".to_vec();
+        bytes.extend_from_slice(&[0x04, 0x01, 0x06, 0x0a, 0x03, 0x33, 0x34, 0x00]);
+        bytes.extend(raw(1, 0x04, 9, &[1]));
+        let whole = read(&bytes);
+        let mut r = CommandReader::new();
+        let mut single = Vec::new();
+        for b in &bytes {
+            r.push(std::slice::from_ref(b), |i| single.push(i));
+        }
+        assert_eq!(whole, single);
+        assert_eq!(
+            r.stats().commands + r.stats().refused + r.stats().garbage,
+            3
+        );
+    }
+
+    #[test]
     fn oversize_block_is_garbage_and_the_next_frame_survives() {
         let mut bytes = vec![0x55u8; 400];
         bytes.push(0);
