@@ -112,14 +112,17 @@ def modal(poles_z, dt):
 def python_control_era(markov, dt, order, mem_limit_gb):
     import control as ct
     l = len(markov)
-    # Square Hankel as python-control's default: m = n = l/2 block rows and columns.
+    # Square Hankel: m = n block rows and columns, (l - 1) >= m + n.
     m = (l - 1) // 2
     need_gb = 3 * m * m * 8 / 1e9   # H, H shifted, and the full SVD factors, roughly
     if need_gb > mem_limit_gb:
         return None, f"skipped: square Hankel {m}x{m} needs ~{need_gb:.0f} GB"
     yy = markov.reshape(1, 1, l)
     t0 = time.perf_counter()
-    sys_d, _ = ct.eigensys_realization(yy, order, m=m, n=m, dt=dt)
+    # dt=True (unspecified sample time): given a numeric dt, python-control 0.10 multiplies B by
+    # dt ("unit-area impulse"), which makes the DC gain wrong by the sample rate for Markov
+    # parameters of a unit pulse held one sample. The sample time enters only via the poles.
+    sys_d, _ = ct.eigensys_realization(yy, order, m=m, n=m, dt=True)
     elapsed = time.perf_counter() - t0
     poles = np.linalg.eigvals(sys_d.A)
     fn, zeta = modal(poles, dt)
