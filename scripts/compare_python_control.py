@@ -7,7 +7,9 @@ installs them into a virtual environment under target/.
   compare_python_control.py generate N OUT.csv [--seed S]
       writes a pulse experiment on a mass-spring-damper-like thrust response at 1 kHz
       (PROTOCOL.md section 6 header `t_s,throttle,thrust_N`, throttle as the TSP/1 level
-      0..10000): an operating point, one-sample throttle pulses, Gaussian thrust noise.
+      0..10000): an operating point, one one-sample throttle pulse after 100 samples, its
+      response over the rest of the record, Gaussian thrust noise (with --pulses K, K pulses
+      spread evenly).
   compare_python_control.py compare FILE.csv [--propid BIN] [--order 2] [--truth FN,ZETA,DC]
       python-control: Markov parameters from the pulses (baseline-subtracted, scaled by the
       amplitude, averaged), then `control.eigensys_realization` (= `era`) with a square Hankel
@@ -35,7 +37,6 @@ OP_LEVEL = 5000          # operating point, TSP/1 level (0.5 throttle)
 PULSE = 1000             # pulse height, TSP/1 level (0.1 throttle)
 NOISE_N = 0.002          # thrust noise std, N
 THRUST_OP = 4.0          # thrust at the operating point, N
-SPACING = 1000           # samples between pulses (1 s: the response has decayed to < 1 %)
 LEAD = 100               # samples before the first pulse
 
 
@@ -53,10 +54,11 @@ def plant_ss(truth=TRUTH, fs=FS):
     return e[:2, :2], e[:2, 2:], np.array([[1.0, 0.0]])
 
 
-def generate(n, out, seed):
+def generate(n, out, seed, pulses=1):
     ad, bd, c = plant_ss()
     level = np.full(n, OP_LEVEL, dtype=np.int64)
-    starts = list(range(LEAD, n - 50, SPACING))
+    spacing = max((n - LEAD) // max(pulses, 1), 1)
+    starts = list(range(LEAD, n - 50, spacing))[:pulses]
     for i, s in enumerate(starts):
         level[s] += PULSE if i % 2 == 0 else -PULSE
     u = (level - OP_LEVEL) / 1e4
@@ -188,6 +190,7 @@ def main():
     g.add_argument("n", type=int)
     g.add_argument("out")
     g.add_argument("--seed", type=int, default=1)
+    g.add_argument("--pulses", type=int, default=1)
     c = sub.add_parser("compare")
     c.add_argument("file")
     c.add_argument("--propid", default="target/release/propid")
@@ -196,7 +199,7 @@ def main():
     c.add_argument("--mem-limit-gb", type=float, default=4.0)
     args = ap.parse_args()
     if args.cmd == "generate":
-        generate(args.n, args.out, args.seed)
+        generate(args.n, args.out, args.seed, args.pulses)
         return 0
     return compare(args)
 
