@@ -6,6 +6,8 @@
 //! order-2 factors ERA needs) and for `k = 16` with only the leading 2 required to converge
 //! (`compute_at_least`, what an automatic order choice asks for).
 
+use std::time::Duration;
+
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
 use propid::core::svd::dense::DenseSvd;
 use propid::core::svd::hankel_op::HankelOp;
@@ -43,7 +45,10 @@ fn dense_hankel(m: &[f64], s: usize, out: &mut [f64]) {
 
 fn bench_svd(c: &mut Criterion) {
     let mut group = c.benchmark_group("hankel_svd");
-    group.sample_size(10);
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
     for &s in &[16usize, 32, 64, 96, 128, 192, 256] {
         let m = markov(2 * s + 2);
         let mut sigma = vec![0.0; s];
@@ -82,6 +87,9 @@ fn bench_svd(c: &mut Criterion) {
 
 fn bench_products(c: &mut Criterion) {
     let mut group = c.benchmark_group("hankel_product");
+    group
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
     for &n in &[2_000usize, 8_000, 100_000] {
         let s = n / 2;
         let m = markov(n + 1);

@@ -1,9 +1,10 @@
 //! Scale run of the truncated Hankel SVD (plain `main`, not criterion): for records of 1 000,
 //! 4 000 and 100 000 samples, the square Hankel `H(0)` (`s × s`, `s = (N − 1)/2`), its two
 //! leading triplets and `Uᵀ H(1) V` (everything ERA needs from the SVD), timed, with the peak
-//! resident memory of the process (`getrusage`, `ru_maxrss`).
+//! resident memory of the process (`VmHWM`). Sizes can be given as arguments; for a clean
+//! peak-memory figure per size run one size per process, as `scripts/svd_scale.sh` does.
 //!
-//! `cargo bench --bench svd_scale` (or `scripts/svd_scale.sh`). Targets (issue 6): 100 000
+//! `cargo bench --bench svd_scale [-- N...]` (or `scripts/svd_scale.sh`). Targets (issue 6): 100 000
 //! samples in well under 1 s and under 64 MB peak.
 
 use std::time::Instant;
@@ -32,15 +33,18 @@ fn markov(len: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Peak resident set size of this process in MiB (Linux reports kibibytes).
+/// Peak resident set size of this process in MiB: `VmHWM` from `/proc/self/status` (Linux).
+/// (`getrusage`'s `ru_maxrss` is not used: it keeps the parent's high-water mark across
+/// `exec`, so under `cargo bench` it reports cargo's own peak.)
 fn peak_rss_mib() -> f64 {
-    // SAFETY: getrusage writes into the zeroed struct we pass; no other invariants.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    let rc = unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
-    if rc != 0 {
+    let Ok(status) = std::fs::read_to_string("/proc/self/status") else {
         return f64::NAN;
-    }
-    usage.ru_maxrss as f64 / 1024.0
+    };
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+        .map_or(f64::NAN, |kib| kib / 1024.0)
 }
 
 fn main() {

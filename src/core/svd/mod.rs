@@ -50,7 +50,16 @@ impl SvdPath {
 /// path (see [`resolve`]). The svd part measures and tunes it (`docs/core.md`,
 /// `/work/shared/SVD-MEASUREMENTS.md`: the dense Jacobi SVD grows as `m n²`, the truncated one
 /// as `(m + n) log(m + n)` per Lanczos step).
-pub const TRUNCATED_CROSSOVER: usize = 160;
+///
+/// Measured by `benches/svd.rs` (square SISO Hankel, noisy 2nd-order response, release build on
+/// the 2-core machine; medians): dense Jacobi with `k = 2` takes 0.24 ms at 16, 0.86–1.9 ms at
+/// 32, 4.9–11.5 ms at 64, 17–42 ms at 96, 41–91 ms at 128, 0.72 s at 256; the truncated path
+/// takes 15–45 µs at 32 and 65 µs at 128 for `k = 2`, and 0.12 ms at 16, 0.56 ms at 32,
+/// 0.81 ms at 64, 3.4 ms at 128, 4.7 ms at 256 for `k = 16` with 2 required
+/// (`compute_at_least`, the automatic-order call). It is faster from 16 up; below 32 both take
+/// well under a millisecond and the dense path also gives every singular value, so the switch
+/// is at 32.
+pub const TRUNCATED_CROSSOVER: usize = 32;
 
 /// Largest dimension the dense path's buffers are allocated for (`rows × cols` doubles twice):
 /// beyond it only the truncated path runs.

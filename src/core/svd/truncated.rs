@@ -59,6 +59,11 @@ pub const DEFAULT_TOLERANCE: f64 = 1e-12;
 /// is a breakdown (rounding-level: the Krylov space is invariant).
 const BREAKDOWN: f64 = 1e-13;
 
+/// In [`TruncatedSvd::compute_at_least`], Ritz values past the converged ones count as
+/// settled when none moved by more than this fraction of `σ₁` between two checks: enough to
+/// place them against a noise floor (order choice), far from converged vectors.
+pub const RITZ_STABLE: f64 = 1e-3;
+
 /// The default step budget for `max_k` requested triplets: `max(4 max_k, max_k + 30)`.
 pub fn default_max_steps(max_k: usize) -> usize {
     (4 * max_k).max(max_k + 30)
@@ -86,6 +91,8 @@ pub struct TruncatedSvd {
     residuals: Vec<f64>,
     ritz: Vec<f64>,
     n_ritz: usize,
+    ritz_prev: Vec<f64>,
+    n_prev: usize,
     steps: usize,
     /// Scratch of length `max_rows` for [`project`](Self::project).
     tmp_rows: Vec<f64>,
@@ -147,6 +154,8 @@ impl TruncatedSvd {
             residuals: vec![0.0; max_k],
             ritz: vec![0.0; max_steps],
             n_ritz: 0,
+            ritz_prev: vec![0.0; max_steps],
+            n_prev: 0,
             steps: 0,
             tmp_rows: vec![0.0; row_stride],
             rng: 0,
@@ -222,10 +231,13 @@ impl TruncatedSvd {
             .map(|_| ())
     }
 
-    /// As [`compute`](Self::compute), but succeeds as soon as the leading `need ≤ k` triplets
-    /// have converged within the step budget; returns how many leading triplets converged
-    /// (`need ..= k`). Triplets past that count are Ritz approximations (their residuals are in
-    /// [`residuals`](Self::residuals)): for ERA this gives the order-`n` factors to full
+    /// As [`compute`](Self::compute), but requires only the leading `need ≤ k` triplets to
+    /// converge: it stops when all `k` have converged, or when the leading `need` have and
+    /// the `k` leading Ritz values have settled (moved by at most [`RITZ_STABLE`]` · σ₁`
+    /// between two checks), or at the step budget; it fails only if fewer than `need`
+    /// converged. Returns how many leading triplets converged (`need ..= k`). Triplets past
+    /// that count are Ritz approximations (lower estimates of the singular values; residuals
+    /// in [`residuals`](Self::residuals)): for ERA this gives the order-`n` factors to full
     /// accuracy plus estimates of the following singular values for the order choice, without
     /// iterating into the noise cluster. Allocates nothing.
     #[allow(clippy::too_many_arguments)]
@@ -273,7 +285,7 @@ impl TruncatedSvd {
             return Err(TruncatedError::ZeroMatrix);
         }
         self.rng = 0x9E37_79B9_7F4A_7C15;
-        self.lanczos(rows, cols, k)?;
+        self.lanczos(rows, cols, k, need)?;
         let converged = self.converged(k);
         if converged < need {
             return Err(TruncatedError::NotConverged {
@@ -298,15 +310,24 @@ impl TruncatedSvd {
             .count()
     }
 
-    /// The Lanczos iteration proper: runs until the leading `k` Ritz triplets converge or the
-    /// step budget is spent; either way the small SVD of the last check (and `residuals`) hold
-    /// the Ritz triplets.
-    fn lanczos(&mut self, rows: usize, cols: usize, k: usize) -> Result<(), TruncatedError> {
+    /// The Lanczos iteration proper: runs until the leading `k` Ritz triplets converge (or,
+    /// with `need < k`, the leading `need` converged and the `k` leading Ritz values are
+    /// stable, see [`RITZ_STABLE`]), or the step budget is spent; either way the small SVD of
+    /// the last check (and `residuals`) hold the Ritz triplets. Checks (a small SVD each) come
+    /// at `k + 2` steps and then every half as many steps again as taken so far.
+    fn lanczos(
+        &mut self,
+        rows: usize,
+        cols: usize,
+        k: usize,
+        need: usize,
+    ) -> Result<(), TruncatedError> {
         let m_max = self.max_steps.min(rows.min(cols));
         let (rs, cs) = (self.row_stride, self.col_stride);
         self.random_unit(false, 0, cols);
         let mut norm_est = 0.0f64;
         let mut next_check = (k + 2).min(m_max);
+        self.n_prev = 0;
         for j in 0..m_max {
             // α_j u_j = H v_j − β_{j−1} u_{j−1}
             {
@@ -358,18 +379,20 @@ impl TruncatedSvd {
             }
             self.steps = j + 1;
             if self.steps >= k && (self.steps >= next_check || breakdown || self.steps == m_max) {
-                if self.check(k)? {
+                if self.check(k, need)? {
                     return Ok(());
                 }
-                next_check = self.steps + (self.steps / 4).max(2);
+                next_check = self.steps + (self.steps / 2).max(2);
             }
         }
         // The budget is spent; the last check (forced at `m_max`) holds the Ritz triplets.
         Ok(())
     }
 
-    /// Small SVD of `B_m`, residuals of the leading `k` Ritz triplets; `true` when all pass.
-    fn check(&mut self, k: usize) -> Result<bool, TruncatedError> {
+    /// Small SVD of `B_m`, residuals of the leading `k` Ritz triplets; `true` when all pass,
+    /// or when the leading `need < k` pass and the leading `k` Ritz values moved by at most
+    /// [`RITZ_STABLE`]` · σ₁` since the previous check.
+    fn check(&mut self, k: usize, need: usize) -> Result<bool, TruncatedError> {
         let m = self.steps;
         if !self
             .small
@@ -385,6 +408,9 @@ impl TruncatedSvd {
             });
         }
         let s = self.small.sigma();
+        let n_prev = self.n_ritz;
+        self.ritz_prev[..n_prev].copy_from_slice(&self.ritz[..n_prev]);
+        self.n_prev = n_prev;
         self.n_ritz = m;
         self.ritz[..m].copy_from_slice(s);
         let s1 = s[0];
@@ -396,7 +422,13 @@ impl TruncatedSvd {
             let last = self.small.left(i)[m - 1];
             self.residuals[i] = (beta_m * last).abs() / s1;
         }
-        Ok(self.residuals[..k].iter().all(|&res| res <= self.tolerance))
+        let converged = self.converged(k);
+        if converged == k {
+            return Ok(true);
+        }
+        let stable = self.n_prev >= k
+            && (0..k).all(|i| (self.ritz[i] - self.ritz_prev[i]).abs() <= RITZ_STABLE * s1);
+        Ok(need < k && converged >= need && stable)
     }
 
     /// `u_i = U_m p_i`, `v_i = V_m q_i` for the leading `k` Ritz triplets of the last check.
