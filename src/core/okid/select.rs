@@ -40,7 +40,7 @@ pub struct OkidSummary {
     pub observer_order: usize,
     /// Largest `ℓ` considered.
     pub observer_order_max: usize,
-    /// `"bic"` when chosen, `"given"` otherwise.
+    /// `"output_error"` when chosen, `"given"` otherwise.
     pub observer_order_from: &'static str,
     /// Regression rows used.
     pub rows: usize,
@@ -66,7 +66,7 @@ impl From<&OkidResult> for OkidSummary {
             observer_order: r.observer_order,
             observer_order_max: r.observer_order_max,
             observer_order_from: if r.observer_order_chosen {
-                "bic"
+                "output_error"
             } else {
                 "given"
             },
