@@ -243,3 +243,63 @@ fn report_is_valid_json_with_the_public_field_names() {
     assert_eq!(back.order, 1);
     assert!(back.fn_hz.is_nan());
 }
+
+mod never_panics {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 48, .. ProptestConfig::default() })]
+
+        /// Random throttle levels, pulses of random width, random outputs with NaN/inf, random
+        /// missing masks and device starts: `identify` returns, it never panics.
+        #[test]
+        fn identify_returns_on_arbitrary_input(
+            levels in proptest::collection::vec((0usize..300, 0.0f64..1.0), 1..4),
+            pulses in proptest::collection::vec((1usize..290, 1usize..8, -0.3f64..0.3), 0..8),
+            noise in proptest::collection::vec(-1.0f64..1.0, 300),
+            noise_level in prop_oneof![Just(0.0), Just(1e-3), Just(1.0)],
+            bad in prop_oneof![3 => Just(None), 1 => (0usize..300, prop_oneof![Just(f64::NAN), Just(f64::INFINITY)]).prop_map(Some)],
+            miss_at in proptest::collection::vec(0usize..300, 0..3),
+            starts in proptest::option::of(proptest::collection::vec(0usize..400, 0..5)),
+            order in proptest::option::of(1usize..6),
+        ) {
+            let mut u = vec![0.5; 300];
+            for (k, uk) in u.iter_mut().enumerate() {
+                if let Some((_, l)) = levels.iter().filter(|(s, _)| *s <= k).max_by_key(|(s, _)| *s) {
+                    *uk = *l;
+                }
+            }
+            for (s, w, a) in pulses {
+                for uk in u.iter_mut().skip(s).take(w) {
+                    *uk += a;
+                }
+            }
+            let mut miss = vec![false; 300];
+            for k in miss_at {
+                miss[k] = true;
+            }
+            // A first-order lag of the throttle plus noise, sometimes with a bad value.
+            let mut y = vec![0.0; 300];
+            let mut state = 0.0;
+            for k in 0..300 {
+                state = 0.8 * state + u[k];
+                y[k] = state + noise_level * noise[k];
+            }
+            if let Some((k, v)) = bad {
+                y[k] = v;
+            }
+            for k in 0..300 {
+                if miss[k] {
+                    y[k] = f64::NAN;
+                }
+            }
+            let chans = [&y[..]];
+            let input = PulseInput { dt_s: 0.001, u: &u, y: &chans, missing: &miss, pulse_starts: starts.as_deref() };
+            let mut w = Workspace::new(&Limits { max_samples: 512, max_block_rows: 32, max_block_cols: 32, ..Limits::default() }).unwrap();
+            let _ = w.identify(&input, &IdentOptions { order, ..IdentOptions::default() });
+            let m = MarkovSeq::from_data(1, 1, y.clone()).unwrap();
+            let _ = w.identify_markov(&m, 0.001, &IdentOptions { order, ..IdentOptions::default() });
+        }
+    }
+}

@@ -130,6 +130,9 @@ pub struct SampleAssembler {
     span_t_us: u64,
     span_samples: u64,
     nominal_rate_hz: Option<u16>,
+    /// The current segment began at an inferred reset after the last HELLO: the HELLO of
+    /// that new boot, when it comes, must not split it again.
+    reset_since_hello: bool,
     stats: AssembleStats,
 }
 
@@ -182,10 +185,11 @@ impl SampleAssembler {
     /// A HELLO: a new `boot_id` ends the current segment.
     pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) {
         self.nominal_rate_hz = Some(sample_rate_hz);
-        if self.boot_id.is_some_and(|b| b != boot_id) {
+        if self.boot_id.is_some_and(|b| b != boot_id) && !self.reset_since_hello {
             self.end_segment();
         }
         self.boot_id = Some(boot_id);
+        self.reset_since_hello = false;
     }
 
     /// A device event referring to `sample_index`.
@@ -239,6 +243,7 @@ impl SampleAssembler {
         let d = match seg.idx.step(sample_index) {
             Step::Backward => {
                 self.stats.resets_inferred += 1;
+                self.reset_since_hello = true;
                 self.end_segment();
                 return self.start_segment(sample_index, t_us, value, on);
             }
@@ -352,6 +357,10 @@ pub struct BuildStats {
     pub invalid_samples: u64,
     /// SAMPLEs without THRUST_FRESH: the load cell's value was held, not newly converted.
     pub thrust_held: u64,
+    /// Device frames lost on the link, from jumps of the 16-bit `seq` between successive
+    /// device frames (restarted by a HELLO with a new `boot_id`). Sample-index gaps without a
+    /// `seq` jump were dropped by the device itself.
+    pub link_frames_lost: u64,
 }
 
 /// Builds a [`Record`] from frames (or generic points), streaming.
@@ -363,6 +372,8 @@ pub struct BuildStats {
 pub struct RecordBuilder {
     asm: SampleAssembler,
     store: Store,
+    last_seq: Option<u16>,
+    boot_id: Option<u32>,
 }
 
 /// The growing record columns.
@@ -381,7 +392,7 @@ impl RecordBuilder {
     pub fn new(opts: AssembleOptions) -> Self {
         Self {
             asm: SampleAssembler::new(opts),
-            store: Store::default(),
+            ..Self::default()
         }
     }
 
@@ -407,6 +418,23 @@ impl RecordBuilder {
 
     /// Feed one decoded frame (SAMPLE, HELLO and EVENT matter; others are ignored).
     pub fn push_frame(&mut self, f: &Frame) {
+        if f.msg.is_command() {
+            return; // a host frame (an echo, a loopback): not part of the device's stream
+        }
+        if let Message::Hello(h) = &f.msg {
+            if self.boot_id.is_some_and(|b| b != h.boot_id) {
+                self.last_seq = None;
+            }
+            self.boot_id = Some(h.boot_id);
+        }
+        if let Some(last) = self.last_seq {
+            let jump = f.seq.wrapping_sub(last);
+            // A jump of half the range or more is a restart, not a loss.
+            if (2..0x8000).contains(&jump) {
+                self.store.stats.link_frames_lost += (jump - 1) as u64;
+            }
+        }
+        self.last_seq = Some(f.seq);
         match &f.msg {
             Message::Sample(s) => {
                 if !s.flags.contains(SampleFlags::THRUST_FRESH) {

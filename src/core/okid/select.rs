@@ -173,14 +173,22 @@ pub fn identify_okid(
         let dims = sizing::hankel_dims(r.q, r.p, avail, signal, min_size, rmax, cmax)?;
         opts.hankel_blocks = Some((dims.r, dims.c));
     }
-    ws.identify_markov(&markov, input.dt_s, &opts)?;
     if opts.order.is_none() {
-        let order = okid_order(&ws.to_report(), &r, limits.max_order);
-        if order != ws.model().order() {
-            opts.order = Some(order);
-            ws.identify_markov(&markov, input.dt_s, &opts)?;
+        // Probe with the largest order the Hankel allows to see every leading singular value,
+        // then keep those above OKID's noise floor. If the probe is refused (exact data of
+        // lower rank), the core's own choice stands.
+        let (r_blk, c_blk) = opts.hankel_blocks.unwrap_or((1, 1));
+        let wide = (r_blk * r.q).min(c_blk * r.p);
+        let probe = IdentOptions {
+            order: Some(limits.max_order.min(wide).max(1)),
+            jackknife: false,
+            ..opts
+        };
+        if ws.identify_markov(&markov, input.dt_s, &probe).is_ok() {
+            opts.order = Some(okid_order(&ws.to_report(), &r, limits.max_order));
         }
     }
+    ws.identify_markov(&markov, input.dt_s, &opts)?;
     Ok(AnyModel {
         report: ws.to_report(),
         path: PathTaken::Okid,
