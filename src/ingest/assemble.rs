@@ -13,6 +13,9 @@
 //! - A forward jump of `d > 1` in `sample_index` is a gap: `d − 1` samples are missing (NaN and
 //!   marked in `Record::missing`), counted in `samples_lost`, never bridged. A gap longer than
 //!   `max_gap_samples` is not filled: a new segment starts after it (still counted as lost).
+//!   So is a gap that would take the filled samples past `max_gap_samples + 10 × samples
+//!   received`: a few corrupt frames with absurd indices cannot make a small file expand into
+//!   gigabytes of NaN.
 //! - `d = 0` is a duplicate (dropped, counted); a backward jump is a device reset whose HELLO
 //!   was not seen: a new segment.
 //! - A HELLO with a new `boot_id` ends the segment; the next sample starts a new one. Later
@@ -36,14 +39,15 @@ use crate::record::{names, Channel, Record, RecordEvent, RecordEventKind};
 /// Assembly limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct AssembleOptions {
-    /// Longest gap filled with missing samples; a longer one starts a new segment.
+    /// Longest gap filled with missing samples (default 65 536, a minute at 1 kHz); a longer
+    /// one starts a new segment.
     pub max_gap_samples: u64,
 }
 
 impl Default for AssembleOptions {
     fn default() -> Self {
         Self {
-            max_gap_samples: 1 << 20,
+            max_gap_samples: 1 << 16,
         }
     }
 }
@@ -133,6 +137,8 @@ pub struct SampleAssembler {
     /// The current segment began at an inferred reset after the last HELLO: the HELLO of
     /// that new boot, when it comes, must not split it again.
     reset_since_hello: bool,
+    /// Missing samples filled in so far.
+    filled: u64,
     stats: AssembleStats,
 }
 
@@ -254,7 +260,8 @@ impl SampleAssembler {
             Step::Forward(d) => d,
         };
         let lost = d - 1;
-        if lost > self.opts.max_gap_samples {
+        let budget = self.opts.max_gap_samples + 10 * self.stats.samples;
+        if lost > self.opts.max_gap_samples || self.filled + lost > budget {
             self.stats.samples_lost += lost;
             self.stats.large_gaps += 1;
             // The segment ends at its last sample, not at the far side of the gap.
@@ -269,6 +276,7 @@ impl SampleAssembler {
         self.stats.clock_wraps += seg.clock.wraps() - wraps;
         let t = seg.clock.value();
         if lost > 0 {
+            self.filled += lost;
             self.stats.samples_lost += lost;
             self.stats.gaps += 1;
             on(Assembled::Missing {

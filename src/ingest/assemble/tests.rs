@@ -266,3 +266,22 @@ fn samples_of_a_new_boot_before_its_hello_make_one_segment() {
     let starts: Vec<usize> = r.events.iter().map(|e| e.sample).collect();
     assert_eq!(starts, [5]);
 }
+
+#[test]
+fn absurd_indices_cannot_blow_up_the_record() {
+    // Every other frame jumps by almost the largest fillable gap.
+    let mut b = RecordBuilder::new(AssembleOptions {
+        max_gap_samples: 1000,
+    });
+    let mut idx = 0u32;
+    for i in 0..100u32 {
+        b.push_frame(&sample(idx, 1000 * idx, ALL));
+        idx += if i % 2 == 0 { 999 } else { 1 };
+    }
+    let (r, a, _) = b.finish().unwrap();
+    // Filled samples stay within max_gap + 10 × received.
+    assert!(r.missing_count() as u64 <= 1000 + 10 * 100);
+    assert!(a.large_gaps > 0);
+    assert_eq!(a.samples, 100);
+    assert_eq!(a.samples_lost, 50 * 998);
+}
