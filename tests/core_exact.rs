@@ -144,3 +144,97 @@ fn state_space_simulation_reproduces_the_markov_parameters() {
         assert!((out[k] - want[k]).abs() < 1e-9 * plant.gain, "k={k}");
     }
 }
+
+/// Regression: a Hankel matrix that starts at `Y_0 = D` has one rank too many and biases a
+/// 2nd-order model; ours starts at `Y_1` and is exact.
+#[test]
+fn hankel_starting_at_y0_biases_a_second_order_model() {
+    let mut plant = Plant::new(10.0, 0.2, 4.0, 0.005);
+    plant.d[0] = 0.8;
+    let exact = plant.markov(300);
+    let mut shifted = vec![0.0];
+    shifted.extend_from_slice(&exact[..299]);
+    let opts = IdentOptions {
+        order: Some(2),
+        ..IdentOptions::default()
+    };
+    let mut ws = Workspace::new(&Limits::default()).unwrap();
+    let good = ws
+        .identify_markov(&MarkovSeq::from_data(1, 1, exact).unwrap(), plant.dt, &opts)
+        .unwrap()
+        .to_report();
+    let bad = ws
+        .identify_markov(
+            &MarkovSeq::from_data(1, 1, shifted).unwrap(),
+            plant.dt,
+            &opts,
+        )
+        .unwrap()
+        .to_report();
+    assert!(rel(good.fn_hz, 10.0) < 1e-8 && rel(good.zeta, 0.2) < 1e-8);
+    assert!((good.d[0][0] - 0.8).abs() < 1e-12);
+    let bias = rel(bad.fn_hz, 10.0).max(rel(bad.zeta, 0.2));
+    assert!(
+        bias.is_nan() || bias > 1e-3,
+        "Y_0 in the Hankel should bias the model, got {bias}"
+    );
+}
+
+/// Regression: the one-sample convention. Scaling the Markov parameters as a unit-area impulse
+/// (`Y_k / dt`) makes the DC gain wrong by exactly the sample rate; the pulse path does not.
+#[test]
+fn unit_area_scaling_makes_dc_gain_off_by_the_sample_rate() {
+    let plant = Plant::new(10.0, 0.2, 4.0, 0.005);
+    let fs = 1.0 / plant.dt;
+    let area: Vec<f64> = plant.markov(300).iter().map(|y| y * fs).collect();
+    let mut ws = Workspace::new(&Limits::default()).unwrap();
+    let r = ws
+        .identify_markov(
+            &MarkovSeq::from_data(1, 1, area).unwrap(),
+            plant.dt,
+            &IdentOptions::default(),
+        )
+        .unwrap()
+        .to_report();
+    assert!(rel(r.dc_gain.get(0) / plant.dc(0), fs) < 1e-8);
+    let u = throttle(2400, &[(0, 0.4)], &pulses(100, 400, 5, &[1]));
+    let ours = identify(&plant, &u, None);
+    assert!(rel(ours.dc_gain.get(0), 4.0) < 1e-8);
+}
+
+/// The truncated (FFT + Lanczos) path gives the dense path's model, pulse and Markov entries.
+#[test]
+fn truncated_svd_path_matches_dense() {
+    use propid::core::SvdChoice;
+    let plant = Plant::new(10.0, 0.2, 4.0, 0.005).with_output([0.3, 0.02], 0.1);
+    let u = throttle(2400, &[(0, 0.4)], &pulses(100, 400, 5, &[1, 2]));
+    let y = plant.simulate(&u, 3.0);
+    let chans: Vec<&[f64]> = y.iter().map(|c| &c[..]).collect();
+    let input = PulseInput {
+        dt_s: plant.dt,
+        u: &u,
+        y: &chans,
+        missing: &[],
+        pulse_starts: None,
+    };
+    let mut ws = Workspace::new(&Limits::default()).unwrap();
+    let opts = IdentOptions {
+        svd: SvdChoice::Truncated,
+        ..IdentOptions::default()
+    };
+    let r = ws.identify(&input, &opts).unwrap().to_report();
+    assert_eq!((r.order, r.svd.as_str()), (2, "truncated"));
+    assert!(
+        rel(r.fn_hz, 10.0) < 1e-8 && rel(r.zeta, 0.2) < 1e-8,
+        "{} {}",
+        r.fn_hz,
+        r.zeta
+    );
+    assert!(rel(r.dc_gain.get(0), plant.dc(0)) < 1e-8 && rel(r.dc_gain.get(1), plant.dc(1)) < 1e-8);
+    let markov = MarkovSeq::from_data(2, 1, plant.markov(300)).unwrap();
+    let r = ws
+        .identify_markov(&markov, plant.dt, &opts)
+        .unwrap()
+        .to_report();
+    assert!(rel(r.fn_hz, 10.0) < 1e-8 && rel(r.zeta, 0.2) < 1e-8);
+}

@@ -53,25 +53,41 @@ impl HankelDims {
         }
     }
 
-    /// `y = H(shift) x` (`x`: cols, `y`: rows), without forming `H`.
+    /// `y = H(shift) x` (`x`: cols, `y`: rows), without forming `H`: `O(rows · cols)`.
     pub fn apply(&self, markov: &[f64], shift: usize, x: &[f64], y: &mut [f64]) {
-        for (row, yr) in y[..self.rows()].iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for (col, xc) in x[..self.cols()].iter().enumerate() {
-                acc += self.element(markov, shift, row, col) * xc;
+        let (q, p) = (self.q, self.p);
+        let qp = q * p;
+        for a in 0..self.r {
+            for i in 0..q {
+                let mut acc = 0.0;
+                for b in 0..self.c {
+                    let blk = &markov[(a + b + 1 + shift) * qp..];
+                    let xb = &x[b * p..(b + 1) * p];
+                    for (j, xj) in xb.iter().enumerate() {
+                        acc += blk[i + j * q] * xj;
+                    }
+                }
+                y[a * q + i] = acc;
             }
-            *yr = acc;
         }
     }
 
-    /// `y = H(shift)ᵀ x` (`x`: rows, `y`: cols), without forming `H`.
+    /// `y = H(shift)ᵀ x` (`x`: rows, `y`: cols), without forming `H`: `O(rows · cols)`.
     pub fn apply_t(&self, markov: &[f64], shift: usize, x: &[f64], y: &mut [f64]) {
-        for (col, yc) in y[..self.cols()].iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for (row, xr) in x[..self.rows()].iter().enumerate() {
-                acc += self.element(markov, shift, row, col) * xr;
+        let (q, p) = (self.q, self.p);
+        let qp = q * p;
+        for b in 0..self.c {
+            for j in 0..p {
+                let mut acc = 0.0;
+                for a in 0..self.r {
+                    let blk = &markov[(a + b + 1 + shift) * qp + j * q..];
+                    let xa = &x[a * q..(a + 1) * q];
+                    for (i, xi) in xa.iter().enumerate() {
+                        acc += blk[i] * xi;
+                    }
+                }
+                y[b * p + j] = acc;
             }
-            *yc = acc;
         }
     }
 }

@@ -7,15 +7,22 @@
 //!
 //! 1. [`pulses`]: segment throttle pulses, reference each to its own pre-pulse baseline, scale
 //!    by amplitude, ensemble-average, undo the pulse width → Markov parameters [`markov`]
-//!    (`Y_0 = D`, `Y_k = C A^(k-1) B`, response to a unit input held for one sample).
-//! 2. [`sizing`]: noise floor, Hankel size (near-square, up to where the response sinks into
-//!    the noise), order from the singular-value gap against the noise floor.
-//! 3. [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is `Y_{a+b+1+s}`).
-//! 4. [`era`]: `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` = first q rows
+//!    (`Y_0 = D`, `Y_k = C A^(k-1) B`, response to a unit input held for one sample; no `1/dt`).
+//! 2. [`grouped`]: what ERA actually runs on for pulse records: the averaged responses per
+//!    pulse width, whose tails are Markov sequences of the same `(A, C)` with input matrix
+//!    `B̃_w = Σ_{i<w} A^i B` (identical to `Y` for one-sample pulses; no deconvolution noise
+//!    for wider ones). `B` then follows by least squares, `D = P_0`.
+//! 3. [`sizing`]: noise floor, Hankel size (near-square, up to where the response sinks into
+//!    the noise), order from the singular values against the noise floor.
+//! 4. [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is `Y_{a+b+1+s}`).
+//! 5. [`era`]: `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` = first q rows
 //!    of `U Σ^½`, `D = Y_0`.
-//! 5. [`modal`], [`indicators`], [`uncertainty`]: poles, fn, ζ, DC gain, m-d-k; MSV, MAC,
+//! 6. [`modal`], [`indicators`], [`uncertainty`]: poles, fn, ζ, DC gain, m-d-k; MSV, MAC,
 //!    EMAC, MPC, CMI; jackknife over pulses.
-//! 6. [`report`]: the published, serde-serialisable [`report::ModelReport`].
+//! 7. [`workspace`] runs it all on preallocated buffers ([`model::Model`] holds the result);
+//!    [`report`] is the published, serde-serialisable [`report::ModelReport`].
+//!
+//! Measured accuracy with noise and timings: `docs/core.md`.
 
 // Index loops mirror the formulas (A[i][l] x[l]) in this numerical code; iterator chains over
 // several matrices at once would hide them.
@@ -24,6 +31,7 @@
 pub mod eig;
 pub mod era;
 pub mod error;
+pub mod grouped;
 pub mod hankel;
 pub mod indicators;
 pub mod linalg;

@@ -186,15 +186,38 @@ impl Model {
         }
     }
 
-    /// Poles, eigenvectors, DC gain, fn/ζ, time constants and indicators of the realised
-    /// `(A, B, C, D)` (already in `a`, `b`, `c`, `d`). `u`, `v` are the SVD factors.
-    pub(crate) fn analyse(&mut self, u: &[f64], v: &[f64]) -> Result<(), IdentError> {
-        let (n, q, p) = (self.n, self.q, self.p);
+    /// Poles, eigenvectors, fn/ζ, time constants and indicators of the realised `A` (with
+    /// `B`, `C` as realised, `u`, `v` the SVD factors). The DC gain follows in
+    /// [`Model::finish_gain`], after the input matrix is final.
+    pub(crate) fn analyse_modes(&mut self, u: &[f64], v: &[f64]) -> Result<(), IdentError> {
+        let n = self.n;
         self.rscratch[..n * n].copy_from_slice(&self.a[..n * n]);
         eigenvalues(&mut self.rscratch, n, &mut self.poles_z)?;
         for k in 0..n {
             self.poles_s[k] = continuous(self.poles_z[k], self.dt_s);
         }
+        self.time_constants();
+        self.eigenvectors_and_indicators(u, v);
+        self.pair = self.select_pair();
+        (self.fn_hz, self.zeta) = match self.pair_s() {
+            Some((s1, s2)) => fn_zeta(s1, s2),
+            None => (f64::NAN, f64::NAN),
+        };
+        Ok(())
+    }
+
+    /// Replaces the realised input matrix by the single-input `b` (`n`) and feed-through `d`
+    /// (`q`): the pulse path realises one column per pulse width ([`crate::core::grouped`]).
+    pub(crate) fn set_single_input(&mut self, b: &[f64], d: &[f64]) {
+        let (n, q) = (self.n, self.q);
+        self.b[..n].copy_from_slice(&b[..n]);
+        self.d[..q].copy_from_slice(&d[..q]);
+        self.p = 1;
+    }
+
+    /// DC gain `D + C (I − A)^-1 B`.
+    pub(crate) fn finish_gain(&mut self) -> Result<(), IdentError> {
+        let (n, q, p) = (self.n, self.q, self.p);
         let ok = modal::dc_gain(
             &self.a,
             &self.b,
@@ -207,17 +230,11 @@ impl Model {
             &mut self.xscratch,
             &mut self.dc,
         );
-        if !ok {
-            return Err(IdentError::SingularDcGain);
+        if ok {
+            Ok(())
+        } else {
+            Err(IdentError::SingularDcGain)
         }
-        self.time_constants();
-        self.eigenvectors_and_indicators(u, v);
-        self.pair = self.select_pair();
-        (self.fn_hz, self.zeta) = match self.pair_s() {
-            Some((s1, s2)) => fn_zeta(s1, s2),
-            None => (f64::NAN, f64::NAN),
-        };
-        Ok(())
     }
 
     fn time_constants(&mut self) {

@@ -122,6 +122,16 @@ impl PulseEnsemble {
         &self.pulses[..self.count]
     }
 
+    /// Per-output baselines of pulse `i` (an index into [`PulseEnsemble::pulses`]).
+    pub fn baseline(&self, i: usize) -> &[f64] {
+        &self.baselines[i * self.max_outputs..i * self.max_outputs + self.q]
+    }
+
+    /// Number of output channels of the last build.
+    pub fn outputs(&self) -> usize {
+        self.q
+    }
+
     /// Pulses averaged.
     pub fn kept(&self) -> usize {
         self.kept
@@ -196,7 +206,7 @@ impl PulseEnsemble {
             });
         }
         self.baselines_and_noise(input);
-        self.average(input, markov, None)
+        self.average(input, markov)
     }
 
     /// The leave-one-out average without pulse `i` (an index into [`PulseEnsemble::pulses`];
@@ -212,7 +222,23 @@ impl PulseEnsemble {
                 "leave-one-out needs a kept pulse and two or more pulses",
             ));
         }
-        self.average(input, markov, Some(i))
+        // (Σ a² Y − a_i² Y_i) / (W − a_i²): one pulse's deconvolution, not all of them.
+        let (q, len, mq) = (self.q, self.len, self.max_outputs);
+        markov.set_len(q, 1, len)?;
+        let p = self.pulses[i];
+        let one = &mut self.one[..len * q];
+        deconvolve(input, &p, &self.baselines[i * mq..i * mq + q], len, one);
+        let w = p.amplitude * p.amplitude;
+        let rest = self.weight - w;
+        for ((m, s), y) in markov
+            .as_mut_slice()
+            .iter_mut()
+            .zip(&self.sum[..len * q])
+            .zip(one.iter())
+        {
+            *m = (s - w * y) / rest;
+        }
+        Ok(())
     }
 
     fn find(&mut self, input: &PulseInput<'_>, max_width: usize) -> Result<(), IdentError> {
@@ -348,12 +374,11 @@ impl PulseEnsemble {
         }
     }
 
-    /// Deconvolved, amplitude-weighted average over the kept pulses except `leave`.
+    /// Deconvolved, amplitude-weighted average over the kept pulses; keeps the weighted sum.
     fn average(
         &mut self,
         input: &PulseInput<'_>,
         markov: &mut MarkovSeq,
-        leave: Option<usize>,
     ) -> Result<(), IdentError> {
         let (q, len, mq) = (self.q, self.len, self.max_outputs);
         markov.set_len(q, 1, len)?;
@@ -361,7 +386,7 @@ impl PulseEnsemble {
         sum.fill(0.0);
         let mut weight = 0.0;
         for (pi, p) in self.pulses[..self.count].iter().enumerate() {
-            if !p.kept || leave == Some(pi) {
+            if !p.kept {
                 continue;
             }
             let one = &mut self.one[..len * q];
@@ -375,10 +400,8 @@ impl PulseEnsemble {
         for (m, s) in markov.as_mut_slice().iter_mut().zip(sum.iter()) {
             *m = s / weight;
         }
-        if leave.is_none() {
-            self.weight = weight;
-            self.noise_growth();
-        }
+        self.weight = weight;
+        self.noise_growth();
         Ok(())
     }
 }

@@ -17,13 +17,16 @@
 use nalgebra::Complex;
 
 use super::eig::eigenvalues;
-use super::era::realize;
+use super::era::{h1_times_v, realize};
+use super::grouped::{input_matrix, WidthGroups, MAX_GROUPS};
+use super::hankel::HankelDims;
 use super::modal::{continuous, dc_gain, fn_zeta};
 use super::model::Model;
 use super::pulses::{PulseEnsemble, PulseInput};
 use super::sizing;
 use super::svd::dense::DenseSvd;
 use super::svd::subspace::SubspaceSvd;
+use super::svd::truncated::TruncatedSvd;
 use super::svd::{self, SvdChoice, SvdPath};
 use super::uncertainty::jackknife_std;
 use super::{IdentError, MarkovSeq};
@@ -97,22 +100,28 @@ impl Default for IdentOptions {
 }
 
 /// Everything an identification needs, allocated once.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Workspace {
     limits: Limits,
     ensemble: PulseEnsemble,
+    groups: WidthGroups,
     markov: MarkovSeq,
+    grouped: MarkovSeq,
     jk_markov: MarkovSeq,
+    jk_weights: [f64; MAX_GROUPS],
     engine: Engine,
 }
 
 /// SVD, realisation and jackknife buffers (split from the Markov storage for borrowing).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 struct Engine {
     limits: Limits,
     kmax: usize,
+    dense_rows: usize,
+    dense_cols: usize,
     hbuf: Vec<f64>,
     dense: DenseSvd,
+    trunc: TruncatedSvd,
     sub: SubspaceSvd,
     u: Vec<f64>,
     v: Vec<f64>,
@@ -136,6 +145,9 @@ struct Lite {
     c: Vec<f64>,
     d: Vec<f64>,
     m: Vec<f64>,
+    s: Vec<f64>,
+    nrm: Vec<f64>,
+    b1: Vec<f64>,
     x: Vec<f64>,
     poles: Vec<C64>,
     dc: Vec<f64>,
@@ -162,8 +174,11 @@ impl Workspace {
         Ok(Self {
             limits: l,
             ensemble: PulseEnsemble::new(l.max_samples, l.max_outputs, l.max_pulses),
+            groups: WidthGroups::new(l.max_samples, l.max_outputs, l.max_pulses),
             markov: MarkovSeq::zeros(l.max_outputs, l.max_inputs, markov_cap),
-            jk_markov: MarkovSeq::zeros(l.max_outputs, l.max_inputs, markov_cap),
+            grouped: MarkovSeq::zeros(l.max_outputs, max_p(&l), markov_cap),
+            jk_markov: MarkovSeq::zeros(l.max_outputs, max_p(&l), markov_cap),
+            jk_weights: [0.0; MAX_GROUPS],
             engine: Engine::new(&l),
         })
     }
@@ -178,7 +193,9 @@ impl Workspace {
         &self.engine.model
     }
 
-    /// The averaged Markov parameters of the last pulse identification.
+    /// The averaged, width-deconvolved Markov parameters `Y_0 .. Y_{L-1}` of the last pulse
+    /// identification (for plots and export; ERA itself runs on the per-width responses, see
+    /// [`crate::core::grouped`], which equal these for one-sample pulses).
     pub fn markov(&self) -> &MarkovSeq {
         &self.markov
     }
@@ -188,8 +205,8 @@ impl Workspace {
         self.engine.model.to_report()
     }
 
-    /// Identifies from a pulse experiment: pulses → Markov parameters → ERA → modal summary,
-    /// indicators, jackknife uncertainty. No heap allocation.
+    /// Identifies from a pulse experiment: pulses → per-width averaged responses → ERA →
+    /// input matrix, modal summary, indicators, jackknife uncertainty. No heap allocation.
     pub fn identify(
         &mut self,
         input: &PulseInput<'_>,
@@ -197,17 +214,27 @@ impl Workspace {
     ) -> Result<&Model, IdentError> {
         self.ensemble
             .build(input, opts.max_pulse_width, &mut self.markov)?;
+        self.groups
+            .build(&self.ensemble, input, &mut self.grouped)?;
         let q = input.y.len();
         let e = &mut self.engine;
+        let wmin = self
+            .groups
+            .weights()
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let out_noise = self.ensemble.output_noise();
         for c in 0..q {
-            e.noise[c] = self.ensemble.markov_noise(c);
+            e.noise[c] = out_noise[c] / wmin.sqrt();
         }
         if e.noise[..q].iter().any(|v| !v.is_finite()) {
-            sizing::tail_noise(&self.markov, &mut e.noise[..q]);
+            sizing::tail_noise(&self.grouped, &mut e.noise[..q]);
         }
-        let out_noise = self.ensemble.output_noise();
         let rms = (out_noise.iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
-        e.run(&self.markov, input.dt_s, self.ensemble.growth(), opts)?;
+        e.run(&self.grouped, input.dt_s, &[], opts)?;
+        e.single_input(self.groups.widths(), self.groups.weights(), self.groups.d())?;
+        e.model.finish_gain()?;
         e.model.pulses = self.ensemble.kept();
         e.model.skipped = self.ensemble.skipped();
         e.model.noise_rms = rms;
@@ -218,8 +245,21 @@ impl Workspace {
                 if !self.ensemble.pulses()[i].kept {
                     continue;
                 }
-                self.ensemble.leave_one_out(input, i, &mut self.jk_markov)?;
-                e.jackknife_one(&self.jk_markov, count)?;
+                self.groups.leave_one_out(
+                    &self.ensemble,
+                    input,
+                    i,
+                    &mut self.jk_markov,
+                    &mut self.jk_weights,
+                )?;
+                let w = &self.jk_weights[..self.groups.groups()];
+                e.jackknife_one(
+                    &self.jk_markov,
+                    count,
+                    self.groups.widths(),
+                    w,
+                    self.groups.d(),
+                )?;
                 count += 1;
             }
             e.finish_jackknife(count);
@@ -264,6 +304,7 @@ impl Workspace {
         sizing::tail_noise(markov, &mut e.noise[..q]);
         let rms = (e.noise[..q].iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
         e.run(markov, dt_s, &[], opts)?;
+        e.model.finish_gain()?;
         e.model.pulses = 0;
         e.model.skipped = 0;
         e.model.noise_rms = rms;
@@ -273,16 +314,27 @@ impl Workspace {
 
 impl Engine {
     fn new(l: &Limits) -> Self {
+        let pmax = max_p(l);
         let rows = l.max_block_rows * l.max_outputs;
-        let cols = l.max_block_cols * l.max_inputs;
+        let cols = l.max_block_cols * pmax;
         let wide = rows.min(cols);
+        let (dense_rows, dense_cols) = (rows.min(svd::DENSE_MAX_DIM), cols.min(svd::DENSE_MAX_DIM));
         let kmax = (l.max_order + EXTRA_TRIPLETS).min(wide).max(1);
         let n = l.max_order;
         Self {
             limits: *l,
             kmax,
-            hbuf: vec![0.0; rows * cols],
-            dense: DenseSvd::new(rows, cols),
+            dense_rows,
+            dense_cols,
+            hbuf: vec![0.0; dense_rows * dense_cols],
+            dense: DenseSvd::new(dense_rows, dense_cols),
+            trunc: TruncatedSvd::new(
+                l.max_block_rows,
+                l.max_block_cols,
+                l.max_outputs,
+                pmax,
+                kmax,
+            ),
             sub: SubspaceSvd::new(rows, cols, kmax),
             u: vec![0.0; rows * kmax],
             v: vec![0.0; cols * kmax],
@@ -293,18 +345,21 @@ impl Engine {
             noise: vec![0.0; l.max_outputs],
             lite: Lite {
                 a: vec![0.0; n * n],
-                b: vec![0.0; n * l.max_inputs],
+                b: vec![0.0; n * pmax],
                 c: vec![0.0; l.max_outputs * n],
-                d: vec![0.0; l.max_outputs * l.max_inputs],
+                d: vec![0.0; l.max_outputs * pmax],
                 m: vec![0.0; n * n],
-                x: vec![0.0; n * l.max_inputs],
+                s: vec![0.0; n * n],
+                nrm: vec![0.0; n * n],
+                b1: vec![0.0; n],
+                x: vec![0.0; n * pmax],
                 poles: vec![C64::new(0.0, 0.0); n],
-                dc: vec![0.0; l.max_outputs * l.max_inputs],
+                dc: vec![0.0; l.max_outputs * pmax],
             },
             theta_fn: vec![0.0; l.max_pulses],
             theta_zeta: vec![0.0; l.max_pulses],
             theta_dc: vec![0.0; l.max_pulses * l.max_outputs],
-            model: Model::new(n, l.max_outputs, l.max_inputs, wide),
+            model: Model::new(n, l.max_outputs, pmax, wide),
         }
     }
 
@@ -365,11 +420,12 @@ impl Engine {
                 });
             }
         }
-        let path = svd::resolve(opts.svd, rows, cols)?;
+        let path = svd::resolve(opts.svd, rows, cols, self.dense_rows, self.dense_cols)?;
         let k = self.kmax.min(wide);
-        let m = &mut self.model;
+        let mut converged = k;
         match path {
             SvdPath::Dense => {
+                let m = &mut self.model;
                 dims.fill(markov.as_slice(), 0, &mut self.hbuf);
                 self.dense.compute(
                     &self.hbuf,
@@ -383,10 +439,9 @@ impl Engine {
                 m.n_sigma = wide;
             }
             SvdPath::Truncated => {
-                return Err(svd::SvdError::Unavailable("truncated SVD not built yet").into());
+                converged = self.truncated_svd(markov, dims, k, opts.order.unwrap_or(1))?;
             }
         }
-        let sig = &m.sigma[..m.n_sigma];
         let pooled = (self.noise[..q]
             .iter()
             .map(|s| if s.is_finite() { s * s } else { 0.0 })
@@ -394,6 +449,7 @@ impl Engine {
             / q as f64)
             .sqrt();
         let noise_sv = sizing::noise_singular_value(pooled, &dims, growth);
+        let sig = &self.model.sigma[..self.model.n_sigma];
         let n = match opts.order {
             Some(n) => {
                 let rank = sizing::auto_order(sig, 0.0, wide);
@@ -407,6 +463,12 @@ impl Engine {
         if n == 0 {
             return Err(IdentError::RankDeficient { rank: 0, order: 0 });
         }
+        if n > converged {
+            // The automatic order reached past the triplets that had converged: ask for them.
+            self.truncated_svd(markov, dims, k, n)?;
+        }
+        self.h1v(markov, dims, n, path, false)?;
+        let m = &mut self.model;
         m.n = n;
         m.q = q;
         m.p = p;
@@ -423,33 +485,156 @@ impl Engine {
             &m.sigma,
             &self.u,
             &self.v,
-            &mut self.era_scratch,
+            &self.era_scratch,
             &mut m.a,
             &mut m.b,
             &mut m.c,
             &mut m.d,
         );
-        m.analyse(&self.u, &self.v)
+        m.analyse_modes(&self.u, &self.v)
+    }
+
+    /// Leading `k` triplets by the truncated (FFT + Lanczos) SVD, at least `need` converged;
+    /// the rest are Ritz estimates for the order choice. Returns how many converged.
+    fn truncated_svd(
+        &mut self,
+        markov: &MarkovSeq,
+        dims: HankelDims,
+        k: usize,
+        need: usize,
+    ) -> Result<usize, IdentError> {
+        let m = &mut self.model;
+        let (q, p) = (dims.q, dims.p);
+        let got = self
+            .trunc
+            .compute_at_least(
+                markov.as_slice(),
+                q,
+                p,
+                dims.r,
+                dims.c,
+                0,
+                k,
+                need.min(k),
+                &mut m.sigma[..k],
+                &mut self.u,
+                &mut self.v,
+            )
+            .map_err(svd::SvdError::from)?;
+        m.n_sigma = k;
+        Ok(got)
+    }
+
+    /// `era_scratch = H(1) V_n` (of the jackknife's `V` when `jk`), by FFT products on the
+    /// truncated path and direct products on the dense one.
+    fn h1v(
+        &mut self,
+        markov: &MarkovSeq,
+        dims: HankelDims,
+        n: usize,
+        path: SvdPath,
+        jk: bool,
+    ) -> Result<(), IdentError> {
+        let (rows, cols) = (dims.rows(), dims.cols());
+        let v = if jk { &self.jk_v } else { &self.v };
+        match path {
+            SvdPath::Dense => h1_times_v(markov.as_slice(), &dims, n, v, &mut self.era_scratch),
+            SvdPath::Truncated => {
+                for l in 0..n {
+                    self.trunc
+                        .apply(
+                            markov.as_slice(),
+                            dims.q,
+                            dims.p,
+                            dims.r,
+                            dims.c,
+                            1,
+                            &v[l * cols..(l + 1) * cols],
+                            &mut self.era_scratch[l * rows..(l + 1) * rows],
+                        )
+                        .map_err(svd::SvdError::from)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Converts the realised per-width input matrices `B̃_g` into the single input `B` and
+    /// sets `D` ([`crate::core::grouped`]).
+    fn single_input(
+        &mut self,
+        widths: &[usize],
+        weights: &[f64],
+        d: &[f64],
+    ) -> Result<(), IdentError> {
+        let m = &mut self.model;
+        let n = m.n;
+        let lt = &mut self.lite;
+        if !input_matrix(
+            &m.a,
+            n,
+            &m.b,
+            widths,
+            weights,
+            &mut lt.m,
+            &mut lt.s,
+            &mut lt.nrm,
+            &mut lt.b1,
+        ) {
+            return Err(IdentError::InvalidInput(
+                "the pulse widths cannot excite a pole of the model: B is not identifiable",
+            ));
+        }
+        m.set_single_input(&lt.b1, d);
+        Ok(())
     }
 
     /// Re-identifies the leave-one-out sequence at the model's order and Hankel size and
     /// stores fn, ζ and the DC gains as estimate number `slot`.
-    fn jackknife_one(&mut self, markov: &MarkovSeq, slot: usize) -> Result<(), IdentError> {
+    fn jackknife_one(
+        &mut self,
+        markov: &MarkovSeq,
+        slot: usize,
+        widths: &[usize],
+        weights: &[f64],
+        d: &[f64],
+    ) -> Result<(), IdentError> {
         let m = &self.model;
-        let (n, q, p, dims) = (m.n, m.q, m.p, m.dims);
+        let (n, q, dims) = (m.n, m.q, m.dims);
         let b = (n + EXTRA_TRIPLETS)
             .min(self.kmax)
             .min(dims.rows().min(dims.cols()));
-        self.sub.compute(
-            markov.as_slice(),
-            dims,
-            b,
-            JACKKNIFE_ITERS,
-            &self.v,
-            &mut self.jk_sigma,
-            &mut self.jk_u,
-            &mut self.jk_v,
-        )?;
+        let path = m.path;
+        match path {
+            SvdPath::Dense => self.sub.compute(
+                markov.as_slice(),
+                dims,
+                b,
+                JACKKNIFE_ITERS,
+                &self.v,
+                &mut self.jk_sigma,
+                &mut self.jk_u,
+                &mut self.jk_v,
+            )?,
+            SvdPath::Truncated => {
+                self.trunc
+                    .compute_at_least(
+                        markov.as_slice(),
+                        dims.q,
+                        dims.p,
+                        dims.r,
+                        dims.c,
+                        0,
+                        b,
+                        n,
+                        &mut self.jk_sigma[..b],
+                        &mut self.jk_u,
+                        &mut self.jk_v,
+                    )
+                    .map_err(svd::SvdError::from)?;
+            }
+        }
+        self.h1v(markov, dims, n, path, true)?;
         let lt = &mut self.lite;
         realize(
             markov.as_slice(),
@@ -458,12 +643,13 @@ impl Engine {
             &self.jk_sigma,
             &self.jk_u,
             &self.jk_v,
-            &mut self.era_scratch,
+            &self.era_scratch,
             &mut lt.a,
             &mut lt.b,
             &mut lt.c,
             &mut lt.d,
         );
+        let m = &self.model;
         lt.m[..n * n].copy_from_slice(&lt.a[..n * n]);
         eigenvalues(&mut lt.m, n, &mut lt.poles)?;
         let (f, z) = match m.pair_s() {
@@ -475,9 +661,24 @@ impl Engine {
         };
         self.theta_fn[slot] = f;
         self.theta_zeta[slot] = z;
-        dc_gain(
-            &lt.a, &lt.b, &lt.c, &lt.d, n, q, p, &mut lt.m, &mut lt.x, &mut lt.dc,
+        let ok = input_matrix(
+            &lt.a,
+            n,
+            &lt.b,
+            widths,
+            weights,
+            &mut lt.m,
+            &mut lt.s,
+            &mut lt.nrm,
+            &mut lt.b1,
         );
+        if ok {
+            dc_gain(
+                &lt.a, &lt.b1, &lt.c, d, n, q, 1, &mut lt.m, &mut lt.x, &mut lt.dc,
+            );
+        } else {
+            lt.dc[..q].fill(f64::NAN);
+        }
         for i in 0..q {
             self.theta_dc[slot * self.limits.max_outputs + i] = lt.dc[i];
         }
@@ -494,6 +695,12 @@ impl Engine {
             m.std_dc[i] = strided_jackknife(vals, count);
         }
     }
+}
+
+/// Most input columns the engine handles: the inputs of given Markov parameters, or one
+/// column per pulse width on the pulse path.
+fn max_p(l: &Limits) -> usize {
+    l.max_inputs.max(MAX_GROUPS)
 }
 
 /// [`jackknife_std`] over an iterator (no allocation).
