@@ -13,6 +13,9 @@
 //! - A forward jump of `d > 1` in `sample_index` is a gap: `d − 1` samples are missing (NaN and
 //!   marked in `Record::missing`), counted in `samples_lost`, never bridged. A gap longer than
 //!   `max_gap_samples` is not filled: a new segment starts after it (still counted as lost).
+//!   So is a gap that would take the filled samples past `max_gap_samples + 10 × samples
+//!   received`: a few corrupt frames with absurd indices cannot make a small file expand into
+//!   gigabytes of NaN.
 //! - `d = 0` is a duplicate (dropped, counted); a backward jump is a device reset whose HELLO
 //!   was not seen: a new segment.
 //! - A HELLO with a new `boot_id` ends the segment; the next sample starts a new one. Later
@@ -36,14 +39,15 @@ use crate::record::{names, Channel, Record, RecordEvent, RecordEventKind};
 /// Assembly limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct AssembleOptions {
-    /// Longest gap filled with missing samples; a longer one starts a new segment.
+    /// Longest gap filled with missing samples (default 65 536, a minute at 1 kHz); a longer
+    /// one starts a new segment.
     pub max_gap_samples: u64,
 }
 
 impl Default for AssembleOptions {
     fn default() -> Self {
         Self {
-            max_gap_samples: 1 << 20,
+            max_gap_samples: 1 << 16,
         }
     }
 }
@@ -130,6 +134,11 @@ pub struct SampleAssembler {
     span_t_us: u64,
     span_samples: u64,
     nominal_rate_hz: Option<u16>,
+    /// The current segment began at an inferred reset after the last HELLO: the HELLO of
+    /// that new boot, when it comes, must not split it again.
+    reset_since_hello: bool,
+    /// Missing samples filled in so far.
+    filled: u64,
     stats: AssembleStats,
 }
 
@@ -182,10 +191,11 @@ impl SampleAssembler {
     /// A HELLO: a new `boot_id` ends the current segment.
     pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) {
         self.nominal_rate_hz = Some(sample_rate_hz);
-        if self.boot_id.is_some_and(|b| b != boot_id) {
+        if self.boot_id.is_some_and(|b| b != boot_id) && !self.reset_since_hello {
             self.end_segment();
         }
         self.boot_id = Some(boot_id);
+        self.reset_since_hello = false;
     }
 
     /// A device event referring to `sample_index`.
@@ -239,6 +249,7 @@ impl SampleAssembler {
         let d = match seg.idx.step(sample_index) {
             Step::Backward => {
                 self.stats.resets_inferred += 1;
+                self.reset_since_hello = true;
                 self.end_segment();
                 return self.start_segment(sample_index, t_us, value, on);
             }
@@ -249,7 +260,8 @@ impl SampleAssembler {
             Step::Forward(d) => d,
         };
         let lost = d - 1;
-        if lost > self.opts.max_gap_samples {
+        let budget = self.opts.max_gap_samples + 10 * self.stats.samples;
+        if lost > self.opts.max_gap_samples || self.filled + lost > budget {
             self.stats.samples_lost += lost;
             self.stats.large_gaps += 1;
             // The segment ends at its last sample, not at the far side of the gap.
@@ -264,6 +276,7 @@ impl SampleAssembler {
         self.stats.clock_wraps += seg.clock.wraps() - wraps;
         let t = seg.clock.value();
         if lost > 0 {
+            self.filled += lost;
             self.stats.samples_lost += lost;
             self.stats.gaps += 1;
             on(Assembled::Missing {
@@ -352,6 +365,10 @@ pub struct BuildStats {
     pub invalid_samples: u64,
     /// SAMPLEs without THRUST_FRESH: the load cell's value was held, not newly converted.
     pub thrust_held: u64,
+    /// Device frames lost on the link, from jumps of the 16-bit `seq` between successive
+    /// device frames (restarted by a HELLO with a new `boot_id`). Sample-index gaps without a
+    /// `seq` jump were dropped by the device itself.
+    pub link_frames_lost: u64,
 }
 
 /// Builds a [`Record`] from frames (or generic points), streaming.
@@ -363,6 +380,8 @@ pub struct BuildStats {
 pub struct RecordBuilder {
     asm: SampleAssembler,
     store: Store,
+    last_seq: Option<u16>,
+    boot_id: Option<u32>,
 }
 
 /// The growing record columns.
@@ -381,7 +400,7 @@ impl RecordBuilder {
     pub fn new(opts: AssembleOptions) -> Self {
         Self {
             asm: SampleAssembler::new(opts),
-            store: Store::default(),
+            ..Self::default()
         }
     }
 
@@ -407,6 +426,23 @@ impl RecordBuilder {
 
     /// Feed one decoded frame (SAMPLE, HELLO and EVENT matter; others are ignored).
     pub fn push_frame(&mut self, f: &Frame) {
+        if f.msg.is_command() {
+            return; // a host frame (an echo, a loopback): not part of the device's stream
+        }
+        if let Message::Hello(h) = &f.msg {
+            if self.boot_id.is_some_and(|b| b != h.boot_id) {
+                self.last_seq = None;
+            }
+            self.boot_id = Some(h.boot_id);
+        }
+        if let Some(last) = self.last_seq {
+            let jump = f.seq.wrapping_sub(last);
+            // A jump of half the range or more is a restart, not a loss.
+            if (2..0x8000).contains(&jump) {
+                self.store.stats.link_frames_lost += (jump - 1) as u64;
+            }
+        }
+        self.last_seq = Some(f.seq);
         match &f.msg {
             Message::Sample(s) => {
                 if !s.flags.contains(SampleFlags::THRUST_FRESH) {

@@ -4,8 +4,12 @@
 //! init `0xFFFF`, refin = refout = true, xorout `0x0000`; check("123456789") = `0x6F91`.
 //! This is the CRC that MAVLink calls X.25 "accumulate" before its final xor.
 //!
-//! Implemented byte-wise with a 256-entry table built at compile time:
-//! `crc' = (crc >> 8) ^ T[(crc ^ b) & 0xFF]`, with `T[i]` the 8-fold reflected shift of `i`.
+//! Implemented with tables built at compile time. Byte-wise:
+//! `crc' = (crc >> 8) ^ T₀[(crc ^ b) & 0xFF]`, `T₀[i]` the 8-fold reflected shift of `i`.
+//! Four bytes at a time ("slicing-by-4", Intel 2006): with `x = crc ^ (b₀ | b₁ << 8)` (the
+//! 16-bit register is shifted out entirely after two bytes),
+//! `crc' = T₃[x & 0xFF] ^ T₂[x >> 8] ^ T₁[b₂] ^ T₀[b₃]`, where `Tₖ[i] = (Tₖ₋₁[i] >> 8) ^
+//! T₀[Tₖ₋₁[i] & 0xFF]` is the effect of byte `i` followed by `k` zero bytes.
 
 /// Initial register value.
 pub const CRC_INIT: u16 = 0xFFFF;
@@ -32,12 +36,34 @@ const fn make_table() -> [u16; 256] {
     table
 }
 
-static TABLE: [u16; 256] = make_table();
+const fn make_tables() -> [[u16; 256]; 4] {
+    let mut t = [make_table(); 4];
+    let mut k = 1;
+    while k < 4 {
+        let mut i = 0;
+        while i < 256 {
+            let prev = t[k - 1][i];
+            t[k][i] = (prev >> 8) ^ t[0][(prev & 0xFF) as usize];
+            i += 1;
+        }
+        k += 1;
+    }
+    t
+}
+
+static TABLES: [[u16; 256]; 4] = make_tables();
 
 /// Continue a CRC-16/MCRF4XX computation from register value `crc` over `data`.
 pub fn crc16_update(mut crc: u16, data: &[u8]) -> u16 {
-    for &b in data {
-        crc = (crc >> 8) ^ TABLE[((crc ^ b as u16) & 0xFF) as usize];
+    let [t0, t1, t2, t3] = &TABLES;
+    let mut words = data.chunks_exact(4);
+    for w in &mut words {
+        let x = crc ^ u16::from_le_bytes([w[0], w[1]]);
+        crc =
+            t3[(x & 0xFF) as usize] ^ t2[(x >> 8) as usize] ^ t1[w[2] as usize] ^ t0[w[3] as usize];
+    }
+    for &b in words.remainder() {
+        crc = (crc >> 8) ^ t0[((crc ^ b as u16) & 0xFF) as usize];
     }
     crc
 }
@@ -80,7 +106,7 @@ mod tests {
     #[test]
     fn table_matches_bitwise_reference() {
         let data: Vec<u8> = (0..=255u8).chain((0..=255u8).rev()).collect();
-        for n in [0, 1, 2, 7, 100, 512] {
+        for n in [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 38, 100, 253, 512] {
             assert_eq!(crc16_mcrf4xx(&data[..n]), reference(&data[..n]), "n = {n}");
         }
     }

@@ -183,7 +183,7 @@ impl Decoder {
     ) {
         self.stats.bytes += bytes.len() as u64;
         let mut rest = bytes;
-        while let Some(i) = rest.iter().position(|&b| b == 0) {
+        while let Some(i) = find_zero(rest) {
             self.append(&rest[..i]);
             rest = &rest[i + 1..];
             if let Some(r) = self.finish() {
@@ -243,6 +243,29 @@ impl Decoder {
     }
 }
 
+/// Position of the first `0x00`, eight bytes at a time: a word `v` holds a zero byte iff
+/// `(v − 0x01…01) & !v & 0x80…80 ≠ 0`, and the lowest set bit of that mask marks the first one
+/// (little-endian; borrows only propagate upwards from a zero byte, so lower bytes are exact).
+fn find_zero(s: &[u8]) -> Option<usize> {
+    const LO: u64 = 0x0101_0101_0101_0101;
+    const HI: u64 = 0x8080_8080_8080_8080;
+    let mut words = s.chunks_exact(8);
+    let mut base = 0;
+    for w in &mut words {
+        let v = u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]);
+        let m = v.wrapping_sub(LO) & !v & HI;
+        if m != 0 {
+            return Some(base + (m.trailing_zeros() / 8) as usize);
+        }
+        base += 8;
+    }
+    words
+        .remainder()
+        .iter()
+        .position(|&b| b == 0)
+        .map(|i| base + i)
+}
+
 /// Iterator over the frames of one chunk, see [`Decoder::frames`].
 #[derive(Debug)]
 pub struct Frames<'a> {
@@ -254,7 +277,7 @@ impl Iterator for Frames<'_> {
     type Item = Frame;
 
     fn next(&mut self) -> Option<Frame> {
-        while let Some(i) = self.rest.iter().position(|&b| b == 0) {
+        while let Some(i) = find_zero(self.rest) {
             self.dec.append(&self.rest[..i]);
             self.rest = &self.rest[i + 1..];
             if let Some(Ok(f)) = self.dec.finish() {
@@ -273,5 +296,33 @@ impl Drop for Frames<'_> {
     /// end (or use [`Decoder::push`]) to get them all.
     fn drop(&mut self) {
         for _ in self.by_ref() {}
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::find_zero;
+
+    #[test]
+    fn find_zero_matches_a_plain_search() {
+        let mut v: Vec<u8> = (0..64).map(|i| 1 + (i * 37 % 255) as u8).collect();
+        v[5] = 0x80; // high bits and 0x01 bytes around a zero must not confuse the word test
+        v[6] = 0x01;
+        assert_eq!(find_zero(&v), None);
+        for z in 0..v.len() {
+            let mut w = v.clone();
+            w[z] = 0;
+            if z + 3 < w.len() {
+                w[z + 3] = 0;
+            }
+            for start in 0..4.min(w.len()) {
+                let s = &w[start..];
+                assert_eq!(
+                    find_zero(s),
+                    s.iter().position(|&b| b == 0),
+                    "z={z} start={start}"
+                );
+            }
+        }
     }
 }

@@ -226,3 +226,62 @@ fn nominal_rate_when_the_clock_cannot_tell() {
         IngestError::NoSamples
     );
 }
+
+#[test]
+fn seq_jumps_count_link_losses_not_device_drops() {
+    // Frames 0..10 with seq = index; frame seq 4 lost on the link (index 4 missing too), and
+    // index 7 dropped by the device (seq continues).
+    let mut frames = Vec::new();
+    let mut seq = 0u16;
+    for i in 0..10u32 {
+        if i == 7 {
+            continue; // device drop: no frame, no seq consumed
+        }
+        let mut f = sample(i, 1000 * i, ALL);
+        f.seq = seq;
+        seq += 1;
+        if i != 4 {
+            frames.push(f);
+        }
+    }
+    let mut b = RecordBuilder::default();
+    b.push_frame(&hello(1));
+    frames.iter().for_each(|f| b.push_frame(f));
+    let (r, a, st) = b.finish().unwrap();
+    assert_eq!(r.missing_count(), 2);
+    assert_eq!(a.samples_lost, 2);
+    assert_eq!(st.link_frames_lost, 1);
+}
+
+#[test]
+fn samples_of_a_new_boot_before_its_hello_make_one_segment() {
+    let mut frames = vec![hello(1)];
+    frames.extend((100..105).map(|i| sample(i, 1000 * i, ALL)));
+    frames.extend((0..2).map(|i| sample(i, 1000 * i, ALL))); // new boot, HELLO late
+    frames.push(hello(2));
+    frames.extend((2..5).map(|i| sample(i, 1000 * i, ALL)));
+    let (r, a, _) = build(&frames);
+    assert_eq!(r.len(), 10);
+    assert_eq!((a.segments, a.resets_inferred), (2, 1));
+    let starts: Vec<usize> = r.events.iter().map(|e| e.sample).collect();
+    assert_eq!(starts, [5]);
+}
+
+#[test]
+fn absurd_indices_cannot_blow_up_the_record() {
+    // Every other frame jumps by almost the largest fillable gap.
+    let mut b = RecordBuilder::new(AssembleOptions {
+        max_gap_samples: 1000,
+    });
+    let mut idx = 0u32;
+    for i in 0..100u32 {
+        b.push_frame(&sample(idx, 1000 * idx, ALL));
+        idx += if i % 2 == 0 { 999 } else { 1 };
+    }
+    let (r, a, _) = b.finish().unwrap();
+    // Filled samples stay within max_gap + 10 × received.
+    assert!(r.missing_count() as u64 <= 1000 + 10 * 100);
+    assert!(a.large_gaps > 0);
+    assert_eq!(a.samples, 100);
+    assert_eq!(a.samples_lost, 50 * 998);
+}
