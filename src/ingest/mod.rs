@@ -5,9 +5,14 @@
 //! - [`assemble`]: the streaming part the daemon reuses: sample-index gaps, the device clock,
 //!   segments and events ([`SampleAssembler`]), and the growing record ([`RecordBuilder`]).
 //! - [`clock`]: unwrapping the 32-bit device counters.
+//! - [`csv_file`]: CSV files (exported stand logs, benchmark archives) with column choice,
+//!   [`resample`] for irregular timestamps, and [`steps`] found from a response-only record.
 
 pub mod assemble;
 pub mod clock;
+pub mod csv_file;
+pub mod resample;
+pub mod steps;
 pub mod tsp;
 
 pub use assemble::{
