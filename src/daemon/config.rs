@@ -89,6 +89,8 @@ pub struct RawIdentify {
     pub max_window_samples: Option<usize>,
     /// Throttle change that means a new operating point, fraction.
     pub level_tolerance: Option<f64>,
+    /// Jackknife uncertainty per model.
+    pub jackknife: Option<bool>,
 }
 
 /// `[publish]` as written.
@@ -167,6 +169,8 @@ pub struct IdentifyConfig {
     pub max_window_samples: usize,
     /// A throttle change larger than this (fraction) starts a new operating point.
     pub level_tolerance: f64,
+    /// Compute the jackknife uncertainty of each model (about 3× the cost of a model).
+    pub jackknife: bool,
 }
 
 /// Validated publishing settings.
@@ -394,6 +398,7 @@ impl RawIdentify {
                 0.5,
                 "1e-4..=0.5 (throttle fraction)",
             )?,
+            jackknife: self.jackknife.unwrap_or(true),
         })
     }
 }

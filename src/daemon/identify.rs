@@ -36,6 +36,7 @@ impl CoreIdentifier {
         let ws = Workspace::new(&limits).map_err(|e| DaemonError::Identify(e.to_string()))?;
         let opts = IdentOptions {
             order: cfg.identify.order,
+            jackknife: cfg.identify.jackknife,
             ..IdentOptions::default()
         };
         Ok(CoreIdentifier {

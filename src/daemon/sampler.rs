@@ -446,3 +446,81 @@ fn sleep_unless(shutdown: &Shutdown, d: Duration) {
         std::thread::sleep((end - now).min(Duration::from_millis(10)));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::daemon::source::{ScriptedSource, Step};
+    use crate::daemon::synth::{synth_stream, SynthConfig};
+
+    fn cfg() -> SamplerConfig {
+        SamplerConfig {
+            stop_timeout: Duration::from_millis(100),
+            max_run: None,
+            reconnect_initial: Duration::from_millis(1),
+            reconnect_max: Duration::from_millis(2),
+        }
+    }
+
+    #[test]
+    fn hangup_reconnects_and_counts_everything_once() {
+        let synth = SynthConfig {
+            levels: vec![0.4],
+            pulses_per_level: 2,
+            ..SynthConfig::default()
+        };
+        let (bytes, facts) = synth_stream(&synth);
+        let half = bytes.len() / 2;
+        let mut src = ScriptedSource::new(vec![
+            Step::Data(bytes[..half].to_vec()),
+            Step::Stall,
+            Step::Hangup,
+            Step::Data(bytes[half..].to_vec()),
+        ]);
+        src.refuse_reconnects = 2;
+        let (tx, rx) = crossbeam_channel::bounded(1 << 16);
+        let s = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg());
+        let out = s.run();
+        assert!(out.error.is_none());
+        assert_eq!(out.stats.reconnects, 1);
+        assert_eq!(out.stats.samples, facts.samples_sent);
+        assert_eq!(out.stats.frames_ok, facts.frames_intact);
+        let notices: Vec<Notice> = rx
+            .try_iter()
+            .filter_map(|i| match i {
+                Item::Notice(n) => Some(n),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(notices, vec![Notice::Disconnected, Notice::Reconnected]);
+    }
+
+    #[test]
+    fn full_queue_is_counted_as_overflow_never_waited_for() {
+        let (bytes, facts) = synth_stream(&SynthConfig {
+            levels: vec![0.4],
+            pulses_per_level: 2,
+            ..SynthConfig::default()
+        });
+        let src = ScriptedSource::new(vec![Step::Data(bytes)]);
+        let (tx, rx) = crossbeam_channel::bounded(16);
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
+        let queued = rx.try_iter().count() as u64;
+        assert_eq!(queued, 16);
+        // every sample and event beyond the 16 queued items was dropped and counted
+        assert!(out.stats.overflows > 0);
+        assert_eq!(out.stats.samples, facts.samples_sent);
+    }
+
+    #[test]
+    fn shutdown_sends_stop_and_reports_it_unacknowledged_without_a_device() {
+        let src = ScriptedSource::new(vec![Step::Stall; 1000]);
+        let (tx, rx) = crossbeam_channel::bounded(64);
+        let stop = Shutdown::manual();
+        stop.request();
+        let out = Sampler::new(Box::new(src), tx, None, None, stop, cfg()).run();
+        assert!(out.error.is_none());
+        let items: Vec<Item> = rx.try_iter().collect();
+        assert_eq!(items, vec![Item::Notice(Notice::StopUnacknowledged)]);
+    }
+}
