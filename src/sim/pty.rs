@@ -43,6 +43,11 @@ pub const MAX_BACKLOG: usize = 1 << 20;
 /// Longest wait for host bytes between checks of the stop flag and the hang-up timer.
 const MAX_WAIT: Duration = Duration::from_millis(5);
 
+/// Shortest time between two batches of output, µs: above 2 kHz the samples go out in batches
+/// (as a USB device sends per bus frame) instead of one wake-up per sample. Host bytes still
+/// wake the runner at once.
+const MIN_BATCH_US: u64 = 500;
+
 /// How the runner is started.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
@@ -341,7 +346,8 @@ fn serve(
                 }
             }
         }
-        let wait = clock.until(fw.next_deadline_us()).min(MAX_WAIT);
+        let wake_us = fw.next_deadline_us().max(now + MIN_BATCH_US);
+        let wait = clock.until(wake_us).min(MAX_WAIT);
         match wait_master(fd, wait) {
             Ready::Input => {
                 reader_present = true;
