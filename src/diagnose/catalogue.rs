@@ -261,6 +261,26 @@ pub fn extend(ctx: &Ctx, cur: &Fit, effect: &str) -> Option<Fit> {
     }
 }
 
+/// Physical plausibility of a fitted extension: a mode below Nyquist with positive damping and
+/// share, a periodic term with at least 5 periods in the estimation part, a power law within
+/// 0.1..10. Fits that leave these ranges are numerical artefacts, not findings.
+pub fn plausible(ctx: &Ctx, effect: &str, f: &Fit) -> bool {
+    let v = &f.params.v;
+    let fmax = max_freq_hz(ctx.sig.dt_s);
+    let span_s = ctx.est.len() as f64 * ctx.sig.dt_s;
+    match effect {
+        "extra_mode" => {
+            (v[ix::MODE_FN] > 0.0 && v[ix::MODE_FN] < 0.95 * fmax)
+                && (0.002..=5.0).contains(&v[ix::MODE_ZETA])
+                && v[ix::MODE_GAIN] > 0.0
+                && v[ix::MODE_GAIN] <= 2.0
+        }
+        "periodic_disturbance" => v[ix::SIN_FREQ] >= 5.0 / span_s && v[ix::SIN_FREQ] < fmax,
+        "static_nonlinearity" => (0.1..=10.0).contains(&v[ix::EXPONENT]),
+        _ => v.iter().all(|x| !x.is_nan()),
+    }
+}
+
 /// Throttle clip: a grid over levels between the median and the largest throttle of the
 /// estimation part (other parameters held, gain and offset by least squares), a finer grid
 /// around the best, then Levenberg–Marquardt with the level held.

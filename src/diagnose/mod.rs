@@ -231,7 +231,8 @@ pub fn diagnose(
             let Some(f) = catalogue::extend(&ctx, &cur, name) else {
                 continue;
             };
-            if !(f.sse.is_finite() && f.sse > 0.0 && cur.sse > 0.0) {
+            let usable = f.sse.is_finite() && f.sse > 0.0 && cur.sse > 0.0;
+            if !(usable && catalogue::plausible(&ctx, name, &f)) {
                 continue;
             }
             let score = f.n as f64 * (cur.sse / f.sse).ln();

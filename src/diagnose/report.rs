@@ -322,3 +322,22 @@ fn markdown(title: &str, d: &Diagnosis, pulses: usize, sv: &[f64]) -> String {
     );
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pulses_are_found_with_sign_and_steps_are_not_pulses() {
+        let mut u = vec![0.5; 400];
+        u[50..55].iter_mut().for_each(|v| *v = 0.6);
+        u[100] = 0.45;
+        u[200..].iter_mut().for_each(|v| *v = 0.7); // a step, never returns
+        let p = find_pulses(&u);
+        assert_eq!(p.len(), 2, "{p:?}");
+        assert_eq!(p[0].0, 50);
+        assert!((p[0].1 - 0.1).abs() < 1e-12);
+        assert_eq!(p[1].0, 100);
+        assert!((p[1].1 + 0.05).abs() < 1e-12);
+    }
+}
