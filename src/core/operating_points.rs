@@ -3,10 +3,12 @@
 //!
 //! Segmentation (one input):
 //! - **Piecewise-constant input** (a staircase with or without pulses): a *level* is a run of
-//!   constant input longer than `max_pulse_width` samples (shorter runs are pulses and belong to
-//!   the level around them). Level `i`'s segment runs from the second half of level `i−1` (so
-//!   the step into level `i` is in it, with the system at rest before it) to the end of level
-//!   `i`. The first level has no step into it and is only identified when it holds pulses.
+//!   constant input longer than `max_pulse_width` samples (shorter runs are pulses, or the ramp
+//!   into the next level, and belong to the level before them). A level is identified from its
+//!   own samples when they hold pulses (pulse path); otherwise by OKID over the segment from the
+//!   second half of level `i−1` (so the step into level `i` is in it, with the system at rest
+//!   before it) to the end of level `i`. The first level has no step into it and is only
+//!   identified when it holds pulses.
 //! - **Ramp** (the input is strongly correlated with time, |r| > 0.9): [`RAMP_WINDOWS`] windows
 //!   of equal length, each at the mean input over it.
 //! - Anything else is one operating point: the model of the whole record says it all, the
@@ -18,7 +20,7 @@
 
 use serde::Serialize;
 
-use super::okid::select::{identify_any, AnyInput, PathTaken};
+use super::okid::select::{identify_any, identify_okid, AnyInput, AnyModel, PathTaken};
 use super::okid::OkidOptions;
 use super::report::Gain;
 use super::workspace::IdentOptions;
@@ -90,9 +92,10 @@ pub struct OpTable {
     pub skipped: Vec<SkippedPoint>,
 }
 
-/// A segment: sample range and level.
+/// A segment: sample range, the start of the level's own samples, and the level.
 struct Segment {
     from: usize,
+    own: usize,
     to: usize,
     level: f64,
 }
@@ -147,17 +150,36 @@ fn identify_segment(
     ident: &IdentOptions,
     opts: &OpOptions,
 ) -> Result<OperatingPoint, String> {
+    // Pulses of the level itself first (the pulse path, from the level's own samples only).
+    if seg.own > seg.from && seg.to - seg.own >= opts.min_samples {
+        if let Ok(m) = identify_range(input, seg.own..seg.to, ident, false) {
+            if m.path == PathTaken::Pulse {
+                return Ok(point(seg, seg.own, m, input.dt_s));
+            }
+        }
+    }
     let n = seg.to - seg.from;
     if n < opts.min_samples {
         return Err(format!("only {n} samples (need {})", opts.min_samples));
     }
-    let r = seg.from..seg.to;
+    let okid_only = seg.own > seg.from;
+    let m = identify_range(input, seg.from..seg.to, ident, okid_only).map_err(|e| e.to_string())?;
+    Ok(point(seg, seg.from, m, input.dt_s))
+}
+
+/// Identifies `input` over `r` (by [`identify_any`], or OKID only).
+fn identify_range(
+    input: &AnyInput<'_>,
+    r: std::ops::Range<usize>,
+    ident: &IdentOptions,
+    okid_only: bool,
+) -> Result<AnyModel, super::okid::select::AnyError> {
     let u = [&input.u[0][r.clone()]];
     let y: Vec<&[f64]> = input.y.iter().map(|c| &c[r.clone()]).collect();
     let starts: Option<Vec<usize>> = input.pulse_starts.map(|s| {
         s.iter()
             .filter(|&&k| r.contains(&k))
-            .map(|k| k - seg.from)
+            .map(|k| k - r.start)
             .collect()
     });
     let missing = if input.missing.is_empty() {
@@ -172,18 +194,25 @@ fn identify_segment(
         missing,
         pulse_starts: starts.as_deref(),
     };
-    let m = identify_any(&sub, ident, &OkidOptions::default()).map_err(|e| e.to_string())?;
-    Ok(OperatingPoint {
+    if okid_only {
+        identify_okid(&sub, ident, &OkidOptions::default())
+    } else {
+        identify_any(&sub, ident, &OkidOptions::default())
+    }
+}
+
+fn point(seg: &Segment, from: usize, m: AnyModel, dt_s: f64) -> OperatingPoint {
+    OperatingPoint {
         level: seg.level,
-        start_s: seg.from as f64 * input.dt_s,
-        samples: n,
+        start_s: from as f64 * dt_s,
+        samples: seg.to - from,
         path: m.path,
         order: m.report.order,
         fn_hz: m.report.fn_hz,
         zeta: m.report.zeta,
         time_constants_s: m.report.time_constants_s,
         dc_gain: m.report.dc_gain,
-    })
+    }
 }
 
 /// Levels of a piecewise-constant input: runs longer than `max_pulse`.
@@ -205,14 +234,19 @@ fn staircase(u: &[f64], max_pulse: usize) -> Vec<Segment> {
         }
     }
     let mut segs = Vec::with_capacity(runs.len());
-    for (i, &(from, to, level)) in runs.iter().enumerate() {
+    for (i, &(own, to, level)) in runs.iter().enumerate() {
         let from = if i == 0 {
-            from
+            own
         } else {
             let prev = runs[i - 1];
             prev.0 + (prev.1 - prev.0) / 2
         };
-        segs.push(Segment { from, to, level });
+        segs.push(Segment {
+            from,
+            own,
+            to,
+            level,
+        });
     }
     segs
 }
@@ -258,6 +292,7 @@ fn ramp(u: &[f64]) -> Vec<Segment> {
             let (s, c) = vals.fold((0.0, 0usize), |a, v| (a.0 + v, a.1 + 1));
             Segment {
                 from,
+                own: from,
                 to,
                 level: s / c.max(1) as f64,
             }

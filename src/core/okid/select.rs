@@ -1,7 +1,9 @@
 //! One entry for any excitation: the pulse path for a clean pulse experiment, OKID otherwise.
 //!
 //! A record is a **clean pulse experiment** when it has one input that is piecewise constant
-//! (the input changes on at most an eighth of the samples) and the pulse path of the core finds
+//! (the input holds its previous value on at least half of the samples: levels, pulses and the
+//! ramps between levels of a stand's experiment plan, but not random, chirp or multisine input,
+//! whose rare equal neighbours could look like pulses) and the pulse path of the core finds
 //! and keeps at least one pulse in it. Everything else (random, chirp, multisine, steps,
 //! staircases, ramps, several inputs) goes through [`okid`](super::okid) and then ERA on the
 //! recovered Markov parameters ([`Workspace::identify_markov`]). The path taken is reported.
@@ -266,13 +268,13 @@ fn okid_order(report: &ModelReport, r: &OkidResult, max_order: usize) -> usize {
     sizing::auto_order(&report.singular_values, noise_sv, max_order).max(1)
 }
 
-/// True when `u` changes (by more than 1e-9) on at most an eighth of its samples.
+/// True when `u` changes (by more than 1e-9) on at most half of its samples.
 pub fn is_piecewise_constant(u: &[f64]) -> bool {
     let changes = u
         .windows(2)
         .filter(|w| w[0].is_finite() && w[1].is_finite() && (w[1] - w[0]).abs() > 1e-9)
         .count();
-    changes * 8 <= u.len()
+    changes * 2 <= u.len()
 }
 
 /// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs.
