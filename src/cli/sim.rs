@@ -1,12 +1,213 @@
-//! `propid sim` (not written yet).
+//! `propid sim`: the simulated stand on a pseudo-terminal, or a recording written faster than
+//! real time.
+//!
+//! On a pty, the first line on stdout is the device path to open (the `--link` if given); when
+//! the stand stops (Ctrl-C, `--seconds`, or a hang-up without re-open) one JSON line with the
+//! runner's report follows (`{"type":"sim_stats", ...}`: boots, firmware and fault counters).
+//! With `--record FILE --seconds S` the firmware and the host's experiment plan run in one loop
+//! on a simulated clock and the device's bytes go to FILE; stdout gets one JSON summary line.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use super::CliError;
+use crate::sim::config::WireProtocol;
+use crate::sim::pty::{self, RunOptions};
+use crate::sim::{record, SimConfig, SimError};
 
 /// Arguments of `propid sim`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Configuration file (default: config/sim.toml when it exists, else built-in defaults).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Make a symlink at PATH to the pty slave (re-pointed after a hang-up and re-open).
+    #[arg(long, value_name = "PATH")]
+    pub link: Option<PathBuf>,
+    /// Stop after S seconds (with --record: the length of the recording).
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f64>,
+    /// Write a recording (raw device bytes) of the experiment plan to FILE, faster than real
+    /// time, instead of opening a pty. Needs --seconds.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
+    /// Overrides of config keys (boxed: keeps the binary's command enum small).
+    #[command(flatten)]
+    pub set: Box<Overrides>,
+}
+
+/// Command-line overrides of `config/sim.toml` keys.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct Overrides {
+    /// Override stand.seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Override stand.sample_rate_hz (Hz).
+    #[arg(long, value_name = "HZ")]
+    pub rate: Option<u32>,
+    /// Override stand.protocol ("tsp" or "csv").
+    #[arg(long, value_parser = ["tsp", "csv"])]
+    pub protocol: Option<String>,
+    /// Override stand.initial_t_us (µs; near 4294967295 makes the device clock wrap soon).
+    #[arg(long, value_name = "US")]
+    pub initial_t_us: Option<u32>,
+    /// Fault: probability per output byte of a flipped bit (faults.bit_flip_per_byte).
+    #[arg(long, value_name = "P")]
+    pub bit_flips: Option<f64>,
+    /// Fault: garbage bursts per second (faults.garbage_bursts_per_s).
+    #[arg(long, value_name = "RATE")]
+    pub garbage: Option<f64>,
+    /// Fault: bytes per garbage burst (faults.garbage_burst_bytes).
+    #[arg(long, value_name = "N")]
+    pub garbage_bytes: Option<u32>,
+    /// Fault: probability per SAMPLE that it is dropped (faults.drop_sample_prob).
+    #[arg(long, value_name = "P")]
+    pub drop_samples: Option<f64>,
+    /// Fault: stalls per second (faults.stalls_per_s).
+    #[arg(long, value_name = "RATE")]
+    pub stalls: Option<f64>,
+    /// Fault: stall length, ms (faults.stall_ms).
+    #[arg(long, value_name = "MS")]
+    pub stall_ms: Option<u32>,
+    /// Fault: hang up after S seconds (faults.hangup_after_s).
+    #[arg(long, value_name = "S")]
+    pub hangup_after: Option<f64>,
+    /// Fault: re-open as a new boot MS ms after a hang-up (faults.reopen_after_ms; <0 never).
+    #[arg(long, value_name = "MS", allow_negative_numbers = true)]
+    pub reopen_after: Option<i64>,
+}
 
 /// Runs `propid sim`.
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::Usage("propid sim is not implemented yet".into()))
+pub fn run(args: Args) -> Result<(), CliError> {
+    let cfg = load_config(&args)?;
+    if let Some(s) = args.seconds {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(CliError::Usage(format!("--seconds {s}: must be > 0")));
+        }
+    }
+    match &args.record {
+        Some(file) => run_record(&cfg, file, &args),
+        None => run_pty(&cfg, &args),
+    }
+}
+
+/// The configuration with the command-line overrides applied, validated.
+pub fn load_config(args: &Args) -> Result<SimConfig, CliError> {
+    let default = Path::new("config/sim.toml");
+    let mut cfg = match &args.config {
+        Some(p) => SimConfig::load(p).map_err(|e| map_err(e.into()))?,
+        None if default.exists() => SimConfig::load(default).map_err(|e| map_err(e.into()))?,
+        None => SimConfig::default(),
+    };
+    let o = &args.set;
+    let s = &mut cfg.stand;
+    set(&mut s.seed, o.seed);
+    set(&mut s.sample_rate_hz, o.rate);
+    set(&mut s.initial_t_us, o.initial_t_us);
+    if let Some(p) = &o.protocol {
+        s.protocol = if p == "csv" {
+            WireProtocol::Csv
+        } else {
+            WireProtocol::Tsp
+        };
+    }
+    let f = &mut cfg.faults;
+    set(&mut f.bit_flip_per_byte, o.bit_flips);
+    set(&mut f.garbage_bursts_per_s, o.garbage);
+    set(&mut f.garbage_burst_bytes, o.garbage_bytes);
+    set(&mut f.drop_sample_prob, o.drop_samples);
+    set(&mut f.stalls_per_s, o.stalls);
+    set(&mut f.stall_ms, o.stall_ms);
+    set(&mut f.hangup_after_s, o.hangup_after);
+    set(&mut f.reopen_after_ms, o.reopen_after);
+    cfg.validate().map_err(|e| map_err(e.into()))?;
+    Ok(cfg)
+}
+
+fn set<T>(slot: &mut T, v: Option<T>) {
+    if let Some(v) = v {
+        *slot = v;
+    }
+}
+
+fn run_record(cfg: &SimConfig, file: &Path, args: &Args) -> Result<(), CliError> {
+    let seconds = args
+        .seconds
+        .ok_or_else(|| CliError::Usage("--record needs --seconds S".into()))?;
+    let f = std::fs::File::create(file)
+        .map_err(|e| CliError::io(format!("creating {}", file.display()), e))?;
+    let mut w = std::io::BufWriter::new(f);
+    let summary = record::record(cfg, seconds, &mut w).map_err(map_err)?;
+    let mut line = serde_json::json!({ "type": "sim_record", "file": file.display().to_string() });
+    if let (Some(obj), Ok(serde_json::Value::Object(s))) =
+        (line.as_object_mut(), serde_json::to_value(&summary))
+    {
+        obj.extend(s);
+    }
+    print_line(&line.to_string())
+}
+
+fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let s2 = Arc::clone(&stop);
+    // A second Ctrl-C while stopping exits at once.
+    let _ = ctrlc::set_handler(move || {
+        if s2.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
+    let opts = RunOptions {
+        link: args.link.clone(),
+        seconds: args.seconds,
+    };
+    let mut print_err = None;
+    let report = pty::run(cfg, &opts, &stop, |p| {
+        if let Err(e) = print_line(&p.display().to_string()) {
+            print_err.get_or_insert(e);
+        }
+        eprintln!(
+            "propid sim: stand on {} ({} Hz, {:?})",
+            p.display(),
+            cfg.stand.sample_rate_hz,
+            cfg.stand.protocol
+        );
+    })
+    .map_err(map_err)?;
+    if let Some(l) = &args.link {
+        let _ = std::fs::remove_file(l);
+    }
+    if let Some(e) = print_err {
+        return Err(e);
+    }
+    let mut line = serde_json::json!({ "type": "sim_stats" });
+    if let (Some(obj), Ok(serde_json::Value::Object(s))) =
+        (line.as_object_mut(), serde_json::to_value(&report))
+    {
+        obj.extend(s);
+    }
+    print_line(&line.to_string())
+}
+
+/// One line on stdout, flushed (a closed stdout is not an error worth failing for).
+fn print_line(s: &str) -> Result<(), CliError> {
+    let mut out = std::io::stdout().lock();
+    match writeln!(out, "{s}").and_then(|_| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(CliError::io("writing to stdout", e))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Maps a simulator error to the CLI's classes.
+pub fn map_err(e: SimError) -> CliError {
+    match e {
+        SimError::Config(c) => CliError::Config(c.to_string()),
+        SimError::Plant(m) => CliError::Config(format!("plant model: {m}")),
+        SimError::Experiment(m) => CliError::Config(format!("experiment: {m}")),
+        SimError::Pty(m) => CliError::Device(format!("pseudo-terminal: {m}")),
+        SimError::Io { context, source } => CliError::Io { context, source },
+    }
 }

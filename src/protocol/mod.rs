@@ -1,1 +1,38 @@
-//! (to be written)
+//! TSP/1, the thrust-stand serial protocol (`../shared/PROTOCOL.md`), sans-IO.
+//!
+//! - [`crc`]: CRC-16/MCRF4XX; [`cobs`]: byte stuffing;
+//! - [`message`]: every message of both directions as typed `Copy` structs, [`Frame`];
+//! - [`encode`]: [`encode_frame`] into a caller buffer (no allocation);
+//! - [`decoder`]: [`Decoder`], a fixed-buffer decoder with [`DecodeStats`] (one counter per
+//!   kind of drop), resynchronising at every `0x00`;
+//! - [`csv`]: the text fallback of §6; [`detect`]: binary or CSV from the first bytes.
+//!
+//! Nothing here does I/O: callers push the bytes they read and write the bytes they are given,
+//! so the serial source, the recording replay, the simulated stand and the tests share one code
+//! path.
+
+pub mod cobs;
+pub mod crc;
+pub mod csv;
+pub mod csv_columns;
+pub mod csv_command;
+pub mod decoder;
+pub mod detect;
+pub mod encode;
+pub mod error;
+pub mod message;
+pub mod payload;
+
+#[cfg(test)]
+mod vectors;
+
+pub use decoder::{decode_block, DecodeStats, Decoder, DropCounts, Frames};
+pub use encode::{encode_frame, encode_raw, try_encode_frame, EncodeError, MAX_FRAME_LEN};
+pub use error::DecodeError;
+pub use message::{
+    Ack, AckResult, Arm, EscProtocol, Event, EventCode, Frame, Hello, Impulse, Log, Message,
+    Sample, SampleFlags, SetRate, SetThrottle,
+};
+
+/// Protocol major version carried in every frame (`ver`).
+pub const VERSION: u8 = 1;

@@ -1,0 +1,153 @@
+//! The two outputs of `identify`: one JSON object, or a short human summary.
+
+use std::fmt::Write;
+
+use serde::Serialize;
+
+use super::load::{Loaded, Source};
+use crate::core::okid::select::{AnyModel, PathTaken};
+use crate::core::operating_points::OpTable;
+use crate::core::report::Gain;
+use crate::core::ModelReport;
+
+/// Everything `identify` prints.
+#[derive(Debug, Clone, Serialize)]
+pub struct Output<'a> {
+    /// The model (public field names, see `core::report`).
+    pub model: &'a ModelReport,
+    /// Where the data came from and which path was taken.
+    pub source: Source,
+    /// The gain schedule.
+    pub operating_points: &'a OpTable,
+}
+
+impl<'a> Output<'a> {
+    /// Assembles the output.
+    pub fn new(loaded: &Loaded, model: &'a AnyModel, ops: &'a OpTable) -> Self {
+        let mut source = loaded.source.clone();
+        source.path = path_name(model.path);
+        source.okid = model.okid.clone();
+        Self {
+            model: &model.report,
+            source,
+            operating_points: ops,
+        }
+    }
+
+    /// Exactly one JSON object.
+    pub fn json(&self) -> serde_json::Result<String> {
+        serde_json::to_string(self)
+    }
+
+    /// The human summary.
+    pub fn human(&self) -> String {
+        let (m, s) = (self.model, &self.source);
+        let mut o = String::new();
+        let _ = writeln!(o, "file      {} ({})", s.file, s.format);
+        let _ = writeln!(o, "input     {}", s.input);
+        let _ = writeln!(o, "outputs   {}", s.outputs.join(", "));
+        let _ = writeln!(
+            o,
+            "rate      {:.4} Hz, {} samples ({} missing)",
+            s.rate_hz, s.samples, s.missing
+        );
+        if let Some(j) = s.csv.as_ref().and_then(|c| c.jitter.as_ref()) {
+            let _ = writeln!(
+                o,
+                "timing    median dt {:.4} s, p5..p95 {:.4}..{:.4} s, rms jitter {:.4} s{}",
+                j.median_dt_s,
+                j.p5_dt_s,
+                j.p95_dt_s,
+                j.rms_jitter_s,
+                if j.resampled { ", resampled" } else { "" }
+            );
+        }
+        if let Some(steps) = &s.steps {
+            let _ = writeln!(o, "steps     {} found from the response:", steps.len());
+            for st in steps {
+                let _ = writeln!(
+                    o,
+                    "          t = {:.3} s  {:.4} -> {:.4}",
+                    st.t_s, st.from, st.to
+                );
+            }
+        }
+        match &s.okid {
+            Some(k) => {
+                let _ = writeln!(
+                    o,
+                    "path      OKID ({} observer parameters of max {}, by {}; condition {:.2e}, rank {}/{}{})",
+                    k.observer_order,
+                    k.observer_order_max,
+                    k.observer_order_from,
+                    k.condition,
+                    k.rank,
+                    k.params,
+                    if k.regularised { ", regularised" } else { "" }
+                );
+            }
+            None => {
+                let _ = writeln!(o, "path      pulse ({} pulses averaged)", m.pulses);
+            }
+        }
+        let _ = writeln!(o, "order     {}", m.order);
+        let _ = writeln!(o, "fn        {:.4} Hz", m.fn_hz);
+        let _ = writeln!(o, "zeta      {:.4}", m.zeta);
+        let _ = writeln!(o, "tau       {}", taus(&m.time_constants_s));
+        let _ = writeln!(o, "dc gain   {}", gain(&m.dc_gain));
+        let ops = self.operating_points;
+        if !ops.points.is_empty() || !ops.skipped.is_empty() {
+            let _ = writeln!(o, "operating points ({}):", ops.kind);
+            let _ = writeln!(
+                o,
+                "  {:>10}  {:>6}  {:>9}  {:>7}  {:<16}  gain",
+                "level", "path", "fn (Hz)", "zeta", "tau (s)"
+            );
+            for p in &ops.points {
+                let _ = writeln!(
+                    o,
+                    "  {:>10.4}  {:>6}  {:>9.3}  {:>7.3}  {:<16}  {}",
+                    p.level,
+                    path_name(p.path),
+                    p.fn_hz,
+                    p.zeta,
+                    taus(&p.time_constants_s),
+                    gain(&p.dc_gain)
+                );
+            }
+            for sk in &ops.skipped {
+                let _ = writeln!(o, "  {:>10.4}  skipped: {}", sk.level, sk.reason);
+            }
+        }
+        o
+    }
+}
+
+fn path_name(p: PathTaken) -> &'static str {
+    match p {
+        PathTaken::Pulse => "pulse",
+        PathTaken::Okid => "okid",
+    }
+}
+
+fn taus(t: &[f64]) -> String {
+    if t.is_empty() {
+        return "-".into();
+    }
+    t.iter()
+        .map(|v| format!("{v:.4}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn gain(g: &Gain) -> String {
+    match g {
+        Gain::Scalar(v) => format!("{v:.4}"),
+        Gain::List(v) => v
+            .iter()
+            .map(|x| format!("{x:.4}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Gain::Matrix(m) => format!("{m:?}"),
+    }
+}

@@ -1,0 +1,289 @@
+//! One entry for any excitation: the pulse path for a clean pulse experiment, OKID otherwise.
+//!
+//! A record is a **clean pulse experiment** when it has one input that is piecewise constant
+//! (the input changes on at most an eighth of the samples) and the pulse path of the core finds
+//! and keeps at least one pulse in it. Everything else (random, chirp, multisine, steps,
+//! staircases, ramps, several inputs) goes through [`okid`](super::okid) and then ERA on the
+//! recovered Markov parameters ([`Workspace::identify_markov`]). The path taken is reported.
+//!
+//! **Hankel size and order on the OKID path.** The recovered sequence is smooth (it is the pulse
+//! response of the fitted observer model), so the RMS of its tail says nothing about how well it
+//! is known. The noise floor used instead is measured by **split halves**: OKID with the same
+//! `ℓ` on the first and on the second half of the record gives two independent estimates, and
+//! `σ = RMS(Y_a − Y_b) / 2` over the first `max(64, 2ℓ)` blocks (each half has twice the
+//! variance of the whole, the difference four times). It includes what a formula would miss:
+//! drift, a change of operating point. It is inflated when the halves are excited differently
+//! (a sine sweep: low frequencies in one half, high in the other), while OKID's regression
+//! standard error ([`OkidResult::markov_noise`]) is inflated by collinear input lags (slow
+//! inputs). Each overstates the noise for a known reason, so the smaller of the two is used
+//! (the regression one alone when a half cannot be identified). The Hankel size follows from where the sequence sinks below
+//! it ([`sizing::signal_length`], [`sizing::hankel_dims`]), and the order from the singular
+//! values above `NOISE_SV_FACTOR · σ (√rows + √cols)` ([`sizing::noise_singular_value`],
+//! [`sizing::auto_order`]), the same rules as the pulse path with this σ.
+
+use serde::Serialize;
+
+use super::{okid, OkidError, OkidOptions, OkidResult};
+use crate::core::hankel::HankelDims;
+use crate::core::pulses::PulseInput;
+use crate::core::sizing;
+use crate::core::workspace::{IdentOptions, Limits, Workspace};
+use crate::core::{IdentError, MarkovSeq, ModelReport};
+
+/// Which way the Markov parameters were obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PathTaken {
+    /// Pulses segmented and ensemble-averaged (core::pulses).
+    Pulse,
+    /// Observer/Kalman filter identification from arbitrary input.
+    Okid,
+}
+
+/// How the OKID regression went (published beside the model).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OkidSummary {
+    /// Observer Markov parameters `ℓ` used.
+    pub observer_order: usize,
+    /// Largest `ℓ` considered.
+    pub observer_order_max: usize,
+    /// `"output_error"` when chosen, `"given"` otherwise.
+    pub observer_order_from: &'static str,
+    /// Regression rows used.
+    pub rows: usize,
+    /// Rows skipped (missing samples in their window).
+    pub rows_skipped: usize,
+    /// Parameters per output.
+    pub params: usize,
+    /// Condition number of the scaled regressor.
+    pub condition: f64,
+    /// Numerical rank kept.
+    pub rank: usize,
+    /// True when the truncated SVD dropped directions.
+    pub regularised: bool,
+    /// One-step residual RMS per output, output units.
+    pub residual_rms: Vec<f64>,
+    /// System Markov parameters recovered and handed to ERA.
+    pub markov_len: usize,
+    /// Noise of the Markov parameters per output (the floor for Hankel size and order).
+    pub markov_noise: Vec<f64>,
+    /// `"split_half"` or `"regression"`: the smaller estimate (see the module docs).
+    pub markov_noise_from: &'static str,
+}
+
+impl From<&OkidResult> for OkidSummary {
+    fn from(r: &OkidResult) -> Self {
+        Self {
+            observer_order: r.observer_order,
+            observer_order_max: r.observer_order_max,
+            observer_order_from: if r.observer_order_chosen {
+                "output_error"
+            } else {
+                "given"
+            },
+            rows: r.rows,
+            rows_skipped: r.rows_skipped,
+            params: r.params,
+            condition: r.condition,
+            rank: r.rank,
+            regularised: r.regularised,
+            residual_rms: r.residual_rms.clone(),
+            markov_len: r.len,
+            markov_noise: r.markov_noise.clone(),
+            markov_noise_from: "regression",
+        }
+    }
+}
+
+/// A model from any excitation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnyModel {
+    /// The published model.
+    pub report: ModelReport,
+    /// The path taken.
+    pub path: PathTaken,
+    /// The OKID regression, when that path was taken.
+    pub okid: Option<OkidSummary>,
+}
+
+/// Why neither path gave a model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AnyError {
+    /// The OKID regression refused the data.
+    #[error("OKID: {0}")]
+    Okid(#[from] OkidError),
+    /// ERA (or the pulse path) refused the data.
+    #[error("{0}")]
+    Ident(#[from] IdentError),
+}
+
+/// The record to identify, borrowed: `u` inputs and `y` outputs of equal length.
+#[derive(Debug, Clone, Copy)]
+pub struct AnyInput<'a> {
+    /// Sample period, seconds.
+    pub dt_s: f64,
+    /// Inputs (throttle first).
+    pub u: &'a [&'a [f64]],
+    /// Outputs.
+    pub y: &'a [&'a [f64]],
+    /// Missing samples (empty: none).
+    pub missing: &'a [bool],
+    /// Device pulse starts, if any.
+    pub pulse_starts: Option<&'a [usize]>,
+}
+
+/// Identifies `input` by the pulse path when it is a clean pulse experiment, by OKID + ERA
+/// otherwise.
+pub fn identify_any(
+    input: &AnyInput<'_>,
+    ident: &IdentOptions,
+    okid_opts: &OkidOptions,
+) -> Result<AnyModel, AnyError> {
+    let n = input.u.first().map_or(0, |c| c.len());
+    let q = input.y.len();
+    if input.u.len() == 1 && is_piecewise_constant(input.u[0]) {
+        let limits = limits_for(n, q, 1, ident);
+        let mut ws = Workspace::new(&limits)?;
+        let pulse = PulseInput {
+            dt_s: input.dt_s,
+            u: input.u[0],
+            y: input.y,
+            missing: input.missing,
+            pulse_starts: input.pulse_starts,
+        };
+        match ws.identify(&pulse, ident) {
+            Ok(_) => {
+                return Ok(AnyModel {
+                    report: ws.to_report(),
+                    path: PathTaken::Pulse,
+                    okid: None,
+                })
+            }
+            Err(IdentError::NoPulse | IdentError::AllPulsesSkipped { .. }) => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+    identify_okid(input, ident, okid_opts)
+}
+
+/// OKID, then ERA on the recovered Markov parameters.
+pub fn identify_okid(
+    input: &AnyInput<'_>,
+    ident: &IdentOptions,
+    okid_opts: &OkidOptions,
+) -> Result<AnyModel, AnyError> {
+    let missing = (!input.missing.is_empty()).then_some(input.missing);
+    let mut r = okid(input.u, input.y, missing, okid_opts)?;
+    let from = match split_half_noise(input, &r, okid_opts) {
+        Some(noise) if noise.iter().sum::<f64>() < r.markov_noise.iter().sum::<f64>() => {
+            r.markov_noise = noise;
+            "split_half"
+        }
+        Some(_) | None => "regression",
+    };
+    let markov = MarkovSeq::from_data(r.q, r.p, r.markov.clone())?;
+    let limits = limits_for(r.len, r.q, r.p, ident);
+    let mut ws = Workspace::new(&limits)?;
+    let mut opts = *ident;
+    if opts.hankel_blocks.is_none() {
+        let signal = sizing::signal_length(&markov, &r.markov_noise, &[]).max(8);
+        let min_size = opts.order.map_or(3, |n| n + 1);
+        let (rmax, cmax) = (limits.max_block_rows, limits.max_block_cols);
+        let avail = r.len.saturating_sub(1);
+        let dims = sizing::hankel_dims(r.q, r.p, avail, signal, min_size, rmax, cmax)?;
+        opts.hankel_blocks = Some((dims.r, dims.c));
+    }
+    if opts.order.is_none() {
+        // Probe with the largest order the Hankel allows to see every leading singular value,
+        // then keep those above OKID's noise floor. If the probe is refused (exact data of
+        // lower rank), the core's own choice stands.
+        let (r_blk, c_blk) = opts.hankel_blocks.unwrap_or((1, 1));
+        let wide = (r_blk * r.q).min(c_blk * r.p);
+        let probe = IdentOptions {
+            order: Some(limits.max_order.min(wide).max(1)),
+            jackknife: false,
+            ..opts
+        };
+        if ws.identify_markov(&markov, input.dt_s, &probe).is_ok() {
+            opts.order = Some(okid_order(&ws.to_report(), &r, limits.max_order));
+        }
+    }
+    ws.identify_markov(&markov, input.dt_s, &opts)?;
+    let mut summary = OkidSummary::from(&r);
+    summary.markov_noise_from = from;
+    Ok(AnyModel {
+        report: ws.to_report(),
+        path: PathTaken::Okid,
+        okid: Some(summary),
+    })
+}
+
+/// `σ_i = RMS_{k, j}(Y_a − Y_b)/2` from OKID on the two halves with the same `ℓ` (see the module
+/// docs); `None` when a half cannot be identified.
+fn split_half_noise(input: &AnyInput<'_>, r: &OkidResult, o: &OkidOptions) -> Option<Vec<f64>> {
+    let n = input.u.first()?.len();
+    let half = n / 2;
+    let opts = OkidOptions {
+        observer_order: Some(r.observer_order),
+        markov_len: Some(r.len),
+        ..*o
+    };
+    let part = |range: std::ops::Range<usize>| {
+        let u: Vec<&[f64]> = input.u.iter().map(|c| &c[range.clone()]).collect();
+        let y: Vec<&[f64]> = input.y.iter().map(|c| &c[range.clone()]).collect();
+        let m = (!input.missing.is_empty()).then(|| &input.missing[range.clone()]);
+        okid(&u, &y, m, &opts).ok()
+    };
+    let (a, b) = (part(0..half)?, part(half..n)?);
+    let blocks = (r.len - 1).min(64.max(2 * r.observer_order));
+    let (q, p) = (r.q, r.p);
+    let noise = (0..q)
+        .map(|i| {
+            let mut sum = 0.0;
+            for k in 1..=blocks {
+                for j in 0..p {
+                    sum += (a.at(k, i, j) - b.at(k, i, j)).powi(2);
+                }
+            }
+            (sum / (blocks * p) as f64).sqrt() / 2.0
+        })
+        .collect::<Vec<f64>>();
+    noise.iter().all(|v| v.is_finite()).then_some(noise)
+}
+
+/// The order from the singular values of the last identification against OKID's noise floor
+/// (RMS of [`OkidResult::markov_noise`] over outputs); at least 1.
+fn okid_order(report: &ModelReport, r: &OkidResult, max_order: usize) -> usize {
+    let dims = HankelDims {
+        q: r.q,
+        p: r.p,
+        r: report.hankel_block_rows,
+        c: report.hankel_block_cols,
+    };
+    let n = r.markov_noise.len().max(1) as f64;
+    let sigma = (r.markov_noise.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+    let noise_sv = sizing::noise_singular_value(sigma, &dims, &[]);
+    sizing::auto_order(&report.singular_values, noise_sv, max_order).max(1)
+}
+
+/// True when `u` changes (by more than 1e-9) on at most an eighth of its samples.
+pub fn is_piecewise_constant(u: &[f64]) -> bool {
+    let changes = u
+        .windows(2)
+        .filter(|w| w[0].is_finite() && w[1].is_finite() && (w[1] - w[0]).abs() > 1e-9)
+        .count();
+    changes * 8 <= u.len()
+}
+
+/// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs.
+fn limits_for(n: usize, q: usize, p: usize, ident: &IdentOptions) -> Limits {
+    let d = Limits::default();
+    Limits {
+        max_samples: n.max(4),
+        max_outputs: q.max(1),
+        max_inputs: p.max(1),
+        max_order: ident.order.unwrap_or(d.max_order).max(d.max_order),
+        max_pulses: (n / 4).clamp(1, 4096),
+        ..d
+    }
+}

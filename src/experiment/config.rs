@@ -1,0 +1,186 @@
+//! The experiment plan's configuration (`[experiment]` in `config/sim.toml` and the daemon's
+//! config): operating points, pulse train, timing. Units are in the names.
+
+use serde::Deserialize;
+
+/// A refused experiment configuration: key (relative to the `[experiment]` table), value, reason.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("experiment key `{key}` = {value}: {reason}")]
+pub struct ExperimentConfigError {
+    /// Key inside the experiment table, e.g. `levels[1]`.
+    pub key: String,
+    /// The refused value.
+    pub value: String,
+    /// The allowed range.
+    pub reason: String,
+}
+
+/// The host-side experiment: arm, visit each operating point, fire pulses, ramp down, disarm.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ExperimentConfig {
+    /// Operating points, throttle fraction, each in 0.0..=1.0, 1..=32 of them.
+    pub levels: Vec<f64>,
+    /// Duration of the ramp from one operating point to the next (and down at the end), ms,
+    /// 0..=10000 (0 = step).
+    pub ramp_ms: u16,
+    /// Wait after the ramp before the first pulse, ms, 0..=60000.
+    pub settle_ms: u32,
+    /// Pulse amplitudes, throttle fraction, each in 0.001..=0.5, 1..=8 of them; pulse `j` uses
+    /// amplitude `pulse_amplitudes[(j / 2) % n]` (or `[j % n]` without alternating sign).
+    pub pulse_amplitudes: Vec<f64>,
+    /// Alternate the sign of the pulses (+a, −a, +a, …) so that a static nonlinearity shows up
+    /// and the mean throttle stays at the operating point.
+    pub alternate_sign: bool,
+    /// Pulse width, sample periods, 1..=1000 (1 = the Kronecker delta of the ERA derivation).
+    pub pulse_width_samples: u32,
+    /// Spacing from one pulse to the next, ms, 10..=60000: long enough that the response has
+    /// decayed into the noise (several time constants).
+    pub pulse_spacing_ms: u32,
+    /// Pulses per operating point before the level is reported done (K), 1..=10000.
+    pub pulses_per_level: u32,
+    /// HEARTBEAT period, ms, 10..=1000 (the protocol asks for 100).
+    pub heartbeat_ms: u32,
+    /// Device watchdog sent with ARM, ms, 100..=5000; must exceed `heartbeat_ms` twice over.
+    pub watchdog_ms: u16,
+    /// Re-send a command with the same seq after this long without ACK, ms, 10..=1000.
+    pub retry_ms: u32,
+    /// Re-sends before the link is declared failed, 0..=10.
+    pub max_retries: u32,
+}
+
+impl Default for ExperimentConfig {
+    fn default() -> Self {
+        ExperimentConfig {
+            levels: vec![0.3, 0.45, 0.6],
+            ramp_ms: 500,
+            settle_ms: 500,
+            pulse_amplitudes: vec![0.05, 0.1],
+            alternate_sign: true,
+            pulse_width_samples: 1,
+            pulse_spacing_ms: 250,
+            pulses_per_level: 8,
+            heartbeat_ms: 100,
+            watchdog_ms: 500,
+            retry_ms: 50,
+            max_retries: 3,
+        }
+    }
+}
+
+fn refuse(key: impl Into<String>, value: impl ToString, reason: &str) -> ExperimentConfigError {
+    ExperimentConfigError {
+        key: key.into(),
+        value: value.to_string(),
+        reason: reason.to_string(),
+    }
+}
+
+fn check_f(key: String, v: f64, lo: f64, hi: f64) -> Result<(), ExperimentConfigError> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(refuse(key, v, &format!("a finite number in {lo}..={hi}")))
+    }
+}
+
+fn check_i(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), ExperimentConfigError> {
+    if v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(refuse(key, v, &format!("an integer in {lo}..={hi}")))
+    }
+}
+
+impl ExperimentConfig {
+    /// Refuses NaN, out-of-range values and empty lists, naming the key and the value.
+    pub fn validate(&self) -> Result<(), ExperimentConfigError> {
+        check_i("levels.len()", self.levels.len() as u64, 1, 32)?;
+        for (i, &l) in self.levels.iter().enumerate() {
+            check_f(format!("levels[{i}]"), l, 0.0, 1.0)?;
+        }
+        check_i(
+            "pulse_amplitudes.len()",
+            self.pulse_amplitudes.len() as u64,
+            1,
+            8,
+        )?;
+        for (i, &a) in self.pulse_amplitudes.iter().enumerate() {
+            check_f(format!("pulse_amplitudes[{i}]"), a, 0.001, 0.5)?;
+        }
+        check_i("ramp_ms", self.ramp_ms as u64, 0, 10_000)?;
+        check_i("settle_ms", self.settle_ms as u64, 0, 60_000)?;
+        check_i(
+            "pulse_width_samples",
+            self.pulse_width_samples as u64,
+            1,
+            1000,
+        )?;
+        check_i("pulse_spacing_ms", self.pulse_spacing_ms as u64, 10, 60_000)?;
+        check_i("pulses_per_level", self.pulses_per_level as u64, 1, 10_000)?;
+        check_i("heartbeat_ms", self.heartbeat_ms as u64, 10, 1000)?;
+        check_i("watchdog_ms", self.watchdog_ms as u64, 100, 5000)?;
+        if (self.watchdog_ms as u32) < 2 * self.heartbeat_ms {
+            return Err(refuse(
+                "watchdog_ms",
+                self.watchdog_ms,
+                "at least twice heartbeat_ms",
+            ));
+        }
+        check_i("retry_ms", self.retry_ms as u64, 10, 1000)?;
+        check_i("max_retries", self.max_retries as u64, 0, 10)?;
+        Ok(())
+    }
+
+    /// Signed amplitude (throttle fraction) of pulse `j` at an operating point.
+    pub fn pulse_delta(&self, j: u32) -> f64 {
+        let n = self.pulse_amplitudes.len().max(1);
+        if self.alternate_sign {
+            let a = self.pulse_amplitudes[(j as usize / 2) % n];
+            if j % 2 == 0 {
+                a
+            } else {
+                -a
+            }
+        } else {
+            self.pulse_amplitudes[j as usize % n]
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_is_valid() {
+        ExperimentConfig::default().validate().unwrap();
+    }
+
+    #[test]
+    fn pulse_train_alternates_sign_and_cycles_amplitudes() {
+        let c = ExperimentConfig::default();
+        let d: Vec<f64> = (0..5).map(|j| c.pulse_delta(j)).collect();
+        assert_eq!(d, vec![0.05, -0.05, 0.1, -0.1, 0.05]);
+    }
+
+    #[test]
+    fn bad_level_is_named() {
+        let c = ExperimentConfig {
+            levels: vec![0.3, f64::NAN],
+            ..ExperimentConfig::default()
+        };
+        let e = c.validate().unwrap_err();
+        assert_eq!(e.key, "levels[1]");
+        assert_eq!(e.value, "NaN");
+    }
+
+    #[test]
+    fn watchdog_must_outlast_heartbeats() {
+        let c = ExperimentConfig {
+            watchdog_ms: 150,
+            ..ExperimentConfig::default()
+        };
+        assert_eq!(c.validate().unwrap_err().key, "watchdog_ms");
+    }
+}

@@ -1,0 +1,463 @@
+//! The experiment plan as a state machine. See the [module documentation](super).
+
+use std::collections::VecDeque;
+
+use super::config::{ExperimentConfig, ExperimentConfigError};
+use crate::protocol::message::throttle_level;
+use crate::protocol::{Ack, AckResult, Arm, EventCode, Frame, Impulse, Message, SetThrottle};
+
+/// Something the caller must know about.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Notice {
+    /// HELLO and ACK received: the device is there.
+    Connected {
+        /// Its boot id.
+        boot_id: u32,
+        /// Its nominal sample rate, Hz.
+        sample_rate_hz: u16,
+    },
+    /// ARM acknowledged.
+    Armed,
+    /// The ramp to operating point `index` is done and the settling time has passed; pulses
+    /// follow.
+    LevelReached {
+        /// Index in the configured list.
+        index: usize,
+        /// Throttle fraction.
+        level: f64,
+    },
+    /// A pulse was acknowledged (it starts at the device time `t_us` of the ACK).
+    PulseFired {
+        /// Operating point index.
+        index: usize,
+        /// Pulse number at this operating point, from 0.
+        pulse: u32,
+        /// Signed amplitude, throttle fraction.
+        delta: f64,
+        /// Device time the pulse starts, µs (wire clock).
+        t_us: u32,
+    },
+    /// K pulses are done at this operating point and the last response has decayed: identify.
+    LevelDone {
+        /// Operating point index.
+        index: usize,
+        /// Throttle fraction.
+        level: f64,
+        /// Pulses fired at this level.
+        pulses: u32,
+    },
+    /// All operating points done, ramped down, disarmed.
+    Finished,
+    /// A STOP asked for by [`Experiment::abort`] was acknowledged.
+    Stopped,
+    /// The device reset (HELLO with a new boot id). It boots disarmed; the plan does not re-arm
+    /// and is over.
+    DeviceReset {
+        /// Boot id at the handshake.
+        old_boot_id: u32,
+        /// The new one.
+        new_boot_id: u32,
+    },
+    /// The device's watchdog stopped the motor. The plan is over.
+    WatchdogTripped,
+    /// The device refused a command the plan cannot do without. The plan is over (a STOP is
+    /// sent).
+    Refused {
+        /// Protocol name of the command.
+        command: &'static str,
+        /// The device's answer.
+        result: AckResult,
+    },
+    /// A command went unanswered after all re-sends. The plan is over.
+    LinkFailed {
+        /// Protocol name of the command.
+        command: &'static str,
+        /// Its seq.
+        seq: u16,
+    },
+}
+
+/// What the plan wants done: a frame to send, or news.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// Encode `msg` with `seq` (e.g. `protocol::encode_frame`) and send it.
+    Send {
+        /// Link sequence number (the command id; a re-send keeps it).
+        seq: u16,
+        /// The command.
+        msg: Message,
+    },
+    /// Something happened.
+    Notice(Notice),
+}
+
+/// Where the plan is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// Not started.
+    Idle,
+    /// HELLO_REQ sent, waiting for HELLO and ACK.
+    Handshake,
+    /// ARM sent.
+    Arming,
+    /// SET_THROTTLE to an operating point sent or its ramp running.
+    Ramping,
+    /// Waiting for the operating point to settle.
+    Settling,
+    /// Firing pulses and waiting between them.
+    Pulsing,
+    /// Ramping down at the end.
+    RampDown,
+    /// DISARM sent.
+    Disarming,
+    /// Finished normally.
+    Done,
+    /// STOP sent by [`Experiment::abort`].
+    Stopping,
+    /// Over because of a reset, a watchdog trip, a refusal, a failed link or an abort.
+    Halted,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct InFlight {
+    seq: u16,
+    msg: Message,
+    sent_us: u64,
+    resends: u32,
+}
+
+/// Wait before re-trying an IMPULSE the device answered BUSY, µs.
+const BUSY_RETRY_US: u64 = 20_000;
+
+/// The host-side experiment plan: a pure state machine (see the [module docs](super)).
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    cfg: ExperimentConfig,
+    phase: Phase,
+    seq: u16,
+    out: VecDeque<Output>,
+    in_flight: Option<InFlight>,
+    next_heartbeat_us: Option<u64>,
+    boot_id: Option<u32>,
+    rate_hz: Option<u16>,
+    handshake_acked: bool,
+    level_idx: usize,
+    pulses: u32,
+    wait_until_us: Option<u64>,
+}
+
+impl Experiment {
+    /// A plan with `cfg` (validated here), starting with sequence number `first_seq`.
+    pub fn new(cfg: ExperimentConfig, first_seq: u16) -> Result<Self, ExperimentConfigError> {
+        cfg.validate()?;
+        Ok(Experiment {
+            cfg,
+            phase: Phase::Idle,
+            seq: first_seq,
+            out: VecDeque::new(),
+            in_flight: None,
+            next_heartbeat_us: None,
+            boot_id: None,
+            rate_hz: None,
+            handshake_acked: false,
+            level_idx: 0,
+            pulses: 0,
+            wait_until_us: None,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ExperimentConfig {
+        &self.cfg
+    }
+
+    /// Where the plan is.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// True once the plan is over (finished, stopped or halted).
+    pub fn is_over(&self) -> bool {
+        matches!(self.phase, Phase::Done | Phase::Halted)
+    }
+
+    /// Boot id seen at the handshake.
+    pub fn boot_id(&self) -> Option<u32> {
+        self.boot_id
+    }
+
+    /// The operating point now being worked on (index, throttle fraction).
+    pub fn current_level(&self) -> Option<(usize, f64)> {
+        match self.phase {
+            Phase::Ramping | Phase::Settling | Phase::Pulsing => {
+                Some((self.level_idx, self.cfg.levels[self.level_idx]))
+            }
+            _ => None,
+        }
+    }
+
+    /// The next thing to do, if any. Call until `None` after every `start`, `poll`,
+    /// `on_frame` and `abort`.
+    pub fn next_output(&mut self) -> Option<Output> {
+        self.out.pop_front()
+    }
+
+    /// Starts the plan at `now_us` (host clock, µs): HELLO_REQ.
+    pub fn start(&mut self, now_us: u64) {
+        if self.phase == Phase::Idle {
+            self.phase = Phase::Handshake;
+            self.send(Message::HelloReq, now_us);
+        }
+    }
+
+    /// Asks the plan to stop the motor now (shutdown): STOP, re-sent until acknowledged or the
+    /// link is declared failed. Heartbeats stop.
+    pub fn abort(&mut self, now_us: u64) {
+        if self.phase == Phase::Stopping {
+            return;
+        }
+        self.phase = Phase::Stopping;
+        self.next_heartbeat_us = None;
+        self.wait_until_us = None;
+        self.send(Message::Stop, now_us);
+    }
+
+    /// Timers: heartbeats, re-sends, waits. Call at least every few milliseconds.
+    pub fn poll(&mut self, now_us: u64) {
+        if let Some(t) = self.next_heartbeat_us.filter(|&t| t <= now_us) {
+            let seq = self.next_seq();
+            self.out.push_back(Output::Send {
+                seq,
+                msg: Message::Heartbeat,
+            });
+            let p = self.cfg.heartbeat_ms as u64 * 1000;
+            self.next_heartbeat_us = Some((t + p).max(now_us));
+        }
+        self.check_retry(now_us);
+        if let Some(t) = self.wait_until_us.filter(|&t| t <= now_us) {
+            self.wait_until_us = None;
+            self.wait_over(t.max(now_us));
+        }
+    }
+
+    /// A frame from the device arrived at `now_us`.
+    pub fn on_frame(&mut self, frame: &Frame, now_us: u64) {
+        match frame.msg {
+            Message::Hello(h) => {
+                match self.boot_id {
+                    Some(old) if old != h.boot_id => {
+                        return self.halt(Notice::DeviceReset {
+                            old_boot_id: old,
+                            new_boot_id: h.boot_id,
+                        });
+                    }
+                    _ => {}
+                }
+                if self.phase == Phase::Handshake && self.boot_id.is_none() {
+                    self.boot_id = Some(h.boot_id);
+                    self.rate_hz = Some(h.sample_rate_hz);
+                    if self.handshake_acked {
+                        self.connected(now_us);
+                    }
+                }
+            }
+            Message::Ack(a) => self.on_ack(a, now_us),
+            Message::Event(e) if e.code == EventCode::WatchdogTrip && !self.is_over() => {
+                self.halt(Notice::WatchdogTripped);
+            }
+            _ => {}
+        }
+    }
+
+    fn on_ack(&mut self, a: Ack, now_us: u64) {
+        let Some(f) = self.in_flight.filter(|f| f.seq == a.cmd_seq) else {
+            return; // heartbeats, late duplicates
+        };
+        self.in_flight = None;
+        if a.result == AckResult::Busy && matches!(f.msg, Message::Impulse(_)) {
+            self.wait_until_us = Some(now_us + BUSY_RETRY_US);
+            return;
+        }
+        if a.result != AckResult::Ok {
+            if self.phase == Phase::Stopping {
+                return self.halt(Notice::Stopped);
+            }
+            return self.refused(f.msg.name(), a.result, now_us);
+        }
+        match self.phase {
+            Phase::Handshake => {
+                self.handshake_acked = true;
+                if self.boot_id.is_some() {
+                    self.connected(now_us);
+                }
+            }
+            Phase::Arming => {
+                self.notice(Notice::Armed);
+                let p = self.cfg.heartbeat_ms as u64 * 1000;
+                self.next_heartbeat_us = Some(now_us + p);
+                self.go_to_level(0, now_us);
+            }
+            Phase::Ramping => {
+                self.phase = Phase::Settling;
+                let wait = (self.cfg.ramp_ms as u64 + self.cfg.settle_ms as u64) * 1000;
+                self.wait_until_us = Some(now_us + wait);
+            }
+            Phase::Pulsing => {
+                let delta = self.cfg.pulse_delta(self.pulses);
+                self.notice(Notice::PulseFired {
+                    index: self.level_idx,
+                    pulse: self.pulses,
+                    delta,
+                    t_us: a.t_us,
+                });
+                self.pulses += 1;
+                self.wait_until_us = Some(now_us + self.cfg.pulse_spacing_ms as u64 * 1000);
+            }
+            Phase::RampDown => {
+                // Wait for the ramp (and one heartbeat period) before disarming.
+                let wait = self.cfg.ramp_ms as u64 * 1000 + self.cfg.heartbeat_ms as u64 * 1000;
+                self.wait_until_us = Some(now_us + wait);
+            }
+            Phase::Disarming => {
+                self.phase = Phase::Done;
+                self.next_heartbeat_us = None;
+                self.notice(Notice::Finished);
+            }
+            Phase::Stopping => self.halt(Notice::Stopped),
+            _ => {}
+        }
+    }
+
+    /// A timed wait ended.
+    fn wait_over(&mut self, now_us: u64) {
+        match self.phase {
+            Phase::Settling => {
+                self.phase = Phase::Pulsing;
+                let level = self.cfg.levels[self.level_idx];
+                self.notice(Notice::LevelReached {
+                    index: self.level_idx,
+                    level,
+                });
+                self.fire(now_us);
+            }
+            Phase::Pulsing if self.pulses < self.cfg.pulses_per_level => self.fire(now_us),
+            Phase::Pulsing => {
+                self.notice(Notice::LevelDone {
+                    index: self.level_idx,
+                    level: self.cfg.levels[self.level_idx],
+                    pulses: self.pulses,
+                });
+                if self.level_idx + 1 < self.cfg.levels.len() {
+                    self.go_to_level(self.level_idx + 1, now_us);
+                } else {
+                    self.phase = Phase::RampDown;
+                    let msg = Message::SetThrottle(SetThrottle {
+                        level: 0,
+                        ramp_ms: self.cfg.ramp_ms,
+                    });
+                    self.send(msg, now_us);
+                }
+            }
+            Phase::RampDown => {
+                self.phase = Phase::Disarming;
+                self.send(Message::Disarm, now_us);
+            }
+            _ => {}
+        }
+    }
+
+    fn connected(&mut self, now_us: u64) {
+        self.notice(Notice::Connected {
+            boot_id: self.boot_id.unwrap_or(0),
+            sample_rate_hz: self.rate_hz.unwrap_or(0),
+        });
+        self.phase = Phase::Arming;
+        self.send(Message::Arm(Arm::new(self.cfg.watchdog_ms)), now_us);
+    }
+
+    fn go_to_level(&mut self, idx: usize, now_us: u64) {
+        self.level_idx = idx;
+        self.pulses = 0;
+        self.phase = Phase::Ramping;
+        let msg = Message::SetThrottle(SetThrottle {
+            level: throttle_level(self.cfg.levels[idx]),
+            ramp_ms: self.cfg.ramp_ms,
+        });
+        self.send(msg, now_us);
+    }
+
+    /// Pulse number `self.pulses` at the current level: the absolute level `u + delta` for
+    /// `pulse_width_samples` sample periods (width from the HELLO's rate).
+    fn fire(&mut self, now_us: u64) {
+        let level = self.cfg.levels[self.level_idx] + self.cfg.pulse_delta(self.pulses);
+        let rate = self.rate_hz.filter(|&r| r > 0).unwrap_or(1000) as u64;
+        let width_us = (self.cfg.pulse_width_samples as u64 * 1_000_000 / rate).max(1);
+        let msg = Message::Impulse(Impulse {
+            level: throttle_level(level),
+            width_us: width_us.min(u32::MAX as u64) as u32,
+        });
+        self.send(msg, now_us);
+    }
+
+    fn refused(&mut self, command: &'static str, result: AckResult, now_us: u64) {
+        self.notice(Notice::Refused { command, result });
+        let armed_phase = !matches!(self.phase, Phase::Idle | Phase::Handshake);
+        self.phase = Phase::Halted;
+        self.next_heartbeat_us = None;
+        self.wait_until_us = None;
+        if armed_phase {
+            self.send(Message::Stop, now_us);
+        }
+    }
+
+    fn halt(&mut self, n: Notice) {
+        self.phase = Phase::Halted;
+        self.in_flight = None;
+        self.next_heartbeat_us = None;
+        self.wait_until_us = None;
+        self.notice(n);
+    }
+
+    fn check_retry(&mut self, now_us: u64) {
+        let Some(mut f) = self.in_flight else { return };
+        if now_us < f.sent_us + self.cfg.retry_ms as u64 * 1000 {
+            return;
+        }
+        if f.resends >= self.cfg.max_retries {
+            let n = Notice::LinkFailed {
+                command: f.msg.name(),
+                seq: f.seq,
+            };
+            return self.halt(n);
+        }
+        f.resends += 1;
+        f.sent_us = now_us;
+        self.in_flight = Some(f);
+        self.out.push_back(Output::Send {
+            seq: f.seq,
+            msg: f.msg,
+        });
+    }
+
+    /// Sends a command that must be acknowledged (one at a time).
+    fn send(&mut self, msg: Message, now_us: u64) {
+        let seq = self.next_seq();
+        self.in_flight = Some(InFlight {
+            seq,
+            msg,
+            sent_us: now_us,
+            resends: 0,
+        });
+        self.out.push_back(Output::Send { seq, msg });
+    }
+
+    fn next_seq(&mut self) -> u16 {
+        let s = self.seq;
+        self.seq = self.seq.wrapping_add(1);
+        s
+    }
+
+    fn notice(&mut self, n: Notice) {
+        self.out.push_back(Output::Notice(n));
+    }
+}

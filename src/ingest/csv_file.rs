@@ -1,0 +1,504 @@
+//! CSV files into a [`Record`]: TSP/1 CSV (PROTOCOL.md §6), exported logs of commercial stands,
+//! benchmark archives.
+//!
+//! Line rules follow §6 (comments `#…`, optional `*HH` checksum verified with
+//! [`protocol::csv::checksum`](crate::protocol::csv::checksum), separator `,` else tab else `;`),
+//! with what files need on top: no line-length limit (exports have 400-character headers), a
+//! UTF-8 byte-order mark, quoted names, trailing empty columns, and columns the alias table does
+//! not know (kept under their own names so that `--input`/`--output` can pick them). Known names
+//! are mapped and converted by [`protocol::csv_columns`](crate::protocol::csv_columns) (the one
+//! alias and unit table of the project).
+//!
+//! A file without a header follows §6 (`t_us,throttle,thrust_N,…`) unless the caller names the
+//! columns. Bad rows are counted, never fatal: a wrong checksum, text in a column that is used,
+//! a row with too few fields. An empty file, a file without data rows, or a requested column
+//! that is absent is an error naming what is missing and what is there.
+//!
+//! Time: a time column (`t_us`, `t_ms`, `t_s`, `Time (s)`, `t`, `time`) is resampled onto a
+//! uniform grid when irregular ([`super::resample`]); `fs` overrides its rate; without a time
+//! column `fs` is required.
+
+use serde::Serialize;
+
+use super::resample::{to_uniform, Jitter, ResampleError};
+use crate::protocol::csv::checksum;
+use crate::protocol::csv_columns::{self, ColumnSpec, ConvOptions, Quantity};
+use crate::record::{names, Channel, Record};
+
+/// Default ESC pulse range for throttle columns in µs, when none is given.
+pub const DEFAULT_ESC_US: (f64, f64) = (1000.0, 2000.0);
+
+/// What the caller wants from the file.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CsvFileOptions {
+    /// Input column (source name or canonical name); `None` = the throttle column if any.
+    pub input: Option<String>,
+    /// Output columns; empty = the thrust column.
+    pub outputs: Vec<String>,
+    /// Sample rate, Hz: required without a time column, overrides it otherwise.
+    pub fs_hz: Option<f64>,
+    /// Names for a file without a header (otherwise §6's default order).
+    pub columns: Option<Vec<String>>,
+    /// ESC pulse range for throttle in µs; `None` = [`DEFAULT_ESC_US`].
+    pub esc_us: Option<(f64, f64)>,
+    /// Motor pole count (for electrical rpm).
+    pub motor_poles: Option<u32>,
+}
+
+/// Why a file cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CsvFileError {
+    /// Nothing but comments or blank lines.
+    #[error("the file holds no data rows")]
+    Empty,
+    /// A requested (or the default) column is absent.
+    #[error("no {what} column {wanted}; columns in the file: {available}")]
+    MissingColumn {
+        /// "input" or "output".
+        what: &'static str,
+        /// The name asked for (or the default's description).
+        wanted: String,
+        /// The columns present.
+        available: String,
+    },
+    /// No time column and no `fs`.
+    #[error("the file has no time column: give the sample rate with --fs HZ")]
+    NeedRate,
+    /// Timestamps unusable, or a bad rate.
+    #[error("time base: {0}")]
+    Time(#[from] ResampleError),
+    /// Fewer than two usable rows.
+    #[error("only {0} usable data row(s)")]
+    TooFewRows(usize),
+    /// A column needs an option to be converted (e.g. electrical rpm needs the pole count).
+    #[error("column {column}: {reason}")]
+    Conversion {
+        /// The column.
+        column: String,
+        /// What is missing.
+        reason: String,
+    },
+}
+
+/// Rows that were not used, by cause.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct SkippedRows {
+    /// Wrong `*HH` checksum.
+    pub bad_checksum: usize,
+    /// Text where a number was needed (in a column that is used).
+    pub not_a_number: usize,
+    /// Fewer fields than the columns used need.
+    pub short_row: usize,
+}
+
+impl SkippedRows {
+    /// All skipped rows.
+    pub fn total(&self) -> usize {
+        self.bad_checksum + self.not_a_number + self.short_row
+    }
+}
+
+/// Where the data came from and what was done to it (published beside the model).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CsvSource {
+    /// Input column as named in the file (`None`: response only).
+    pub input: Option<String>,
+    /// Output columns as named in the file.
+    pub outputs: Vec<String>,
+    /// Time column as named in the file (`None`: rate given).
+    pub time: Option<String>,
+    /// Sample rate used, Hz.
+    pub rate_hz: f64,
+    /// `"time column"` or `"--fs"`.
+    pub rate_from: &'static str,
+    /// Timing report (with a time column).
+    pub jitter: Option<Jitter>,
+    /// Data rows read.
+    pub rows: usize,
+    /// Rows skipped, by cause.
+    pub skipped: SkippedRows,
+    /// Comment lines.
+    pub comments: usize,
+    /// True when the file had a header line.
+    pub header: bool,
+}
+
+/// A file read into a record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsvFile {
+    /// Channels: the input first (when there is one), then the outputs.
+    pub record: Record,
+    /// Canonical name of the input channel in the record, if any.
+    pub input: Option<String>,
+    /// Canonical names of the output channels in the record.
+    pub outputs: Vec<String>,
+    /// The report.
+    pub source: CsvSource,
+}
+
+/// One column of the file.
+#[derive(Debug, Clone)]
+struct Column {
+    name: String,
+    spec: Option<ColumnSpec>,
+}
+
+/// Reads CSV text (the whole file) into a record.
+pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
+    let mut skipped = SkippedRows::default();
+    let mut comments = 0;
+    let mut lines = Vec::new();
+    for raw in text.split('\n') {
+        let line = raw.trim_end_matches('\r');
+        let line = line.trim_start_matches('\u{feff}').trim();
+        if line.is_empty() {
+            continue;
+        }
+        if line.starts_with('#') {
+            comments += 1;
+            continue;
+        }
+        match strip_checksum(line) {
+            Some(l) => lines.push(l),
+            None => skipped.bad_checksum += 1,
+        }
+    }
+    let Some(first) = lines.first() else {
+        return Err(CsvFileError::Empty);
+    };
+    let sep = separator(first);
+    let header = !split(first, sep).all(|f| f.is_empty() || f.parse::<f64>().is_ok());
+    let mut columns = header_columns(&lines, sep, header, opts);
+    // A header ending in a separator (benchmark files) has an empty, unnamed last column.
+    if columns.last().is_some_and(|c| c.name.is_empty()) {
+        columns.pop();
+    }
+    let data = &lines[usize::from(header)..];
+    if data.is_empty() {
+        return Err(CsvFileError::Empty);
+    }
+    let picks = Picks::choose(&columns, opts)?;
+    let conv = ConvOptions {
+        esc_min_us: Some(opts.esc_us.unwrap_or(DEFAULT_ESC_US).0),
+        esc_max_us: Some(opts.esc_us.unwrap_or(DEFAULT_ESC_US).1),
+        motor_poles: opts.motor_poles,
+    };
+    let used = picks.all();
+    let maps: Vec<csv_columns::Affine> = used
+        .iter()
+        .map(|&i| match columns[i].spec {
+            Some(spec) => spec
+                .conversion(&conv)
+                .map_err(|e| CsvFileError::Conversion {
+                    column: columns[i].name.clone(),
+                    reason: e.to_string(),
+                }),
+            None => Ok(csv_columns::Affine {
+                zero: 0.0,
+                mul: 1.0,
+                div: 1.0,
+            }),
+        })
+        .collect::<Result<_, _>>()?;
+    let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(data.len()); used.len()];
+    let mut fields = Vec::new();
+    for line in data {
+        fields.clear();
+        fields.extend(split(line, sep));
+        if used.iter().any(|&i| i >= fields.len()) {
+            skipped.short_row += 1;
+            continue;
+        }
+        let parsed: Option<Vec<f64>> = used
+            .iter()
+            .zip(&maps)
+            .map(|(&i, m)| parse_field(fields[i]).map(|v| m.apply(v)))
+            .collect();
+        match parsed {
+            Some(row) => values.iter_mut().zip(row).for_each(|(c, v)| c.push(v)),
+            None => skipped.not_a_number += 1,
+        }
+    }
+    let rows = values[0].len();
+    if rows < 2 {
+        return Err(CsvFileError::TooFewRows(rows));
+    }
+    build(
+        columns, picks, values, header, rows, skipped, comments, opts,
+    )
+}
+
+/// The columns used, as indices into the file's columns.
+struct Picks {
+    time: Option<usize>,
+    input: Option<usize>,
+    outputs: Vec<usize>,
+}
+
+impl Picks {
+    fn choose(columns: &[Column], opts: &CsvFileOptions) -> Result<Self, CsvFileError> {
+        let available = || {
+            columns
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let by_quantity = |q: Quantity| {
+            columns
+                .iter()
+                .position(|c| c.spec.is_some_and(|s| s.quantity == q))
+        };
+        let time = by_quantity(Quantity::Time).or_else(|| {
+            columns
+                .iter()
+                .position(|c| matches!(csv_columns::normalise(&c.name).as_str(), "t" | "time"))
+        });
+        let input = match &opts.input {
+            Some(name) => Some(
+                find(columns, name).ok_or_else(|| CsvFileError::MissingColumn {
+                    what: "input",
+                    wanted: name.clone(),
+                    available: available(),
+                })?,
+            ),
+            None => by_quantity(Quantity::Throttle),
+        };
+        let outputs = if opts.outputs.is_empty() {
+            vec![
+                by_quantity(Quantity::Thrust).ok_or_else(|| CsvFileError::MissingColumn {
+                    what: "output",
+                    wanted: "thrust (give --output NAME)".into(),
+                    available: available(),
+                })?,
+            ]
+        } else {
+            opts.outputs
+                .iter()
+                .map(|name| {
+                    find(columns, name).ok_or_else(|| CsvFileError::MissingColumn {
+                        what: "output",
+                        wanted: name.clone(),
+                        available: available(),
+                    })
+                })
+                .collect::<Result<_, _>>()?
+        };
+        let time = if opts.fs_hz.is_some() && time.is_none() {
+            None
+        } else {
+            Some(time.ok_or(CsvFileError::NeedRate)?)
+        };
+        Ok(Self {
+            time,
+            input,
+            outputs,
+        })
+    }
+
+    /// Column indices in value order: time, input, outputs.
+    fn all(&self) -> Vec<usize> {
+        self.time
+            .iter()
+            .chain(self.input.iter())
+            .chain(self.outputs.iter())
+            .copied()
+            .collect()
+    }
+}
+
+/// A column by its name as written, its normalised name, or its canonical channel name.
+fn find(columns: &[Column], name: &str) -> Option<usize> {
+    let want = csv_columns::normalise(name);
+    columns
+        .iter()
+        .position(|c| c.name == name || csv_columns::normalise(&c.name) == want)
+        .or_else(|| {
+            columns.iter().position(|c| {
+                c.spec
+                    .and_then(|s| s.quantity.channel_name())
+                    .is_some_and(|n| n.eq_ignore_ascii_case(name))
+            })
+        })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build(
+    columns: Vec<Column>,
+    picks: Picks,
+    mut values: Vec<Vec<f64>>,
+    header: bool,
+    rows: usize,
+    skipped: SkippedRows,
+    comments: usize,
+    opts: &CsvFileOptions,
+) -> Result<CsvFile, CsvFileError> {
+    let time_vals = picks.time.map(|_| values.remove(0));
+    let (t0_s, dt_s, missing, jitter, rate_from) = match time_vals {
+        Some(t) => {
+            let u = to_uniform(&t, &values, opts.fs_hz)?;
+            values = u.channels;
+            let from = if opts.fs_hz.is_some() {
+                "--fs"
+            } else {
+                "time column"
+            };
+            (u.t0_s, u.jitter.dt_s, u.missing, Some(u.jitter), from)
+        }
+        None => {
+            let fs = opts.fs_hz.ok_or(CsvFileError::NeedRate)?;
+            if !(fs.is_finite() && fs > 0.0) {
+                return Err(ResampleError::BadRate(fs).into());
+            }
+            (0.0, 1.0 / fs, vec![false; rows], None, "--fs")
+        }
+    };
+    // An empty field (not measured) is NaN: mark the sample missing, as the record requires.
+    let mut missing = missing;
+    for ch in &values {
+        for (m, v) in missing.iter_mut().zip(ch) {
+            *m |= !v.is_finite();
+        }
+    }
+    for ch in &mut values {
+        for (v, m) in ch.iter_mut().zip(&missing) {
+            if *m {
+                *v = f64::NAN;
+            }
+        }
+    }
+    let chosen: Vec<usize> = picks.input.iter().chain(&picks.outputs).copied().collect();
+    let channels: Vec<Channel> = chosen
+        .iter()
+        .zip(values)
+        .map(|(&i, data)| channel(&columns[i], data))
+        .collect();
+    let input = picks.input.map(|_| channels[0].name.clone());
+    let outputs = channels[usize::from(picks.input.is_some())..]
+        .iter()
+        .map(|c| c.name.clone())
+        .collect();
+    let source = CsvSource {
+        input: picks.input.map(|i| columns[i].name.clone()),
+        outputs: picks
+            .outputs
+            .iter()
+            .map(|&i| columns[i].name.clone())
+            .collect(),
+        time: picks.time.map(|i| columns[i].name.clone()),
+        rate_hz: 1.0 / dt_s,
+        rate_from,
+        jitter,
+        rows,
+        skipped,
+        comments,
+        header,
+    };
+    Ok(CsvFile {
+        record: Record {
+            dt_s,
+            t0_s,
+            channels,
+            missing,
+            events: Vec::new(),
+        },
+        input,
+        outputs,
+        source,
+    })
+}
+
+fn channel(col: &Column, data: Vec<f64>) -> Channel {
+    match col
+        .spec
+        .and_then(|s| s.quantity.channel_name().map(|n| (n, s)))
+    {
+        Some((name, spec)) => Channel {
+            name: name.to_string(),
+            unit: spec.quantity.canonical_unit().to_string(),
+            data,
+        },
+        None => Channel {
+            name: col.name.clone(),
+            unit: "?".into(),
+            data,
+        },
+    }
+}
+
+fn header_columns(lines: &[&str], sep: char, header: bool, opts: &CsvFileOptions) -> Vec<Column> {
+    let named = |name: &str| Column {
+        name: name.to_string(),
+        spec: csv_columns::lookup(name),
+    };
+    if header {
+        return split(lines[0], sep).map(named).collect();
+    }
+    let width = split(lines[0], sep).count();
+    if let Some(names) = &opts.columns {
+        let mut cols: Vec<Column> = names.iter().map(|n| named(n)).collect();
+        cols.extend((cols.len()..width).map(|i| named(&format!("col{}", i + 1))));
+        return cols;
+    }
+    (0..width)
+        .map(|i| match csv_columns::DEFAULT_ORDER.get(i) {
+            Some(spec) => Column {
+                name: default_name(spec.quantity).to_string(),
+                spec: Some(*spec),
+            },
+            None => named(&format!("col{}", i + 1)),
+        })
+        .collect()
+}
+
+fn default_name(q: Quantity) -> &'static str {
+    match q {
+        Quantity::Time => "t_us",
+        Quantity::Throttle => names::THROTTLE,
+        Quantity::Thrust => names::THRUST,
+        Quantity::Torque => names::TORQUE,
+        Quantity::Rpm => names::RPM,
+        Quantity::Voltage => names::VOLTAGE,
+        Quantity::Current => names::CURRENT,
+        Quantity::Index => "idx",
+    }
+}
+
+/// Fields of a line, trimmed and unquoted.
+fn split(line: &str, sep: char) -> impl Iterator<Item = &str> {
+    line.split(sep).map(|f| f.trim().trim_matches('"').trim())
+}
+
+/// An empty field is "not measured" (NaN); text is `None`.
+fn parse_field(f: &str) -> Option<f64> {
+    if f.is_empty() {
+        return Some(f64::NAN);
+    }
+    f.parse().ok()
+}
+
+/// Field separator: `,`, else tab, else `;`, else runs of spaces are not supported (one field).
+fn separator(line: &str) -> char {
+    if line.contains(',') {
+        ','
+    } else if line.contains('\t') {
+        '\t'
+    } else {
+        ';'
+    }
+}
+
+/// Checks and removes a trailing `*HH` (§6); `None` when present and wrong.
+fn strip_checksum(line: &str) -> Option<&str> {
+    let b = line.as_bytes();
+    let n = b.len();
+    if n >= 3 && b[n - 3] == b'*' {
+        if let Some(want) = line
+            .get(n - 2..)
+            .and_then(|h| u8::from_str_radix(h, 16).ok())
+        {
+            return (checksum(&b[..n - 3]) == want).then(|| &line[..n - 3]);
+        }
+    }
+    Some(line)
+}

@@ -1,0 +1,118 @@
+//! `protocol = "auto"`: binary TSP/1 or the CSV fallback, decided from the first bytes.
+//!
+//! The rule (over the first [`DETECT_WINDOW`] bytes, after an optional UTF-8 BOM):
+//! 1. A valid TSP/1 frame (COBS, CRC, version, known type) ends in the window → **binary**.
+//! 2. No `0x00` in the window and a complete line that is CSV — numeric fields (at least two)
+//!    or a header naming a known column — → **CSV**. Text never holds `0x00`, while a binary
+//!    stream has a delimiter at least every 255 bytes; boot banners are text but neither
+//!    numeric rows nor headers, so a banner before binary frames does not decide.
+//! 3. The window is full (or the input has ended): a `0x00` seen → binary (a damaged binary
+//!    stream; its decoder counts the drops), none → CSV.
+//! 4. Otherwise: undecided, read more.
+
+use super::csv_columns;
+use super::decoder::Decoder;
+
+/// Bytes examined at most.
+pub const DETECT_WINDOW: usize = 1024;
+
+/// Which wire format a stream speaks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum WireFormat {
+    /// COBS-framed binary TSP/1.
+    Binary,
+    /// The CSV text fallback.
+    Csv,
+}
+
+/// Outcome of [`detect`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Detection {
+    /// Decided.
+    Format(WireFormat),
+    /// More bytes are needed.
+    Undecided,
+}
+
+/// Decide the wire format from the first bytes of a stream; `at_end` says the input has no more
+/// bytes (a short file). See the module documentation for the rule.
+pub fn detect(prefix: &[u8], at_end: bool) -> Detection {
+    let p = prefix.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(prefix);
+    let window = &p[..p.len().min(DETECT_WINDOW)];
+    let mut dec = Decoder::new();
+    let mut binary = false;
+    dec.push(window, |_| binary = true);
+    if binary {
+        return Detection::Format(WireFormat::Binary);
+    }
+    let has_zero = window.contains(&0);
+    if !has_zero && window.split(|&b| b == b'\n').rev().skip(1).any(is_csv_line) {
+        return Detection::Format(WireFormat::Csv);
+    }
+    if at_end || window.len() >= DETECT_WINDOW {
+        let f = if has_zero {
+            WireFormat::Binary
+        } else {
+            WireFormat::Csv
+        };
+        return Detection::Format(f);
+    }
+    Detection::Undecided
+}
+
+/// A complete line that is a CSV data row or header.
+fn is_csv_line(line: &[u8]) -> bool {
+    let Ok(text) = std::str::from_utf8(line) else {
+        return false;
+    };
+    let text = text.trim();
+    if text.starts_with('#') || text.is_empty() {
+        return false;
+    }
+    let sep = if text.contains(',') { ',' } else { '\t' };
+    let fields: Vec<&str> = text.split(sep).map(str::trim).collect();
+    let numeric = fields.iter().filter(|f| f.parse::<f64>().is_ok()).count();
+    let blank = fields.iter().filter(|f| f.is_empty()).count();
+    (numeric >= 2 && numeric + blank == fields.len())
+        || fields.iter().any(|f| csv_columns::lookup(f).is_some())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::{encode_frame, Message, MAX_FRAME_LEN};
+
+    const CSV: Detection = Detection::Format(WireFormat::Csv);
+    const BIN: Detection = Detection::Format(WireFormat::Binary);
+
+    #[test]
+    fn binary_after_a_banner() {
+        let mut s = b"Booting stand fw 1.2\r\nready\r\n".to_vec();
+        assert_eq!(detect(&s, false), Detection::Undecided);
+        let mut f = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(1, &Message::Heartbeat, &mut f);
+        // The banner runs into the first frame (no 0x00 between them): that frame is lost,
+        // the next one decides.
+        s.extend_from_slice(&f[..n]);
+        assert_eq!(detect(&s, false), Detection::Undecided);
+        s.extend_from_slice(&f[..n]);
+        assert_eq!(detect(&s, false), BIN);
+    }
+
+    #[test]
+    fn csv_rows_and_headers() {
+        assert_eq!(detect(b"1000,3500,1.25\n", false), CSV);
+        assert_eq!(detect(b"\xEF\xBB\xBFTime (s),Thrust (N)\n", false), CSV);
+        assert_eq!(detect(b"# banner\n1000,35", false), Detection::Undecided);
+        assert_eq!(detect(b"# banner only", true), CSV);
+    }
+
+    #[test]
+    fn garbage_with_zeros_is_binary_when_the_window_is_full() {
+        let g: Vec<u8> = (0..2000u32).map(|i| (i * 7 % 251) as u8).collect();
+        assert_eq!(detect(&g, false), BIN);
+        assert_eq!(detect(&[0x05, 0x00, 0x07], false), Detection::Undecided);
+        assert_eq!(detect(&[0x05, 0x00, 0x07], true), BIN);
+        assert_eq!(detect(&[b'x'; 1024], false), CSV);
+    }
+}

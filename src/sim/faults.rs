@@ -1,0 +1,322 @@
+//! Fault injection on the device's output: bit flips, garbage bursts, dropped samples, stalls.
+//! (Hang-ups close the pty and are done by the [`pty`](super::pty) runner; it counts them here.)
+//!
+//! Faults are applied to whole encoded frames, so that each one has an exact, countable effect
+//! on the host's decoder:
+//! - a **bit flip** changes one bit of one byte of a frame, never the 0x00 delimiter and never
+//!   into a 0x00, so the frame stays one frame and fails its CRC (or COBS): one dropped frame;
+//! - a **garbage burst** is `n` random non-zero bytes and one 0x00, inserted between frames:
+//!   one dropped frame (of whatever kind the decoder finds);
+//! - a **dropped sample** is a SAMPLE not sent: its `sample_index` is missing at the host;
+//! - a **stall** holds all output for `stall_ms`, then sends it at once (nothing lost).
+//!
+//! The host therefore sees `samples_lost = dropped_samples + corrupted_samples` and
+//! `frames_dropped = corrupted_frames + garbage_bursts` (summed over the kinds). Events are drawn
+//! from a seeded generator: the same seed gives the same faults. Bursts and stalls arrive as a
+//! Poisson process (exponential gaps with the configured rate).
+
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use rand_distr::{Distribution, Exp};
+
+use super::config::FaultConfig;
+
+/// What a frame carries, for the faults that depend on it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameKind {
+    /// A SAMPLE (may be dropped).
+    Sample,
+    /// Anything else (HELLO, ACK, EVENT, LOG, CSV comment lines).
+    Other,
+}
+
+/// Every injected fault, counted.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct FaultStats {
+    /// Frames with one flipped bit (each costs the host one frame).
+    pub corrupted_frames: u64,
+    /// Of those, SAMPLE frames (each also costs the host one sample).
+    pub corrupted_samples: u64,
+    /// Garbage bursts inserted (each costs the host one dropped frame; the chance that random
+    /// bytes pass COBS, the CRC, `ver` and `type` together is below 1e-7 per burst).
+    pub garbage_bursts: u64,
+    /// Garbage bytes inserted, delimiters included.
+    pub garbage_bytes: u64,
+    /// SAMPLE frames not sent.
+    pub dropped_samples: u64,
+    /// Stalls.
+    pub stalls: u64,
+    /// Hang-ups (pty master closed).
+    pub hangups: u64,
+    /// Re-opens after a hang-up (each a new boot).
+    pub reopens: u64,
+}
+
+impl FaultStats {
+    /// Samples the host cannot receive because of injected faults.
+    pub fn samples_lost(&self) -> u64 {
+        self.dropped_samples + self.corrupted_samples
+    }
+
+    /// Frames the host's decoder must drop because of injected faults.
+    pub fn frames_dropped(&self) -> u64 {
+        self.corrupted_frames + self.garbage_bursts
+    }
+}
+
+/// Applies the configured faults to the device's output stream.
+#[derive(Debug)]
+pub struct FaultInjector {
+    cfg: FaultConfig,
+    rng: StdRng,
+    stats: FaultStats,
+    next_garbage_us: Option<u64>,
+    next_stall_us: Option<u64>,
+    stall_until_us: u64,
+    pending: Vec<u8>,
+    delimiter: u8,
+}
+
+impl FaultInjector {
+    /// An injector with the faults of `cfg`, drawing from `seed`.
+    pub fn new(cfg: &FaultConfig, seed: u64) -> Self {
+        let mut inj = FaultInjector {
+            cfg: cfg.clone(),
+            rng: StdRng::seed_from_u64(seed ^ 0x0fa1_75ee_d000_0000),
+            stats: FaultStats::default(),
+            next_garbage_us: None,
+            next_stall_us: None,
+            stall_until_us: 0,
+            pending: Vec::new(),
+            delimiter: 0,
+        };
+        inj.next_garbage_us = inj.gap_us(cfg.garbage_bursts_per_s, 0);
+        inj.next_stall_us = inj.gap_us(cfg.stalls_per_s, 0);
+        inj
+    }
+
+    /// Uses `delimiter` as the frame end (0x00 for TSP/1, `\n` for CSV lines): flips never
+    /// create it and garbage bursts end with it.
+    pub fn with_delimiter(mut self, delimiter: u8) -> Self {
+        self.delimiter = delimiter;
+        self
+    }
+
+    /// The counts so far.
+    pub fn stats(&self) -> FaultStats {
+        self.stats
+    }
+
+    /// Counts a hang-up done by the runner.
+    pub fn note_hangup(&mut self) {
+        self.stats.hangups += 1;
+    }
+
+    /// Counts a re-open done by the runner.
+    pub fn note_reopen(&mut self) {
+        self.stats.reopens += 1;
+    }
+
+    /// Forgets output not yet sent (the link went away with it).
+    pub fn discard_pending(&mut self) {
+        self.pending.clear();
+    }
+
+    /// Next event of a Poisson process with `rate_per_s`, after `now_us`.
+    fn gap_us(&mut self, rate_per_s: f64, now_us: u64) -> Option<u64> {
+        let exp = Exp::new(rate_per_s).ok().filter(|_| rate_per_s > 0.0)?;
+        let gap_s: f64 = exp.sample(&mut self.rng);
+        Some(now_us + (gap_s * 1e6).min(1e15) as u64 + 1)
+    }
+
+    /// Runs the time-driven faults (garbage bursts, stalls) up to `now_us`.
+    pub fn poll(&mut self, now_us: u64) {
+        while let Some(t) = self.next_garbage_us.filter(|&t| t <= now_us) {
+            self.burst();
+            self.next_garbage_us = self.gap_us(self.cfg.garbage_bursts_per_s, t);
+        }
+        while let Some(t) = self.next_stall_us.filter(|&t| t <= now_us) {
+            self.stats.stalls += 1;
+            self.stall_until_us = t + self.cfg.stall_ms as u64 * 1000;
+            self.next_stall_us = self.gap_us(self.cfg.stalls_per_s, self.stall_until_us);
+        }
+    }
+
+    fn burst(&mut self) {
+        let n = self.cfg.garbage_burst_bytes as usize;
+        for _ in 0..n {
+            let mut b: u8 = self.rng.gen_range(1..=255);
+            if b == self.delimiter {
+                b = b.wrapping_add(1).max(1);
+            }
+            self.pending.push(b);
+        }
+        self.pending.push(self.delimiter);
+        self.stats.garbage_bursts += 1;
+        self.stats.garbage_bytes += n as u64 + 1;
+    }
+
+    /// Decides whether the next SAMPLE is dropped by the device (counted). The firmware asks
+    /// before it gives the sample a link `seq`, so the host sees a `sample_index` jump without a
+    /// `seq` jump: a device-side drop (PROTOCOL.md §3).
+    pub fn drop_sample(&mut self) -> bool {
+        let drop = self.cfg.drop_sample_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_sample_prob);
+        if drop {
+            self.stats.dropped_samples += 1;
+        }
+        drop
+    }
+
+    /// Passes one encoded frame (ending in its 0x00 delimiter) through the faults into the
+    /// output queue.
+    pub fn push_frame(&mut self, frame: &[u8], kind: FrameKind) {
+        let start = self.pending.len();
+        self.pending.extend_from_slice(frame);
+        let body = frame.len().saturating_sub(1);
+        if self.cfg.bit_flip_per_byte > 0.0 && body > 0 {
+            let p_frame = 1.0 - (1.0 - self.cfg.bit_flip_per_byte).powi(body as i32);
+            if self.rng.gen_bool(p_frame.clamp(0.0, 1.0)) {
+                let at = start + self.rng.gen_range(0..body);
+                self.flip(at);
+                self.stats.corrupted_frames += 1;
+                if kind == FrameKind::Sample {
+                    self.stats.corrupted_samples += 1;
+                }
+            }
+        }
+    }
+
+    /// Flips one bit of `pending[i]` (not a delimiter), choosing a bit that does not turn it
+    /// into the delimiter (two different bits cannot both do that).
+    fn flip(&mut self, i: usize) {
+        let byte = self.pending[i];
+        let mut bit = self.rng.gen_range(0..8u32);
+        if byte ^ (1 << bit) == self.delimiter {
+            bit = (bit + 1) % 8;
+        }
+        self.pending[i] = byte ^ (1 << bit);
+    }
+
+    /// Moves the output that may go on the wire at `now_us` into `out` (nothing during a stall).
+    pub fn drain_ready(&mut self, now_us: u64, out: &mut Vec<u8>) {
+        self.poll(now_us);
+        if now_us >= self.stall_until_us {
+            out.append(&mut self.pending);
+        }
+    }
+
+    /// True while a stall holds the output.
+    pub fn stalled(&self, now_us: u64) -> bool {
+        now_us < self.stall_until_us
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(n: usize) -> Vec<u8> {
+        let mut f = vec![0x11u8; n];
+        f.push(0);
+        f
+    }
+
+    #[test]
+    fn clean_config_passes_bytes_unchanged() {
+        let mut inj = FaultInjector::new(&FaultConfig::default(), 1);
+        inj.push_frame(&frame(10), FrameKind::Sample);
+        let mut out = Vec::new();
+        inj.drain_ready(1_000_000, &mut out);
+        assert_eq!(out, frame(10));
+        assert_eq!(inj.stats(), FaultStats::default());
+    }
+
+    #[test]
+    fn bit_flips_keep_frame_boundaries_and_are_counted() {
+        let cfg = FaultConfig {
+            bit_flip_per_byte: 0.05,
+            ..FaultConfig::default()
+        };
+        let mut inj = FaultInjector::new(&cfg, 7);
+        let mut out = Vec::new();
+        for _ in 0..1000 {
+            inj.push_frame(&frame(20), FrameKind::Sample);
+        }
+        inj.drain_ready(0, &mut out);
+        let changed = out
+            .chunks(21)
+            .filter(|c| *c != frame(20).as_slice())
+            .count() as u64;
+        assert_eq!(
+            out.iter().filter(|&&b| b == 0).count(),
+            1000,
+            "delimiters intact"
+        );
+        let s = inj.stats();
+        assert_eq!(changed, s.corrupted_frames);
+        assert_eq!(s.corrupted_samples, s.corrupted_frames);
+        // P(frame) = 1 - 0.95^20 = 0.64
+        assert!((500..800).contains(&s.corrupted_frames), "{s:?}");
+    }
+
+    #[test]
+    fn dropped_samples_never_touch_other_frames() {
+        let cfg = FaultConfig {
+            drop_sample_prob: 0.5,
+            ..FaultConfig::default()
+        };
+        let mut inj = FaultInjector::new(&cfg, 3);
+        for _ in 0..100 {
+            if !inj.drop_sample() {
+                inj.push_frame(&frame(5), FrameKind::Sample);
+            }
+            inj.push_frame(&frame(3), FrameKind::Other);
+        }
+        let mut out = Vec::new();
+        inj.drain_ready(0, &mut out);
+        let s = inj.stats();
+        assert!(s.dropped_samples > 20 && s.dropped_samples < 80, "{s:?}");
+        assert_eq!(out.len() as u64, 100 * 4 + (100 - s.dropped_samples) * 6);
+    }
+
+    #[test]
+    fn garbage_bursts_arrive_at_their_rate_and_end_in_a_delimiter() {
+        let cfg = FaultConfig {
+            garbage_bursts_per_s: 100.0,
+            garbage_burst_bytes: 10,
+            ..FaultConfig::default()
+        };
+        let mut inj = FaultInjector::new(&cfg, 5);
+        let mut out = Vec::new();
+        inj.drain_ready(1_000_000, &mut out);
+        let s = inj.stats();
+        assert!((60..140).contains(&s.garbage_bursts), "{s:?}");
+        assert_eq!(out.len() as u64, s.garbage_bytes);
+        assert_eq!(
+            out.iter().filter(|&&b| b == 0).count() as u64,
+            s.garbage_bursts
+        );
+    }
+
+    #[test]
+    fn stall_holds_output_then_releases_all_of_it() {
+        let cfg = FaultConfig {
+            stalls_per_s: 10.0,
+            stall_ms: 50,
+            ..FaultConfig::default()
+        };
+        let mut inj = FaultInjector::new(&cfg, 11);
+        let mut out = Vec::new();
+        let mut t = 0;
+        while inj.stats().stalls == 0 {
+            t += 1000;
+            inj.poll(t);
+        }
+        assert!(inj.stalled(t));
+        inj.push_frame(&frame(4), FrameKind::Sample);
+        inj.drain_ready(t, &mut out);
+        assert!(out.is_empty());
+        inj.drain_ready(t + 50_000, &mut out);
+        assert_eq!(out, frame(4));
+    }
+}

@@ -1,0 +1,475 @@
+//! The simulated stand on a pseudo-terminal: `propid sim`, and [`SimHandle`] for running it on
+//! a thread inside another process (the daemon's `demo`, integration tests).
+//!
+//! `serialport::TTYPort::pair()` gives a master (ours) and a slave whose path the host opens
+//! like any serial port. The runner closes its own slave handle, so the host is the only one
+//! with the slave open: while nobody has it open, the master polls POLLHUP and the device's
+//! output is discarded (a real USB device's bytes go nowhere without a host too), so a host that
+//! opens late gets fresh data, not a backlog.
+//!
+//! A pty does not pace, so the runner does: the firmware schedules its samples on device time
+//! and the runner hands it a monotonic clock ([`MonoClock`](super::pace::MonoClock)), waiting
+//! for host bytes with `ppoll` until the next sample deadline. A late wake-up emits every sample
+//! that became due (catch-up without drift). Writes are non-blocking; output the host does not
+//! read yet is kept up to [`MAX_BACKLOG`] bytes, beyond which whole batches are dropped and
+//! counted.
+//!
+//! A hang-up fault drops the master (the host sees EOF/EIO, i.e. an unplug); with
+//! `reopen_after_ms >= 0` a new pty is opened after that delay as a new boot (new boot id,
+//! disarmed, counters restarted) and `--link` is re-pointed to it.
+
+use std::os::fd::AsRawFd;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use serialport::{SerialPort, TTYPort};
+
+use super::config::SimConfig;
+use super::dynamics::PlantDynamics;
+use super::faults::{FaultInjector, FaultStats};
+use super::firmware::{Firmware, FirmwareStats};
+use super::pace::MonoClock;
+use super::SimError;
+
+/// Output kept for a host that does not read, bytes; beyond it output is dropped and counted.
+pub const MAX_BACKLOG: usize = 1 << 20;
+
+/// Longest wait for host bytes between checks of the stop flag and the hang-up timer.
+const MAX_WAIT: Duration = Duration::from_millis(5);
+
+/// How the runner is started.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Make a symlink at this path to the slave device (re-pointed after every re-open).
+    pub link: Option<PathBuf>,
+    /// Stop after this many seconds (None: until stopped or hung up for good).
+    pub seconds: Option<f64>,
+}
+
+/// What the runner did; also available live from [`SimHandle::report`].
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct SimReport {
+    /// Boots (1 + re-opens).
+    pub boots: u64,
+    /// Boot id of the current (or last) boot.
+    pub boot_id: u32,
+    /// Slave device path of the current (or last) boot.
+    pub slave_path: String,
+    /// Firmware counters of the current boot.
+    pub firmware: FirmwareStats,
+    /// SAMPLEs taken over all boots.
+    pub samples_total: u64,
+    /// Injected faults over all boots.
+    pub faults: FaultStats,
+    /// Bytes written to the master.
+    pub bytes_out: u64,
+    /// Bytes read from the master.
+    pub bytes_in: u64,
+    /// Bytes discarded because no host had the slave open.
+    pub bytes_no_reader: u64,
+    /// Bytes dropped because the host did not read fast enough.
+    pub bytes_overrun: u64,
+    /// Why the runner ended (empty while running).
+    pub ended: String,
+}
+
+/// One pty pair: the master we keep, the slave path the host opens.
+struct Link {
+    master: TTYPort,
+    path: PathBuf,
+}
+
+fn open_link(link: Option<&Path>) -> Result<Link, SimError> {
+    let (master, slave) = TTYPort::pair().map_err(|e| SimError::Pty(e.to_string()))?;
+    let path = slave
+        .name()
+        .map(PathBuf::from)
+        .ok_or_else(|| SimError::Pty("the pty slave has no name".into()))?;
+    drop(slave);
+    set_nonblocking(master.as_raw_fd())?;
+    if let Some(l) = link {
+        point_link(l, &path)?;
+    }
+    Ok(Link { master, path })
+}
+
+fn set_nonblocking(fd: i32) -> Result<(), SimError> {
+    // SAFETY: fcntl on a descriptor we own; no memory is passed.
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+    // SAFETY: as above.
+    if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK) } < 0 {
+        return Err(SimError::io(
+            "making the pty master non-blocking",
+            std::io::Error::last_os_error(),
+        ));
+    }
+    Ok(())
+}
+
+/// Creates (or atomically replaces) the symlink `link -> target`. An existing file at `link`
+/// that is not a symlink is left alone and refused.
+pub fn point_link(link: &Path, target: &Path) -> Result<(), SimError> {
+    if let Ok(meta) = std::fs::symlink_metadata(link) {
+        if !meta.file_type().is_symlink() {
+            return Err(SimError::Pty(format!(
+                "--link {}: exists and is not a symlink",
+                link.display()
+            )));
+        }
+    }
+    let tmp = link.with_extension(format!("tmp{}", std::process::id()));
+    let _ = std::fs::remove_file(&tmp);
+    std::os::unix::fs::symlink(target, &tmp)
+        .map_err(|e| SimError::io(format!("creating symlink {}", tmp.display()), e))?;
+    std::fs::rename(&tmp, link)
+        .map_err(|e| SimError::io(format!("creating symlink {}", link.display()), e))
+}
+
+/// What `ppoll` said about the master.
+enum Ready {
+    Nothing,
+    Input,
+    NoReader,
+}
+
+fn wait_master(fd: i32, timeout: Duration) -> Ready {
+    let mut pfd = libc::pollfd {
+        fd,
+        events: libc::POLLIN,
+        revents: 0,
+    };
+    let ts = libc::timespec {
+        tv_sec: timeout.as_secs() as libc::time_t,
+        tv_nsec: timeout.subsec_nanos() as libc::c_long,
+    };
+    // SAFETY: one valid pollfd, a valid timespec, no signal mask.
+    let n = unsafe { libc::ppoll(&mut pfd, 1, &ts, std::ptr::null()) };
+    if n <= 0 {
+        Ready::Nothing
+    } else if pfd.revents & libc::POLLIN != 0 {
+        Ready::Input
+    } else if pfd.revents & (libc::POLLHUP | libc::POLLERR) != 0 {
+        Ready::NoReader
+    } else {
+        Ready::Nothing
+    }
+}
+
+/// Non-blocking read; `Ok(0)` when nothing is there.
+fn read_master(fd: i32, buf: &mut [u8]) -> std::io::Result<usize> {
+    // SAFETY: `buf` is valid for `buf.len()` bytes.
+    let n = unsafe { libc::read(fd, buf.as_mut_ptr().cast(), buf.len()) };
+    if n >= 0 {
+        return Ok(n as usize);
+    }
+    let e = std::io::Error::last_os_error();
+    match e.kind() {
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::Interrupted => Ok(0),
+        _ => Err(e),
+    }
+}
+
+/// Non-blocking write; `Ok(0)` when the pty buffer is full.
+fn write_master(fd: i32, buf: &[u8]) -> std::io::Result<usize> {
+    // SAFETY: `buf` is valid for `buf.len()` bytes.
+    let n = unsafe { libc::write(fd, buf.as_ptr().cast(), buf.len()) };
+    if n >= 0 {
+        return Ok(n as usize);
+    }
+    let e = std::io::Error::last_os_error();
+    match e.kind() {
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::Interrupted => Ok(0),
+        _ => Err(e),
+    }
+}
+
+/// Shared between the runner and its handle.
+#[derive(Debug, Default)]
+struct Shared {
+    stop: AtomicBool,
+    report: Mutex<SimReport>,
+}
+
+/// Runs the simulated stand on a pty until `stop` is set, `opts.seconds` pass, or a hang-up
+/// without re-open. `on_path` is called with the path the host should open (the `--link` if
+/// given, else the slave) every time a pty is opened.
+pub fn run(
+    cfg: &SimConfig,
+    opts: &RunOptions,
+    stop: &AtomicBool,
+    mut on_path: impl FnMut(&Path),
+) -> Result<SimReport, SimError> {
+    let shared = Shared::default();
+    let r = run_shared(cfg, opts, &shared, Some(stop), &mut on_path);
+    let report = shared.report.lock().map(|r| r.clone()).unwrap_or_default();
+    r.map(|_| report)
+}
+
+fn run_shared(
+    cfg: &SimConfig,
+    opts: &RunOptions,
+    shared: &Shared,
+    extra_stop: Option<&AtomicBool>,
+    on_path: &mut dyn FnMut(&Path),
+) -> Result<(), SimError> {
+    let started = Instant::now();
+    let deadline = opts
+        .seconds
+        .map(|s| started + Duration::from_secs_f64(s.max(0.0)));
+    let stopped = || {
+        shared.stop.load(Ordering::Relaxed)
+            || extra_stop.is_some_and(|s| s.load(Ordering::Relaxed))
+            || deadline.is_some_and(|d| Instant::now() >= d)
+    };
+    let dt_s = 1.0 / cfg.stand.sample_rate_hz as f64;
+    let mut faults = FaultInjector::new(&cfg.faults, cfg.stand.seed);
+    let mut boot = 0u64;
+    let mut samples_before = 0u64;
+    loop {
+        let link = open_link(opts.link.as_deref())?;
+        on_path(opts.link.as_deref().unwrap_or(&link.path));
+        let plant = PlantDynamics::new(&cfg.plant, dt_s, cfg.stand.seed.wrapping_add(boot))?;
+        let id = super::boot_id(cfg.stand.seed, boot);
+        let mut fw = Firmware::new(&cfg.stand, plant, id, faults);
+        {
+            let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
+            r.boots = boot + 1;
+            r.boot_id = id;
+            r.slave_path = link.path.display().to_string();
+        }
+        let hung_up = serve(&mut fw, &link, cfg, shared, &stopped, samples_before)?;
+        samples_before += fw.stats().samples;
+        faults = fw.into_faults();
+        if !hung_up {
+            set_ended(shared, "stopped");
+            return Ok(());
+        }
+        faults.note_hangup();
+        faults.discard_pending();
+        drop(link);
+        if cfg.faults.reopen_after_ms < 0 {
+            update(shared, None, &faults, samples_before);
+            set_ended(shared, "hung up");
+            return Ok(());
+        }
+        let until = Instant::now() + Duration::from_millis(cfg.faults.reopen_after_ms as u64);
+        while Instant::now() < until {
+            if stopped() {
+                update(shared, None, &faults, samples_before);
+                set_ended(shared, "stopped");
+                return Ok(());
+            }
+            std::thread::sleep(MAX_WAIT);
+        }
+        faults.note_reopen();
+        boot += 1;
+    }
+}
+
+fn set_ended(shared: &Shared, why: &str) {
+    let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
+    r.ended = why.to_string();
+}
+
+fn update(shared: &Shared, fw: Option<FirmwareStats>, faults: &FaultInjector, samples_before: u64) {
+    let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
+    if let Some(s) = fw {
+        r.firmware = s;
+        r.samples_total = samples_before + s.samples;
+    }
+    r.faults = faults.stats();
+}
+
+/// Serves one boot on one pty. Returns true when it ended by a hang-up fault.
+fn serve(
+    fw: &mut Firmware<PlantDynamics>,
+    link: &Link,
+    cfg: &SimConfig,
+    shared: &Shared,
+    stopped: &dyn Fn() -> bool,
+    samples_before: u64,
+) -> Result<bool, SimError> {
+    let fd = link.master.as_raw_fd();
+    let clock = MonoClock::start();
+    let hangup_us =
+        (cfg.faults.hangup_after_s > 0.0).then_some((cfg.faults.hangup_after_s * 1e6) as u64);
+    let mut backlog: Vec<u8> = Vec::new();
+    let mut rx = [0u8; 4096];
+    let (mut bytes_out, mut bytes_in, mut no_reader, mut overrun) = (0u64, 0u64, 0u64, 0u64);
+    let mut reader_present = false;
+    loop {
+        if stopped() {
+            break;
+        }
+        let now = clock.now_us();
+        if hangup_us.is_some_and(|h| now >= h) {
+            publish(
+                shared,
+                fw,
+                samples_before,
+                [bytes_out, bytes_in, no_reader, overrun],
+            );
+            return Ok(true);
+        }
+        fw.advance(now);
+        let before = backlog.len();
+        fw.drain_output(now, &mut backlog);
+        if backlog.len() > MAX_BACKLOG {
+            overrun += (backlog.len() - before) as u64;
+            backlog.truncate(before);
+        }
+        if !reader_present {
+            no_reader += backlog.len() as u64;
+            backlog.clear();
+        } else if !backlog.is_empty() {
+            match write_master(fd, &backlog) {
+                Ok(n) => {
+                    bytes_out += n as u64;
+                    backlog.drain(..n);
+                }
+                Err(_) => {
+                    // EIO: the host closed the slave between the poll and the write.
+                    no_reader += backlog.len() as u64;
+                    backlog.clear();
+                }
+            }
+        }
+        let wait = clock.until(fw.next_deadline_us()).min(MAX_WAIT);
+        match wait_master(fd, wait) {
+            Ready::Input => {
+                reader_present = true;
+                match read_master(fd, &mut rx) {
+                    Ok(n) if n > 0 => {
+                        bytes_in += n as u64;
+                        fw.feed(clock.now_us(), &rx[..n]);
+                    }
+                    Ok(_) => {}
+                    Err(_) => reader_present = false,
+                }
+            }
+            Ready::NoReader => {
+                reader_present = false;
+                std::thread::sleep(wait);
+            }
+            Ready::Nothing => reader_present = true,
+        }
+        publish(
+            shared,
+            fw,
+            samples_before,
+            [bytes_out, bytes_in, no_reader, overrun],
+        );
+    }
+    publish(
+        shared,
+        fw,
+        samples_before,
+        [bytes_out, bytes_in, no_reader, overrun],
+    );
+    Ok(false)
+}
+
+fn publish(shared: &Shared, fw: &Firmware<PlantDynamics>, samples_before: u64, io: [u64; 4]) {
+    let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
+    let s = fw.stats();
+    r.firmware = s;
+    r.samples_total = samples_before + s.samples;
+    r.faults = fw.fault_stats();
+    r.bytes_out = io[0];
+    r.bytes_in = io[1];
+    r.bytes_no_reader = io[2];
+    r.bytes_overrun = io[3];
+}
+
+/// The simulated stand running on its own thread.
+#[derive(Debug)]
+pub struct SimHandle {
+    path: PathBuf,
+    shared: Arc<Shared>,
+    thread: Option<JoinHandle<Result<(), SimError>>>,
+}
+
+impl SimHandle {
+    /// Starts the stand on a new pty on a thread; returns once the device path exists. The path
+    /// is `opts.link` when given (needed to reconnect after a hang-up with re-open), else the
+    /// slave device.
+    pub fn spawn(cfg: SimConfig, opts: RunOptions) -> Result<SimHandle, SimError> {
+        cfg.validate()?;
+        let shared = Arc::new(Shared::default());
+        let (tx, rx) = std::sync::mpsc::channel::<PathBuf>();
+        let thread_shared = Arc::clone(&shared);
+        let thread = std::thread::Builder::new()
+            .name("propid-sim".into())
+            .spawn(move || {
+                let mut on_path = |p: &Path| {
+                    let _ = tx.send(p.to_path_buf());
+                };
+                let r = run_shared(&cfg, &opts, &thread_shared, None, &mut on_path);
+                if let Err(e) = &r {
+                    set_ended(&thread_shared, &format!("error: {e}"));
+                }
+                r
+            })
+            .map_err(|e| SimError::io("starting the simulator thread", e))?;
+        let mut handle = SimHandle {
+            path: PathBuf::new(),
+            shared,
+            thread: Some(thread),
+        };
+        match rx.recv_timeout(Duration::from_secs(5)) {
+            Ok(p) => {
+                handle.path = p;
+                Ok(handle)
+            }
+            Err(_) => Err(handle
+                .join()
+                .err()
+                .unwrap_or_else(|| SimError::Pty("the simulator did not open a pty".into()))),
+        }
+    }
+
+    /// The device path for the host to open.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// A snapshot of the runner's counters (boots, firmware, faults, bytes).
+    pub fn report(&self) -> SimReport {
+        self.shared
+            .report
+            .lock()
+            .map(|r| r.clone())
+            .unwrap_or_default()
+    }
+
+    /// True once the runner has ended (stopped, timed out, hung up for good, or failed).
+    pub fn is_finished(&self) -> bool {
+        self.thread.as_ref().map_or(true, |t| t.is_finished())
+    }
+
+    /// Stops the stand (closing the pty) and returns its final report.
+    pub fn stop(mut self) -> Result<SimReport, SimError> {
+        self.shared.stop.store(true, Ordering::Relaxed);
+        self.join()?;
+        Ok(self.report())
+    }
+
+    fn join(&mut self) -> Result<(), SimError> {
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| SimError::Pty("the simulator thread panicked".into()))?,
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for SimHandle {
+    fn drop(&mut self) {
+        self.shared.stop.store(true, Ordering::Relaxed);
+        let _ = self.join();
+    }
+}
