@@ -1,14 +1,282 @@
-//! `propid diagnose` (not written yet).
+//! `propid diagnose FILE [--json] [--report DIR]`: what the 2nd-order model gets wrong, why,
+//! and how much an extended model gains on held-out data (issue 5). FILE is a TSP/1 recording
+//! (binary or CSV dialect) or any CSV form `propid identify` reads; the supply voltage is used
+//! when the file has one.
+
+use std::path::PathBuf;
 
 use super::CliError;
+use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
+use crate::ingest::csv_file::{read_csv, CsvFileOptions};
+use crate::ingest::steps::find_steps;
+use crate::ingest::{read_record_with, IngestOptions};
+use crate::protocol::detect::{detect, Detection, WireFormat};
+use crate::record::names;
 
 /// Arguments of `propid diagnose`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// A TSP/1 recording (raw bytes) or a CSV file.
+    pub file: PathBuf,
+    /// Print exactly one JSON object instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Write a Markdown page with SVG plots into this directory.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Input column (default: the throttle column; none: steps are found from the response).
+    #[arg(long)]
+    pub input: Option<String>,
+    /// Output column (default: thrust).
+    #[arg(long)]
+    pub output: Option<String>,
+    /// Sample rate, Hz (needed without a time column).
+    #[arg(long)]
+    pub fs: Option<f64>,
+    /// Column names for a CSV file without a header, comma separated.
+    #[arg(long, value_delimiter = ',')]
+    pub columns: Option<Vec<String>>,
+    /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
+    #[arg(long, value_delimiter = ',', num_args = 2)]
+    pub esc_us: Option<Vec<f64>>,
+    /// Share of the samples (from the start) used for estimation, 0.3..0.9.
+    #[arg(long, default_value_t = 0.7)]
+    pub estimation_fraction: f64,
+}
+
+/// The signals of FILE that diagnose works on.
+#[derive(Debug, Clone)]
+pub struct Signals {
+    /// Sample period, s.
+    pub dt_s: f64,
+    /// Input (throttle, the chosen column, or the levels of the steps found).
+    pub u: Vec<f64>,
+    /// Output, NaN where missing.
+    pub y: Vec<f64>,
+    /// Supply voltage, if the file has it.
+    pub voltage: Option<Vec<f64>>,
+    /// What the input is.
+    pub input_name: String,
+    /// What the output is.
+    pub output_name: String,
+}
 
 /// Runs `propid diagnose`.
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::Usage(
-        "propid diagnose is not implemented yet".into(),
-    ))
+pub fn run(args: Args) -> Result<(), CliError> {
+    if !(0.3..=0.9).contains(&args.estimation_fraction) {
+        return Err(CliError::Usage(format!(
+            "--estimation-fraction {} is outside 0.3..0.9",
+            args.estimation_fraction
+        )));
+    }
+    let s = load(&args)?;
+    let opts = diagnose::Options {
+        estimation_fraction: args.estimation_fraction,
+        ..Default::default()
+    };
+    let d =
+        diagnose::diagnose(s.dt_s, &s.u, &s.y, s.voltage.as_deref(), &opts).map_err(diag_error)?;
+    if let Some(dir) = &args.report {
+        let title = args.file.display().to_string();
+        report::write(dir, &title, &s.output_name, &d)
+            .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
+    }
+    if args.json {
+        let text = serde_json::to_string(&d).map_err(|e| CliError::Input(format!("JSON: {e}")))?;
+        println!("{text}");
+    } else {
+        print_summary(&args, &s, &d);
+    }
+    Ok(())
+}
+
+fn diag_error(e: DiagnoseError) -> CliError {
+    match e {
+        DiagnoseError::MissingChannel(_)
+        | DiagnoseError::NonFinite { .. }
+        | DiagnoseError::BadSamplePeriod(_) => CliError::Input(e.to_string()),
+        _ => CliError::Identification(e.to_string()),
+    }
+}
+
+fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
+    let b = &d.baseline;
+    println!(
+        "{}: {} → {}, {} samples at {:.4} s",
+        args.file.display(),
+        s.input_name,
+        s.output_name,
+        s.u.len(),
+        s.dt_s
+    );
+    println!(
+        "estimation samples {}..{}, validation samples {}..{}",
+        d.split.estimation[0], d.split.estimation[1], d.split.validation[0], d.split.validation[1]
+    );
+    println!(
+        "baseline 2nd order: fn {:.3} Hz, zeta {:.3}, dc gain {:.4}; validation fit {:.2} %",
+        b.model.fn_hz, b.model.zeta, b.model.dc_gain, b.fit_percent
+    );
+    if let Some(c) = &b.core_model {
+        println!(
+            "  (identification core, {:?} path: fn {:.3} Hz, zeta {:.3}, fit {:.2} %)",
+            c.path, c.fn_hz, c.zeta, c.fit_percent
+        );
+    }
+    if d.findings.is_empty() {
+        println!("no effect found: the 2nd-order model explains the data to the noise");
+        return;
+    }
+    for f in &d.findings {
+        println!("- {} (score {:.0}): {}", f.effect, f.score, f.evidence);
+    }
+    if let (Some(e), Some(g)) = (&d.extended, &d.gain) {
+        println!(
+            "extended by {}: validation fit {:.2} % ({:+.2} points, residual RMS × {:.3})",
+            e.effects.join(", "),
+            e.fit_percent,
+            g.fit_percent_points,
+            g.rms_ratio
+        );
+    }
+}
+
+/// Reads FILE: TSP/1 binary recordings through `ingest::read_record_with`, everything else
+/// through the CSV reader of `propid identify`.
+pub fn load(args: &Args) -> Result<Signals, CliError> {
+    let name = args.file.display().to_string();
+    let bytes =
+        std::fs::read(&args.file).map_err(|e| CliError::io(format!("reading {name}"), e))?;
+    if bytes.is_empty() {
+        return Err(CliError::Input(format!("{name}: the file is empty")));
+    }
+    match detect(&bytes, true) {
+        Detection::Format(WireFormat::Binary) => load_tsp(args, &name, &bytes),
+        _ => load_csv(args, &name, &bytes),
+    }
+}
+
+fn load_tsp(args: &Args, name: &str, bytes: &[u8]) -> Result<Signals, CliError> {
+    let opts = IngestOptions {
+        fs_hz: args.fs,
+        ..IngestOptions::default()
+    };
+    let (rec, _) =
+        read_record_with(bytes, &opts).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
+    let pick = |want: &str| -> Result<Vec<f64>, CliError> {
+        rec.channel(want).map(|c| c.data.clone()).ok_or_else(|| {
+            let have: Vec<&str> = rec.channels.iter().map(|c| c.name.as_str()).collect();
+            CliError::Input(format!(
+                "{name}: no channel {want}; the recording has {}",
+                have.join(", ")
+            ))
+        })
+    };
+    let input_name = args.input.clone().unwrap_or(names::THROTTLE.into());
+    let output_name = args.output.clone().unwrap_or(names::THRUST.into());
+    let u = pick(&input_name)?;
+    let mut y = pick(&output_name)?;
+    mark_missing(&mut y, &rec.missing);
+    let voltage = rec.channel(names::VOLTAGE).map(|c| c.data.clone());
+    let u = fill_gaps(u);
+    let voltage = voltage
+        .map(fill_gaps)
+        .filter(|v| v.iter().all(|x| x.is_finite()));
+    Ok(Signals {
+        dt_s: rec.dt_s,
+        u,
+        y,
+        voltage,
+        input_name,
+        output_name,
+    })
+}
+
+fn load_csv(args: &Args, name: &str, bytes: &[u8]) -> Result<Signals, CliError> {
+    let text = String::from_utf8_lossy(bytes);
+    let esc_us = match args.esc_us.as_deref() {
+        Some([lo, hi]) => Some((*lo, *hi)),
+        Some(_) => return Err(CliError::Usage("--esc-us takes MIN,MAX".into())),
+        None => None,
+    };
+    let output = args.output.clone().unwrap_or(names::THRUST.into());
+    let opts = |outputs: Vec<String>| CsvFileOptions {
+        input: args.input.clone(),
+        outputs,
+        fs_hz: args.fs,
+        columns: args.columns.clone(),
+        esc_us,
+        motor_poles: None,
+    };
+    // With the voltage when the file has one, without it otherwise.
+    let with_v = read_csv(&text, &opts(vec![output.clone(), names::VOLTAGE.into()]));
+    let file = match with_v {
+        Ok(f) => f,
+        Err(_) => read_csv(&text, &opts(vec![output.clone()]))
+            .map_err(|e| CliError::Input(format!("{name}: {e}")))?,
+    };
+    let rec = &file.record;
+    let out_name = file.outputs.first().cloned().unwrap_or(output);
+    let mut y = rec
+        .channel(&out_name)
+        .map(|c| c.data.clone())
+        .unwrap_or_default();
+    mark_missing(&mut y, &rec.missing);
+    let voltage = file
+        .outputs
+        .get(1)
+        .and_then(|n| rec.channel(n))
+        .map(|c| fill_gaps(c.data.clone()))
+        .filter(|v| v.iter().all(|x| x.is_finite()));
+    let (u, input_name) = match &file.input {
+        Some(n) => (
+            rec.channel(n).map(|c| c.data.clone()).unwrap_or_default(),
+            n.clone(),
+        ),
+        None => {
+            let f = find_steps(&y)
+                .filter(|f| !f.steps.is_empty())
+                .ok_or_else(|| {
+                    CliError::Identification(format!(
+                    "{name}: no input column and no step found in the response (give --input NAME)"
+                ))
+                })?;
+            (f.input, "steps found from the response".to_string())
+        }
+    };
+    Ok(Signals {
+        dt_s: rec.dt_s,
+        u: fill_gaps(u),
+        y,
+        voltage,
+        input_name,
+        output_name: out_name,
+    })
+}
+
+/// NaN at every sample marked missing.
+fn mark_missing(y: &mut [f64], missing: &[bool]) {
+    for (v, m) in y.iter_mut().zip(missing) {
+        if *m {
+            *v = f64::NAN;
+        }
+    }
+}
+
+/// Holds the last finite value across gaps (leading gaps take the first finite value).
+fn fill_gaps(mut x: Vec<f64>) -> Vec<f64> {
+    let first = x
+        .iter()
+        .copied()
+        .find(|v| v.is_finite())
+        .unwrap_or(f64::NAN);
+    let mut last = first;
+    for v in x.iter_mut() {
+        if v.is_finite() {
+            last = *v;
+        } else {
+            *v = last;
+        }
+    }
+    x
 }

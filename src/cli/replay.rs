@@ -1,14 +1,104 @@
-//! `propid replay` (not written yet).
+//! `propid replay FILE [--config F]`: a recording through the daemon's decoder and worker.
+//!
+//! The same sampler (without commands) and the same worker as `propid run`, so the replay of a
+//! run's recording publishes the same model lines. Progress goes to stderr when stderr is a
+//! terminal.
 
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use super::run::{daemon_error, load_config};
 use super::CliError;
+use crate::daemon::runner::{self, RunParts};
+use crate::daemon::source::{RecordingSource, Source, SourceError};
+use crate::daemon::{Publisher, Shutdown};
 
 /// Arguments of `propid replay`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// The recording (raw TSP/1 bytes, as `propid run --record` or `propid sim --record` wrote).
+    pub file: PathBuf,
+    /// Configuration file (the `[identify]` and `[publish]` tables apply).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Deliver the recording in reads of at most this many bytes (1 = byte at a time).
+    #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u64).range(1..=16_777_216))]
+    pub chunk: u64,
+}
 
 /// Runs `propid replay`.
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::Usage(
-        "propid replay is not implemented yet".into(),
-    ))
+pub fn run(args: Args) -> Result<(), CliError> {
+    let cfg = load_config(args.config.as_ref())?;
+    let shutdown = Shutdown::install().map_err(daemon_error)?;
+    let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg).map_err(daemon_error)?;
+    let source = RecordingSource::open(&args.file, args.chunk as usize)
+        .map_err(|e| CliError::Input(e.to_string()))?;
+    let source: Box<dyn Source> = if std::io::stderr().is_terminal() {
+        Box::new(Progress::new(source))
+    } else {
+        Box::new(source)
+    };
+    let publisher = Publisher::open(&cfg.publish).map_err(daemon_error)?;
+    let parts = RunParts {
+        source,
+        plan: None,
+        identifier,
+        publisher,
+        record: None,
+        shutdown,
+    };
+    runner::run(&cfg, parts).map_err(daemon_error)?;
+    Ok(())
+}
+
+/// A recording that reports how far it got on stderr, at most every 200 ms.
+struct Progress {
+    inner: RecordingSource,
+    last: Instant,
+}
+
+impl Progress {
+    fn new(inner: RecordingSource) -> Progress {
+        Progress {
+            inner,
+            last: Instant::now(),
+        }
+    }
+
+    fn show(&self, done: bool) {
+        let (pos, total) = self.inner.progress();
+        let pct = if total == 0 {
+            100.0
+        } else {
+            100.0 * pos as f64 / total as f64
+        };
+        let end = if done { "\n" } else { "" };
+        eprint!("\rreplay: {pct:5.1} % of {} bytes{end}", total);
+    }
+}
+
+impl Source for Progress {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
+        let r = self.inner.read(buf);
+        if matches!(r, Err(SourceError::Finished { .. })) {
+            self.show(true);
+        } else if self.last.elapsed() >= Duration::from_millis(200) {
+            self.last = Instant::now();
+            self.show(false);
+        }
+        r
+    }
+    fn write_all(&mut self, bytes: &[u8]) -> Result<(), SourceError> {
+        self.inner.write_all(bytes)
+    }
+    fn reconnect(&mut self) -> Result<(), SourceError> {
+        self.inner.reconnect()
+    }
+    fn is_live(&self) -> bool {
+        self.inner.is_live()
+    }
+    fn describe(&self) -> String {
+        self.inner.describe()
+    }
 }

@@ -1,12 +1,86 @@
-//! `propid run` (not written yet).
+//! `propid run [--config F] [--port PATH] [--record FILE]`: the daemon against a stand.
+//!
+//! Opens the serial port (timeout always set), starts the experiment plan (handshake, arm,
+//! operating points, pulses, heartbeats), identifies after every K pulses and publishes JSON
+//! lines (stdout, file, UNIX socket as configured). `--record` stores the raw bytes received,
+//! for `propid replay`. Ctrl-C / SIGTERM: STOP until acknowledged, flush, stats line, exit 0.
+
+use std::path::PathBuf;
 
 use super::CliError;
+use crate::daemon::runner::{self, RunParts};
+use crate::daemon::source::SerialSource;
+use crate::daemon::{Config, DaemonError, Publisher, Shutdown};
 
 /// Arguments of `propid run`.
 #[derive(Debug, clap::Args)]
-pub struct Args {}
+pub struct Args {
+    /// Configuration file (TOML, see config/propid.toml); built-in defaults without it.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Serial device of the stand (overrides `device.port`).
+    #[arg(long)]
+    pub port: Option<String>,
+    /// Store the raw bytes received in FILE (overrides `daemon.record`).
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+}
+
+/// Maps a daemon error to the CLI's error classes and exit codes.
+pub fn daemon_error(e: DaemonError) -> CliError {
+    match e {
+        DaemonError::Config(e) => CliError::Config(e.to_string()),
+        DaemonError::Source(e) => CliError::Device(e.to_string()),
+        DaemonError::LinkFailed(m) => CliError::Device(format!("link failed: {m}")),
+        DaemonError::Io { context, source } => CliError::Io { context, source },
+        e @ (DaemonError::Publish(_) | DaemonError::Signal(_) | DaemonError::Internal(_)) => {
+            CliError::Io {
+                context: "propid".into(),
+                source: std::io::Error::other(e.to_string()),
+            }
+        }
+        DaemonError::Identify(m) => CliError::Identification(m),
+    }
+}
+
+/// Loads the configuration (defaults without a file).
+pub fn load_config(path: Option<&PathBuf>) -> Result<Config, CliError> {
+    match path {
+        Some(p) => Config::load(p).map_err(|e| CliError::Config(e.to_string())),
+        None => Ok(Config::default()),
+    }
+}
 
 /// Runs `propid run`.
-pub fn run(_args: Args) -> Result<(), CliError> {
-    Err(CliError::Usage("propid run is not implemented yet".into()))
+pub fn run(args: Args) -> Result<(), CliError> {
+    let mut cfg = load_config(args.config.as_ref())?;
+    if let Some(p) = args.port {
+        cfg.device.port = p;
+    }
+    if let Some(r) = args.record {
+        cfg.daemon.record = Some(r);
+    }
+    let shutdown = Shutdown::install().map_err(daemon_error)?;
+    let plan = crate::daemon::plan::from_config(&cfg).map_err(daemon_error)?;
+    let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg).map_err(daemon_error)?;
+    let source = SerialSource::open(&cfg.device.port, cfg.device.baud, cfg.device.read_timeout)
+        .map_err(|e| CliError::Device(e.to_string()))?;
+    let record = match &cfg.daemon.record {
+        Some(p) => Some(
+            std::fs::File::create(p)
+                .map_err(|e| CliError::io(format!("create recording {}", p.display()), e))?,
+        ),
+        None => None,
+    };
+    let publisher = Publisher::open(&cfg.publish).map_err(daemon_error)?;
+    let parts = RunParts {
+        source: Box::new(source),
+        plan: Some(plan),
+        identifier,
+        publisher,
+        record,
+        shutdown,
+    };
+    runner::run(&cfg, parts).map_err(daemon_error)?;
+    Ok(())
 }

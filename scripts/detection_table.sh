@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Produces the detection table of `propid diagnose` (issue 5) and the real-data table, and puts
+# both into docs/diagnose.md between the markers
+#   <!-- detection-table:begin --> ... <!-- detection-table:end -->
+# Nothing in those tables is typed by hand.
+#
+# Usage: scripts/detection_table.sh [CASES] [DATA_DIR]
+#   CASES     seeded synthetic cases per effect (default 20; clean cases: max(CASES, 50))
+#   DATA_DIR  the real datasets (default ../shared/data; skipped with a message when absent)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cases="${1:-20}"
+data="${2:-../shared/data}"
+doc=docs/diagnose.md
+table="$(mktemp)"
+trap 'rm -f "$table"' EXIT
+cargo run --quiet --release --example detection_table -- "$cases" "$data" > "$table"
+if ! grep -q '<!-- detection-table:begin -->' "$doc"; then
+    echo "$doc lacks the detection-table markers" >&2
+    exit 1
+fi
+{
+    sed '/<!-- detection-table:begin -->/q' "$doc"
+    echo
+    echo "_Produced by \`scripts/detection_table.sh $cases\` on $(date -u +%Y-%m-%d)._"
+    echo
+    cat "$table"
+    echo
+    sed -n '/<!-- detection-table:end -->/,$p' "$doc"
+} > "$doc.new"
+mv "$doc.new" "$doc"
+echo "updated $doc" >&2

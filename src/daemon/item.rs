@@ -1,0 +1,169 @@
+//! What the sampler hands the worker over the bounded queue.
+//!
+//! Items are small `Copy` values (no heap), so queueing one never allocates. Samples carry
+//! their unwrapped device index and time; gaps and new segments travel as their own items so
+//! the worker never bridges them.
+
+use std::time::Instant;
+
+/// SAMPLE flag bits (PROTOCOL.md §3).
+pub mod flags {
+    /// The motor is armed.
+    pub const ARMED: u16 = 1 << 0;
+    /// A device-timed pulse is being applied.
+    pub const IMPULSE_ACTIVE: u16 = 1 << 6;
+    /// A throttle ramp is running.
+    pub const RAMP_ACTIVE: u16 = 1 << 7;
+    /// The watchdog tripped.
+    pub const WATCHDOG_TRIPPED: u16 = 1 << 8;
+}
+
+/// One decoded, placed SAMPLE.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SampleItem {
+    /// Unwrapped sample index within the segment.
+    pub index: u64,
+    /// Unwrapped device time, µs.
+    pub t_us: u64,
+    /// Throttle applied during the sample period, raw 0..10000.
+    pub throttle_raw: u16,
+    /// Flags as sent.
+    pub flags: u16,
+    /// Thrust, N (NaN if not valid).
+    pub thrust_n: f32,
+    /// Torque, N·m (NaN if not valid).
+    pub torque_nm: f32,
+    /// Rotor speed, rev/min (NaN if not valid).
+    pub rpm: f32,
+    /// When the sampler decoded it (for latency measurements only; never published).
+    pub received: Instant,
+}
+
+impl SampleItem {
+    /// Throttle as a fraction 0..1.
+    pub fn throttle(&self) -> f64 {
+        f64::from(self.throttle_raw) / 10_000.0
+    }
+
+    /// Whether a flag bit is set.
+    pub fn has(&self, flag: u16) -> bool {
+        self.flags & flag != 0
+    }
+}
+
+/// A device EVENT, placed in the segment's numbering.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EventItem {
+    /// Event code (PROTOCOL.md §3, 0x44).
+    pub code: u8,
+    /// Code-specific argument.
+    pub arg: u16,
+    /// Unwrapped device time, µs.
+    pub t_us: u64,
+    /// Unwrapped sample index.
+    pub sample_index: u64,
+}
+
+/// A fact about the link, published as an `"event"` or `"warning"` line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Notice {
+    /// The link dropped.
+    Disconnected,
+    /// The link was reopened.
+    Reconnected,
+    /// STOP was acknowledged at shutdown.
+    Stopped,
+    /// STOP was not acknowledged within the shutdown timeout.
+    StopUnacknowledged,
+}
+
+impl Notice {
+    /// Name used in the published line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Notice::Disconnected => "disconnected",
+            Notice::Reconnected => "reconnected",
+            Notice::Stopped => "shutdown_stop_acknowledged",
+            Notice::StopUnacknowledged => "shutdown_stop_unacknowledged",
+        }
+    }
+
+    /// Whether it is published as a warning rather than an event.
+    pub fn is_warning(self) -> bool {
+        matches!(self, Notice::Disconnected | Notice::StopUnacknowledged)
+    }
+}
+
+/// What the experiment plan reported, published as an `"event"` or `"warning"` line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlanNote {
+    /// Handshake done.
+    Connected {
+        /// The device's boot id.
+        boot_id: u32,
+    },
+    /// ARM acknowledged.
+    Armed,
+    /// An operating point is reached and settled.
+    LevelReached {
+        /// Index in the configured list.
+        index: usize,
+        /// Throttle fraction.
+        level: f64,
+    },
+    /// A pulse was acknowledged (not published: pulses are counted).
+    PulseFired,
+    /// The pulses at an operating point are done.
+    LevelDone {
+        /// Index in the configured list.
+        index: usize,
+        /// Throttle fraction.
+        level: f64,
+    },
+    /// All operating points done, ramped down, disarmed.
+    Finished,
+    /// STOP acknowledged.
+    Stopped,
+    /// The device reset; the plan is over and does not re-arm.
+    DeviceReset {
+        /// The new boot id.
+        new_boot_id: u32,
+    },
+    /// The device's watchdog stopped the motor; the plan is over.
+    WatchdogTripped,
+    /// The device refused a command the plan needs; the plan is over.
+    Refused {
+        /// Protocol name of the command.
+        command: &'static str,
+    },
+    /// A command went unanswered after its re-sends.
+    LinkFailed {
+        /// Protocol name of the command.
+        command: &'static str,
+    },
+}
+
+/// One item on the sampler → worker queue.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Item {
+    /// A sample.
+    Sample(SampleItem),
+    /// `count` samples before index `before` were lost.
+    Gap {
+        /// The index of the first sample after the gap.
+        before: u64,
+        /// Samples lost.
+        count: u64,
+    },
+    /// A new segment (device boot) starts with the next sample.
+    Segment {
+        /// The device's boot id (0 if the segment was inferred from the index going back).
+        boot_id: u32,
+    },
+    /// A device event.
+    Event(EventItem),
+    /// A link fact.
+    Notice(Notice),
+    /// An experiment-plan fact.
+    Plan(PlanNote),
+}

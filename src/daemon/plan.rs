@@ -1,0 +1,116 @@
+//! The experiment plan as the sampler drives it: the pure [`Experiment`] state machine
+//! (`crate::experiment`) behind the sampler's [`Plan`] trait.
+//!
+//! The sampler gives it the host clock and every device frame, sends what it asks for, and
+//! turns its notices into published lines. After a device reset, a watchdog trip or a refused
+//! command the plan is over and never re-arms; the daemon keeps sampling (passively) until it
+//! is stopped. A failed link (a command unanswered after its re-sends) ends the run.
+
+use crate::experiment::{Experiment, ExperimentConfig, Notice, Output};
+use crate::protocol::message::{Frame, Message};
+
+use super::config::Config;
+use super::item::PlanNote;
+use super::sampler::{Plan, PlanStatus};
+use super::DaemonError;
+
+/// The experiment plan with the bookkeeping the sampler needs.
+pub struct ExperimentPlan {
+    exp: Experiment,
+    started: bool,
+    link_failed: bool,
+}
+
+/// Builds the plan from the config's `[experiment]` table (its keys are the plan's own).
+pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
+    let ecfg: ExperimentConfig = cfg.experiment.clone().try_into().map_err(|e| {
+        DaemonError::Config(super::ConfigError::Parse {
+            origin: "[experiment]".into(),
+            message: format!("{e}"),
+        })
+    })?;
+    from_experiment(ecfg)
+}
+
+/// Builds the plan from an experiment configuration (validated here).
+pub fn from_experiment(ecfg: ExperimentConfig) -> Result<Box<dyn Plan>, DaemonError> {
+    let exp = Experiment::new(ecfg, 1).map_err(|e| {
+        DaemonError::Config(super::ConfigError::Parse {
+            origin: "[experiment]".into(),
+            message: e.to_string(),
+        })
+    })?;
+    Ok(Box::new(ExperimentPlan {
+        exp,
+        started: false,
+        link_failed: false,
+    }))
+}
+
+/// Translates the plan's notice into what the worker publishes.
+fn note(n: &Notice) -> PlanNote {
+    match *n {
+        Notice::Connected { boot_id, .. } => PlanNote::Connected { boot_id },
+        Notice::Armed => PlanNote::Armed,
+        Notice::LevelReached { index, level } => PlanNote::LevelReached { index, level },
+        Notice::PulseFired { .. } => PlanNote::PulseFired,
+        Notice::LevelDone { index, level, .. } => PlanNote::LevelDone { index, level },
+        Notice::Finished => PlanNote::Finished,
+        Notice::Stopped => PlanNote::Stopped,
+        Notice::DeviceReset { new_boot_id, .. } => PlanNote::DeviceReset { new_boot_id },
+        Notice::WatchdogTripped => PlanNote::WatchdogTripped,
+        Notice::Refused { command, .. } => PlanNote::Refused { command },
+        Notice::LinkFailed { command, .. } => PlanNote::LinkFailed { command },
+    }
+}
+
+impl Plan for ExperimentPlan {
+    fn on_connect(&mut self, now_us: u64) {
+        // The plan's handshake runs once; after a reconnect the next HELLO tells whether the
+        // device is the same boot (the plan goes on) or reset (the plan halts, never re-arms).
+        if !self.started {
+            self.started = true;
+            self.exp.start(now_us);
+        }
+    }
+
+    fn on_frame(&mut self, now_us: u64, frame: &Frame) {
+        self.exp.on_frame(frame, now_us);
+    }
+
+    fn poll(&mut self, now_us: u64) {
+        self.exp.poll(now_us);
+    }
+
+    fn abort(&mut self, now_us: u64) {
+        if !self.exp.is_over() {
+            self.exp.abort(now_us);
+        }
+    }
+
+    fn next(&mut self, send: &mut dyn FnMut(u16, &Message), notes: &mut dyn FnMut(PlanNote)) {
+        while let Some(o) = self.exp.next_output() {
+            match o {
+                Output::Send { seq, msg } => send(seq, &msg),
+                Output::Notice(n) => {
+                    if matches!(n, Notice::LinkFailed { .. }) {
+                        self.link_failed = true;
+                    }
+                    notes(note(&n));
+                }
+            }
+        }
+    }
+
+    fn status(&self) -> PlanStatus {
+        if self.link_failed {
+            PlanStatus::LinkFailed
+        } else if self.exp.phase() == crate::experiment::Phase::Done {
+            PlanStatus::Done
+        } else if self.exp.is_over() {
+            PlanStatus::Halted
+        } else {
+            PlanStatus::Running
+        }
+    }
+}

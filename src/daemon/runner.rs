@@ -1,0 +1,210 @@
+//! Wires a run together: sampler thread → bounded queue → worker thread → publisher, then the
+//! final stats line. `propid run`, `propid replay` and `propid demo` all go through [`run`].
+
+use crossbeam_channel::bounded;
+use std::fs::File;
+use std::time::Instant;
+
+use super::config::Config;
+use super::publish::Publisher;
+use super::sampler::{Plan, Sampler, SamplerConfig};
+use super::shutdown::Shutdown;
+use super::source::Source;
+use super::stats::{LinkStats, StatsLine, WorkStats};
+use super::window::{OutputChannel, Window};
+use super::worker::{Identifier, Worker};
+use super::DaemonError;
+
+/// What a finished run reports.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// Link counters.
+    pub link: LinkStats,
+    /// Worker counters.
+    pub work: WorkStats,
+    /// Latencies from a window's last sample to its published model line, s, sorted.
+    pub latencies_s: Vec<f64>,
+    /// Wall-clock duration, s.
+    pub elapsed_s: f64,
+}
+
+impl RunSummary {
+    /// The `q`-quantile (0..1) of the latencies, s (NaN without models).
+    pub fn latency_quantile(&self, q: f64) -> f64 {
+        quantile(&self.latencies_s, q)
+    }
+}
+
+/// The `q`-quantile of sorted values (nearest rank), NaN when empty.
+pub fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let i = ((sorted.len() as f64 - 1.0) * q.clamp(0.0, 1.0)).round() as usize;
+    sorted[i]
+}
+
+/// Everything a run needs besides the configuration.
+pub struct RunParts<I: Identifier> {
+    /// The byte source (serial port, pty, recording).
+    pub source: Box<dyn Source>,
+    /// The experiment plan (live runs), or none (replay, passive benches).
+    pub plan: Option<Box<dyn Plan>>,
+    /// The identifier, sized at start-up.
+    pub identifier: I,
+    /// Where lines go.
+    pub publisher: Publisher,
+    /// Raw-byte recording of everything received.
+    pub record: Option<File>,
+    /// The stop flag.
+    pub shutdown: Shutdown,
+}
+
+/// Runs the sampler and the worker until the source ends, the plan finishes, or a stop is
+/// requested; then publishes the final stats line and flushes every output.
+pub fn run<I: Identifier + 'static>(
+    cfg: &Config,
+    parts: RunParts<I>,
+) -> Result<RunSummary, DaemonError> {
+    let start = Instant::now();
+    let channel = OutputChannel::from_name(&cfg.identify.output).unwrap_or(OutputChannel::Thrust);
+    let window = Window::new(
+        cfg.identify.max_window_samples,
+        cfg.identify.pulses_per_model as usize,
+        cfg.identify.level_tolerance,
+        channel,
+    );
+    let (tx, rx) = bounded(cfg.daemon.queue_capacity);
+    let worker = Worker::new(window, parts.identifier, parts.publisher);
+    let worker = std::thread::Builder::new()
+        .name("propid-worker".into())
+        .spawn(move || worker.run(rx))
+        .map_err(|e| DaemonError::io("spawn the worker thread", e))?;
+    let sampler = Sampler::new(
+        parts.source,
+        tx,
+        parts.plan,
+        parts.record,
+        parts.shutdown,
+        SamplerConfig {
+            stop_timeout: cfg.daemon.stop_timeout,
+            max_run: cfg.daemon.max_run,
+            reconnect_initial: cfg.device.reconnect_initial,
+            reconnect_max: cfg.device.reconnect_max,
+        },
+    );
+    let sampler = std::thread::Builder::new()
+        .name("propid-sampler".into())
+        .spawn(move || sampler.run())
+        .map_err(|e| DaemonError::io("spawn the sampler thread", e))?;
+    // The sampler drops its sender when it ends, which ends the worker.
+    let sampled = sampler
+        .join()
+        .map_err(|_| DaemonError::Internal("the sampler thread panicked".into()))?;
+    let worked = worker
+        .join()
+        .map_err(|_| DaemonError::Internal("the worker thread panicked".into()))?;
+    let mut publisher = worked.publisher;
+    let elapsed_s = start.elapsed().as_secs_f64();
+    let line = StatsLine::new(
+        &sampled.stats,
+        &worked.stats,
+        publisher.dropped_clients(),
+        elapsed_s,
+    );
+    let mut value = serde_json::to_value(&line)
+        .map_err(|e| DaemonError::Publish(format!("stats line: {e}")))?;
+    value["latency_s"] = serde_json::json!({
+        "p50": nan_null(quantile(&worked.latencies_s, 0.5)),
+        "p99": nan_null(quantile(&worked.latencies_s, 0.99)),
+    });
+    publisher.publish_json(&value)?;
+    publisher.close();
+    if let Some(e) = sampled.error.or(worked.error) {
+        return Err(e);
+    }
+    Ok(RunSummary {
+        link: sampled.stats,
+        work: worked.stats,
+        latencies_s: worked.latencies_s,
+        elapsed_s,
+    })
+}
+
+fn nan_null(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        serde_json::json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quantiles_by_nearest_rank() {
+        let v: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(quantile(&v, 0.5), 51.0);
+        assert_eq!(quantile(&v, 0.99), 99.0);
+        assert!(quantile(&[], 0.5).is_nan());
+    }
+}
+
+#[cfg(test)]
+mod replay_tests {
+    use super::*;
+    use crate::daemon::identify::CoreIdentifier;
+    use crate::daemon::source::RecordingSource;
+    use crate::daemon::synth::{synth_stream, SynthConfig};
+    use std::path::Path;
+
+    fn replay(bytes: Vec<u8>, chunk: usize) -> (RunSummary, Vec<serde_json::Value>) {
+        let cfg = Config::default();
+        let (publisher, lines) = Publisher::capture();
+        let parts = RunParts {
+            source: Box::new(RecordingSource::from_bytes(
+                Path::new("synth"),
+                bytes,
+                chunk,
+            )),
+            plan: None,
+            identifier: CoreIdentifier::new(&cfg).unwrap(),
+            publisher,
+            record: None,
+            shutdown: Shutdown::manual(),
+        };
+        let summary = run(&cfg, parts).unwrap();
+        let lines = lines
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        (summary, lines)
+    }
+
+    #[test]
+    fn replay_of_a_clean_synthetic_stream_recovers_the_plant() {
+        let cfg = SynthConfig::default();
+        let (bytes, facts) = synth_stream(&cfg);
+        let (summary, lines) = replay(bytes, 4096);
+        assert_eq!(summary.link.samples, facts.samples_sent);
+        assert_eq!(summary.link.samples_lost, 0);
+        let models: Vec<_> = lines.iter().filter(|l| l["type"] == "model").collect();
+        assert_eq!(models.len(), 6, "{lines:#?}");
+        for m in &models {
+            let f = m["fn_hz"].as_f64().unwrap();
+            let z = m["zeta"].as_f64().unwrap();
+            let g = m["dc_gain"].as_f64().unwrap();
+            // f32 thrust on the wire limits the accuracy to ~1e-5 relative
+            assert!((f - 25.0).abs() < 1e-3, "fn {f}");
+            assert!((z - 0.5).abs() < 1e-4, "zeta {z}");
+            assert!((g - 8.0).abs() < 1e-3, "gain {g}");
+        }
+        let last = lines.last().unwrap();
+        assert_eq!(last["type"], "stats");
+        assert_eq!(lines[lines.len() - 2]["type"], "schedule");
+    }
+}

@@ -1,0 +1,448 @@
+//! The sampler: reads the source, decodes TSP/1, places samples, drives the plan, never blocks.
+//!
+//! One loop, each turn bounded by the source's read timeout (≤ 50 ms):
+//! 1. read whatever bytes are there (`Ok(0)` = nothing yet); append them to the raw recording;
+//! 2. push them through the protocol [`Decoder`] (fixed buffer, counts every drop by kind);
+//! 3. for each frame: HELLO → new segment if its `boot_id` changed; SAMPLE → unwrapped clock and
+//!    index, gaps handed on as [`Item::Gap`], the sample queued; EVENT → queued; every frame is
+//!    shown to the experiment plan (ACKs, state);
+//! 4. ask the plan for due commands (heartbeats every 100 ms, pulses, re-sends) and write them.
+//!
+//! Queueing to the worker uses `try_send` on a bounded channel when the source is live: a full
+//! queue drops the item and counts an overflow, so the sampler never waits for the worker and
+//! never falls behind the device. For a recording (replay) there is no device to fall behind
+//! and the sampler waits instead (lossless).
+//!
+//! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
+//! exponential backoff; the plan is told, does a HELLO handshake again and never re-arms by
+//! itself. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
+//! acknowledges it or the stop timeout passes.
+
+use crossbeam_channel::{Sender, TrySendError};
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::time::{Duration, Instant};
+
+use super::item::{EventItem, Item, Notice, PlanNote, SampleItem};
+use super::shutdown::Shutdown;
+use super::source::{Backoff, Source, SourceError};
+use super::stats::LinkStats;
+use super::tracker::Tracker;
+use super::DaemonError;
+use crate::protocol::message::{msg_type, Frame, Message};
+use crate::protocol::{encode_frame, DecodeStats, Decoder, MAX_FRAME_LEN};
+
+/// Where the experiment stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlanStatus {
+    /// Still running.
+    Running,
+    /// Finished: ramped down and disarmed. The run ends.
+    Done,
+    /// Over (device reset, watchdog trip, refusal, stop): no more commands, sampling goes on.
+    Halted,
+    /// The device stopped acknowledging commands. The run ends with an error.
+    LinkFailed,
+}
+
+/// The host-side experiment as the sampler drives it (implemented over `crate::experiment` in
+/// [`super::plan`]). Pure: it is given the host time and the device's frames, and says what to
+/// send and what happened.
+pub trait Plan: Send {
+    /// The link was (re)opened.
+    fn on_connect(&mut self, now_us: u64);
+    /// A frame from the device.
+    fn on_frame(&mut self, now_us: u64, frame: &Frame);
+    /// Timers (heartbeats, re-sends, waits).
+    fn poll(&mut self, now_us: u64);
+    /// Stop the motor now (shutdown): the plan sends STOP.
+    fn abort(&mut self, now_us: u64);
+    /// Drains what the plan wants sent (`(seq, message)`; a re-send keeps its seq) and what it
+    /// reports.
+    fn next(&mut self, send: &mut dyn FnMut(u16, &Message), notes: &mut dyn FnMut(PlanNote));
+    /// Where the plan stands.
+    fn status(&self) -> PlanStatus;
+}
+
+/// Sampler settings.
+#[derive(Debug, Clone)]
+pub struct SamplerConfig {
+    /// Longest time to send STOP at shutdown.
+    pub stop_timeout: Duration,
+    /// Stop after this long (graceful, with STOP).
+    pub max_run: Option<Duration>,
+    /// First reconnect delay.
+    pub reconnect_initial: Duration,
+    /// Longest reconnect delay.
+    pub reconnect_max: Duration,
+}
+
+/// What the sampler hands back.
+pub struct SamplerOutcome {
+    /// Link counters.
+    pub stats: LinkStats,
+    /// Why it stopped with an error, if it did.
+    pub error: Option<DaemonError>,
+}
+
+/// STOP re-send period (PROTOCOL.md §4: re-send after 50 ms without ACK).
+const RESEND: Duration = Duration::from_millis(50);
+
+/// Seq of the shutdown STOP when no plan assigns one.
+const STOP_SEQ: u16 = 0xFFF0;
+
+/// Frame handling, separate from the decoder so both can be borrowed at once.
+struct Handler {
+    tx: Sender<Item>,
+    lossless: bool,
+    tracker: Tracker,
+    stats: LinkStats,
+    plan: Option<Box<dyn Plan>>,
+    segment_announced: bool,
+    awaiting_stop: Option<u16>,
+    stop_acked: bool,
+    now_us: u64,
+}
+
+impl Handler {
+    fn send(&mut self, item: Item) {
+        if self.lossless {
+            let _ = self.tx.send(item);
+            return;
+        }
+        match self.tx.try_send(item) {
+            Ok(()) => {}
+            Err(TrySendError::Full(_)) => self.stats.overflows += 1,
+            Err(TrySendError::Disconnected(_)) => {}
+        }
+    }
+
+    fn on_frame(&mut self, frame: Frame) {
+        match &frame.msg {
+            Message::Hello(h) if self.tracker.hello(h.boot_id) => {
+                self.segment_announced = true;
+                self.send(Item::Segment { boot_id: h.boot_id });
+            }
+            Message::Sample(s) => {
+                self.stats.samples += 1;
+                let placed = self.tracker.sample(s.sample_index, s.t_us);
+                if placed.new_segment {
+                    if !std::mem::take(&mut self.segment_announced) {
+                        self.send(Item::Segment { boot_id: 0 });
+                    }
+                } else if placed.lost_before > 0 {
+                    self.send(Item::Gap {
+                        before: placed.index,
+                        count: placed.lost_before,
+                    });
+                }
+                let item = SampleItem {
+                    index: placed.index,
+                    t_us: placed.t_us,
+                    throttle_raw: s.throttle,
+                    flags: s.flags.bits(),
+                    thrust_n: valid(s.thrust_n, s.flags.bits(), 1 << 1),
+                    torque_nm: valid(s.torque_nm, s.flags.bits(), 1 << 2),
+                    rpm: valid(s.rpm, s.flags.bits(), 1 << 3),
+                    received: Instant::now(),
+                };
+                self.send(Item::Sample(item));
+            }
+            Message::Event(e) => {
+                let item = EventItem {
+                    code: e.code.to_u8(),
+                    arg: e.arg,
+                    t_us: self.tracker.event_time(e.t_us),
+                    sample_index: self.tracker.event_index(e.sample_index),
+                };
+                self.send(Item::Event(item));
+            }
+            Message::Ack(a)
+                if Some(a.cmd_seq) == self.awaiting_stop && a.cmd_type == msg_type::STOP =>
+            {
+                self.stop_acked = true;
+            }
+            _ => {}
+        }
+        if let Some(plan) = self.plan.as_mut() {
+            plan.on_frame(self.now_us, &frame);
+        }
+    }
+}
+
+/// A measurement whose VALID flag is clear is "not measured": NaN.
+fn valid(v: f32, flags: u16, bit: u16) -> f32 {
+    if flags & bit != 0 {
+        v
+    } else {
+        f32::NAN
+    }
+}
+
+/// The sampler thread's state.
+pub struct Sampler {
+    source: Box<dyn Source>,
+    decoder: Decoder,
+    handler: Handler,
+    record: Option<BufWriter<File>>,
+    shutdown: Shutdown,
+    cfg: SamplerConfig,
+    start: Instant,
+    buf: Box<[u8; 4096]>,
+    cmd: [u8; MAX_FRAME_LEN],
+}
+
+impl Sampler {
+    /// A sampler over `source`, queueing to `tx`, optionally driving `plan` and recording.
+    pub fn new(
+        source: Box<dyn Source>,
+        tx: Sender<Item>,
+        plan: Option<Box<dyn Plan>>,
+        record: Option<File>,
+        shutdown: Shutdown,
+        cfg: SamplerConfig,
+    ) -> Sampler {
+        let lossless = !source.is_live();
+        Sampler {
+            source,
+            decoder: Decoder::new(),
+            handler: Handler {
+                tx,
+                lossless,
+                tracker: Tracker::default(),
+                stats: LinkStats::default(),
+                plan,
+                segment_announced: false,
+                awaiting_stop: None,
+                stop_acked: false,
+                now_us: 0,
+            },
+            record: record.map(|f| BufWriter::with_capacity(1 << 16, f)),
+            shutdown,
+            cfg,
+            start: Instant::now(),
+            buf: Box::new([0u8; 4096]),
+            cmd: [0u8; MAX_FRAME_LEN],
+        }
+    }
+
+    /// Runs until the source ends, the plan finishes, the run time is up or a stop is requested.
+    pub fn run(mut self) -> SamplerOutcome {
+        let error = self.run_loop().err();
+        if let Some(r) = self.record.as_mut() {
+            let _ = r.flush();
+        }
+        self.finish_stats();
+        SamplerOutcome {
+            stats: self.handler.stats,
+            error,
+        }
+    }
+
+    fn run_loop(&mut self) -> Result<(), DaemonError> {
+        let live = self.source.is_live();
+        if live {
+            let now = self.now_us();
+            if let Some(p) = self.handler.plan.as_mut() {
+                p.on_connect(now);
+            }
+        }
+        loop {
+            if self.shutdown.requested() || self.time_up() {
+                if live {
+                    self.stop_device()?;
+                }
+                return Ok(());
+            }
+            match self.read_once() {
+                Ok(()) => {}
+                Err(SourceError::Finished { .. }) => return Ok(()),
+                Err(SourceError::Disconnected { .. }) => self.reconnect()?,
+                Err(e @ SourceError::Open { .. }) => return Err(e.into()),
+            }
+            if live {
+                self.drive_plan()?;
+            }
+            match self.handler.plan.as_ref().map(|p| p.status()) {
+                Some(PlanStatus::Done) => return Ok(()),
+                Some(PlanStatus::LinkFailed) => {
+                    let _ = self.stop_device();
+                    return Err(DaemonError::LinkFailed(format!(
+                        "{} stopped acknowledging commands",
+                        self.source.describe()
+                    )));
+                }
+                _ => {}
+            }
+        }
+    }
+
+    fn now_us(&self) -> u64 {
+        self.start.elapsed().as_micros() as u64
+    }
+
+    fn time_up(&self) -> bool {
+        self.cfg.max_run.is_some_and(|m| self.start.elapsed() >= m)
+    }
+
+    /// One read, its recording and its frames.
+    fn read_once(&mut self) -> Result<(), SourceError> {
+        let n = self.source.read(&mut self.buf[..])?;
+        if n == 0 {
+            return Ok(());
+        }
+        if let Some(r) = self.record.as_mut() {
+            if r.write_all(&self.buf[..n]).is_err() {
+                self.record = None; // a full disk must not stop the stand; stats show bytes
+            }
+        }
+        self.handler.stats.bytes += n as u64;
+        self.handler.now_us = self.now_us();
+        let handler = &mut self.handler;
+        self.decoder.push(&self.buf[..n], |f| handler.on_frame(f));
+        Ok(())
+    }
+
+    /// Sends the plan's due commands and queues its notes.
+    fn drive_plan(&mut self) -> Result<(), DaemonError> {
+        let now = self.now_us();
+        let Some(plan) = self.handler.plan.as_mut() else {
+            return Ok(());
+        };
+        plan.poll(now);
+        match self.send_plan_output() {
+            None => Ok(()),
+            Some(SourceError::Disconnected { .. }) => self.reconnect(),
+            Some(e) => Err(e.into()),
+        }
+    }
+
+    /// Writes what the plan wants sent; returns the first write error.
+    fn send_plan_output(&mut self) -> Option<SourceError> {
+        let plan = self.handler.plan.as_mut()?;
+        let mut failed = None;
+        let mut notes: Vec<PlanNote> = Vec::new();
+        let source = &mut self.source;
+        let cmd = &mut self.cmd;
+        let awaiting = &mut self.handler.awaiting_stop;
+        plan.next(
+            &mut |seq, msg| {
+                if matches!(msg, Message::Stop) && awaiting.is_none() {
+                    *awaiting = Some(seq);
+                }
+                if failed.is_some() {
+                    return;
+                }
+                let n = encode_frame(seq, msg, &mut cmd[..]);
+                if let Err(e) = source.write_all(&cmd[..n]) {
+                    failed = Some(e);
+                }
+            },
+            &mut |n| notes.push(n),
+        );
+        for n in notes {
+            self.handler.send(Item::Plan(n));
+        }
+        failed
+    }
+
+    /// Reopens the source with backoff until it works or a stop is requested.
+    fn reconnect(&mut self) -> Result<(), DaemonError> {
+        self.handler.send(Item::Notice(Notice::Disconnected));
+        let mut backoff = Backoff::new(self.cfg.reconnect_initial, self.cfg.reconnect_max);
+        loop {
+            if self.shutdown.requested() || self.time_up() {
+                return Ok(()); // the main loop sees the request; STOP cannot reach anyone
+            }
+            sleep_unless(&self.shutdown, backoff.next_delay());
+            match self.source.reconnect() {
+                Ok(()) => break,
+                Err(SourceError::Finished { .. }) => return Ok(()),
+                Err(_) => continue,
+            }
+        }
+        self.handler.stats.reconnects += 1;
+        self.handler.send(Item::Notice(Notice::Reconnected));
+        let now = self.now_us();
+        if let Some(p) = self.handler.plan.as_mut() {
+            p.on_connect(now);
+        }
+        Ok(())
+    }
+
+    /// Sends STOP until acknowledged or the stop timeout passes: through the plan when there is
+    /// one (so it stops its heartbeats and pulses), re-sent every 50 ms with the same seq.
+    fn stop_device(&mut self) -> Result<(), DaemonError> {
+        let now = self.now_us();
+        self.handler.awaiting_stop = None;
+        if let Some(p) = self.handler.plan.as_mut() {
+            p.abort(now);
+        }
+        let _ = self.send_plan_output();
+        let seq = match self.handler.awaiting_stop {
+            Some(seq) => seq,
+            None => {
+                // No plan, or the plan was over: a STOP of our own.
+                self.handler.awaiting_stop = Some(STOP_SEQ);
+                STOP_SEQ
+            }
+        };
+        let n = encode_frame(seq, &Message::Stop, &mut self.cmd[..]);
+        let frame: [u8; MAX_FRAME_LEN] = self.cmd;
+        let deadline = Instant::now() + self.cfg.stop_timeout;
+        let mut next_send = Instant::now();
+        while !self.handler.stop_acked && Instant::now() < deadline {
+            if Instant::now() >= next_send {
+                if self.source.write_all(&frame[..n]).is_err() {
+                    break;
+                }
+                next_send += RESEND;
+            }
+            if self.read_once().is_err() {
+                break;
+            }
+        }
+        let _ = self.send_plan_output();
+        let notice = if self.handler.stop_acked {
+            Notice::Stopped
+        } else {
+            Notice::StopUnacknowledged
+        };
+        self.handler.send(Item::Notice(notice));
+        Ok(())
+    }
+
+    fn finish_stats(&mut self) {
+        let d: &DecodeStats = self.decoder.stats();
+        let s = &mut self.handler.stats;
+        s.frames_ok = d.frames_ok;
+        let dr = &d.dropped;
+        for (k, v) in [
+            ("cobs_error", dr.cobs_error),
+            ("crc_error", dr.crc_error),
+            ("bad_version", dr.bad_version),
+            ("short_frame", dr.short_frame),
+            ("short_payload", dr.short_payload),
+            ("oversize", dr.oversize),
+            ("unknown_type", dr.unknown_type),
+        ] {
+            s.frames_dropped.insert(k.to_string(), v);
+        }
+        s.samples_lost = self.handler.tracker.samples_lost;
+        s.gaps = self.handler.tracker.gaps;
+        s.segments = self.handler.tracker.segments;
+        s.clock_wraps = self.handler.tracker.clock_wraps();
+    }
+}
+
+/// Sleeps `d`, waking early when a stop is requested.
+fn sleep_unless(shutdown: &Shutdown, d: Duration) {
+    let end = Instant::now() + d;
+    while !shutdown.requested() {
+        let now = Instant::now();
+        if now >= end {
+            return;
+        }
+        std::thread::sleep((end - now).min(Duration::from_millis(10)));
+    }
+}

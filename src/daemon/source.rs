@@ -1,0 +1,449 @@
+//! Where the daemon's bytes come from: the [`Source`] trait and its implementations.
+//!
+//! # Contract of [`Source::read`]
+//! - `Ok(n)` with `n > 0`: `n` bytes were placed at the front of the buffer.
+//! - `Ok(0)`: **no data yet** (the read timed out). It never means end of file.
+//! - `Err(SourceError::Disconnected)`: the link is gone (unplug: `BrokenPipe`, `EIO`, EOF on a
+//!   port). The caller may [`Source::reconnect`].
+//! - `Err(SourceError::Finished)`: the source has no more data and never will (the end of a
+//!   recording). Serial ports never return it.
+//!
+//! Reads block for at most the source's timeout, so a sampler loop built on them never hangs and
+//! can send heartbeats between reads. Implementations: [`SerialSource`] (a serial port or the
+//! simulated stand's pseudo-terminal, opened by path with `serialport`, timeout always set),
+//! [`RecordingSource`] (a raw-byte recording, delivered in chunks of a chosen size) and
+//! [`ScriptedSource`] (an in-memory fake that stalls, delivers partially and fails on cue).
+
+use std::collections::VecDeque;
+use std::io::{ErrorKind, Read, Write};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// Why a source cannot deliver.
+#[derive(Debug, thiserror::Error)]
+pub enum SourceError {
+    /// The link is gone; reconnecting may help.
+    #[error("disconnected from {what}: {reason}")]
+    Disconnected {
+        /// The source.
+        what: String,
+        /// What the OS said.
+        reason: String,
+    },
+    /// Opening the device failed.
+    #[error("cannot open {what}: {reason}")]
+    Open {
+        /// The source.
+        what: String,
+        /// What the OS said.
+        reason: String,
+    },
+    /// The source is exhausted (end of a recording).
+    #[error("end of {what}")]
+    Finished {
+        /// The source.
+        what: String,
+    },
+}
+
+/// A byte stream from the stand (or a recording of it). See the module docs for the contract.
+pub trait Source: Send {
+    /// Reads available bytes; `Ok(0)` = nothing yet (timeout), never EOF.
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError>;
+    /// Writes all of `bytes` (a command frame) or fails with `Disconnected`.
+    fn write_all(&mut self, bytes: &[u8]) -> Result<(), SourceError>;
+    /// Reopens the link after a disconnection (one attempt; the caller backs off).
+    fn reconnect(&mut self) -> Result<(), SourceError>;
+    /// Whether commands reach a device (false for a recording).
+    fn is_live(&self) -> bool;
+    /// A short description for messages (`/dev/ttyACM0`, `recording run.tsp`).
+    fn describe(&self) -> String;
+}
+
+/// Classifies an I/O error from a port read: a timeout is "no data", the rest disconnects.
+fn classify(what: &str, e: &std::io::Error) -> Result<usize, SourceError> {
+    match e.kind() {
+        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted => Ok(0),
+        _ => Err(SourceError::Disconnected {
+            what: what.to_string(),
+            reason: e.to_string(),
+        }),
+    }
+}
+
+/// A serial port (or pty slave) opened by path. Reconnects by reopening the same path, so a
+/// udev symlink (`/dev/propid-stand`) survives re-enumeration.
+pub struct SerialSource {
+    path: String,
+    baud: u32,
+    timeout: Duration,
+    port: Option<Box<dyn serialport::SerialPort>>,
+}
+
+impl SerialSource {
+    /// Opens `path` at `baud` with a read timeout (never zero: zero would spin).
+    pub fn open(path: &str, baud: u32, timeout: Duration) -> Result<SerialSource, SourceError> {
+        let mut s = SerialSource {
+            path: path.to_string(),
+            baud,
+            timeout: timeout.max(Duration::from_millis(1)),
+            port: None,
+        };
+        s.reconnect()?;
+        Ok(s)
+    }
+
+    /// The device path.
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+
+    fn disconnected(&mut self, reason: String) -> SourceError {
+        self.port = None;
+        SourceError::Disconnected {
+            what: self.path.clone(),
+            reason,
+        }
+    }
+}
+
+impl Source for SerialSource {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
+        let Some(port) = self.port.as_mut() else {
+            return Err(self.disconnected("not connected".into()));
+        };
+        match port.read(buf) {
+            // EOF on a port is an unplug, never "no data".
+            Ok(0) if !buf.is_empty() => Err(self.disconnected("end of file".into())),
+            Ok(n) => Ok(n),
+            Err(e) => match classify(&self.path, &e) {
+                Ok(n) => Ok(n),
+                Err(_) => Err(self.disconnected(e.to_string())),
+            },
+        }
+    }
+
+    fn write_all(&mut self, bytes: &[u8]) -> Result<(), SourceError> {
+        let Some(port) = self.port.as_mut() else {
+            return Err(self.disconnected("not connected".into()));
+        };
+        match port.write_all(bytes) {
+            Ok(()) => Ok(()),
+            Err(e) => Err(self.disconnected(e.to_string())),
+        }
+    }
+
+    fn reconnect(&mut self) -> Result<(), SourceError> {
+        self.port = None;
+        let port = serialport::new(&self.path, self.baud)
+            .timeout(self.timeout)
+            .open()
+            .map_err(|e| SourceError::Open {
+                what: self.path.clone(),
+                reason: e.to_string(),
+            })?;
+        self.port = Some(port);
+        Ok(())
+    }
+
+    fn is_live(&self) -> bool {
+        true
+    }
+
+    fn describe(&self) -> String {
+        self.path.clone()
+    }
+}
+
+/// A raw-byte recording, delivered in chunks of at most `chunk` bytes (1 = byte at a time).
+pub struct RecordingSource {
+    path: PathBuf,
+    bytes: Vec<u8>,
+    pos: usize,
+    chunk: usize,
+}
+
+impl RecordingSource {
+    /// Reads the whole recording into memory.
+    pub fn open(path: &Path, chunk: usize) -> Result<RecordingSource, SourceError> {
+        let bytes = std::fs::read(path).map_err(|e| SourceError::Open {
+            what: path.display().to_string(),
+            reason: e.to_string(),
+        })?;
+        Ok(RecordingSource::from_bytes(path, bytes, chunk))
+    }
+
+    /// A recording already in memory.
+    pub fn from_bytes(path: &Path, bytes: Vec<u8>, chunk: usize) -> RecordingSource {
+        RecordingSource {
+            path: path.to_path_buf(),
+            bytes,
+            pos: 0,
+            chunk: chunk.max(1),
+        }
+    }
+
+    /// Bytes delivered so far and the total, for progress.
+    pub fn progress(&self) -> (usize, usize) {
+        (self.pos, self.bytes.len())
+    }
+}
+
+impl Source for RecordingSource {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
+        let left = self.bytes.len() - self.pos;
+        if left == 0 {
+            return Err(SourceError::Finished {
+                what: self.describe(),
+            });
+        }
+        let n = left.min(self.chunk).min(buf.len());
+        buf[..n].copy_from_slice(&self.bytes[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
+
+    fn write_all(&mut self, _bytes: &[u8]) -> Result<(), SourceError> {
+        Ok(()) // a recording has no device to command
+    }
+
+    fn reconnect(&mut self) -> Result<(), SourceError> {
+        Err(SourceError::Finished {
+            what: self.describe(),
+        })
+    }
+
+    fn is_live(&self) -> bool {
+        false
+    }
+
+    fn describe(&self) -> String {
+        format!("recording {}", self.path.display())
+    }
+}
+
+/// One step of a [`ScriptedSource`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// Deliver these bytes (possibly over several reads if the buffer is small).
+    Data(Vec<u8>),
+    /// One read that returns `Ok(0)` (a timeout).
+    Stall,
+    /// One read that fails with `Disconnected`.
+    Hangup,
+}
+
+/// An in-memory fake source for tests: plays a script of data, stalls and hang-ups, records
+/// what was written, and can refuse a number of reconnect attempts.
+#[derive(Debug, Default)]
+pub struct ScriptedSource {
+    steps: VecDeque<Step>,
+    /// Everything written to the source.
+    pub written: Vec<u8>,
+    /// Reconnect attempts still to refuse.
+    pub refuse_reconnects: u32,
+    /// Successful reconnects.
+    pub reconnects: u32,
+    connected: bool,
+}
+
+impl ScriptedSource {
+    /// A fake that plays `steps` and then reports `Finished`.
+    pub fn new(steps: Vec<Step>) -> ScriptedSource {
+        ScriptedSource {
+            steps: steps.into(),
+            connected: true,
+            ..Default::default()
+        }
+    }
+}
+
+impl Source for ScriptedSource {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
+        if !self.connected {
+            return Err(SourceError::Disconnected {
+                what: "script".into(),
+                reason: "not connected".into(),
+            });
+        }
+        match self.steps.pop_front() {
+            None => Err(SourceError::Finished {
+                what: "script".into(),
+            }),
+            Some(Step::Stall) => Ok(0),
+            Some(Step::Hangup) => {
+                self.connected = false;
+                Err(SourceError::Disconnected {
+                    what: "script".into(),
+                    reason: "hang-up".into(),
+                })
+            }
+            Some(Step::Data(mut d)) => {
+                let n = d.len().min(buf.len());
+                buf[..n].copy_from_slice(&d[..n]);
+                if n < d.len() {
+                    self.steps.push_front(Step::Data(d.split_off(n)));
+                }
+                Ok(n)
+            }
+        }
+    }
+
+    fn write_all(&mut self, bytes: &[u8]) -> Result<(), SourceError> {
+        if !self.connected {
+            return Err(SourceError::Disconnected {
+                what: "script".into(),
+                reason: "not connected".into(),
+            });
+        }
+        self.written.extend_from_slice(bytes);
+        Ok(())
+    }
+
+    fn reconnect(&mut self) -> Result<(), SourceError> {
+        if self.refuse_reconnects > 0 {
+            self.refuse_reconnects -= 1;
+            return Err(SourceError::Open {
+                what: "script".into(),
+                reason: "no such device".into(),
+            });
+        }
+        self.connected = true;
+        self.reconnects += 1;
+        Ok(())
+    }
+
+    fn is_live(&self) -> bool {
+        true
+    }
+
+    fn describe(&self) -> String {
+        "script".into()
+    }
+}
+
+/// Exponential reconnect backoff: `initial`, `2·initial`, … capped at `max`; reset on success.
+#[derive(Debug, Clone)]
+pub struct Backoff {
+    initial: Duration,
+    max: Duration,
+    next: Duration,
+}
+
+impl Backoff {
+    /// A backoff starting at `initial`, never above `max`.
+    pub fn new(initial: Duration, max: Duration) -> Backoff {
+        Backoff {
+            initial,
+            max: max.max(initial),
+            next: initial,
+        }
+    }
+
+    /// The delay before the next attempt; doubles the one after.
+    pub fn next_delay(&mut self) -> Duration {
+        let d = self.next;
+        self.next = (self.next * 2).min(self.max);
+        d
+    }
+
+    /// Back to the initial delay (after a successful reconnect).
+    pub fn reset(&mut self) {
+        self.next = self.initial;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serialport::{SerialPort, TTYPort};
+
+    #[test]
+    fn backoff_doubles_up_to_max_and_resets() {
+        let ms = Duration::from_millis;
+        let mut b = Backoff::new(ms(100), ms(350));
+        let got: Vec<_> = (0..4).map(|_| b.next_delay()).collect();
+        assert_eq!(got, vec![ms(100), ms(200), ms(350), ms(350)]);
+        b.reset();
+        assert_eq!(b.next_delay(), ms(100));
+    }
+
+    #[test]
+    fn recording_delivers_in_chunks_then_finishes() {
+        let mut r = RecordingSource::from_bytes(Path::new("x"), vec![1, 2, 3, 4, 5], 2);
+        let mut buf = [0u8; 8];
+        assert_eq!(r.read(&mut buf).unwrap(), 2);
+        assert_eq!(r.read(&mut buf).unwrap(), 2);
+        assert_eq!(r.read(&mut buf).unwrap(), 1);
+        assert_eq!(buf[0], 5);
+        assert!(matches!(
+            r.read(&mut buf),
+            Err(SourceError::Finished { .. })
+        ));
+        assert!(!r.is_live());
+    }
+
+    #[test]
+    fn scripted_source_plays_stalls_partial_reads_and_hangups() {
+        let mut s = ScriptedSource::new(vec![
+            Step::Data(vec![1, 2, 3]),
+            Step::Stall,
+            Step::Hangup,
+            Step::Data(vec![9]),
+        ]);
+        s.refuse_reconnects = 1;
+        let mut buf = [0u8; 2];
+        assert_eq!(s.read(&mut buf).unwrap(), 2);
+        assert_eq!(s.read(&mut buf).unwrap(), 1);
+        assert_eq!(s.read(&mut buf).unwrap(), 0);
+        assert!(matches!(
+            s.read(&mut buf),
+            Err(SourceError::Disconnected { .. })
+        ));
+        assert!(s.write_all(&[1]).is_err());
+        assert!(s.reconnect().is_err());
+        s.reconnect().unwrap();
+        assert_eq!(s.read(&mut buf).unwrap(), 1);
+        assert!(matches!(
+            s.read(&mut buf),
+            Err(SourceError::Finished { .. })
+        ));
+    }
+
+    #[test]
+    fn serial_source_over_pty_times_out_reads_and_detects_hangup() {
+        let (mut master, slave) = TTYPort::pair().unwrap();
+        let path = slave.name().unwrap();
+        let mut src = SerialSource::open(&path, 921_600, Duration::from_millis(5)).unwrap();
+        let mut buf = [0u8; 16];
+        assert_eq!(src.read(&mut buf).unwrap(), 0, "no data = Ok(0)");
+        master.write_all(b"abc").unwrap();
+        let mut got = Vec::new();
+        for _ in 0..100 {
+            let n = src.read(&mut buf).unwrap();
+            got.extend_from_slice(&buf[..n]);
+            if got.len() == 3 {
+                break;
+            }
+        }
+        assert_eq!(got, b"abc");
+        src.write_all(b"cmd").unwrap();
+        let mut back = [0u8; 3];
+        master.read_exact(&mut back).unwrap();
+        assert_eq!(&back, b"cmd");
+        drop(master);
+        drop(slave);
+        let mut saw = false;
+        for _ in 0..100 {
+            match src.read(&mut buf) {
+                Ok(_) => continue,
+                Err(SourceError::Disconnected { .. }) => {
+                    saw = true;
+                    break;
+                }
+                Err(e) => panic!("unexpected {e}"),
+            }
+        }
+        assert!(saw, "closing the master must disconnect the source");
+    }
+}

@@ -1,0 +1,91 @@
+//! The identification core's own 2nd-order model of the estimation part (ERA on pulse-averaged
+//! Markov parameters for a clean pulse experiment, OKID + ERA otherwise:
+//! [`crate::core::okid::select::identify_any`]). It is what `propid identify` and the daemon
+//! publish; `diagnose` reports its validation fit beside the baseline and uses it as one more
+//! starting point of the baseline's output-error fit.
+
+use serde::Serialize;
+
+use super::model::{ix, Params, Spec};
+use crate::core::okid::select::{identify_any, AnyInput, PathTaken};
+use crate::core::okid::OkidOptions;
+use crate::core::IdentOptions;
+
+use super::catalogue::Ctx;
+
+/// The core's model and how well it predicts the validation part.
+#[derive(Debug, Clone, Serialize)]
+pub struct EraBaseline {
+    /// `"pulse"` or `"okid"`.
+    pub path: PathTaken,
+    /// Natural frequency, Hz.
+    pub fn_hz: f64,
+    /// Damping ratio.
+    pub zeta: f64,
+    /// DC gain, output units per unit throttle.
+    pub dc_gain: f64,
+    /// Validation fit of its simulation (offset by least squares on the estimation part), %.
+    pub fit_percent: f64,
+}
+
+/// Runs the core on the estimation part with order 2; `None` when it refuses the data.
+pub fn era_start(ctx: &Ctx) -> Option<(Params, PathTaken)> {
+    let est = ctx.est.clone();
+    let u = &ctx.sig.u[est.clone()];
+    let y = &ctx.sig.y[est];
+    let missing: Vec<bool> = y.iter().map(|v| !v.is_finite()).collect();
+    let us = [u];
+    let ys = [y];
+    let input = AnyInput {
+        dt_s: ctx.sig.dt_s,
+        u: &us,
+        y: &ys,
+        missing: &missing,
+        pulse_starts: None,
+    };
+    let opts = IdentOptions {
+        order: Some(2),
+        jackknife: false,
+        ..IdentOptions::default()
+    };
+    let m = identify_any(&input, &opts, &OkidOptions::default()).ok()?;
+    let r = &m.report;
+    let k = r.dc_gain.get(0);
+    let ok = |v: f64| v.is_finite() && v > 0.0;
+    if !(ok(r.fn_hz) && ok(r.zeta) && k.is_finite()) {
+        return None;
+    }
+    let mut p = Params::default();
+    p.v[ix::FN] = r.fn_hz;
+    p.v[ix::ZETA] = r.zeta;
+    p.v[ix::GAIN] = k;
+    Some((p, m.path))
+}
+
+/// The core's model with only the output offset fitted (least squares on the estimation part).
+pub fn with_offset(ctx: &Ctx, p: &Params) -> Params {
+    let mut q = *p;
+    let mut buf = vec![0.0; ctx.sig.u.len()];
+    super::model::simulate(&Spec::default(), &q, &ctx.sig, &mut buf);
+    let (mut s, mut n) = (0.0, 0usize);
+    for k in ctx.est.clone() {
+        let e = ctx.sig.y[k] - buf[k];
+        if e.is_finite() {
+            s += e;
+            n += 1;
+        }
+    }
+    q.v[ix::OFFSET] = if n > 0 { s / n as f64 } else { 0.0 };
+    q
+}
+
+/// The published summary of the core's model given its validation fit.
+pub fn summary(p: &Params, path: PathTaken, fit_percent: f64) -> EraBaseline {
+    EraBaseline {
+        path,
+        fn_hz: p.v[ix::FN],
+        zeta: p.v[ix::ZETA],
+        dc_gain: p.v[ix::GAIN],
+        fit_percent,
+    }
+}

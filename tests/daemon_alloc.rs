@@ -1,0 +1,97 @@
+//! The worker's hot path allocates nothing: window bookkeeping and the core identification
+//! over a whole synthetic experiment, counted by a global allocator.
+
+use propid::daemon::identify::CoreIdentifier;
+use propid::daemon::item::SampleItem;
+use propid::daemon::synth::{frames_of, synth_stream, SynthConfig};
+use propid::daemon::window::{OutputChannel, Window};
+use propid::daemon::worker::Identifier;
+use propid::daemon::Config;
+use propid::protocol::message::Message;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+struct Counting;
+
+thread_local! {
+    /// Counting is on for this thread only (the test harness's other threads may allocate).
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+}
+static ALLOCS: AtomicU64 = AtomicU64::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        if COUNTING.with(Cell::get) {
+            ALLOCS.fetch_add(1, Ordering::Relaxed);
+        }
+        System.alloc(l)
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        System.dealloc(p, l)
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        if COUNTING.with(Cell::get) {
+            ALLOCS.fetch_add(1, Ordering::Relaxed);
+        }
+        System.realloc(p, l, n)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn window_and_identification_allocate_nothing() {
+    let cfg = Config::default();
+    let synth = SynthConfig {
+        noise: 0.01,
+        ..SynthConfig::default()
+    };
+    let (bytes, _) = synth_stream(&synth);
+    let now = Instant::now();
+    let samples: Vec<SampleItem> = frames_of(&bytes)
+        .into_iter()
+        .filter_map(|f| match f.msg {
+            Message::Sample(s) => Some(SampleItem {
+                index: u64::from(s.sample_index),
+                t_us: u64::from(s.t_us),
+                throttle_raw: s.throttle,
+                flags: s.flags.bits(),
+                thrust_n: s.thrust_n,
+                torque_nm: f32::NAN,
+                rpm: f32::NAN,
+                received: now,
+            }),
+            _ => None,
+        })
+        .collect();
+    let mut window = Window::new(
+        cfg.identify.max_window_samples,
+        cfg.identify.pulses_per_model as usize,
+        cfg.identify.level_tolerance,
+        OutputChannel::Thrust,
+    );
+    let mut id = CoreIdentifier::new(&cfg).unwrap();
+    let mut ok = 0u32;
+    let mut failed = 0u32;
+    COUNTING.with(|c| c.set(true));
+    for s in &samples {
+        window.on_sample(s, |v| match id.identify(v) {
+            Ok(()) => ok += 1,
+            Err(_) => failed += 1,
+        });
+    }
+    window.finish(|v| match id.identify(v) {
+        Ok(()) => ok += 1,
+        Err(_) => failed += 1,
+    });
+    COUNTING.with(|c| c.set(false));
+    assert_eq!((ok, failed), (6, 0));
+    assert_eq!(
+        ALLOCS.load(Ordering::SeqCst),
+        0,
+        "allocations in the hot path"
+    );
+}

@@ -1,0 +1,296 @@
+//! `propid replay` on synthetic recordings with exactly known content, through the real binary:
+//! a clean stream, byte-at-a-time versus burst delivery, bit flips and garbage counted exactly,
+//! sample gaps, the device clock wrapping, bad input.
+
+use propid::daemon::synth::{synth_stream, SynthConfig};
+use serde_json::Value;
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_propid");
+
+/// Writes the stream, replays it, returns the parsed lines and the exit status.
+fn replay(bytes: &[u8], extra: &[&str]) -> (Vec<Value>, std::process::ExitStatus, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.tsp");
+    std::fs::write(&path, bytes).unwrap();
+    let out = Command::new(BIN)
+        .arg("replay")
+        .arg(&path)
+        .args(extra)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let lines = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("bad line {l}: {e}")))
+        .collect();
+    (
+        lines,
+        out.status,
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn of_type<'a>(lines: &'a [Value], t: &str) -> Vec<&'a Value> {
+    lines.iter().filter(|l| l["type"] == t).collect()
+}
+
+fn stats(lines: &[Value]) -> &Value {
+    let s = lines.last().expect("no lines");
+    assert_eq!(s["type"], "stats");
+    s
+}
+
+fn dropped_total(s: &Value) -> u64 {
+    s["frames_dropped"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum()
+}
+
+fn assert_plant(m: &Value, fn_hz: f64, zeta: f64, gain: f64, tol: f64) {
+    let f = m["fn_hz"].as_f64().unwrap();
+    let z = m["zeta"].as_f64().unwrap();
+    let g = m["dc_gain"].as_f64().unwrap();
+    assert!((f / fn_hz - 1.0).abs() < tol, "fn {f} vs {fn_hz}");
+    assert!((z / zeta - 1.0).abs() < tol, "zeta {z} vs {zeta}");
+    assert!((g / gain - 1.0).abs() < tol, "gain {g} vs {gain}");
+}
+
+#[test]
+fn clean_stream_publishes_models_schedule_and_stats() {
+    let cfg = SynthConfig::default();
+    let (bytes, facts) = synth_stream(&cfg);
+    let (lines, status, err) = replay(&bytes, &[]);
+    assert!(status.success(), "{err}");
+    let models = of_type(&lines, "model");
+    assert_eq!(models.len(), 6); // 8 pulses per level, K = 4, three levels
+    for m in &models {
+        assert_plant(m, 25.0, 0.5, 8.0, 1e-4);
+        assert_eq!(m["pulses"], 4);
+        assert!(m["t_s"].as_f64().unwrap() > 0.0);
+    }
+    let ops: Vec<f64> = models
+        .iter()
+        .map(|m| m["operating_point"].as_f64().unwrap())
+        .collect();
+    assert_eq!(ops, vec![0.3, 0.3, 0.45, 0.45, 0.6, 0.6]);
+    let sched = of_type(&lines, "schedule");
+    assert_eq!(sched.len(), 1);
+    assert_eq!(sched[0]["models"].as_array().unwrap().len(), 3);
+    let s = stats(&lines);
+    assert_eq!(s["frames_ok"].as_u64().unwrap(), facts.frames_intact);
+    assert_eq!(dropped_total(s), 0);
+    assert_eq!(s["samples"].as_u64().unwrap(), facts.samples_taken);
+    assert_eq!(s["samples_lost"], 0);
+    assert_eq!(s["overflows"], 0);
+    assert_eq!(s["reconnects"], 0);
+    assert_eq!(s["models"], 6);
+}
+
+/// Everything but the wall-clock fields of the stats line.
+fn deterministic(lines: &[Value]) -> Vec<Value> {
+    lines
+        .iter()
+        .map(|l| {
+            let mut l = l.clone();
+            if l["type"] == "stats" {
+                let o = l.as_object_mut().unwrap();
+                o.remove("elapsed_s");
+                o.remove("latency_s");
+            }
+            l
+        })
+        .collect()
+}
+
+#[test]
+fn byte_at_a_time_and_burst_delivery_publish_identical_lines() {
+    let cfg = SynthConfig {
+        levels: vec![0.4],
+        noise: 0.002,
+        flip_samples: vec![400, 1000],
+        garbage_before: vec![700],
+        ..SynthConfig::default()
+    };
+    let (bytes, _) = synth_stream(&cfg);
+    let (one, s1, e1) = replay(&bytes, &["--chunk", "1"]);
+    let (burst, s2, e2) = replay(&bytes, &["--chunk", "1000000"]);
+    let (odd, s3, e3) = replay(&bytes, &["--chunk", "37"]);
+    assert!(s1.success() && s2.success() && s3.success(), "{e1}{e2}{e3}");
+    assert_eq!(of_type(&one, "model").len(), 2);
+    assert_eq!(deterministic(&one), deterministic(&burst));
+    assert_eq!(deterministic(&odd), deterministic(&burst));
+}
+
+#[test]
+fn bit_flips_and_garbage_are_counted_exactly_and_nothing_else_is_lost() {
+    let flips = vec![5, 333, 334, 1200, 2500];
+    let garbage = vec![10, 900, 2000];
+    let cfg = SynthConfig {
+        flip_samples: flips.clone(),
+        garbage_before: garbage.clone(),
+        ..SynthConfig::default()
+    };
+    let (bytes, facts) = synth_stream(&cfg);
+    let (lines, status, err) = replay(&bytes, &[]);
+    assert!(status.success(), "{err}");
+    let s = stats(&lines);
+    assert_eq!(dropped_total(s), (flips.len() + garbage.len()) as u64);
+    assert_eq!(s["frames_ok"].as_u64().unwrap(), facts.frames_intact);
+    assert_eq!(s["samples"].as_u64().unwrap(), facts.samples_sent);
+    // a corrupted SAMPLE is a lost sample, found from the index jump
+    assert_eq!(s["samples_lost"].as_u64().unwrap(), flips.len() as u64);
+    assert_eq!(
+        of_type(&lines, "event")
+            .iter()
+            .filter(|e| e["kind"] == "gap")
+            .count(),
+        4
+    );
+    // the flips fall outside the pulse windows' identifications or are left out as pulses:
+    // every level still gets its models
+    assert!(of_type(&lines, "model").len() >= 5);
+}
+
+#[test]
+fn sample_gaps_are_counted_masked_and_never_bridged() {
+    // drops inside the settle time of level 2 and the pulse train of level 1
+    let cfg = SynthConfig {
+        drop_samples: vec![100, 101, 102, 801, 1950],
+        ..SynthConfig::default()
+    };
+    let (bytes, facts) = synth_stream(&cfg);
+    let (lines, status, err) = replay(&bytes, &[]);
+    assert!(status.success(), "{err}");
+    let s = stats(&lines);
+    assert_eq!(s["samples_lost"], 5);
+    assert_eq!(s["gaps"], 3);
+    assert_eq!(dropped_total(s), 0);
+    assert_eq!(s["samples"].as_u64().unwrap(), facts.samples_sent);
+    let gaps: Vec<u64> = of_type(&lines, "event")
+        .iter()
+        .filter(|e| e["kind"] == "gap")
+        .map(|e| e["count"].as_u64().unwrap())
+        .collect();
+    assert_eq!(gaps, vec![3, 1, 1]);
+    // a pulse whose window holds a lost sample is left out, the others still identify
+    let models = of_type(&lines, "model");
+    assert_eq!(models.len(), 6);
+    let skipped: u64 = models
+        .iter()
+        .map(|m| m["pulses_skipped"].as_u64().unwrap())
+        .sum();
+    assert_eq!(
+        skipped, 2,
+        "the two pulses with a lost sample in their window"
+    );
+    for m in models {
+        assert_plant(m, 25.0, 0.5, 8.0, 1e-3);
+    }
+}
+
+#[test]
+fn device_clock_wrap_is_unwrapped() {
+    // the 32-bit µs clock wraps 1.2 s into the run
+    let cfg = SynthConfig {
+        t0_us: u32::MAX - 1_200_000,
+        ..SynthConfig::default()
+    };
+    let (bytes, _) = synth_stream(&cfg);
+    let (lines, status, err) = replay(&bytes, &[]);
+    assert!(status.success(), "{err}");
+    let s = stats(&lines);
+    assert_eq!(s["clock_wraps"], 1);
+    assert_eq!(s["samples_lost"], 0);
+    let models = of_type(&lines, "model");
+    assert_eq!(models.len(), 6);
+    let mut last_t = 0.0;
+    for m in models {
+        assert_plant(m, 25.0, 0.5, 8.0, 1e-4);
+        let t = m["t_s"].as_f64().unwrap();
+        assert!(t > last_t, "time goes forward across the wrap");
+        last_t = t;
+    }
+    assert!(last_t > 4294.0, "unwrapped past 2^32 µs");
+}
+
+#[test]
+fn missing_or_garbage_file_is_an_input_error_not_a_panic() {
+    let out = Command::new(BIN)
+        .args(["replay", "/nonexistent/run.tsp"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let (lines, status, _) = replay(b"just some text\n\x00\xff\xfe\x00", &[]);
+    assert!(status.success());
+    let s = stats(&lines);
+    assert_eq!(s["frames_ok"], 0);
+    assert_eq!(dropped_total(s), 2);
+    assert!(of_type(&lines, "model").is_empty());
+}
+
+#[test]
+fn bad_config_is_refused_with_key_and_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("bad.toml");
+    std::fs::write(&cfg, "[identify]\npulses_per_model = -3\n").unwrap();
+    let out = Command::new(BIN)
+        .args(["replay", "x.tsp", "--config"])
+        .arg(&cfg)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(5));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("pulses_per_model"), "{err}");
+    std::fs::write(&cfg, "[identify]\nlevel_tolerance = nan\n").unwrap();
+    let out = Command::new(BIN)
+        .args(["replay", "x.tsp", "--config"])
+        .arg(&cfg)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(5));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("identify.level_tolerance") && err.contains("NaN"),
+        "{err}"
+    );
+}
+
+#[test]
+fn replay_of_a_simulated_stand_recording_identifies_the_plant() {
+    // the sim's firmware + experiment plan, faster than real time, with noise and quantisation
+    let mut cfg = propid::sim::SimConfig::default();
+    cfg.experiment.levels = vec![0.35, 0.55];
+    cfg.experiment.pulses_per_level = 8;
+    let mut bytes = Vec::new();
+    propid::sim::record::record(&cfg, 30.0, &mut bytes).unwrap();
+    let (lines, status, err) = replay(&bytes, &[]);
+    assert!(status.success(), "{err}");
+    let models = of_type(&lines, "model");
+    assert_eq!(models.len(), 4, "{lines:#?}");
+    // One-sample pulses at 1 kHz in 0.01 N of noise: each model's scatter is large (its
+    // jackknife uncertainty says so); require agreement within 4 reported standard deviations.
+    let p = &cfg.plant;
+    for m in &models {
+        let u = &m["uncertainty"];
+        for (key, truth) in [
+            ("fn_hz", p.fn_hz),
+            ("zeta", p.zeta),
+            ("dc_gain", p.gain_n_per_throttle),
+        ] {
+            let est = m[key].as_f64().unwrap();
+            let sd = u[key].as_f64().unwrap();
+            assert!(sd.is_finite() && sd > 0.0, "{key} uncertainty {sd}");
+            assert!(
+                (est - truth).abs() < 4.0 * sd + 0.02 * truth,
+                "{key} {est} ± {sd} vs {truth}"
+            );
+        }
+    }
+    let s = stats(&lines);
+    assert_eq!(s["samples_lost"], 0);
+    assert_eq!(dropped_total(s), 0);
+}
