@@ -174,9 +174,12 @@ def compare(args):
     for key in ("fn_hz", "zeta", "dc_gain"):
         rows.append((key, lambda r, k=key: fmt(r[k], truth[k])))
     for name, f in rows:
-        a = f(pc) if pc else pc_err
-        b = f(pr) if pr else pr_err
+        a = f(pc) if pc else "-"
+        b = f(pr) if pr else "-"
         print(f"{name:14} {a:>34} {b:>34}")
+    for who, err in (("python-control", pc_err), ("propid", pr_err)):
+        if err:
+            print(f"{'note':14} {who}: {err}")
     if pc and pr:
         print(f"{'ratio':14} python-control era / propid identify = {pc['time_s'] / pr['time_s']:.1f}x")
     print(f"{'truth':14} fn {truth['fn_hz']} Hz, zeta {truth['zeta']}, DC gain {truth['dc_gain']} N/throttle")
