@@ -273,7 +273,8 @@ Produced by `scripts/real_data.sh` (`examples/real_data.rs`) from the datasets i
 `../shared/data` (see their `PROVENANCE.md`); do not edit by hand. Each model is fitted on the
 first two thirds of the record and scored on the last third (free-run simulation from steady
 state; fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) on the held-out samples; 100 is perfect, 0 is no better
-than the mean, negative is worse). Order chosen automatically. Rates in Hz; `τ` are the time
+than the mean, negative is worse; *diverges*: below −1000 %, an unstable or drifting model).
+Order chosen automatically. Rates in Hz; `τ` are the time
 constants of the real poles; `fn`/`ζ` of the dominant oscillatory pair (– if none).
 
 | dataset | file | rate | excitation | path | order | fn (Hz) | ζ | τ (s) | DC gain | held-out fit (%) | notes |
@@ -374,7 +375,9 @@ fn run_case(case: &Case, path: &Path) -> Result<String, String> {
 }
 
 fn num(v: f64, digits: usize) -> String {
-    if v.is_finite() {
+    if v == f64::NEG_INFINITY {
+        "diverges".into()
+    } else if v.is_finite() {
         format!("{v:.digits$}")
     } else {
         "–".into()
@@ -455,7 +458,13 @@ fn held_out_fit(r: &ModelReport, u: &[f64], ys: &[Vec<f64>], n_est: usize) -> Ve
             let mean = val.iter().map(|&k| y[k]).sum::<f64>() / val.len() as f64;
             let err: f64 = val.iter().map(|&k| (y[k] - sim[i][k] - off).powi(2)).sum();
             let tot: f64 = val.iter().map(|&k| (y[k] - mean).powi(2)).sum();
-            100.0 * (1.0 - (err / tot).sqrt())
+            let fit = 100.0 * (1.0 - (err / tot).sqrt());
+            // A simulation that runs away (unstable model) is reported as such, not as a number.
+            if fit < -1000.0 {
+                f64::NEG_INFINITY
+            } else {
+                fit
+            }
         })
         .collect()
 }

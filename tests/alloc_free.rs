@@ -90,6 +90,16 @@ fn pulse_identification_allocates_nothing() {
         assert_eq!(res, Ok(3));
         assert_eq!(n, 0, "round {round}: {n} allocations at order 3");
     }
+    // The truncated (FFT + Lanczos) path, jackknife included.
+    let trunc = IdentOptions {
+        svd: propid::core::SvdChoice::Truncated,
+        ..opts
+    };
+    for round in 0..2 {
+        let (n, res) = allocations(|| ws.identify(&input, &trunc).map(|m| m.order()));
+        assert_eq!(res, Ok(2));
+        assert_eq!(n, 0, "round {round}: {n} allocations on the truncated path");
+    }
     // Errors allocate nothing either.
     let flat = vec![0.4; 2600];
     let bad = PulseInput { u: &flat, ..input };

@@ -201,3 +201,40 @@ fn unit_area_scaling_makes_dc_gain_off_by_the_sample_rate() {
     let ours = identify(&plant, &u, None);
     assert!(rel(ours.dc_gain.get(0), 4.0) < 1e-8);
 }
+
+/// The truncated (FFT + Lanczos) path gives the dense path's model, pulse and Markov entries.
+#[test]
+fn truncated_svd_path_matches_dense() {
+    use propid::core::SvdChoice;
+    let plant = Plant::new(10.0, 0.2, 4.0, 0.005).with_output([0.3, 0.02], 0.1);
+    let u = throttle(2400, &[(0, 0.4)], &pulses(100, 400, 5, &[1, 2]));
+    let y = plant.simulate(&u, 3.0);
+    let chans: Vec<&[f64]> = y.iter().map(|c| &c[..]).collect();
+    let input = PulseInput {
+        dt_s: plant.dt,
+        u: &u,
+        y: &chans,
+        missing: &[],
+        pulse_starts: None,
+    };
+    let mut ws = Workspace::new(&Limits::default()).unwrap();
+    let opts = IdentOptions {
+        svd: SvdChoice::Truncated,
+        ..IdentOptions::default()
+    };
+    let r = ws.identify(&input, &opts).unwrap().to_report();
+    assert_eq!((r.order, r.svd.as_str()), (2, "truncated"));
+    assert!(
+        rel(r.fn_hz, 10.0) < 1e-8 && rel(r.zeta, 0.2) < 1e-8,
+        "{} {}",
+        r.fn_hz,
+        r.zeta
+    );
+    assert!(rel(r.dc_gain.get(0), plant.dc(0)) < 1e-8 && rel(r.dc_gain.get(1), plant.dc(1)) < 1e-8);
+    let markov = MarkovSeq::from_data(2, 1, plant.markov(300)).unwrap();
+    let r = ws
+        .identify_markov(&markov, plant.dt, &opts)
+        .unwrap()
+        .to_report();
+    assert!(rel(r.fn_hz, 10.0) < 1e-8 && rel(r.zeta, 0.2) < 1e-8);
+}

@@ -204,8 +204,10 @@ fn empty_fields_are_missing_samples() {
 /// The real exported log (RCbenchmark/Tyto, no licence: read from ../shared/data only).
 #[test]
 fn real_tyto_export_from_shared_data() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/vanderploeg-rcbenchmark-steps/90PERCENT_2024-08-13_185523.csv");
+    let root = std::env::var_os("PROPID_SHARED_DATA")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));
+    let path = root.join("vanderploeg-rcbenchmark-steps/90PERCENT_2024-08-13_185523.csv");
     let Ok(text) = std::fs::read_to_string(&path) else {
         eprintln!(
             "skipped: {} is absent (vanderploeg-rcbenchmark-steps)",

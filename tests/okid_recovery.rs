@@ -306,7 +306,7 @@ fn missing_samples_skip_their_rows_and_stay_exact() {
 fn output_noise_gives_a_small_documented_bias() {
     // White output noise at 2 % of the output spread, 4000 samples, random input: the recovered
     // Markov parameters stay within 2 % of the largest block (the ARX truncation bias of OKID
-    // with a finite ℓ, plus the noise itself). Measured: 0.28 % with ℓ = 21 chosen by the BIC.
+    // with a finite ℓ, plus the noise itself). ℓ is chosen by output error.
     let sys = underdamped();
     let u = vec![random_input(4000, 21)];
     let mut y = sys.simulate(&u);

@@ -11,13 +11,28 @@
 //! D = Y_0
 //! ```
 //!
-//! `H(1) V_n` is computed from the Markov parameters directly, `H(1)` is never formed.
+//! `H(1) V_n` is computed by Hankel products ([`h1_times_v`], or FFT products on the
+//! truncated path), `H(1)` is never formed.
 //! Storage: `a` (`n × n`), `b` (`n × p`), `c` (`q × n`), `d` (`q × p`), all column-major.
 
 use super::hankel::HankelDims;
 
+/// `T = H(1) V_n` (`rows × n`, column-major) by direct products with the Markov parameters,
+/// `O(rows · cols · n)`; the truncated path uses FFT products instead.
+pub fn h1_times_v(markov: &[f64], dims: &HankelDims, n: usize, v: &[f64], t: &mut [f64]) {
+    let (rows, cols) = (dims.rows(), dims.cols());
+    for l in 0..n {
+        dims.apply(
+            markov,
+            1,
+            &v[l * cols..(l + 1) * cols],
+            &mut t[l * rows..(l + 1) * rows],
+        );
+    }
+}
+
 /// Realises `(A, B, C, D)` of order `n` from the leading triplets (`u`: `rows × k`,
-/// `v`: `cols × k`, column-major, `k >= n`). `scratch` needs `rows * n` values.
+/// `v`: `cols × k`, column-major, `k >= n`) and `t = H(1) V_n` (`rows × n`).
 #[allow(clippy::too_many_arguments)]
 pub fn realize(
     markov: &[f64],
@@ -26,22 +41,17 @@ pub fn realize(
     sigma: &[f64],
     u: &[f64],
     v: &[f64],
-    scratch: &mut [f64],
+    t: &[f64],
     a: &mut [f64],
     b: &mut [f64],
     c: &mut [f64],
     d: &mut [f64],
 ) {
     let (rows, cols, q, p) = (dims.rows(), dims.cols(), dims.q, dims.p);
-    // T = H(1) V_n, rows × n.
-    for l in 0..n {
-        let vl = &v[l * cols..(l + 1) * cols];
-        dims.apply(markov, 1, vl, &mut scratch[l * rows..(l + 1) * rows]);
-    }
     for i in 0..n {
         let ui = &u[i * rows..(i + 1) * rows];
         for j in 0..n {
-            let tj = &scratch[j * rows..(j + 1) * rows];
+            let tj = &t[j * rows..(j + 1) * rows];
             let dot: f64 = ui.iter().zip(tj).map(|(x, y)| x * y).sum();
             a[i + j * n] = dot / (sigma[i] * sigma[j]).sqrt();
         }

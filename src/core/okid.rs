@@ -36,28 +36,31 @@
 //! `O(N·cols)`), then `R θ = Qᵀ Y` is solved through the SVD of the small triangular `R`:
 //!
 //! ```text
-//! θ = Σ_{σ_i > rcond·σ_1} v_i (u_iᵀ Qᵀ Y) / σ_i
+//! θ_out = Σ_{i kept} v_i (u_iᵀ Qᵀ y_out) / σ_i,
+//! kept:  σ_i > rcond·σ_1   and   |u_iᵀ Qᵀ y_out| > τ·σ_e,out
 //! ```
 //!
-//! a truncated-SVD (minimum-norm) solution.
+//! a truncated-SVD (minimum-norm) solution. Directions below rounding (`σ_i ≤ rcond·σ_1`,
+//! default `rcond` = 1e-10) carry no information and are dropped: that is the regularisation of
+//! an ill-conditioned (or rank-deficient) regression, and [`OkidResult::regularised`] says when
+//! it happened; the condition number is reported either way. Optionally (`significance` τ > 0,
+//! off by default) a direction whose data projection is not significant against the residual
+//! noise is dropped too: in the rotated system `Qᵀ y = R θ + Qᵀ e` with white `e`, each
+//! `u_iᵀ Qᵀ e` has standard deviation `σ_e`, so dropping `|u_iᵀ Qᵀ y| ≤ τ σ_e` is a
+//! hard-threshold estimator. (Measured on noisy staircases it discards too much: the default
+//! relies on the choice of `ℓ` below instead.)
 //!
 //! # Choosing `ℓ`
 //!
 //! `ℓ_max = clamp(⌊N / (10 (p+q))⌋, 1, 40)` follows from the data length (at least ten rows per
 //! parameter). Because the columns are ordered by lag, the regression with `ℓ ≤ ℓ_max` lags uses a
-//! *prefix* of the columns, so one QR gives the residual of every `ℓ` at once:
-//! `RSS(ℓ) = ‖z_{m(ℓ):}‖² + ‖R_res‖²` with `m(ℓ) = 1 + p + (p+q)ℓ`. The number used is the one
-//! that minimises the Bayesian information criterion
-//! `BIC(ℓ) = rows · Σ_i ln(RSS_i(ℓ)/rows) + q·m(ℓ)·ln(rows)` (RSS floored at rounding level), the
-//! smallest one on ties. Too many lags are not harmless: with a band-limited input (a chirp, a
-//! multisine) the lagged input columns are numerically dependent, the observer parameters are not
-//! determined outside the excited band, and the recovered Markov parameters drift; the BIC stops
-//! at the lag where the fit stops improving (for noise-free data: the deadbeat order `⌈n/q⌉`). Directions with `σ_i ≤ rcond·σ_1` are dropped: that is
-//! the regularisation, and [`OkidResult::regularised`] says when it happened. A single step from
-//! rest makes `Φ` rank deficient (the input window takes only `ℓ + 2` distinct values); the
-//! minimum-norm solution still reproduces the record exactly, and so the Markov parameters, which
-//! the record determines uniquely (`Y_k = s_k − s_{k−1}` for a step response `s`).
-//!
+//! *prefix* of the columns, so one QR serves every `ℓ`: `R_φ` is the leading `m(ℓ) × m(ℓ)` block
+//! with `m(ℓ) = 1 + p + (p+q)ℓ`, and `RSS(ℓ) = ‖z_{m(ℓ):}‖² + ‖R_res‖²`. The number used is
+//! chosen by output (simulation) error over a set of candidates ([`order`]). Too many lags are
+//! not harmless: with a band-limited input (a chirp, a multisine) the lagged input columns are
+//! numerically dependent, and with few steps and noise the extra parameters fit the noise; in
+//! both cases the recovered Markov parameters drift while the one-step fit still improves.
+
 //! # Noise of the Markov parameters
 //!
 //! With residual standard deviation `σ_e` of output `i` and the (pseudo-)inverse Gram matrix
@@ -83,6 +86,7 @@
 
 use nalgebra::{DMatrix, SVD};
 
+pub mod order;
 pub mod select;
 
 /// Rows per block of the streaming QR.
@@ -91,6 +95,8 @@ const QR_BLOCK_ROWS: usize = 512;
 pub const MAX_AUTO_OBSERVER_ORDER: usize = 40;
 /// Default relative singular-value threshold of the truncated-SVD solve.
 pub const DEFAULT_RCOND: f64 = 1e-10;
+/// Default significance threshold (in residual standard deviations) of the solve.
+pub const DEFAULT_SIGNIFICANCE: f64 = 0.0;
 
 /// Why OKID refused the data.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -149,6 +155,9 @@ pub struct OkidOptions {
     pub markov_len: Option<usize>,
     /// Relative singular-value threshold of the truncated-SVD solve.
     pub rcond: f64,
+    /// Significance threshold `τ` of the solve: a direction whose data projection
+    /// `|u_iᵀ Qᵀ y|` is below `τ σ_e` is dropped (0 keeps every direction above `rcond`).
+    pub significance: f64,
 }
 
 impl Default for OkidOptions {
@@ -157,6 +166,7 @@ impl Default for OkidOptions {
             observer_order: None,
             markov_len: None,
             rcond: DEFAULT_RCOND,
+            significance: DEFAULT_SIGNIFICANCE,
         }
     }
 }
@@ -176,7 +186,7 @@ pub struct OkidResult {
     pub observer_order: usize,
     /// Largest number considered (from the data length, or the one given).
     pub observer_order_max: usize,
-    /// True when `ℓ` was chosen by the information criterion, false when it was given.
+    /// True when `ℓ` was chosen by output error ([`order`]), false when it was given.
     pub observer_order_chosen: bool,
     /// Regression rows used.
     pub rows: usize,
@@ -207,7 +217,7 @@ impl OkidResult {
 /// The largest number of observer Markov parameters considered for `n` samples, `p` inputs,
 /// `q` outputs: `ℓ_max = clamp(⌊n / (10 (p + q))⌋, 1, 40)`, so that there are at least ten
 /// regression rows per parameter, enough lags for a deadbeat observer of any order up to `40·q`,
-/// and a bounded cost (`O(N·ℓ²(p+q)²)`). The number used is chosen below it by the BIC.
+/// and a bounded cost (`O(N·ℓ²(p+q)²)`). The number used is chosen below it ([`order`]).
 pub fn auto_observer_order(n: usize, p: usize, q: usize) -> usize {
     (n / (10 * (p + q).max(1))).clamp(1, MAX_AUTO_OBSERVER_ORDER)
 }
@@ -264,19 +274,39 @@ pub fn okid(
             need,
         });
     }
+    let fit = |ell: usize| {
+        let params = params_for(p, q, ell);
+        let solve = solve_truncated(
+            &r_aug,
+            (p, q),
+            params,
+            params_max,
+            rows,
+            opts.rcond,
+            opts.significance,
+        );
+        let theta = unscale(&solve.theta, &scaled, ell);
+        let finite = theta.0.iter().chain(&theta.1).all(|v| v.is_finite());
+        (params, solve, theta, finite)
+    };
     let ell = match opts.observer_order {
         Some(given) => given,
-        None => choose_by_bic(&r_aug, p, q, ell_max, rows),
+        None => {
+            let scores: Vec<(usize, f64)> = order::candidates(ell_max)
+                .into_iter()
+                .map(|ell| {
+                    let (_, _, theta, finite) = fit(ell);
+                    let s = order::output_error((&theta.0, &theta.1), (p, q, ell), u, y);
+                    (ell, if finite { s } else { f64::NAN })
+                })
+                .collect();
+            order::pick(&scores).unwrap_or(ell_max)
+        }
     };
-    let params = params_for(p, q, ell);
-    let solve = solve_truncated(&r_aug, (p, q), params, params_max, opts.rcond);
-    let theta = unscale(&solve.theta, &scaled, ell);
-    if theta.0.iter().chain(&theta.1).any(|v| !v.is_finite()) {
-        return Err(OkidError::NonFiniteSolution);
-    }
+    let (params, solve, theta, finite) = fit(ell);
     let len = opts.markov_len.unwrap_or(auto_markov_len(n, ell)).max(1);
     let markov = recover_markov(&theta, p, q, ell, len);
-    if markov.iter().any(|v| !v.is_finite()) {
+    if !finite || markov.iter().any(|v| !v.is_finite()) {
         return Err(OkidError::NonFiniteSolution);
     }
     let residual_rms: Vec<f64> = (0..q)
@@ -300,7 +330,7 @@ pub fn okid(
         params,
         condition: solve.condition,
         rank: solve.rank,
-        regularised: solve.rank < params,
+        regularised: solve.rank < params || solve.dropped_any,
         residual_rms,
         markov_noise,
     })
@@ -321,29 +351,6 @@ fn prefix_rss(r_aug: &DMatrix<f64>, m: usize, params_max: usize, i: usize) -> f6
         .view((params_max, params_max + i), (i + 1, 1))
         .norm_squared();
     z + res
-}
-
-/// `ℓ ∈ 1..=ℓ_max` minimising `BIC(ℓ) = rows·Σ_i ln(RSS_i/rows) + q·m(ℓ)·ln(rows)`; RSS is in
-/// unit-variance variables and floored at `rows·1e-28` (rounding level), so noise-free data stop
-/// at the smallest exact `ℓ`.
-fn choose_by_bic(r_aug: &DMatrix<f64>, p: usize, q: usize, ell_max: usize, rows: usize) -> usize {
-    let params_max = params_for(p, q, ell_max);
-    let nr = rows as f64;
-    let bic = |ell: usize| {
-        let m = params_for(p, q, ell);
-        let fit: f64 = (0..q)
-            .map(|i| (prefix_rss(r_aug, m, params_max, i).max(nr * 1e-28) / nr).ln())
-            .sum();
-        nr * fit + (q * m) as f64 * nr.ln()
-    };
-    let mut best = (1, bic(1));
-    for ell in 2..=ell_max {
-        let b = bic(ell);
-        if b < best.1 {
-            best = (ell, b);
-        }
-    }
-    best.0
 }
 
 fn check_lengths(u: &[&[f64]], y: &[&[f64]], missing: Option<&[bool]>) -> Result<usize, OkidError> {
@@ -495,16 +502,21 @@ struct Solve {
     residual_scaled: Vec<f64>,
     /// Mean of `[(ΦᵀΦ)⁺]_cc` over the input-lag columns (scaled units).
     input_var_factor: f64,
+    /// True when some output dropped a direction.
+    dropped_any: bool,
 }
 
 /// Truncated-SVD solve of `R_φ θ = z` for the first `params` columns, from the augmented
 /// triangular factor `[[R_φ, z], [0, R_res]]` of all `params_max` columns.
+#[allow(clippy::too_many_arguments)]
 fn solve_truncated(
     r_aug: &DMatrix<f64>,
     (p, q): (usize, usize),
     params: usize,
     params_max: usize,
+    rows: usize,
     rcond: f64,
+    significance: f64,
 ) -> Solve {
     let r_phi = r_aug.view((0, 0), (params, params)).into_owned();
     let z = r_aug.view((0, params_max), (params, q)).into_owned();
@@ -522,22 +534,32 @@ fn solve_truncated(
     let mut theta = DMatrix::<f64>::zeros(params, q);
     let mut rank = 0;
     let mut dropped = vec![0.0; q];
+    let mut dropped_any = false;
+    // Residual standard deviation per output (scaled units), for the significance test.
+    let dof = rows.saturating_sub(params).max(1) as f64;
+    let sigma_e: Vec<f64> = (0..q)
+        .map(|c| (prefix_rss(r_aug, params, params_max, c) / dof).sqrt())
+        .collect();
     if let (Some(uu), Some(vt)) = (uu, vt) {
         let uz = uu.transpose() * &z;
         for (i, &s) in sig.iter().enumerate() {
-            if smax > 0.0 && s > rcond * smax {
-                rank += 1;
-                for c in 0..q {
-                    let coef = uz[(i, c)] / s;
+            let mut kept_any = false;
+            for c in 0..q {
+                let coef = uz[(i, c)];
+                let keep = smax > 0.0
+                    && s > rcond * smax
+                    && (significance == 0.0 || coef.abs() > significance * sigma_e[c]);
+                if keep {
+                    kept_any = true;
                     for r in 0..params {
-                        theta[(r, c)] += vt[(i, r)] * coef;
+                        theta[(r, c)] += vt[(i, r)] * coef / s;
                     }
-                }
-            } else {
-                for (c, d) in dropped.iter_mut().enumerate() {
-                    *d += uz[(i, c)] * uz[(i, c)];
+                } else {
+                    dropped[c] += coef * coef;
                 }
             }
+            rank += usize::from(kept_any);
+            dropped_any |= !kept_any || dropped.iter().any(|d| *d > 0.0);
         }
     }
     let residual_scaled = (0..q)
@@ -562,6 +584,7 @@ fn solve_truncated(
         rank,
         residual_scaled,
         input_var_factor,
+        dropped_any,
     }
 }
 

@@ -17,14 +17,16 @@
 use nalgebra::Complex;
 
 use super::eig::eigenvalues;
-use super::era::realize;
+use super::era::{h1_times_v, realize};
 use super::grouped::{input_matrix, WidthGroups, MAX_GROUPS};
+use super::hankel::HankelDims;
 use super::modal::{continuous, dc_gain, fn_zeta};
 use super::model::Model;
 use super::pulses::{PulseEnsemble, PulseInput};
 use super::sizing;
 use super::svd::dense::DenseSvd;
 use super::svd::subspace::SubspaceSvd;
+use super::svd::truncated::TruncatedSvd;
 use super::svd::{self, SvdChoice, SvdPath};
 use super::uncertainty::jackknife_std;
 use super::{IdentError, MarkovSeq};
@@ -98,7 +100,7 @@ impl Default for IdentOptions {
 }
 
 /// Everything an identification needs, allocated once.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Workspace {
     limits: Limits,
     ensemble: PulseEnsemble,
@@ -111,12 +113,15 @@ pub struct Workspace {
 }
 
 /// SVD, realisation and jackknife buffers (split from the Markov storage for borrowing).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 struct Engine {
     limits: Limits,
     kmax: usize,
+    dense_rows: usize,
+    dense_cols: usize,
     hbuf: Vec<f64>,
     dense: DenseSvd,
+    trunc: TruncatedSvd,
     sub: SubspaceSvd,
     u: Vec<f64>,
     v: Vec<f64>,
@@ -313,13 +318,23 @@ impl Engine {
         let rows = l.max_block_rows * l.max_outputs;
         let cols = l.max_block_cols * pmax;
         let wide = rows.min(cols);
+        let (dense_rows, dense_cols) = (rows.min(svd::DENSE_MAX_DIM), cols.min(svd::DENSE_MAX_DIM));
         let kmax = (l.max_order + EXTRA_TRIPLETS).min(wide).max(1);
         let n = l.max_order;
         Self {
             limits: *l,
             kmax,
-            hbuf: vec![0.0; rows * cols],
-            dense: DenseSvd::new(rows, cols),
+            dense_rows,
+            dense_cols,
+            hbuf: vec![0.0; dense_rows * dense_cols],
+            dense: DenseSvd::new(dense_rows, dense_cols),
+            trunc: TruncatedSvd::new(
+                l.max_block_rows,
+                l.max_block_cols,
+                l.max_outputs,
+                pmax,
+                kmax,
+            ),
             sub: SubspaceSvd::new(rows, cols, kmax),
             u: vec![0.0; rows * kmax],
             v: vec![0.0; cols * kmax],
@@ -405,11 +420,12 @@ impl Engine {
                 });
             }
         }
-        let path = svd::resolve(opts.svd, rows, cols)?;
+        let path = svd::resolve(opts.svd, rows, cols, self.dense_rows, self.dense_cols)?;
         let k = self.kmax.min(wide);
-        let m = &mut self.model;
+        let mut converged = k;
         match path {
             SvdPath::Dense => {
+                let m = &mut self.model;
                 dims.fill(markov.as_slice(), 0, &mut self.hbuf);
                 self.dense.compute(
                     &self.hbuf,
@@ -423,10 +439,9 @@ impl Engine {
                 m.n_sigma = wide;
             }
             SvdPath::Truncated => {
-                return Err(svd::SvdError::Unavailable("truncated SVD not built yet").into());
+                converged = self.truncated_svd(markov, dims, k, opts.order.unwrap_or(1))?;
             }
         }
-        let sig = &m.sigma[..m.n_sigma];
         let pooled = (self.noise[..q]
             .iter()
             .map(|s| if s.is_finite() { s * s } else { 0.0 })
@@ -434,6 +449,7 @@ impl Engine {
             / q as f64)
             .sqrt();
         let noise_sv = sizing::noise_singular_value(pooled, &dims, growth);
+        let sig = &self.model.sigma[..self.model.n_sigma];
         let n = match opts.order {
             Some(n) => {
                 let rank = sizing::auto_order(sig, 0.0, wide);
@@ -447,6 +463,12 @@ impl Engine {
         if n == 0 {
             return Err(IdentError::RankDeficient { rank: 0, order: 0 });
         }
+        if n > converged {
+            // The automatic order reached past the triplets that had converged: ask for them.
+            self.truncated_svd(markov, dims, k, n)?;
+        }
+        self.h1v(markov, dims, n, path, false)?;
+        let m = &mut self.model;
         m.n = n;
         m.q = q;
         m.p = p;
@@ -463,13 +485,78 @@ impl Engine {
             &m.sigma,
             &self.u,
             &self.v,
-            &mut self.era_scratch,
+            &self.era_scratch,
             &mut m.a,
             &mut m.b,
             &mut m.c,
             &mut m.d,
         );
         m.analyse_modes(&self.u, &self.v)
+    }
+
+    /// Leading `k` triplets by the truncated (FFT + Lanczos) SVD, at least `need` converged;
+    /// the rest are Ritz estimates for the order choice. Returns how many converged.
+    fn truncated_svd(
+        &mut self,
+        markov: &MarkovSeq,
+        dims: HankelDims,
+        k: usize,
+        need: usize,
+    ) -> Result<usize, IdentError> {
+        let m = &mut self.model;
+        let (q, p) = (dims.q, dims.p);
+        let got = self
+            .trunc
+            .compute_at_least(
+                markov.as_slice(),
+                q,
+                p,
+                dims.r,
+                dims.c,
+                0,
+                k,
+                need.min(k),
+                &mut m.sigma[..k],
+                &mut self.u,
+                &mut self.v,
+            )
+            .map_err(svd::SvdError::from)?;
+        m.n_sigma = k;
+        Ok(got)
+    }
+
+    /// `era_scratch = H(1) V_n` (of the jackknife's `V` when `jk`), by FFT products on the
+    /// truncated path and direct products on the dense one.
+    fn h1v(
+        &mut self,
+        markov: &MarkovSeq,
+        dims: HankelDims,
+        n: usize,
+        path: SvdPath,
+        jk: bool,
+    ) -> Result<(), IdentError> {
+        let (rows, cols) = (dims.rows(), dims.cols());
+        let v = if jk { &self.jk_v } else { &self.v };
+        match path {
+            SvdPath::Dense => h1_times_v(markov.as_slice(), &dims, n, v, &mut self.era_scratch),
+            SvdPath::Truncated => {
+                for l in 0..n {
+                    self.trunc
+                        .apply(
+                            markov.as_slice(),
+                            dims.q,
+                            dims.p,
+                            dims.r,
+                            dims.c,
+                            1,
+                            &v[l * cols..(l + 1) * cols],
+                            &mut self.era_scratch[l * rows..(l + 1) * rows],
+                        )
+                        .map_err(svd::SvdError::from)?;
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Converts the realised per-width input matrices `B̃_g` into the single input `B` and
@@ -517,16 +604,37 @@ impl Engine {
         let b = (n + EXTRA_TRIPLETS)
             .min(self.kmax)
             .min(dims.rows().min(dims.cols()));
-        self.sub.compute(
-            markov.as_slice(),
-            dims,
-            b,
-            JACKKNIFE_ITERS,
-            &self.v,
-            &mut self.jk_sigma,
-            &mut self.jk_u,
-            &mut self.jk_v,
-        )?;
+        let path = m.path;
+        match path {
+            SvdPath::Dense => self.sub.compute(
+                markov.as_slice(),
+                dims,
+                b,
+                JACKKNIFE_ITERS,
+                &self.v,
+                &mut self.jk_sigma,
+                &mut self.jk_u,
+                &mut self.jk_v,
+            )?,
+            SvdPath::Truncated => {
+                self.trunc
+                    .compute_at_least(
+                        markov.as_slice(),
+                        dims.q,
+                        dims.p,
+                        dims.r,
+                        dims.c,
+                        0,
+                        b,
+                        n,
+                        &mut self.jk_sigma[..b],
+                        &mut self.jk_u,
+                        &mut self.jk_v,
+                    )
+                    .map_err(svd::SvdError::from)?;
+            }
+        }
+        self.h1v(markov, dims, n, path, true)?;
         let lt = &mut self.lite;
         realize(
             markov.as_slice(),
@@ -535,12 +643,13 @@ impl Engine {
             &self.jk_sigma,
             &self.jk_u,
             &self.jk_v,
-            &mut self.era_scratch,
+            &self.era_scratch,
             &mut lt.a,
             &mut lt.b,
             &mut lt.c,
             &mut lt.d,
         );
+        let m = &self.model;
         lt.m[..n * n].copy_from_slice(&lt.a[..n * n]);
         eigenvalues(&mut lt.m, n, &mut lt.poles)?;
         let (f, z) = match m.pair_s() {

@@ -8,8 +8,15 @@
 //!
 //! **Hankel size and order on the OKID path.** The recovered sequence is smooth (it is the pulse
 //! response of the fitted observer model), so the RMS of its tail says nothing about how well it
-//! is known. The noise floor used instead is OKID's standard error of the Markov parameters
-//! ([`OkidResult::markov_noise`]): the Hankel size follows from where the sequence sinks below
+//! is known. The noise floor used instead is measured by **split halves**: OKID with the same
+//! `ℓ` on the first and on the second half of the record gives two independent estimates, and
+//! `σ = RMS(Y_a − Y_b) / 2` over the first `max(64, 2ℓ)` blocks (each half has twice the
+//! variance of the whole, the difference four times). It includes what a formula would miss:
+//! drift, a change of operating point. It is inflated when the halves are excited differently
+//! (a sine sweep: low frequencies in one half, high in the other), while OKID's regression
+//! standard error ([`OkidResult::markov_noise`]) is inflated by collinear input lags (slow
+//! inputs). Each overstates the noise for a known reason, so the smaller of the two is used
+//! (the regression one alone when a half cannot be identified). The Hankel size follows from where the sequence sinks below
 //! it ([`sizing::signal_length`], [`sizing::hankel_dims`]), and the order from the singular
 //! values above `NOISE_SV_FACTOR · σ (√rows + √cols)` ([`sizing::noise_singular_value`],
 //! [`sizing::auto_order`]), the same rules as the pulse path with this σ.
@@ -40,7 +47,7 @@ pub struct OkidSummary {
     pub observer_order: usize,
     /// Largest `ℓ` considered.
     pub observer_order_max: usize,
-    /// `"bic"` when chosen, `"given"` otherwise.
+    /// `"output_error"` when chosen, `"given"` otherwise.
     pub observer_order_from: &'static str,
     /// Regression rows used.
     pub rows: usize,
@@ -58,6 +65,10 @@ pub struct OkidSummary {
     pub residual_rms: Vec<f64>,
     /// System Markov parameters recovered and handed to ERA.
     pub markov_len: usize,
+    /// Noise of the Markov parameters per output (the floor for Hankel size and order).
+    pub markov_noise: Vec<f64>,
+    /// `"split_half"` or `"regression"`: the smaller estimate (see the module docs).
+    pub markov_noise_from: &'static str,
 }
 
 impl From<&OkidResult> for OkidSummary {
@@ -66,7 +77,7 @@ impl From<&OkidResult> for OkidSummary {
             observer_order: r.observer_order,
             observer_order_max: r.observer_order_max,
             observer_order_from: if r.observer_order_chosen {
-                "bic"
+                "output_error"
             } else {
                 "given"
             },
@@ -78,6 +89,8 @@ impl From<&OkidResult> for OkidSummary {
             regularised: r.regularised,
             residual_rms: r.residual_rms.clone(),
             markov_len: r.len,
+            markov_noise: r.markov_noise.clone(),
+            markov_noise_from: "regression",
         }
     }
 }
@@ -160,7 +173,14 @@ pub fn identify_okid(
     okid_opts: &OkidOptions,
 ) -> Result<AnyModel, AnyError> {
     let missing = (!input.missing.is_empty()).then_some(input.missing);
-    let r = okid(input.u, input.y, missing, okid_opts)?;
+    let mut r = okid(input.u, input.y, missing, okid_opts)?;
+    let from = match split_half_noise(input, &r, okid_opts) {
+        Some(noise) if noise.iter().sum::<f64>() < r.markov_noise.iter().sum::<f64>() => {
+            r.markov_noise = noise;
+            "split_half"
+        }
+        Some(_) | None => "regression",
+    };
     let markov = MarkovSeq::from_data(r.q, r.p, r.markov.clone())?;
     let limits = limits_for(r.len, r.q, r.p, ident);
     let mut ws = Workspace::new(&limits)?;
@@ -189,11 +209,46 @@ pub fn identify_okid(
         }
     }
     ws.identify_markov(&markov, input.dt_s, &opts)?;
+    let mut summary = OkidSummary::from(&r);
+    summary.markov_noise_from = from;
     Ok(AnyModel {
         report: ws.to_report(),
         path: PathTaken::Okid,
-        okid: Some(OkidSummary::from(&r)),
+        okid: Some(summary),
     })
+}
+
+/// `σ_i = RMS_{k, j}(Y_a − Y_b)/2` from OKID on the two halves with the same `ℓ` (see the module
+/// docs); `None` when a half cannot be identified.
+fn split_half_noise(input: &AnyInput<'_>, r: &OkidResult, o: &OkidOptions) -> Option<Vec<f64>> {
+    let n = input.u.first()?.len();
+    let half = n / 2;
+    let opts = OkidOptions {
+        observer_order: Some(r.observer_order),
+        markov_len: Some(r.len),
+        ..*o
+    };
+    let part = |range: std::ops::Range<usize>| {
+        let u: Vec<&[f64]> = input.u.iter().map(|c| &c[range.clone()]).collect();
+        let y: Vec<&[f64]> = input.y.iter().map(|c| &c[range.clone()]).collect();
+        let m = (!input.missing.is_empty()).then(|| &input.missing[range.clone()]);
+        okid(&u, &y, m, &opts).ok()
+    };
+    let (a, b) = (part(0..half)?, part(half..n)?);
+    let blocks = (r.len - 1).min(64.max(2 * r.observer_order));
+    let (q, p) = (r.q, r.p);
+    let noise = (0..q)
+        .map(|i| {
+            let mut sum = 0.0;
+            for k in 1..=blocks {
+                for j in 0..p {
+                    sum += (a.at(k, i, j) - b.at(k, i, j)).powi(2);
+                }
+            }
+            (sum / (blocks * p) as f64).sqrt() / 2.0
+        })
+        .collect::<Vec<f64>>();
+    noise.iter().all(|v| v.is_finite()).then_some(noise)
 }
 
 /// The order from the singular values of the last identification against OKID's noise floor

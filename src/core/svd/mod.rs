@@ -47,12 +47,14 @@ impl SvdPath {
 }
 
 /// Smallest Hankel dimension `min(r*q, c*p)` at which [`SvdChoice::Auto`] takes the truncated
-/// path. Placeholder until the truncated path lands and the svd part measures the crossover;
-/// until then `Auto` is always dense (see [`resolve`]).
+/// path (see [`resolve`]). The svd part measures and tunes it (`docs/core.md`,
+/// `/work/shared/SVD-MEASUREMENTS.md`: the dense Jacobi SVD grows as `m n²`, the truncated one
+/// as `(m + n) log(m + n)` per Lanczos step).
 pub const TRUNCATED_CROSSOVER: usize = 160;
 
-/// True while `core::svd::truncated` is a placeholder.
-const TRUNCATED_AVAILABLE: bool = false;
+/// Largest dimension the dense path's buffers are allocated for (`rows × cols` doubles twice):
+/// beyond it only the truncated path runs.
+pub const DENSE_MAX_DIM: usize = 512;
 
 /// Why an SVD failed.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -71,20 +73,50 @@ pub enum SvdError {
     Unavailable(&'static str),
 }
 
-/// Picks the path for a Hankel matrix of `rows × cols`.
-pub fn resolve(choice: SvdChoice, rows: usize, cols: usize) -> Result<SvdPath, SvdError> {
+/// Picks the path for a Hankel matrix of `rows × cols` given the dense path's capacity
+/// `dense_rows × dense_cols`: `Auto` is dense below [`TRUNCATED_CROSSOVER`] and where it fits.
+pub fn resolve(
+    choice: SvdChoice,
+    rows: usize,
+    cols: usize,
+    dense_rows: usize,
+    dense_cols: usize,
+) -> Result<SvdPath, SvdError> {
+    let fits = rows <= dense_rows && cols <= dense_cols;
     match choice {
-        SvdChoice::Dense => Ok(SvdPath::Dense),
-        SvdChoice::Truncated if TRUNCATED_AVAILABLE => Ok(SvdPath::Truncated),
-        SvdChoice::Truncated => Err(SvdError::Unavailable(
-            "the truncated (FFT + Lanczos) SVD is not built yet",
+        SvdChoice::Dense if fits => Ok(SvdPath::Dense),
+        SvdChoice::Dense => Err(SvdError::Dimensions(
+            "Hankel matrix larger than the dense SVD's capacity (use the truncated SVD)",
         )),
-        SvdChoice::Auto => {
-            if TRUNCATED_AVAILABLE && rows.min(cols) >= TRUNCATED_CROSSOVER {
-                Ok(SvdPath::Truncated)
-            } else {
-                Ok(SvdPath::Dense)
-            }
-        }
+        SvdChoice::Truncated => Ok(SvdPath::Truncated),
+        SvdChoice::Auto if fits && rows.min(cols) < TRUNCATED_CROSSOVER => Ok(SvdPath::Dense),
+        SvdChoice::Auto => Ok(SvdPath::Truncated),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_switches_at_the_crossover_and_the_capacity() {
+        let c = TRUNCATED_CROSSOVER;
+        assert_eq!(
+            resolve(SvdChoice::Auto, c - 1, c - 1, 512, 512),
+            Ok(SvdPath::Dense)
+        );
+        assert_eq!(
+            resolve(SvdChoice::Auto, c, c, 512, 512),
+            Ok(SvdPath::Truncated)
+        );
+        assert_eq!(
+            resolve(SvdChoice::Auto, 10, 10, 8, 8),
+            Ok(SvdPath::Truncated)
+        );
+        assert!(resolve(SvdChoice::Dense, 10, 10, 8, 8).is_err());
+        assert_eq!(
+            resolve(SvdChoice::Truncated, 4, 4, 8, 8),
+            Ok(SvdPath::Truncated)
+        );
     }
 }
