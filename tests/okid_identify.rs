@@ -109,3 +109,77 @@ fn clean_pulse_experiment_takes_the_pulse_path() {
     assert!(m.okid.is_none());
     assert!(rel(m.report.fn_hz, plant.fn_hz) < 1e-6);
 }
+
+use propid::core::operating_points::{operating_points, OpOptions};
+
+fn input_of<'a>(dt: f64, u: &'a [&'a [f64]], y: &'a [&'a [f64]]) -> AnyInput<'a> {
+    AnyInput {
+        dt_s: dt,
+        u,
+        y,
+        missing: &[],
+        pulse_starts: None,
+    }
+}
+
+#[test]
+fn pulses_at_two_levels_give_two_pulse_operating_points() {
+    let plant = Plant::new(10.0, 0.3, 5.0, 0.002);
+    let mut u: Vec<f64> = (0..6000)
+        .map(|k| if k < 3000 { 0.3 } else { 0.5 })
+        .collect();
+    for s in (200..6000).step_by(400).filter(|s| (s % 3000) > 100) {
+        u[s] += 0.05;
+    }
+    let y = plant.simulate(&u, 1.0);
+    let (us, ys) = ([&u[..]], [&y[0][..]]);
+    let ident = IdentOptions {
+        order: Some(2),
+        ..IdentOptions::default()
+    };
+    let t = operating_points(&input_of(plant.dt, &us, &ys), &ident, &OpOptions::default());
+    assert_eq!(t.kind, "staircase");
+    assert_eq!(t.points.len(), 2, "{:?}", t.skipped);
+    for (p, level) in t.points.iter().zip([0.3, 0.5]) {
+        assert_eq!(p.path, PathTaken::Pulse);
+        assert!((p.level - level).abs() < 1e-12);
+        assert!(rel(p.fn_hz, 10.0) < 1e-6, "{}", p.fn_hz);
+    }
+}
+
+#[test]
+fn a_ramp_is_cut_into_windows() {
+    let plant = Plant::new(6.0, 0.8, 3.0, 0.004);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(4);
+    let u: Vec<f64> = (0..4000)
+        .map(|k| 0.2 + 0.5 * k as f64 / 4000.0 + 0.01 * rng.gen_range(-1.0..1.0))
+        .collect();
+    let y = plant.simulate(&u, 0.0);
+    let (us, ys) = ([&u[..]], [&y[0][..]]);
+    let t = operating_points(
+        &input_of(plant.dt, &us, &ys),
+        &IdentOptions::default(),
+        &OpOptions::default(),
+    );
+    assert_eq!(t.kind, "ramp");
+    assert_eq!(t.points.len(), 4, "{:?}", t.skipped);
+    assert!(t.points.windows(2).all(|w| w[1].level > w[0].level));
+    for p in &t.points {
+        assert!(rel(p.dc_gain.get(0), plant.dc(0)) < 1e-6, "{:?}", p.dc_gain);
+    }
+}
+
+#[test]
+fn random_input_is_a_single_operating_point() {
+    let plant = Plant::new(6.0, 0.8, 3.0, 0.004);
+    let u = random(2000, 8);
+    let y = plant.simulate(&u, 0.0);
+    let (us, ys) = ([&u[..]], [&y[0][..]]);
+    let t = operating_points(
+        &input_of(plant.dt, &us, &ys),
+        &IdentOptions::default(),
+        &OpOptions::default(),
+    );
+    assert_eq!(t.kind, "single");
+    assert!(t.points.is_empty() && t.skipped.is_empty());
+}

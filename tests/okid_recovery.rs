@@ -365,3 +365,34 @@ fn bad_input_is_a_typed_error() {
         Err(OkidError::ZeroObserverOrder)
     );
 }
+
+#[test]
+fn significance_truncation_drops_noise_directions_and_says_so() {
+    let sys = underdamped();
+    let u = vec![random_input(3000, 31)];
+    let mut y = sys.simulate(&u);
+    let noise = Normal::new(0.0, 0.05).unwrap();
+    let mut rng = rand::rngs::StdRng::seed_from_u64(32);
+    for v in y[0].iter_mut() {
+        *v += noise.sample(&mut rng);
+    }
+    let opts = OkidOptions {
+        observer_order: Some(20),
+        significance: 3.0,
+        ..OkidOptions::default()
+    };
+    let r = okid(&[&u[0]], &[&y[0]], None, &opts).unwrap();
+    assert!(r.regularised);
+    assert!(r.rank < r.params, "rank {} of {}", r.rank, r.params);
+    assert!(r.markov.iter().all(|v| v.is_finite()));
+    // Noise-free data keep every direction with the same option: still exact.
+    let r = run(
+        &sys,
+        &[random_input(800, 33)],
+        &OkidOptions {
+            significance: 3.0,
+            ..OkidOptions::default()
+        },
+    );
+    assert!(rel_err(&sys, &r) < 1e-8);
+}
