@@ -7,6 +7,14 @@
 //!   the level around them). Level `i`'s segment runs from the second half of level `i−1` (so
 //!   the step into level `i` is in it, with the system at rest before it) to the end of level
 //!   `i`. The first level has no step into it and is only identified when it holds pulses.
+//! - **Ramped staircase** (flat levels on at least half of the samples, ramps between them):
+//!   the levels are the flat runs, the ramps are transitions that belong to no level; segments
+//!   as for a staircase.
+//! - **Pulse experiment** (a staircase of either kind whose levels hold pulses: device pulse
+//!   starts inside a level, or short runs with the level on both sides): one model per level
+//!   that holds pulses, identified from that level's own samples only (each pulse is referenced
+//!   to its own pre-pulse baseline; the step or ramp into the level is not part of its model).
+//!   Levels without pulses (rest at 0 before and after) are listed in `skipped`.
 //! - **Ramp** (the input is strongly correlated with time, |r| > 0.9): [`RAMP_WINDOWS`] windows
 //!   of equal length, each at the mean input over it.
 //! - Anything else is one operating point: the model of the whole record says it all, the
@@ -104,6 +112,8 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
     };
     let (kind, segments) = if super::okid::select::is_piecewise_constant(u) {
         ("staircase", staircase(u, opts.max_pulse_width))
+    } else if is_ramped_staircase(u, opts.max_pulse_width) {
+        ("staircase", flat_levels(u, opts.max_pulse_width))
     } else if is_ramp(u) {
         ("ramp", ramp(u))
     } else {
@@ -120,14 +130,34 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
         kind,
         ..OpTable::default()
     };
-    for seg in segments {
-        match identify_segment(input, &seg, &ident, opts) {
-            Ok(p) => table.points.push(p),
-            Err(reason) => table.skipped.push(SkippedPoint {
-                level: seg.level,
-                reason,
-            }),
+    if kind == "staircase" {
+        // A pulse experiment: one model per flat level that holds pulses, from that level's
+        // own samples (its pulses are referenced to their own baselines; the step or ramp into
+        // it is a transition, not part of its model).
+        let runs = flat_runs(u, opts.max_pulse_width);
+        let with_pulses: Vec<bool> = runs
+            .iter()
+            .map(|r| has_pulses(input, r, opts.max_pulse_width))
+            .collect();
+        if with_pulses.iter().any(|&b| b) {
+            if with_pulses.iter().filter(|&&b| b).count() < 2 {
+                return OpTable::single();
+            }
+            for (seg, pulses) in runs.iter().zip(with_pulses) {
+                if !pulses {
+                    table.skipped.push(SkippedPoint {
+                        level: seg.level,
+                        reason: "no pulses at this level (pulse experiment)".into(),
+                    });
+                    continue;
+                }
+                table.push(identify_segment(input, seg, &ident, opts), seg);
+            }
+            return table;
         }
+    }
+    for seg in segments {
+        table.push(identify_segment(input, &seg, &ident, opts), &seg);
     }
     table
 }
@@ -137,6 +167,16 @@ impl OpTable {
         Self {
             kind: "single",
             ..Self::default()
+        }
+    }
+
+    fn push(&mut self, r: Result<OperatingPoint, String>, seg: &Segment) {
+        match r {
+            Ok(p) => self.points.push(p),
+            Err(reason) => self.skipped.push(SkippedPoint {
+                level: seg.level,
+                reason,
+            }),
         }
     }
 }
@@ -215,6 +255,87 @@ fn staircase(u: &[f64], max_pulse: usize) -> Vec<Segment> {
         segs.push(Segment { from, to, level });
     }
     segs
+}
+
+/// A ramped staircase: at least half of the samples in flat runs longer than `max_pulse`
+/// (see [`crate::core::okid::select::is_ramped_staircase`]), levels joined by ramps.
+fn is_ramped_staircase(u: &[f64], max_pulse: usize) -> bool {
+    super::okid::select::is_ramped_staircase(u, max_pulse)
+}
+
+/// The flat levels of a (possibly ramped) staircase, each over its own samples: runs of
+/// constant input longer than `max_pulse`; shorter runs between two runs at the same level are
+/// pulses and belong to it; anything else (ramp samples, steps) is a transition and belongs to
+/// no level.
+fn flat_runs(u: &[f64], max_pulse: usize) -> Vec<Segment> {
+    let mut runs: Vec<Segment> = Vec::new();
+    let mut start = 0;
+    for k in 1..=u.len() {
+        let end = k == u.len() || (u[k] - u[start]).abs() > 1e-9 && u[k].is_finite();
+        if end {
+            if k - start > max_pulse && u[start].is_finite() {
+                match runs.last_mut() {
+                    // Same level again after a short excursion: a pulse, part of the level.
+                    Some(last) if same(last.level, u[start]) => last.to = k,
+                    _ => runs.push(Segment {
+                        from: start,
+                        to: k,
+                        level: u[start],
+                    }),
+                }
+            }
+            start = k;
+        }
+    }
+    runs
+}
+
+/// Segments of a ramped staircase without pulses, as in [`staircase`]: level `i` from the
+/// middle of flat level `i − 1` (so the ramp or step into it is in the segment) to its end.
+fn flat_levels(u: &[f64], max_pulse: usize) -> Vec<Segment> {
+    let runs = flat_runs(u, max_pulse);
+    runs.iter()
+        .enumerate()
+        .map(|(i, r)| Segment {
+            from: if i == 0 {
+                r.from
+            } else {
+                let prev = &runs[i - 1];
+                prev.from + (prev.to - prev.from) / 2
+            },
+            to: r.to,
+            level: r.level,
+        })
+        .collect()
+}
+
+/// True when the level `seg` holds pulses: device pulse starts inside it, or (without device
+/// events) a run of at most `max_pulse` samples with the level's value on both sides.
+fn has_pulses(input: &AnyInput<'_>, seg: &Segment, max_pulse: usize) -> bool {
+    let r = seg.from..seg.to;
+    if let Some(starts) = input.pulse_starts.filter(|s| !s.is_empty()) {
+        return starts
+            .iter()
+            .any(|&k| k > 0 && r.contains(&k) && same(input.u[0][k - 1], seg.level));
+    }
+    let u = &input.u[0][r];
+    let mut k = 1;
+    while k < u.len() {
+        if same(u[k - 1], seg.level) && !same(u[k], seg.level) {
+            let w = u[k..].iter().take_while(|v| !same(**v, seg.level)).count();
+            if w <= max_pulse && k + w < u.len() && u[k..k + w].iter().all(|v| same(*v, u[k])) {
+                return true;
+            }
+            k += w.max(1);
+        } else {
+            k += 1;
+        }
+    }
+    false
+}
+
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9
 }
 
 /// True when the input follows time closely (|Pearson r| > 0.9).
