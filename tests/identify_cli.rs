@@ -254,3 +254,42 @@ fn tsp1_binary_recording_is_identified() {
     assert!(rel(m["fn_hz"].as_f64().unwrap(), 15.0) < 1e-3, "{m}");
     assert!(rel(m["zeta"].as_f64().unwrap(), 0.3) < 1e-2, "{m}");
 }
+
+/// A recording of the simulated stand's experiment plan (levels reached by ramps, pulses at each
+/// level) is a clean pulse experiment: the pulse path, one model per level.
+#[test]
+fn simulated_stand_recording_takes_the_pulse_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("run.tsp");
+    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sim.toml");
+    let cfg = config.to_str().unwrap();
+    let (code, _, err) = propid(&[
+        "sim",
+        "--config",
+        cfg,
+        "--record",
+        rec.to_str().unwrap(),
+        "--seconds",
+        "20",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let text = std::fs::read_to_string(&config).unwrap();
+    let value = |key: &str| -> f64 {
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(key))
+            .unwrap();
+        line.split('=').nth(1).unwrap().trim().parse().unwrap()
+    };
+    let (fn_true, zeta_true) = (value("fn_hz"), value("zeta"));
+    let v = json(&["identify", rec.to_str().unwrap(), "--json"]);
+    assert_eq!(v["source"]["path"], "pulse");
+    let m = &v["model"];
+    assert!(rel(m["fn_hz"].as_f64().unwrap(), fn_true) < 0.1, "{m}");
+    assert!(rel(m["zeta"].as_f64().unwrap(), zeta_true) < 0.2, "{m}");
+    let pts = v["operating_points"]["points"].as_array().unwrap();
+    assert!(
+        pts.iter().filter(|p| p["path"] == "pulse").count() >= 3,
+        "{pts:?}"
+    );
+}

@@ -3,18 +3,13 @@
 //!
 //! Segmentation (one input):
 //! - **Piecewise-constant input** (a staircase with or without pulses): a *level* is a run of
-//!   constant input longer than `max_pulse_width` samples (shorter runs are pulses and belong to
-//!   the level around them). Level `i`'s segment runs from the second half of level `i−1` (so
-//!   the step into level `i` is in it, with the system at rest before it) to the end of level
-//!   `i`. The first level has no step into it and is only identified when it holds pulses.
-//! - **Ramped staircase** (flat levels on at least half of the samples, ramps between them):
-//!   the levels are the flat runs, the ramps are transitions that belong to no level; segments
-//!   as for a staircase.
-//! - **Pulse experiment** (a staircase of either kind whose levels hold pulses: device pulse
-//!   starts inside a level, or short runs with the level on both sides): one model per level
-//!   that holds pulses, identified from that level's own samples only (each pulse is referenced
-//!   to its own pre-pulse baseline; the step or ramp into the level is not part of its model).
-//!   Levels without pulses (rest at 0 before and after) are listed in `skipped`.
+//!   constant input longer than `max_pulse_width` samples (shorter runs are pulses, or the ramp
+//!   into the next level, and belong to the level before them). A level is identified from its
+//!   own samples when they hold pulses (pulse path); otherwise by OKID over the segment from the
+//!   second half of level `i−1` (so the step into level `i` is in it, with the system at rest
+//!   before it) to the end of level `i`. The first level has no step into it and is only
+//!   identified when it holds pulses. In a pulse experiment (some level holds pulses), levels
+//!   without pulses are listed in `skipped` and not identified.
 //! - **Ramp** (the input is strongly correlated with time, |r| > 0.9): [`RAMP_WINDOWS`] windows
 //!   of equal length, each at the mean input over it.
 //! - Anything else is one operating point: the model of the whole record says it all, the
@@ -26,7 +21,7 @@
 
 use serde::Serialize;
 
-use super::okid::select::{identify_any, AnyInput, PathTaken};
+use super::okid::select::{identify_any, identify_okid, AnyInput, AnyModel, PathTaken};
 use super::okid::OkidOptions;
 use super::report::Gain;
 use super::workspace::IdentOptions;
@@ -98,9 +93,10 @@ pub struct OpTable {
     pub skipped: Vec<SkippedPoint>,
 }
 
-/// A segment: sample range and level.
+/// A segment: sample range, the start of the level's own samples, and the level.
 struct Segment {
     from: usize,
+    own: usize,
     to: usize,
     level: f64,
 }
@@ -112,8 +108,6 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
     };
     let (kind, segments) = if super::okid::select::is_piecewise_constant(u) {
         ("staircase", staircase(u, opts.max_pulse_width))
-    } else if is_ramped_staircase(u, opts.max_pulse_width) {
-        ("staircase", flat_levels(u, opts.max_pulse_width))
     } else if is_ramp(u) {
         ("ramp", ramp(u))
     } else {
@@ -130,34 +124,29 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
         kind,
         ..OpTable::default()
     };
-    if kind == "staircase" {
-        // A pulse experiment: one model per flat level that holds pulses, from that level's
-        // own samples (its pulses are referenced to their own baselines; the step or ramp into
-        // it is a transition, not part of its model).
-        let runs = flat_runs(u, opts.max_pulse_width);
-        let with_pulses: Vec<bool> = runs
-            .iter()
-            .map(|r| has_pulses(input, r, opts.max_pulse_width))
-            .collect();
-        if with_pulses.iter().any(|&b| b) {
-            if with_pulses.iter().filter(|&&b| b).count() < 2 {
-                return OpTable::single();
-            }
-            for (seg, pulses) in runs.iter().zip(with_pulses) {
-                if !pulses {
-                    table.skipped.push(SkippedPoint {
-                        level: seg.level,
-                        reason: "no pulses at this level (pulse experiment)".into(),
-                    });
-                    continue;
-                }
-                table.push(identify_segment(input, seg, &ident, opts), seg);
-            }
-            return table;
+    // A pulse experiment (some level holds pulses): a level without pulses (rest before the
+    // first ramp, after the last) is not an operating point of it, whatever OKID would make of
+    // the ramp into it.
+    let with_pulses: Vec<bool> = segments
+        .iter()
+        .map(|seg| has_pulses(input, seg, opts.max_pulse_width))
+        .collect();
+    let pulse_experiment = with_pulses.iter().any(|&b| b);
+    for (seg, pulses) in segments.iter().zip(with_pulses) {
+        if pulse_experiment && !pulses {
+            table.skipped.push(SkippedPoint {
+                level: seg.level,
+                reason: "no pulses at this level (pulse experiment)".into(),
+            });
+            continue;
         }
-    }
-    for seg in segments {
-        table.push(identify_segment(input, &seg, &ident, opts), &seg);
+        match identify_segment(input, seg, &ident, opts) {
+            Ok(p) => table.points.push(p),
+            Err(reason) => table.skipped.push(SkippedPoint {
+                level: seg.level,
+                reason,
+            }),
+        }
     }
     table
 }
@@ -169,16 +158,6 @@ impl OpTable {
             ..Self::default()
         }
     }
-
-    fn push(&mut self, r: Result<OperatingPoint, String>, seg: &Segment) {
-        match r {
-            Ok(p) => self.points.push(p),
-            Err(reason) => self.skipped.push(SkippedPoint {
-                level: seg.level,
-                reason,
-            }),
-        }
-    }
 }
 
 fn identify_segment(
@@ -187,17 +166,36 @@ fn identify_segment(
     ident: &IdentOptions,
     opts: &OpOptions,
 ) -> Result<OperatingPoint, String> {
+    // Pulses of the level itself first (the pulse path, from the level's own samples only).
+    if seg.own > seg.from && seg.to - seg.own >= opts.min_samples {
+        if let Ok(m) = identify_range(input, seg.own..seg.to, ident, false) {
+            if m.path == PathTaken::Pulse {
+                return Ok(point(seg, seg.own, m, input.dt_s));
+            }
+        }
+    }
     let n = seg.to - seg.from;
     if n < opts.min_samples {
         return Err(format!("only {n} samples (need {})", opts.min_samples));
     }
-    let r = seg.from..seg.to;
+    let okid_only = seg.own > seg.from;
+    let m = identify_range(input, seg.from..seg.to, ident, okid_only).map_err(|e| e.to_string())?;
+    Ok(point(seg, seg.from, m, input.dt_s))
+}
+
+/// Identifies `input` over `r` (by [`identify_any`], or OKID only).
+fn identify_range(
+    input: &AnyInput<'_>,
+    r: std::ops::Range<usize>,
+    ident: &IdentOptions,
+    okid_only: bool,
+) -> Result<AnyModel, super::okid::select::AnyError> {
     let u = [&input.u[0][r.clone()]];
     let y: Vec<&[f64]> = input.y.iter().map(|c| &c[r.clone()]).collect();
     let starts: Option<Vec<usize>> = input.pulse_starts.map(|s| {
         s.iter()
             .filter(|&&k| r.contains(&k))
-            .map(|k| k - seg.from)
+            .map(|k| k - r.start)
             .collect()
     });
     let missing = if input.missing.is_empty() {
@@ -212,18 +210,25 @@ fn identify_segment(
         missing,
         pulse_starts: starts.as_deref(),
     };
-    let m = identify_any(&sub, ident, &OkidOptions::default()).map_err(|e| e.to_string())?;
-    Ok(OperatingPoint {
+    if okid_only {
+        identify_okid(&sub, ident, &OkidOptions::default())
+    } else {
+        identify_any(&sub, ident, &OkidOptions::default())
+    }
+}
+
+fn point(seg: &Segment, from: usize, m: AnyModel, dt_s: f64) -> OperatingPoint {
+    OperatingPoint {
         level: seg.level,
-        start_s: seg.from as f64 * input.dt_s,
-        samples: n,
+        start_s: from as f64 * dt_s,
+        samples: seg.to - from,
         path: m.path,
         order: m.report.order,
         fn_hz: m.report.fn_hz,
         zeta: m.report.zeta,
         time_constants_s: m.report.time_constants_s,
         dc_gain: m.report.dc_gain,
-    })
+    }
 }
 
 /// Levels of a piecewise-constant input: runs longer than `max_pulse`.
@@ -245,80 +250,36 @@ fn staircase(u: &[f64], max_pulse: usize) -> Vec<Segment> {
         }
     }
     let mut segs = Vec::with_capacity(runs.len());
-    for (i, &(from, to, level)) in runs.iter().enumerate() {
+    for (i, &(own, to, level)) in runs.iter().enumerate() {
         let from = if i == 0 {
-            from
+            own
         } else {
             let prev = runs[i - 1];
             prev.0 + (prev.1 - prev.0) / 2
         };
-        segs.push(Segment { from, to, level });
+        segs.push(Segment {
+            from,
+            own,
+            to,
+            level,
+        });
     }
     segs
 }
 
-/// A ramped staircase: at least half of the samples in flat runs longer than `max_pulse`
-/// (see [`crate::core::okid::select::is_ramped_staircase`]), levels joined by ramps.
-fn is_ramped_staircase(u: &[f64], max_pulse: usize) -> bool {
-    super::okid::select::is_ramped_staircase(u, max_pulse)
-}
-
-/// The flat levels of a (possibly ramped) staircase, each over its own samples: runs of
-/// constant input longer than `max_pulse`; shorter runs between two runs at the same level are
-/// pulses and belong to it; anything else (ramp samples, steps) is a transition and belongs to
-/// no level.
-fn flat_runs(u: &[f64], max_pulse: usize) -> Vec<Segment> {
-    let mut runs: Vec<Segment> = Vec::new();
-    let mut start = 0;
-    for k in 1..=u.len() {
-        let end = k == u.len() || (u[k] - u[start]).abs() > 1e-9 && u[k].is_finite();
-        if end {
-            if k - start > max_pulse && u[start].is_finite() {
-                match runs.last_mut() {
-                    // Same level again after a short excursion: a pulse, part of the level.
-                    Some(last) if same(last.level, u[start]) => last.to = k,
-                    _ => runs.push(Segment {
-                        from: start,
-                        to: k,
-                        level: u[start],
-                    }),
-                }
-            }
-            start = k;
-        }
-    }
-    runs
-}
-
-/// Segments of a ramped staircase without pulses, as in [`staircase`]: level `i` from the
-/// middle of flat level `i − 1` (so the ramp or step into it is in the segment) to its end.
-fn flat_levels(u: &[f64], max_pulse: usize) -> Vec<Segment> {
-    let runs = flat_runs(u, max_pulse);
-    runs.iter()
-        .enumerate()
-        .map(|(i, r)| Segment {
-            from: if i == 0 {
-                r.from
-            } else {
-                let prev = &runs[i - 1];
-                prev.from + (prev.to - prev.from) / 2
-            },
-            to: r.to,
-            level: r.level,
-        })
-        .collect()
-}
-
-/// True when the level `seg` holds pulses: device pulse starts inside it, or (without device
-/// events) a run of at most `max_pulse` samples with the level's value on both sides.
+/// True when the level's own samples (`seg.own .. seg.to`) hold pulses: device pulse starts
+/// there with the level just before them, or (without device events) a run of at most
+/// `max_pulse` samples with the level on both sides.
 fn has_pulses(input: &AnyInput<'_>, seg: &Segment, max_pulse: usize) -> bool {
-    let r = seg.from..seg.to;
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9;
+    let r = seg.own..seg.to;
+    let u = input.u[0];
     if let Some(starts) = input.pulse_starts.filter(|s| !s.is_empty()) {
         return starts
             .iter()
-            .any(|&k| k > 0 && r.contains(&k) && same(input.u[0][k - 1], seg.level));
+            .any(|&k| k > 0 && r.contains(&k) && same(u[k - 1], seg.level));
     }
-    let u = &input.u[0][r];
+    let u = &u[r];
     let mut k = 1;
     while k < u.len() {
         if same(u[k - 1], seg.level) && !same(u[k], seg.level) {
@@ -332,10 +293,6 @@ fn has_pulses(input: &AnyInput<'_>, seg: &Segment, max_pulse: usize) -> bool {
         }
     }
     false
-}
-
-fn same(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-9
 }
 
 /// True when the input follows time closely (|Pearson r| > 0.9).
@@ -379,6 +336,7 @@ fn ramp(u: &[f64]) -> Vec<Segment> {
             let (s, c) = vals.fold((0.0, 0usize), |a, v| (a.0 + v, a.1 + 1));
             Segment {
                 from,
+                own: from,
                 to,
                 level: s / c.max(1) as f64,
             }

@@ -1,10 +1,12 @@
 //! One entry for any excitation: the pulse path for a clean pulse experiment, OKID otherwise.
 //!
 //! A record is a **clean pulse experiment** when it has one input, device pulse starts (EVENT
-//! IMPULSE_START) or an input that is piecewise constant (the input changes on at most an
-//! eighth of the samples) or a ramped staircase (flat levels on at least half of the samples,
-//! ramps between them; [`looks_like_pulses`]), and the pulse path of the core finds and keeps
-//! at least one pulse in it. Everything else (random, chirp, multisine, steps,
+//! IMPULSE_START) or an input that is piecewise constant (the input holds its previous value
+//! on at least half of the samples: levels, pulses and the ramps between levels of a stand's
+//! experiment plan, but not random, chirp or multisine input, whose rare equal neighbours could
+//! look like pulses) or a ramped staircase (flat levels on at least half of the samples;
+//! [`looks_like_pulses`]), and the pulse path of the core finds and keeps at least one pulse in
+//! it. Everything else (random, chirp, multisine, steps,
 //! staircases, ramps, several inputs) goes through [`okid`](super::okid) and then ERA on the
 //! recovered Markov parameters ([`Workspace::identify_markov`]). The path taken is reported.
 //!
@@ -327,13 +329,13 @@ pub fn is_ramped_staircase(u: &[f64], max_pulse_width: usize) -> bool {
     flat * 2 >= u.len() && !u.is_empty()
 }
 
-/// True when `u` changes (by more than 1e-9) on at most an eighth of its samples.
+/// True when `u` changes (by more than 1e-9) on at most half of its samples.
 pub fn is_piecewise_constant(u: &[f64]) -> bool {
     let changes = u
         .windows(2)
         .filter(|w| w[0].is_finite() && w[1].is_finite() && (w[1] - w[0]).abs() > 1e-9)
         .count();
-    changes * 8 <= u.len()
+    changes * 2 <= u.len()
 }
 
 /// Root mean square of `v` (NaN when empty).
