@@ -37,7 +37,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub columns: Option<Vec<String>>,
     /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
-    #[arg(long, value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_delimiter = ',')]
     pub esc_us: Option<Vec<f64>>,
     /// Share of the samples (from the start) used for estimation, 0.3..0.9.
     #[arg(long, default_value_t = 0.7)]

@@ -47,7 +47,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub columns: Option<Vec<String>>,
     /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
-    #[arg(long, value_delimiter = ',', num_args = 2)]
+    #[arg(long, value_delimiter = ',')]
     pub esc_us: Option<Vec<f64>>,
 }
 

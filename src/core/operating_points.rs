@@ -8,7 +8,8 @@
 //!   own samples when they hold pulses (pulse path); otherwise by OKID over the segment from the
 //!   second half of level `i−1` (so the step into level `i` is in it, with the system at rest
 //!   before it) to the end of level `i`. The first level has no step into it and is only
-//!   identified when it holds pulses.
+//!   identified when it holds pulses. In a pulse experiment (some level holds pulses), levels
+//!   without pulses are listed in `skipped` and not identified.
 //! - **Ramp** (the input is strongly correlated with time, |r| > 0.9): [`RAMP_WINDOWS`] windows
 //!   of equal length, each at the mean input over it.
 //! - Anything else is one operating point: the model of the whole record says it all, the
@@ -123,8 +124,23 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
         kind,
         ..OpTable::default()
     };
-    for seg in segments {
-        match identify_segment(input, &seg, &ident, opts) {
+    // A pulse experiment (some level holds pulses): a level without pulses (rest before the
+    // first ramp, after the last) is not an operating point of it, whatever OKID would make of
+    // the ramp into it.
+    let with_pulses: Vec<bool> = segments
+        .iter()
+        .map(|seg| has_pulses(input, seg, opts.max_pulse_width))
+        .collect();
+    let pulse_experiment = with_pulses.iter().any(|&b| b);
+    for (seg, pulses) in segments.iter().zip(with_pulses) {
+        if pulse_experiment && !pulses {
+            table.skipped.push(SkippedPoint {
+                level: seg.level,
+                reason: "no pulses at this level (pulse experiment)".into(),
+            });
+            continue;
+        }
+        match identify_segment(input, seg, &ident, opts) {
             Ok(p) => table.points.push(p),
             Err(reason) => table.skipped.push(SkippedPoint {
                 level: seg.level,
@@ -249,6 +265,34 @@ fn staircase(u: &[f64], max_pulse: usize) -> Vec<Segment> {
         });
     }
     segs
+}
+
+/// True when the level's own samples (`seg.own .. seg.to`) hold pulses: device pulse starts
+/// there with the level just before them, or (without device events) a run of at most
+/// `max_pulse` samples with the level on both sides.
+fn has_pulses(input: &AnyInput<'_>, seg: &Segment, max_pulse: usize) -> bool {
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9;
+    let r = seg.own..seg.to;
+    let u = input.u[0];
+    if let Some(starts) = input.pulse_starts.filter(|s| !s.is_empty()) {
+        return starts
+            .iter()
+            .any(|&k| k > 0 && r.contains(&k) && same(u[k - 1], seg.level));
+    }
+    let u = &u[r];
+    let mut k = 1;
+    while k < u.len() {
+        if same(u[k - 1], seg.level) && !same(u[k], seg.level) {
+            let w = u[k..].iter().take_while(|v| !same(**v, seg.level)).count();
+            if w <= max_pulse && k + w < u.len() && u[k..k + w].iter().all(|v| same(*v, u[k])) {
+                return true;
+            }
+            k += w.max(1);
+        } else {
+            k += 1;
+        }
+    }
+    false
 }
 
 /// True when the input follows time closely (|Pearson r| > 0.9).

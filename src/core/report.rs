@@ -179,7 +179,8 @@ pub struct ModelReport {
     /// Pulses found but left out (missing samples, short window).
     pub pulses_skipped: usize,
     /// Output noise RMS estimated from the pre-pulse baselines (output units; for given
-    /// Markov parameters: the RMS of the sequence's noise tail).
+    /// Markov parameters: the RMS of the sequence's noise tail; on the OKID path of
+    /// `identify_any`: the one-step residual RMS of the OKID regression).
     #[serde(with = "nullable::num")]
     pub noise_rms: f64,
     /// Mass–spring–damper equivalent.

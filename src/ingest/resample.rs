@@ -57,7 +57,24 @@ pub enum ResampleError {
     /// The given rate is not a finite positive number.
     #[error("sample rate must be a finite number > 0, got {0}")]
     BadRate(f64),
+    /// The rate would put more grid points on the record than [`MAX_GRID_POINTS`].
+    #[error(
+        "sample rate {fs_hz:e} Hz would need {points:.3e} grid points over the record (at most \
+         {limit}): give a rate close to the logging rate"
+    )]
+    TooManyPoints {
+        /// The rate, Hz (given with --fs, or from the median spacing).
+        fs_hz: f64,
+        /// Grid points it would need.
+        points: f64,
+        /// The bound.
+        limit: usize,
+    },
 }
+
+/// Most grid points a resampled record may have (2^24, about 4.7 hours at 1 kHz; 128 MiB per
+/// channel of f64).
+pub const MAX_GRID_POINTS: usize = 1 << 24;
 
 /// Uniformly sampled channels and the missing mask that came out of [`to_uniform`].
 #[derive(Debug, Clone, PartialEq)]
@@ -115,8 +132,19 @@ pub fn to_uniform(
             jitter,
         });
     }
+    // Bound the grid before allocating it: a rate far above the logging rate (`--fs 1e300`)
+    // would otherwise overflow the length or exhaust memory.
+    let points = ((times[times.len() - 1] - times[0]) / dt).floor() + 1.0;
+    let limit = MAX_GRID_POINTS;
+    if !(points.is_finite() && points <= limit as f64) {
+        return Err(ResampleError::TooManyPoints {
+            fs_hz: fs_hz.unwrap_or(1.0 / dt),
+            points,
+            limit,
+        });
+    }
     let kept: Vec<Vec<f64>> = channels.iter().map(rows).collect();
-    let n = ((times[times.len() - 1] - times[0]) / dt).floor() as usize + 1;
+    let n = points as usize;
     let mut out = vec![Vec::with_capacity(n); kept.len()];
     let mut missing = vec![false; n];
     let mut j = 0;
@@ -217,6 +245,16 @@ mod tests {
         assert!(u.jitter.resampled);
         assert!(u.jitter.gap_samples >= 8, "{}", u.jitter.gap_samples);
         assert!(u.channels[0][25].is_nan() && u.missing[25]);
+    }
+
+    #[test]
+    fn a_rate_far_above_the_logging_rate_is_refused() {
+        let t = [0.0, 0.01, 0.03, 0.04];
+        let y = vec![0.0; 4];
+        let e = to_uniform(&t, std::slice::from_ref(&y), Some(1e300)).unwrap_err();
+        assert!(matches!(e, ResampleError::TooManyPoints { fs_hz, .. } if fs_hz == 1e300));
+        assert!(e.to_string().contains("1e300"), "{e}");
+        assert!(to_uniform(&t, &[y], Some(1e3)).is_ok());
     }
 
     #[test]

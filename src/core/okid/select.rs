@@ -1,10 +1,12 @@
 //! One entry for any excitation: the pulse path for a clean pulse experiment, OKID otherwise.
 //!
-//! A record is a **clean pulse experiment** when it has one input that is piecewise constant
-//! (the input holds its previous value on at least half of the samples: levels, pulses and the
-//! ramps between levels of a stand's experiment plan, but not random, chirp or multisine input,
-//! whose rare equal neighbours could look like pulses) and the pulse path of the core finds
-//! and keeps at least one pulse in it. Everything else (random, chirp, multisine, steps,
+//! A record is a **clean pulse experiment** when it has one input, device pulse starts (EVENT
+//! IMPULSE_START) or an input that is piecewise constant (the input holds its previous value
+//! on at least half of the samples: levels, pulses and the ramps between levels of a stand's
+//! experiment plan, but not random, chirp or multisine input, whose rare equal neighbours could
+//! look like pulses) or a ramped staircase (flat levels on at least half of the samples;
+//! [`looks_like_pulses`]), and the pulse path of the core finds and keeps at least one pulse in
+//! it. Everything else (random, chirp, multisine, steps,
 //! staircases, ramps, several inputs) goes through [`okid`](super::okid) and then ERA on the
 //! recovered Markov parameters ([`Workspace::identify_markov`]). The path taken is reported.
 //!
@@ -28,6 +30,7 @@ use serde::Serialize;
 use super::{okid, OkidError, OkidOptions, OkidResult};
 use crate::core::hankel::HankelDims;
 use crate::core::pulses::PulseInput;
+use crate::core::report::Gain;
 use crate::core::sizing;
 use crate::core::workspace::{IdentOptions, Limits, Workspace};
 use crate::core::{IdentError, MarkovSeq, ModelReport};
@@ -117,6 +120,19 @@ pub enum AnyError {
     /// ERA (or the pulse path) refused the data.
     #[error("{0}")]
     Ident(#[from] IdentError),
+    /// The identification ran but its model has non-finite entries: the data (too short, too
+    /// little excitation) cannot support it. Never published as a model.
+    #[error(
+        "the identified model is not finite ({what}): the record is too short or not exciting \
+         enough{}; use a longer record or a lower --order",
+        condition.map_or(String::new(), |c| format!(" (OKID regression condition {c:.1e})"))
+    )]
+    NonFiniteModel {
+        /// Which part of the model is not finite.
+        what: &'static str,
+        /// Condition number of the OKID regression, when that path was taken.
+        condition: Option<f64>,
+    },
 }
 
 /// The record to identify, borrowed: `u` inputs and `y` outputs of equal length.
@@ -143,7 +159,8 @@ pub fn identify_any(
 ) -> Result<AnyModel, AnyError> {
     let n = input.u.first().map_or(0, |c| c.len());
     let q = input.y.len();
-    if input.u.len() == 1 && is_piecewise_constant(input.u[0]) {
+    check_order(n, q, input.u.len(), ident)?;
+    if input.u.len() == 1 && looks_like_pulses(input, ident.max_pulse_width) {
         let limits = limits_for(n, q, 1, ident);
         let mut ws = Workspace::new(&limits)?;
         let pulse = PulseInput {
@@ -155,11 +172,13 @@ pub fn identify_any(
         };
         match ws.identify(&pulse, ident) {
             Ok(_) => {
+                let report = ws.to_report();
+                check_finite(&report, None)?;
                 return Ok(AnyModel {
-                    report: ws.to_report(),
+                    report,
                     path: PathTaken::Pulse,
                     okid: None,
-                })
+                });
             }
             Err(IdentError::NoPulse | IdentError::AllPulsesSkipped { .. }) => {}
             Err(e) => return Err(e.into()),
@@ -174,6 +193,8 @@ pub fn identify_okid(
     ident: &IdentOptions,
     okid_opts: &OkidOptions,
 ) -> Result<AnyModel, AnyError> {
+    let n = input.u.first().map_or(0, |c| c.len());
+    check_order(n, input.y.len(), input.u.len(), ident)?;
     let missing = (!input.missing.is_empty()).then_some(input.missing);
     let mut r = okid(input.u, input.y, missing, okid_opts)?;
     let from = match split_half_noise(input, &r, okid_opts) {
@@ -184,6 +205,7 @@ pub fn identify_okid(
         Some(_) | None => "regression",
     };
     let markov = MarkovSeq::from_data(r.q, r.p, r.markov.clone())?;
+    check_order(r.len, r.q, r.p, ident)?;
     let limits = limits_for(r.len, r.q, r.p, ident);
     let mut ws = Workspace::new(&limits)?;
     let mut opts = *ident;
@@ -213,8 +235,15 @@ pub fn identify_okid(
     ws.identify_markov(&markov, input.dt_s, &opts)?;
     let mut summary = OkidSummary::from(&r);
     summary.markov_noise_from = from;
+    let mut report = ws.to_report();
+    // The recovered Markov sequence is the smooth pulse response of the fitted observer
+    // model: its tail RMS (what `identify_markov` reports) is ~0 and says nothing about the
+    // measurement. The output noise on this path is the one-step residual RMS of the OKID
+    // regression (RMS over outputs).
+    report.noise_rms = rms(&r.residual_rms);
+    check_finite(&report, Some(r.condition))?;
     Ok(AnyModel {
-        report: ws.to_report(),
+        report,
         path: PathTaken::Okid,
         okid: Some(summary),
     })
@@ -268,6 +297,38 @@ fn okid_order(report: &ModelReport, r: &OkidResult, max_order: usize) -> usize {
     sizing::auto_order(&report.singular_values, noise_sv, max_order).max(1)
 }
 
+/// True when the pulse path should be tried first: the record has device pulse starts
+/// (EVENT IMPULSE_START), or its input is piecewise constant, or it is a ramped staircase
+/// ([`is_ramped_staircase`]). The pulse path itself decides whether there are pulses
+/// ([`IdentError::NoPulse`] falls back to OKID); ramps between levels do not disqualify it,
+/// because every pulse window ends at the next level change and each pulse is referenced to
+/// its own pre-pulse baseline ([`crate::core::pulses`]).
+pub fn looks_like_pulses(input: &AnyInput<'_>, max_pulse_width: usize) -> bool {
+    let Some(u) = input.u.first() else {
+        return false;
+    };
+    input.pulse_starts.is_some_and(|s| !s.is_empty())
+        || is_piecewise_constant(u)
+        || is_ramped_staircase(u, max_pulse_width)
+}
+
+/// True when at least half of the samples of `u` lie in runs of constant value longer than
+/// `max_pulse_width` samples: flat levels joined by ramps (or steps), possibly with pulses on
+/// them. Random, chirp and multisine inputs have no such runs.
+pub fn is_ramped_staircase(u: &[f64], max_pulse_width: usize) -> bool {
+    let mut flat = 0;
+    let mut start = 0;
+    for k in 1..=u.len() {
+        if k == u.len() || !(u[k] - u[start]).abs().le(&1e-9) {
+            if k - start > max_pulse_width {
+                flat += k - start;
+            }
+            start = k;
+        }
+    }
+    flat * 2 >= u.len() && !u.is_empty()
+}
+
 /// True when `u` changes (by more than 1e-9) on at most half of its samples.
 pub fn is_piecewise_constant(u: &[f64]) -> bool {
     let changes = u
@@ -275,6 +336,64 @@ pub fn is_piecewise_constant(u: &[f64]) -> bool {
         .filter(|w| w[0].is_finite() && w[1].is_finite() && (w[1] - w[0]).abs() > 1e-9)
         .count();
     changes * 2 <= u.len()
+}
+
+/// Root mean square of `v` (NaN when empty).
+fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt()
+}
+
+/// Refuses a requested order larger than `n` samples (or Markov blocks) with `q` outputs and
+/// `p` inputs can support, before any workspace is sized from it. ERA's Hankel `H(0)` of `r × c`
+/// blocks from `Y_1 .. Y_{r+c−1}` (and `H(1)` one block further) needs `r + c ≤ n − 1`; its
+/// rank is at most `min(r q, c p)`, largest for `r q = c p`: `(n − 1) p q / (p + q)`. The
+/// workspace also caps `r` and `c` at the default block counts of [`Limits`]. The core checks
+/// the exact Hankel later ([`IdentError::OrderTooHigh`] too); this bound only has to be safe.
+fn check_order(n: usize, q: usize, p: usize, ident: &IdentOptions) -> Result<(), IdentError> {
+    let Some(order) = ident.order else {
+        return Ok(());
+    };
+    let (q, p) = (q.max(1), p.max(1));
+    let d = Limits::default();
+    let data = n.saturating_sub(1) * p * q / (p + q);
+    let max = data.min((d.max_block_rows * q).min(d.max_block_cols * p));
+    if order > max {
+        return Err(IdentError::OrderTooHigh { order, max });
+    }
+    Ok(())
+}
+
+/// OKID regression condition above which an order-2 model without a pole pair (`fn_hz` NaN) is
+/// refused rather than published: a short or poorly exciting record (the audit's 119 samples
+/// gave 4.5e15).
+pub const ILL_CONDITIONED: f64 = 1e12;
+
+/// Refuses a model with non-finite matrices, poles or DC gain, or (order 2, from an OKID
+/// regression whose condition exceeds [`ILL_CONDITIONED`]) non-finite `fn_hz`/`zeta`: a short
+/// or poorly exciting record can produce one without any step failing. An order-2 model of a
+/// first-order plant from well-conditioned data legitimately has no pole pair (`fn_hz` null).
+pub fn check_finite(r: &ModelReport, condition: Option<f64>) -> Result<(), AnyError> {
+    let bad = |m: &[Vec<f64>]| m.iter().flatten().any(|v| !v.is_finite());
+    let gain_bad = match &r.dc_gain {
+        Gain::Scalar(g) => !g.is_finite(),
+        Gain::List(v) => v.iter().any(|g| !g.is_finite()),
+        Gain::Matrix(m) => bad(m),
+    };
+    let what = if bad(&r.a) || bad(&r.b) || bad(&r.c) || bad(&r.d) {
+        "state-space matrices"
+    } else if r.poles_z.iter().flatten().any(|v| !v.is_finite()) {
+        "poles"
+    } else if r.order == 2
+        && !(r.fn_hz.is_finite() && r.zeta.is_finite())
+        && condition.is_some_and(|c| c.is_nan() || c > ILL_CONDITIONED)
+    {
+        "fn_hz/zeta"
+    } else if gain_bad {
+        "dc_gain"
+    } else {
+        return Ok(());
+    };
+    Err(AnyError::NonFiniteModel { what, condition })
 }
 
 /// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs.
