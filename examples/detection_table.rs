@@ -6,9 +6,9 @@
 //! Then the real data: `propid diagnose` (the same loader and diagnosis as the CLI) on the
 //! datasets of `../shared/data` (skipped with a message when absent), one row per file.
 //!
-//! Run: `cargo run --release --example detection_table [CASES] [DATA_DIR]` (default 20,
-//! `../shared/data`). Prints Markdown; `scripts/detection_table.sh` puts it into
-//! `docs/diagnose.md`.
+//! Run: `cargo run --release --example detection_table [CASES] [DATA_DIR]` (default 20;
+//! DATA_DIR defaults to `$PROPID_SHARED_DATA`, else `../shared/data`). Prints Markdown;
+//! `scripts/detection_table.sh` puts it into `docs/diagnose.md`.
 
 use std::path::{Path, PathBuf};
 
@@ -332,7 +332,12 @@ fn main() {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(20);
-    let data = PathBuf::from(std::env::args().nth(2).unwrap_or("../shared/data".into()));
+    let data = PathBuf::from(
+        std::env::args()
+            .nth(2)
+            .or_else(|| std::env::var("PROPID_SHARED_DATA").ok())
+            .unwrap_or("../shared/data".into()),
+    );
     let opts = diagnose::Options::default();
     println!("### Synthetic cases ({cases} per effect, seeded)\n");
     println!("| effect | cases | named | other effect named | parameter error, median (max) | fit gain, median pp | rms ratio, median |");

@@ -115,7 +115,10 @@ fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
     );
     println!(
         "baseline 2nd order: fn {:.3} Hz, zeta {:.3}, dc gain {:.4}; validation fit {:.2} %",
-        b.model.fn_hz, b.model.zeta, b.model.dc_gain, b.fit_percent
+        b.model.report.fn_hz,
+        b.model.report.zeta,
+        b.model.report.dc_gain.get(0),
+        b.fit_percent
     );
     if let Some(c) = &b.core_model {
         println!(

@@ -9,7 +9,7 @@ use serde::Serialize;
 use super::model::{ix, Params, Spec};
 use crate::core::okid::select::{identify_any, AnyInput, PathTaken};
 use crate::core::okid::OkidOptions;
-use crate::core::IdentOptions;
+use crate::core::{IdentOptions, ModelReport};
 
 use super::catalogue::Ctx;
 
@@ -28,8 +28,19 @@ pub struct EraBaseline {
     pub fit_percent: f64,
 }
 
+/// The core's order-2 model of the estimation part.
+#[derive(Debug, Clone)]
+pub struct EraStart {
+    /// `fn`, `ζ`, `K` as output-error parameters (offset 0).
+    pub params: Params,
+    /// Which path the core took.
+    pub path: PathTaken,
+    /// The core's published model (what `propid identify --json` prints for this data).
+    pub report: ModelReport,
+}
+
 /// Runs the core on the estimation part with order 2; `None` when it refuses the data.
-pub fn era_start(ctx: &Ctx) -> Option<(Params, PathTaken)> {
+pub fn era_start(ctx: &Ctx) -> Option<EraStart> {
     let est = ctx.est.clone();
     let u = &ctx.sig.u[est.clone()];
     let y = &ctx.sig.y[est];
@@ -59,7 +70,11 @@ pub fn era_start(ctx: &Ctx) -> Option<(Params, PathTaken)> {
     p.v[ix::FN] = r.fn_hz;
     p.v[ix::ZETA] = r.zeta;
     p.v[ix::GAIN] = k;
-    Some((p, m.path))
+    Some(EraStart {
+        params: p,
+        path: m.path,
+        report: m.report,
+    })
 }
 
 /// The core's model with only the output offset fitted (least squares on the estimation part).

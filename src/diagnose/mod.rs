@@ -211,7 +211,7 @@ pub fn diagnose(
         found.push("saturation".into());
     }
     let era = era_start::era_start(&ctx);
-    let era_starts: Vec<model::Params> = era.iter().map(|e| e.0).collect();
+    let era_starts: Vec<model::Params> = era.iter().map(|e| e.params).collect();
     let base = catalogue::baseline(&ctx, Spec::default(), &era_starts);
     if !base.sse.is_finite() || base.n == 0 {
         return Err(DiagnoseError::FitFailed);
@@ -297,14 +297,15 @@ fn assemble(
     cur: &Fit,
     findings: Vec<Finding>,
     found: Vec<String>,
-    era: Option<(model::Params, crate::core::okid::select::PathTaken)>,
+    era: Option<era_start::EraStart>,
 ) -> Diagnosis {
     let dt = ctx.sig.dt_s;
     let mut sim_b = Vec::new();
     let mut sim_e = Vec::new();
     let (fit_b, rms_b) = validate(ctx, base, &mut sim_b);
-    let core_model = era.map(|(p, path)| {
-        let q = era_start::with_offset(ctx, &p);
+    let core = era.as_ref().map(|e| &e.report);
+    let core_model = era.as_ref().map(|e| {
+        let q = era_start::with_offset(ctx, &e.params);
         let f = Fit {
             spec: Spec::default(),
             params: q,
@@ -312,10 +313,10 @@ fn assemble(
             n: 0,
         };
         let (fit, _) = validate(ctx, &f, &mut sim_e);
-        era_start::summary(&q, path, fit)
+        era_start::summary(&q, e.path, fit)
     });
     let baseline = Stage {
-        model: ModelSummary::from_fit(base, dt),
+        model: ModelSummary::from_fit(base, dt, core),
         fit_percent: fit_b,
         core_model,
     };
@@ -326,7 +327,7 @@ fn assemble(
         let (fit_e, rms_e) = validate(ctx, cur, &mut sim_e);
         let ext = Extended {
             effects: found,
-            model: ModelSummary::from_fit(cur, dt),
+            model: ModelSummary::from_fit(cur, dt, core),
             fit_percent: fit_e,
         };
         let gain = Gain {

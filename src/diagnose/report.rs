@@ -268,7 +268,10 @@ fn markdown(title: &str, d: &Diagnosis, pulses: usize, sv: &[f64]) -> String {
     let _ = writeln!(
         s,
         "**Baseline** (2nd order, output-error fit): fn = {:.3} Hz, ζ = {:.3}, DC gain = {:.4}; validation fit **{:.2} %**.\n",
-        b.model.fn_hz, b.model.zeta, b.model.dc_gain, b.fit_percent
+        b.model.report.fn_hz,
+        b.model.report.zeta,
+        b.model.report.dc_gain.get(0),
+        b.fit_percent
     );
     if let Some(c) = &b.core_model {
         let _ = writeln!(

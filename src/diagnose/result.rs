@@ -6,37 +6,34 @@ use serde_json::{json, Map, Value};
 
 use super::fit::Fit;
 use super::model::{ix, Spec};
+use crate::core::modal::mass_spring_damper;
+use crate::core::report::{
+    Gain as ReportGain, MassSpringDamper, ModeIndicators, ModelReport, Uncertainty,
+};
 use crate::sim::plant::discretise_second_order;
 
-/// A fitted model, summarised with the public model field names (`order`, `dt_s`, `fn_hz`,
-/// `zeta`, `dc_gain`, `time_constants_s`, `poles_s`, `poles_z`, `a`, `b`, `c`, `d`) plus the
-/// terms of the extension (`terms`).
+/// A fitted model, published with every field of `propid identify --json`'s `"model"`
+/// ([`ModelReport`], flattened: same names, same types) plus the terms of the extension
+/// (`terms`).
+///
+/// Where the fields come from:
+/// - `order`, `dt_s`, `fn_hz`, `zeta`, `dc_gain`, `time_constants_s`, `poles_s`, `poles_z`,
+///   `a`, `b`, `c`, `d`, `mass_spring_damper`: the fitted output-error model itself
+///   (`fn_hz`, `zeta` of the 2nd-order core; `mass_spring_damper` = `k = 1/K`, `m = k/ωn²`,
+///   `d = 2ζωn m` of that core, [`crate::core::modal::mass_spring_damper`]).
+/// - `noise_rms`: the RMS of the model's simulation residual on the estimation samples,
+///   `√(SSE/n)`.
+/// - `singular_values`, `pulses`, `pulses_skipped`, `hankel_block_rows`,
+///   `hankel_block_cols`, `svd`: the identification core's run on the estimation part (the ERA /
+///   OKID model the baseline started from, `baseline.core_model`). They describe that data's
+///   Hankel matrix, not the output-error fit; without a core model: empty, 0 and `"none"`.
+/// - `indicators` (ERA's per-mode accuracy indicators) and `uncertainty` (the jackknife over
+///   pulses) have no meaning for an output-error model: one entry of nulls per pole, and nulls.
 #[derive(Debug, Clone, Serialize)]
 pub struct ModelSummary {
-    /// Number of states of the linear part.
-    pub order: usize,
-    /// Sample period, seconds.
-    pub dt_s: f64,
-    /// Natural frequency of the 2nd-order core, Hz.
-    pub fn_hz: f64,
-    /// Damping ratio of the core (> 1: two real poles).
-    pub zeta: f64,
-    /// Small-signal DC gain at the mean throttle, output units per unit throttle.
-    pub dc_gain: f64,
-    /// `−1/s` of every real pole, seconds, descending.
-    pub time_constants_s: Vec<f64>,
-    /// Continuous poles `[re, im]`, 1/s.
-    pub poles_s: Vec<[f64; 2]>,
-    /// Discrete poles `[re, im]`.
-    pub poles_z: Vec<[f64; 2]>,
-    /// Discrete state matrix, rows.
-    pub a: Vec<Vec<f64>>,
-    /// Discrete input matrix (column, as rows of one).
-    pub b: Vec<Vec<f64>>,
-    /// Output matrix, rows.
-    pub c: Vec<Vec<f64>>,
-    /// Feed-through.
-    pub d: Vec<Vec<f64>>,
+    /// The fields of `propid identify --json`'s model.
+    #[serde(flatten)]
+    pub report: ModelReport,
     /// Output offset and the extension's terms (`delay_samples`, `exponent`, `mode_fn_hz`, ...).
     pub terms: Map<String, Value>,
 }
@@ -54,8 +51,9 @@ fn poles(fn_hz: f64, zeta: f64) -> [[f64; 2]; 2] {
 }
 
 impl ModelSummary {
-    /// Summarises a fit on data sampled every `dt_s`.
-    pub fn from_fit(fit: &Fit, dt_s: f64) -> ModelSummary {
+    /// Summarises a fit on data sampled every `dt_s`; `core` is the identification core's model
+    /// of the estimation part (the source of the Hankel fields, see the type's doc).
+    pub fn from_fit(fit: &Fit, dt_s: f64, core: Option<&ModelReport>) -> ModelSummary {
         let v = &fit.params.v;
         let spec = &fit.spec;
         let slope = if spec.static_map {
@@ -99,19 +97,48 @@ impl ModelSummary {
             .map(|s| -1.0 / s[0])
             .collect();
         tcs.sort_by(|a, b| b.total_cmp(a));
-        ModelSummary {
+        let (m, d, kk) = mass_spring_damper(v[ix::FN], v[ix::ZETA], k);
+        let null_mode = ModeIndicators {
+            msv: f64::NAN,
+            mac: f64::NAN,
+            emac: f64::NAN,
+            mpc: f64::NAN,
+            cmi: f64::NAN,
+        };
+        let report = ModelReport {
             order: spec.order(),
             dt_s,
             fn_hz: v[ix::FN],
             zeta: v[ix::ZETA],
-            dc_gain: k,
+            dc_gain: ReportGain::Scalar(k),
             time_constants_s: tcs,
+            indicators: vec![null_mode; ps.len()],
             poles_s: ps,
             poles_z,
             a,
             b,
             c,
             d: vec![vec![0.0]],
+            singular_values: core.map_or(Vec::new(), |r| r.singular_values.clone()),
+            uncertainty: Uncertainty {
+                fn_hz: f64::NAN,
+                zeta: f64::NAN,
+                dc_gain: ReportGain::Scalar(f64::NAN),
+            },
+            pulses: core.map_or(0, |r| r.pulses),
+            pulses_skipped: core.map_or(0, |r| r.pulses_skipped),
+            noise_rms: if fit.n > 0 {
+                (fit.sse / fit.n as f64).sqrt()
+            } else {
+                f64::NAN
+            },
+            mass_spring_damper: MassSpringDamper { m, d, k: kk },
+            hankel_block_rows: core.map_or(0, |r| r.hankel_block_rows),
+            hankel_block_cols: core.map_or(0, |r| r.hankel_block_cols),
+            svd: core.map_or("none".to_string(), |r| r.svd.clone()),
+        };
+        ModelSummary {
+            report,
             terms: terms(spec, fit, dt_s),
         }
     }
@@ -199,7 +226,8 @@ pub struct Finding {
 pub struct Gain {
     /// `fit_extended − fit_baseline`, percentage points.
     pub fit_percent_points: f64,
-    /// `RMS(residual extended) / RMS(residual baseline)`.
+    /// `RMS(residual extended) / RMS(residual baseline)`, both residuals of the simulation
+    /// over the same held-out validation samples (missing outputs skipped).
     pub rms_ratio: f64,
 }
 
