@@ -232,7 +232,7 @@ impl Workspace {
             sizing::tail_noise(&self.grouped, &mut e.noise[..q]);
         }
         let rms = (out_noise.iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
-        e.run(&self.grouped, input.dt_s, &[], opts)?;
+        e.run(&self.grouped, input.dt_s, &[], true, opts)?;
         e.single_input(self.groups.widths(), self.groups.weights(), self.groups.d())?;
         e.model.finish_gain()?;
         e.model.pulses = self.ensemble.kept();
@@ -303,7 +303,7 @@ impl Workspace {
         let e = &mut self.engine;
         sizing::tail_noise(markov, &mut e.noise[..q]);
         let rms = (e.noise[..q].iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
-        e.run(markov, dt_s, &[], opts)?;
+        e.run(markov, dt_s, &[], false, opts)?;
         e.model.finish_gain()?;
         e.model.pulses = 0;
         e.model.skipped = 0;
@@ -363,12 +363,14 @@ impl Engine {
         }
     }
 
-    /// Sizing, SVD, order, realisation and modal analysis of `markov`.
+    /// Sizing, SVD, order, realisation and modal analysis of `markov`; `pulse` stretches the
+    /// automatic Hankel span past the noise crossing ([`sizing::pulse_span`]).
     fn run(
         &mut self,
         markov: &MarkovSeq,
         dt_s: f64,
         growth: &[f64],
+        pulse: bool,
         opts: &IdentOptions,
     ) -> Result<(), IdentError> {
         let l = self.limits;
@@ -391,7 +393,10 @@ impl Engine {
                 sizing::explicit_dims(q, p, r, c, avail, l.max_block_rows, l.max_block_cols)?
             }
             None => {
-                let signal = sizing::signal_length(markov, &self.noise[..q], growth);
+                let mut signal = sizing::signal_length(markov, &self.noise[..q], growth);
+                if pulse {
+                    signal = sizing::pulse_span(signal, len);
+                }
                 if signal == 0 {
                     return Err(IdentError::RankDeficient {
                         rank: 0,
