@@ -10,7 +10,10 @@
 //!
 //! Queueing to the worker uses `try_send` on a bounded channel when the source is live: a full
 //! queue drops the item and counts an overflow, so the sampler never waits for the worker and
-//! never falls behind the device. For a recording (replay) there is no device to fall behind
+//! never falls behind the device. A dropped SAMPLE is also counted in `samples_lost` (the
+//! worker never gets it, exactly as if the link had lost it), and the worker sees the hole it
+//! leaves as a jump in the sample index ([`super::window::Window`] checks continuity): it is
+//! masked as missing, never bridged. For a recording (replay) there is no device to fall behind
 //! and the sampler waits instead (lossless).
 //!
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
@@ -97,6 +100,8 @@ struct Handler {
     lossless: bool,
     tracker: Tracker,
     stats: LinkStats,
+    /// Samples dropped because the queue was full (part of `samples_lost`).
+    overflow_lost: u64,
     plan: Option<Box<dyn Plan>>,
     segment_announced: bool,
     awaiting_stop: Option<u16>,
@@ -112,7 +117,12 @@ impl Handler {
         }
         match self.tx.try_send(item) {
             Ok(()) => {}
-            Err(TrySendError::Full(_)) => self.stats.overflows += 1,
+            Err(TrySendError::Full(item)) => {
+                self.stats.overflows += 1;
+                if matches!(item, Item::Sample(_)) {
+                    self.overflow_lost += 1;
+                }
+            }
             Err(TrySendError::Disconnected(_)) => {}
         }
     }
@@ -211,6 +221,7 @@ impl Sampler {
                 lossless,
                 tracker: Tracker::default(),
                 stats: LinkStats::default(),
+                overflow_lost: 0,
                 plan,
                 segment_announced: false,
                 awaiting_stop: None,
@@ -428,7 +439,7 @@ impl Sampler {
         ] {
             s.frames_dropped.insert(k.to_string(), v);
         }
-        s.samples_lost = self.handler.tracker.samples_lost;
+        s.samples_lost = self.handler.tracker.samples_lost + self.handler.overflow_lost;
         s.gaps = self.handler.tracker.gaps;
         s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
@@ -505,11 +516,17 @@ mod tests {
         let src = ScriptedSource::new(vec![Step::Data(bytes)]);
         let (tx, rx) = crossbeam_channel::bounded(16);
         let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
-        let queued = rx.try_iter().count() as u64;
-        assert_eq!(queued, 16);
+        let queued: Vec<Item> = rx.try_iter().collect();
+        assert_eq!(queued.len(), 16);
         // every sample and event beyond the 16 queued items was dropped and counted
-        assert!(out.stats.overflows > 0);
+        assert_eq!(out.stats.overflows, facts.frames_intact - 16);
         assert_eq!(out.stats.samples, facts.samples_sent);
+        // every dropped sample is lost to the worker: counted in samples_lost
+        let queued_samples = queued
+            .iter()
+            .filter(|i| matches!(i, Item::Sample(_)))
+            .count() as u64;
+        assert_eq!(out.stats.samples_lost, facts.samples_sent - queued_samples);
     }
 
     #[test]
