@@ -16,6 +16,11 @@
 //! masked as missing, never bridged. For a recording (replay) there is no device to fall behind
 //! and the sampler waits instead (lossless).
 //!
+//! `[device] protocol`: with `"auto"` the first bytes are kept (at most
+//! [`DETECT_WINDOW`]) until [`detect`] decides; a stream that is the CSV fallback (PROTOCOL.md
+//! §6) stops the run with [`DaemonError::UnsupportedFormat`] instead of quietly decoding
+//! nothing. `"csv"` is refused before anything is read; `"tsp"` skips the detection.
+//!
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
 //! exponential backoff; the plan is told, does a HELLO handshake again and never re-arms by
 //! itself. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
@@ -26,12 +31,14 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::time::{Duration, Instant};
 
+use super::config::WireProtocol;
 use super::item::{EventItem, Item, Notice, PlanNote, SampleItem};
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
 use super::tracker::Tracker;
 use super::DaemonError;
+use crate::protocol::detect::{detect, Detection, WireFormat, DETECT_WINDOW};
 use crate::protocol::message::{msg_type, Frame, Message};
 use crate::protocol::{encode_frame, DecodeStats, Decoder, MAX_FRAME_LEN};
 
@@ -78,6 +85,8 @@ pub struct SamplerConfig {
     pub reconnect_initial: Duration,
     /// Longest reconnect delay.
     pub reconnect_max: Duration,
+    /// Expected wire format.
+    pub protocol: WireProtocol,
 }
 
 /// What the sampler hands back.
@@ -200,6 +209,8 @@ pub struct Sampler {
     start: Instant,
     buf: Box<[u8; 4096]>,
     cmd: [u8; MAX_FRAME_LEN],
+    /// The first bytes while `protocol = "auto"` has not decided (`None` once decided).
+    prefix: Option<Vec<u8>>,
 }
 
 impl Sampler {
@@ -213,6 +224,8 @@ impl Sampler {
         cfg: SamplerConfig,
     ) -> Sampler {
         let lossless = !source.is_live();
+        let prefix =
+            (cfg.protocol == WireProtocol::Auto).then(|| Vec::with_capacity(DETECT_WINDOW));
         Sampler {
             source,
             decoder: Decoder::new(),
@@ -234,6 +247,7 @@ impl Sampler {
             start: Instant::now(),
             buf: Box::new([0u8; 4096]),
             cmd: [0u8; MAX_FRAME_LEN],
+            prefix,
         }
     }
 
@@ -251,6 +265,12 @@ impl Sampler {
     }
 
     fn run_loop(&mut self) -> Result<(), DaemonError> {
+        if self.cfg.protocol == WireProtocol::Csv {
+            return Err(csv_refused(
+                &*self.source,
+                "protocol = \"csv\" is configured",
+            ));
+        }
         let live = self.source.is_live();
         if live {
             let now = self.now_us();
@@ -266,8 +286,8 @@ impl Sampler {
                 return Ok(());
             }
             match self.read_once() {
-                Ok(()) => {}
-                Err(SourceError::Finished { .. }) => return Ok(()),
+                Ok(()) => self.check_format(false)?,
+                Err(SourceError::Finished { .. }) => return self.check_format(true),
                 Err(SourceError::Disconnected { .. }) => self.reconnect()?,
                 Err(e @ SourceError::Open { .. }) => return Err(e.into()),
             }
@@ -284,6 +304,30 @@ impl Sampler {
                     )));
                 }
                 _ => {}
+            }
+        }
+    }
+
+    /// `protocol = "auto"`: decides the wire format from the first bytes; CSV is refused.
+    fn check_format(&mut self, at_end: bool) -> Result<(), DaemonError> {
+        let Some(prefix) = self.prefix.as_ref() else {
+            return Ok(());
+        };
+        if prefix.is_empty() && at_end {
+            return Ok(());
+        }
+        match detect(prefix, at_end) {
+            Detection::Undecided => Ok(()),
+            Detection::Format(WireFormat::Binary) => {
+                self.prefix = None;
+                Ok(())
+            }
+            Detection::Format(WireFormat::Csv) => {
+                self.prefix = None;
+                Err(csv_refused(
+                    &*self.source,
+                    "the stream is CSV text (detected by protocol = \"auto\")",
+                ))
             }
         }
     }
@@ -306,6 +350,10 @@ impl Sampler {
             if r.write_all(&self.buf[..n]).is_err() {
                 self.record = None; // a full disk must not stop the stand; stats show bytes
             }
+        }
+        if let Some(p) = self.prefix.as_mut() {
+            let room = DETECT_WINDOW.saturating_sub(p.len()).min(n);
+            p.extend_from_slice(&self.buf[..room]);
         }
         self.handler.stats.bytes += n as u64;
         self.handler.now_us = self.now_us();
@@ -446,6 +494,15 @@ impl Sampler {
     }
 }
 
+/// The error for a CSV stream: the daemon decodes binary TSP/1 only.
+fn csv_refused(source: &dyn Source, why: &str) -> DaemonError {
+    DaemonError::UnsupportedFormat(format!(
+        "{}: {why}; the daemon decodes binary TSP/1 only (PROTOCOL.md §1-5). \
+         Identify a CSV recording offline with `propid identify`",
+        source.describe()
+    ))
+}
+
 /// Sleeps `d`, waking early when a stop is requested.
 fn sleep_unless(shutdown: &Shutdown, d: Duration) {
     let end = Instant::now() + d;
@@ -470,7 +527,42 @@ mod tests {
             max_run: None,
             reconnect_initial: Duration::from_millis(1),
             reconnect_max: Duration::from_millis(2),
+            protocol: WireProtocol::Auto,
         }
+    }
+
+    #[test]
+    fn csv_stream_is_refused_not_decoded_as_nothing() {
+        let csv = b"t_us,throttle,thrust_N\n0,0.3,1.0\n1000,0.3,1.1\n2000,0.3,1.2\n".to_vec();
+        let src = ScriptedSource::new(vec![Step::Data(csv.clone())]);
+        let (tx, _rx) = crossbeam_channel::bounded(64);
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
+        let e = out.error.expect("a CSV stream must be refused");
+        assert!(matches!(e, DaemonError::UnsupportedFormat(_)), "{e}");
+        assert!(e.to_string().contains("CSV"), "{e}");
+        // protocol = "csv" is refused before reading
+        let src = ScriptedSource::new(vec![Step::Data(csv)]);
+        let (tx, _rx) = crossbeam_channel::bounded(64);
+        let c = SamplerConfig {
+            protocol: WireProtocol::Csv,
+            ..cfg()
+        };
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), c).run();
+        assert!(matches!(out.error, Some(DaemonError::UnsupportedFormat(_))));
+    }
+
+    #[test]
+    fn binary_stream_passes_detection() {
+        let (bytes, facts) = synth_stream(&SynthConfig {
+            levels: vec![0.4],
+            pulses_per_level: 1,
+            ..SynthConfig::default()
+        });
+        let src = ScriptedSource::new(vec![Step::Data(bytes)]);
+        let (tx, _rx) = crossbeam_channel::bounded(1 << 16);
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
+        assert!(out.error.is_none());
+        assert_eq!(out.stats.samples, facts.samples_sent);
     }
 
     #[test]
