@@ -155,6 +155,13 @@ impl Handler {
                         count: placed.lost_before,
                     });
                 }
+                if placed.duplicate {
+                    // dropped (counted in `duplicates`), as ingest does
+                    if let Some(plan) = self.plan.as_mut() {
+                        plan.on_frame(self.now_us, &frame);
+                    }
+                    return;
+                }
                 let item = SampleItem {
                     index: placed.index,
                     t_us: placed.t_us,
@@ -491,6 +498,7 @@ impl Sampler {
         s.gaps = self.handler.tracker.gaps;
         s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
+        s.duplicates = self.handler.tracker.duplicates;
     }
 }
 
