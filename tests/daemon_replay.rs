@@ -294,3 +294,15 @@ fn replay_of_a_simulated_stand_recording_identifies_the_plant() {
     assert_eq!(s["samples_lost"], 0);
     assert_eq!(dropped_total(s), 0);
 }
+
+#[test]
+fn csv_recording_is_refused_with_exit_3_not_decoded_as_nothing() {
+    let csv = b"t_us,throttle,thrust_N\n0,0.3,1.0\n1000,0.3,1.1\n2000,0.3,1.2\n";
+    let (lines, status, err) = replay(csv, &[]);
+    assert_eq!(status.code(), Some(3), "{err}");
+    assert!(err.contains("CSV"), "{err}");
+    assert!(
+        of_type(&lines, "model").is_empty(),
+        "no model from a refused stream"
+    );
+}

@@ -59,6 +59,8 @@ pub struct RawDevice {
     pub reconnect_initial_ms: Option<u64>,
     /// Longest reconnect delay, ms.
     pub reconnect_max_ms: Option<u64>,
+    /// Wire format: `auto`, `tsp` or `csv`.
+    pub protocol: Option<String>,
 }
 
 /// `[daemon]` as written.
@@ -141,6 +143,19 @@ pub struct DeviceConfig {
     pub reconnect_initial: Duration,
     /// Longest reconnect delay.
     pub reconnect_max: Duration,
+    /// Wire format of the link.
+    pub protocol: WireProtocol,
+}
+
+/// `[device] protocol`: which wire format the daemon expects (PROTOCOL.md §6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WireProtocol {
+    /// Decide from the first bytes ([`crate::protocol::detect`]); a CSV stream is refused.
+    Auto,
+    /// Binary TSP/1 only.
+    Tsp,
+    /// The CSV fallback: not supported by the daemon (refused at start).
+    Csv,
 }
 
 /// Validated daemon settings.
@@ -323,6 +338,18 @@ impl RawDevice {
             )?),
             reconnect_initial: ms(initial),
             reconnect_max: ms(max),
+            protocol: match self.protocol.as_deref().unwrap_or("auto") {
+                "auto" => WireProtocol::Auto,
+                "tsp" => WireProtocol::Tsp,
+                "csv" => WireProtocol::Csv,
+                other => {
+                    return Err(ConfigError::OutOfRange {
+                        key: "device.protocol",
+                        value: format!("{other:?}"),
+                        expected: "one of \"auto\", \"tsp\", \"csv\"",
+                    })
+                }
+            },
         })
     }
 }
@@ -505,6 +532,8 @@ mod tests {
 
     #[test]
     fn reconnect_max_below_initial_is_refused() {
+        let e = err("[device]\nprotocol = \"nmea\"\n");
+        assert!(e.contains("device.protocol") && e.contains("nmea"), "{e}");
         let e = err("[device]\nreconnect_initial_ms = 500\nreconnect_max_ms = 100\n");
         assert!(e.contains("device.reconnect_max_ms"), "{e}");
     }

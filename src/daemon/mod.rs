@@ -57,6 +57,9 @@ pub enum DaemonError {
     /// The signal handler could not be installed.
     #[error("cannot install the signal handler: {0}")]
     Signal(String),
+    /// The stream speaks a wire format the daemon does not decode (the CSV fallback).
+    #[error("unsupported wire format: {0}")]
+    UnsupportedFormat(String),
     /// The device stopped answering commands.
     #[error("link failed: {0}")]
     LinkFailed(String),

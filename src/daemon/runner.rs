@@ -91,6 +91,7 @@ pub fn run<I: Identifier + 'static>(
             max_run: cfg.daemon.max_run,
             reconnect_initial: cfg.device.reconnect_initial,
             reconnect_max: cfg.device.reconnect_max,
+            protocol: cfg.device.protocol,
         },
     );
     let sampler = std::thread::Builder::new()

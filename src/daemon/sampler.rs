@@ -10,8 +10,16 @@
 //!
 //! Queueing to the worker uses `try_send` on a bounded channel when the source is live: a full
 //! queue drops the item and counts an overflow, so the sampler never waits for the worker and
-//! never falls behind the device. For a recording (replay) there is no device to fall behind
+//! never falls behind the device. A dropped SAMPLE is also counted in `samples_lost` (the
+//! worker never gets it, exactly as if the link had lost it), and the worker sees the hole it
+//! leaves as a jump in the sample index ([`super::window::Window`] checks continuity): it is
+//! masked as missing, never bridged. For a recording (replay) there is no device to fall behind
 //! and the sampler waits instead (lossless).
+//!
+//! `[device] protocol`: with `"auto"` the first bytes are kept (at most
+//! [`DETECT_WINDOW`]) until [`detect`] decides; a stream that is the CSV fallback (PROTOCOL.md
+//! §6) stops the run with [`DaemonError::UnsupportedFormat`] instead of quietly decoding
+//! nothing. `"csv"` is refused before anything is read; `"tsp"` skips the detection.
 //!
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
 //! exponential backoff; the plan is told, does a HELLO handshake again and never re-arms by
@@ -23,12 +31,14 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::time::{Duration, Instant};
 
+use super::config::WireProtocol;
 use super::item::{EventItem, Item, Notice, PlanNote, SampleItem};
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
 use super::tracker::Tracker;
 use super::DaemonError;
+use crate::protocol::detect::{detect, Detection, WireFormat, DETECT_WINDOW};
 use crate::protocol::message::{msg_type, Frame, Message};
 use crate::protocol::{encode_frame, DecodeStats, Decoder, MAX_FRAME_LEN};
 
@@ -75,6 +85,8 @@ pub struct SamplerConfig {
     pub reconnect_initial: Duration,
     /// Longest reconnect delay.
     pub reconnect_max: Duration,
+    /// Expected wire format.
+    pub protocol: WireProtocol,
 }
 
 /// What the sampler hands back.
@@ -97,6 +109,8 @@ struct Handler {
     lossless: bool,
     tracker: Tracker,
     stats: LinkStats,
+    /// Samples dropped because the queue was full (part of `samples_lost`).
+    overflow_lost: u64,
     plan: Option<Box<dyn Plan>>,
     segment_announced: bool,
     awaiting_stop: Option<u16>,
@@ -112,7 +126,12 @@ impl Handler {
         }
         match self.tx.try_send(item) {
             Ok(()) => {}
-            Err(TrySendError::Full(_)) => self.stats.overflows += 1,
+            Err(TrySendError::Full(item)) => {
+                self.stats.overflows += 1;
+                if matches!(item, Item::Sample(_)) {
+                    self.overflow_lost += 1;
+                }
+            }
             Err(TrySendError::Disconnected(_)) => {}
         }
     }
@@ -135,6 +154,13 @@ impl Handler {
                         before: placed.index,
                         count: placed.lost_before,
                     });
+                }
+                if placed.duplicate {
+                    // dropped (counted in `duplicates`), as ingest does
+                    if let Some(plan) = self.plan.as_mut() {
+                        plan.on_frame(self.now_us, &frame);
+                    }
+                    return;
                 }
                 let item = SampleItem {
                     index: placed.index,
@@ -190,6 +216,8 @@ pub struct Sampler {
     start: Instant,
     buf: Box<[u8; 4096]>,
     cmd: [u8; MAX_FRAME_LEN],
+    /// The first bytes while `protocol = "auto"` has not decided (`None` once decided).
+    prefix: Option<Vec<u8>>,
 }
 
 impl Sampler {
@@ -203,6 +231,8 @@ impl Sampler {
         cfg: SamplerConfig,
     ) -> Sampler {
         let lossless = !source.is_live();
+        let prefix =
+            (cfg.protocol == WireProtocol::Auto).then(|| Vec::with_capacity(DETECT_WINDOW));
         Sampler {
             source,
             decoder: Decoder::new(),
@@ -211,6 +241,7 @@ impl Sampler {
                 lossless,
                 tracker: Tracker::default(),
                 stats: LinkStats::default(),
+                overflow_lost: 0,
                 plan,
                 segment_announced: false,
                 awaiting_stop: None,
@@ -223,6 +254,7 @@ impl Sampler {
             start: Instant::now(),
             buf: Box::new([0u8; 4096]),
             cmd: [0u8; MAX_FRAME_LEN],
+            prefix,
         }
     }
 
@@ -240,6 +272,12 @@ impl Sampler {
     }
 
     fn run_loop(&mut self) -> Result<(), DaemonError> {
+        if self.cfg.protocol == WireProtocol::Csv {
+            return Err(csv_refused(
+                &*self.source,
+                "protocol = \"csv\" is configured",
+            ));
+        }
         let live = self.source.is_live();
         if live {
             let now = self.now_us();
@@ -255,8 +293,8 @@ impl Sampler {
                 return Ok(());
             }
             match self.read_once() {
-                Ok(()) => {}
-                Err(SourceError::Finished { .. }) => return Ok(()),
+                Ok(()) => self.check_format(false)?,
+                Err(SourceError::Finished { .. }) => return self.check_format(true),
                 Err(SourceError::Disconnected { .. }) => self.reconnect()?,
                 Err(e @ SourceError::Open { .. }) => return Err(e.into()),
             }
@@ -273,6 +311,30 @@ impl Sampler {
                     )));
                 }
                 _ => {}
+            }
+        }
+    }
+
+    /// `protocol = "auto"`: decides the wire format from the first bytes; CSV is refused.
+    fn check_format(&mut self, at_end: bool) -> Result<(), DaemonError> {
+        let Some(prefix) = self.prefix.as_ref() else {
+            return Ok(());
+        };
+        if prefix.is_empty() && at_end {
+            return Ok(());
+        }
+        match detect(prefix, at_end) {
+            Detection::Undecided => Ok(()),
+            Detection::Format(WireFormat::Binary) => {
+                self.prefix = None;
+                Ok(())
+            }
+            Detection::Format(WireFormat::Csv) => {
+                self.prefix = None;
+                Err(csv_refused(
+                    &*self.source,
+                    "the stream is CSV text (detected by protocol = \"auto\")",
+                ))
             }
         }
     }
@@ -295,6 +357,10 @@ impl Sampler {
             if r.write_all(&self.buf[..n]).is_err() {
                 self.record = None; // a full disk must not stop the stand; stats show bytes
             }
+        }
+        if let Some(p) = self.prefix.as_mut() {
+            let room = DETECT_WINDOW.saturating_sub(p.len()).min(n);
+            p.extend_from_slice(&self.buf[..room]);
         }
         self.handler.stats.bytes += n as u64;
         self.handler.now_us = self.now_us();
@@ -428,11 +494,21 @@ impl Sampler {
         ] {
             s.frames_dropped.insert(k.to_string(), v);
         }
-        s.samples_lost = self.handler.tracker.samples_lost;
+        s.samples_lost = self.handler.tracker.samples_lost + self.handler.overflow_lost;
         s.gaps = self.handler.tracker.gaps;
         s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
+        s.duplicates = self.handler.tracker.duplicates;
     }
+}
+
+/// The error for a CSV stream: the daemon decodes binary TSP/1 only.
+fn csv_refused(source: &dyn Source, why: &str) -> DaemonError {
+    DaemonError::UnsupportedFormat(format!(
+        "{}: {why}; the daemon decodes binary TSP/1 only (PROTOCOL.md §1-5). \
+         Identify a CSV recording offline with `propid identify`",
+        source.describe()
+    ))
 }
 
 /// Sleeps `d`, waking early when a stop is requested.
@@ -459,7 +535,42 @@ mod tests {
             max_run: None,
             reconnect_initial: Duration::from_millis(1),
             reconnect_max: Duration::from_millis(2),
+            protocol: WireProtocol::Auto,
         }
+    }
+
+    #[test]
+    fn csv_stream_is_refused_not_decoded_as_nothing() {
+        let csv = b"t_us,throttle,thrust_N\n0,0.3,1.0\n1000,0.3,1.1\n2000,0.3,1.2\n".to_vec();
+        let src = ScriptedSource::new(vec![Step::Data(csv.clone())]);
+        let (tx, _rx) = crossbeam_channel::bounded(64);
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
+        let e = out.error.expect("a CSV stream must be refused");
+        assert!(matches!(e, DaemonError::UnsupportedFormat(_)), "{e}");
+        assert!(e.to_string().contains("CSV"), "{e}");
+        // protocol = "csv" is refused before reading
+        let src = ScriptedSource::new(vec![Step::Data(csv)]);
+        let (tx, _rx) = crossbeam_channel::bounded(64);
+        let c = SamplerConfig {
+            protocol: WireProtocol::Csv,
+            ..cfg()
+        };
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), c).run();
+        assert!(matches!(out.error, Some(DaemonError::UnsupportedFormat(_))));
+    }
+
+    #[test]
+    fn binary_stream_passes_detection() {
+        let (bytes, facts) = synth_stream(&SynthConfig {
+            levels: vec![0.4],
+            pulses_per_level: 1,
+            ..SynthConfig::default()
+        });
+        let src = ScriptedSource::new(vec![Step::Data(bytes)]);
+        let (tx, _rx) = crossbeam_channel::bounded(1 << 16);
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
+        assert!(out.error.is_none());
+        assert_eq!(out.stats.samples, facts.samples_sent);
     }
 
     #[test]
@@ -505,11 +616,17 @@ mod tests {
         let src = ScriptedSource::new(vec![Step::Data(bytes)]);
         let (tx, rx) = crossbeam_channel::bounded(16);
         let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
-        let queued = rx.try_iter().count() as u64;
-        assert_eq!(queued, 16);
+        let queued: Vec<Item> = rx.try_iter().collect();
+        assert_eq!(queued.len(), 16);
         // every sample and event beyond the 16 queued items was dropped and counted
-        assert!(out.stats.overflows > 0);
+        assert_eq!(out.stats.overflows, facts.frames_intact - 16);
         assert_eq!(out.stats.samples, facts.samples_sent);
+        // every dropped sample is lost to the worker: counted in samples_lost
+        let queued_samples = queued
+            .iter()
+            .filter(|i| matches!(i, Item::Sample(_)))
+            .count() as u64;
+        assert_eq!(out.stats.samples_lost, facts.samples_sent - queued_samples);
     }
 
     #[test]

@@ -30,6 +30,8 @@ pub struct LinkStats {
     pub segments: u64,
     /// Times the 32-bit device clock wrapped.
     pub clock_wraps: u64,
+    /// SAMPLE frames dropped as duplicates (same `sample_index` as the previous one).
+    pub duplicates: u64,
 }
 
 /// Worker-side counters.

@@ -6,8 +6,11 @@
 //!   monotonic; a tiny backwards step can only be a corrupted frame that passed the CRC, and
 //!   must not be turned into a 71-minute jump). The same rule unwraps `sample_index`.
 //! - **Gaps.** Within a segment, the next sample must have index `last + 1`. A larger index is
-//!   a gap of `index − last − 1` lost samples: counted and handed on, never bridged. A smaller
-//!   index (with no new HELLO) means the device restarted and its HELLO was lost: a new segment.
+//!   a gap of `index − last − 1` lost samples: counted and handed on, never bridged. The same
+//!   index again is a duplicate: dropped and counted (the rule of
+//!   [`crate::ingest::assemble::SampleAssembler`], so live, replay and `propid identify`
+//!   segment a stream alike). A smaller index (with no new HELLO) means the device restarted
+//!   and its HELLO was lost: a new segment.
 //! - **Segments.** A HELLO whose `boot_id` differs from the current one starts a new segment
 //!   (the device reset: disarmed, counters restarted). The host never re-arms by itself; the
 //!   experiment plan is told and decides (it reports, it does not re-arm).
@@ -50,6 +53,8 @@ pub struct Placed {
     pub lost_before: u64,
     /// This sample starts a new segment (first sample, or the index went backwards).
     pub new_segment: bool,
+    /// The same index as the previous sample: a duplicate, to be dropped.
+    pub duplicate: bool,
 }
 
 /// Clock, gap and segment tracking for one link.
@@ -66,6 +71,8 @@ pub struct Tracker {
     pub gaps: u64,
     /// Segments started.
     pub segments: u64,
+    /// Duplicate samples dropped (same index as the previous one).
+    pub duplicates: u64,
 }
 
 impl Tracker {
@@ -88,7 +95,18 @@ impl Tracker {
     pub fn sample(&mut self, raw_index: u32, raw_t_us: u32) -> Placed {
         let mut new_segment = std::mem::take(&mut self.segment_pending);
         let mut index = self.index.unwrap(raw_index);
-        if matches!(self.last_index, Some(last) if index <= last) {
+        if self.last_index == Some(index) {
+            self.segment_pending = new_segment;
+            self.duplicates += 1;
+            return Placed {
+                index,
+                t_us: self.event_time(raw_t_us),
+                lost_before: 0,
+                new_segment: false,
+                duplicate: true,
+            };
+        }
+        if matches!(self.last_index, Some(last) if index < last) {
             // Backwards or repeated with no new HELLO: the device restarted (its boot HELLO
             // was lost). Its boot id is unknown: the next HELLO is adopted, not a new segment.
             self.restart();
@@ -118,6 +136,7 @@ impl Tracker {
             t_us,
             lost_before,
             new_segment,
+            duplicate: false,
         }
     }
 
@@ -245,6 +264,19 @@ mod tests {
         let p = t.sample(501, 1);
         assert!(!p.new_segment);
         assert!(t.hello(10));
+    }
+
+    #[test]
+    fn repeated_index_is_a_dropped_duplicate_not_a_restart() {
+        let mut t = Tracker::default();
+        t.hello(1);
+        t.sample(10, 0);
+        let p = t.sample(10, 0);
+        assert!(p.duplicate && !p.new_segment);
+        let p = t.sample(11, 1000);
+        assert!(!p.duplicate && !p.new_segment);
+        assert_eq!((p.index, p.lost_before), (11, 0));
+        assert_eq!((t.duplicates, t.segments, t.samples_lost), (1, 1, 0));
     }
 
     #[test]

@@ -17,7 +17,12 @@
 //!   the last pulse's response (decayed: the new pulse's pre-pulse baseline). Each model is
 //!   therefore from K fresh pulses, and the window stays bounded.
 //! - Lost samples (gaps) are pushed as missing (NaN, masked), never bridged; a gap that does not
-//!   fit restarts the window.
+//!   fit restarts the window. The window also checks that sample indices are contiguous by
+//!   itself: a jump the sampler could not announce (its queue was full, so the samples *and*
+//!   the gap notice may have been dropped) is treated exactly like an announced gap, and an
+//!   index going backwards (a new segment whose notice was dropped) closes the window like a
+//!   segment. The identification core leaves out, and counts (`pulses_skipped`), every pulse
+//!   whose response window holds a missing sample.
 
 use std::time::Instant;
 
@@ -105,6 +110,8 @@ pub struct Outcome {
     pub new_level: bool,
     /// The window was full and restarted without K pulses (data discarded).
     pub overflowed: bool,
+    /// Samples missing just before this one that no gap announced (an index jump).
+    pub unannounced_lost: u64,
 }
 
 /// The fixed-capacity window.
@@ -125,6 +132,8 @@ pub struct Window {
     levels_seen: u32,
     in_pulse: bool,
     last_received: Option<Instant>,
+    /// Index the next sample must have (contiguity check); `None` before the first sample.
+    next_index: Option<u64>,
 }
 
 impl Window {
@@ -148,6 +157,7 @@ impl Window {
             levels_seen: 0,
             in_pulse: false,
             last_received: None,
+            next_index: None,
         }
     }
 
@@ -173,6 +183,15 @@ impl Window {
         mut identify: impl FnMut(&WindowView<'_>),
     ) -> Outcome {
         let mut out = Outcome::default();
+        match self.next_index {
+            Some(next) if s.index > next => {
+                out.unannounced_lost = s.index - next;
+                self.on_gap(s.index - next);
+            }
+            Some(next) if s.index < next => self.close(Reason::Segment, &mut identify),
+            _ => {}
+        }
+        self.next_index = Some(s.index + 1);
         if s.has(flags::RAMP_ACTIVE) {
             self.close(Reason::LevelEnd, &mut identify);
             return out;
@@ -214,6 +233,9 @@ impl Window {
 
     /// `count` samples were lost before the next one: masked, or a restart if they do not fit.
     pub fn on_gap(&mut self, count: u64) {
+        if let Some(next) = self.next_index.as_mut() {
+            *next = next.saturating_add(count);
+        }
         if self.level_raw.is_none() {
             return;
         }
@@ -233,6 +255,7 @@ impl Window {
 
     /// A new device segment: what is complete is identified, the rest dropped.
     pub fn on_segment(&mut self, identify: impl FnMut(&WindowView<'_>)) {
+        self.next_index = None;
         self.close(Reason::Segment, identify);
     }
 
@@ -430,6 +453,45 @@ mod tests {
         assert_eq!(starts, vec![5]);
         assert!(nan);
         assert!((dt - 1e-3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unannounced_index_jump_is_masked_not_bridged() {
+        // The sampler's queue overflowed: samples 2..=4 and their gap notice never arrived.
+        let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+        let mut seen = None;
+        w.on_sample(&sample(0, 3000, 0), |_| {});
+        w.on_sample(&sample(1, 3000, flags::IMPULSE_ACTIVE), |_| {});
+        let o = w.on_sample(&sample(5, 3000, 0), |_| {});
+        assert_eq!(o.unannounced_lost, 3);
+        w.on_sample(&sample(6, 3000, 0), |_| {});
+        w.finish(|v| seen = Some((v.missing.to_vec(), v.pulse_starts.to_vec(), v.dt_s)));
+        let (missing, starts, dt) = seen.unwrap();
+        assert_eq!(missing, vec![false, false, true, true, true, false, false]);
+        assert_eq!(starts, vec![1]);
+        assert!((dt - 1e-3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn announced_gap_is_not_counted_twice() {
+        let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+        w.on_sample(&sample(0, 3000, 0), |_| {});
+        w.on_gap(3);
+        let o = w.on_sample(&sample(4, 3000, 0), |_| {});
+        assert_eq!(o.unannounced_lost, 0);
+        assert_eq!(w.len(), 5);
+    }
+
+    #[test]
+    fn index_going_back_closes_the_window_like_a_segment() {
+        let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+        let mut log = Vec::new();
+        feed(&mut w, 100, 100, 3000, 50, 1000, &mut log);
+        assert!(log.is_empty());
+        let mut reasons = Vec::new();
+        w.on_sample(&sample(0, 3000, 0), |v| reasons.push(v.reason));
+        assert_eq!(reasons, vec![Reason::Segment]);
+        assert_eq!(w.len(), 1, "the new segment starts a fresh window");
     }
 
     #[test]

@@ -141,6 +141,12 @@ impl<I: Identifier> Worker<I> {
         if outcome.pulse {
             self.stats.pulses += 1;
         }
+        if outcome.unannounced_lost > 0 {
+            // Only the sampler's full queue drops samples without a gap notice.
+            self.emit(json!({"type": "warning", "kind": "overflow_gap",
+                "message": "samples dropped by a full sampler queue; masked as missing",
+                "before": s.index, "count": outcome.unannounced_lost}));
+        }
         if let Some(d) = done {
             self.publish_model(d);
         }
@@ -395,6 +401,44 @@ mod tests {
         let rows = sched["models"].as_array().unwrap();
         assert_eq!(rows.len(), 3);
         assert_eq!(rows[2]["operating_point"], 0.6);
+    }
+
+    #[test]
+    fn overflow_hole_inside_a_pulse_window_is_masked_and_reported() {
+        let (publisher, lines) = Publisher::capture();
+        struct Masked(Vec<usize>);
+        impl Identifier for Masked {
+            fn identify(&mut self, v: &WindowView<'_>) -> Result<(), String> {
+                self.0.push(v.missing.iter().filter(|m| **m).count());
+                Ok(())
+            }
+            fn report(&self) -> Result<Map<String, Value>, String> {
+                let mut m = Map::new();
+                m.insert("masked".into(), json!(self.0.last()));
+                Ok(m)
+            }
+        }
+        let window = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+        let mut w = Worker::new(window, Masked(Vec::new()), publisher);
+        for i in (0..200u64).filter(|i| !(60..70).contains(i)) {
+            let pulse = i == 50;
+            let f = if pulse { flags::IMPULSE_ACTIVE } else { 0 };
+            w.handle(sample(i, if pulse { 3800 } else { 3000 }, f));
+        }
+        let out = w.finish();
+        drop(out.publisher);
+        let lines = lines.lock().unwrap();
+        let v: Vec<Value> = lines
+            .iter()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert!(v
+            .iter()
+            .any(|l| l["kind"] == "overflow_gap" && l["count"] == 10 && l["before"] == 70));
+        let models: Vec<&Value> = v.iter().filter(|l| l["type"] == "model").collect();
+        assert_eq!(models.len(), 1);
+        assert_eq!(models[0]["masked"], 10, "the hole is masked, not bridged");
+        assert_eq!(models[0]["samples"], 200);
     }
 
     #[test]

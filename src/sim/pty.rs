@@ -97,11 +97,28 @@ fn open_link(link: Option<&Path>) -> Result<Link, SimError> {
         .map(PathBuf::from)
         .ok_or_else(|| SimError::Pty("the pty slave has no name".into()))?;
     drop(slave);
+    set_cloexec(master.as_raw_fd())?;
     set_nonblocking(master.as_raw_fd())?;
     if let Some(l) = link {
         point_link(l, &path)?;
     }
     Ok(Link { master, path })
+}
+
+/// Marks the master close-on-exec: `TTYPort::pair` opens it without, so every child process
+/// (a daemon started by the same process, a test's `propid run`) would inherit it, hold the
+/// pty open and never see the hang-up when the simulator closes its end.
+fn set_cloexec(fd: i32) -> Result<(), SimError> {
+    // SAFETY: fcntl on a descriptor we own; no memory is passed.
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFD) };
+    // SAFETY: as above.
+    if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFD, flags | libc::FD_CLOEXEC) } < 0 {
+        return Err(SimError::io(
+            "making the pty master close-on-exec",
+            std::io::Error::last_os_error(),
+        ));
+    }
+    Ok(())
 }
 
 fn set_nonblocking(fd: i32) -> Result<(), SimError> {
@@ -481,5 +498,23 @@ impl Drop for SimHandle {
     fn drop(&mut self) {
         self.shared.stop.store(true, Ordering::Relaxed);
         let _ = self.join();
+    }
+}
+
+#[cfg(test)]
+mod cloexec_tests {
+    use super::*;
+
+    #[test]
+    fn pty_master_is_close_on_exec() {
+        let link = open_link(None).unwrap();
+        // SAFETY: F_GETFD on a descriptor we own; no memory is passed.
+        let flags = unsafe { libc::fcntl(link.master.as_raw_fd(), libc::F_GETFD) };
+        assert!(flags >= 0);
+        assert_ne!(
+            flags & libc::FD_CLOEXEC,
+            0,
+            "children must not inherit the master"
+        );
     }
 }
