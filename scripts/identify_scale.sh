@@ -2,7 +2,8 @@
 # Whole-process time and peak memory of `propid identify --hankel square --order 2` on one-pulse
 # records of 1 000, 4 000 and 100 000 samples (issue 6 item 2: 100 000 samples, Hankel
 # ≈ 50 000 × 50 000 blocks, under 1 s and under 64 MB peak). Release build, one process per
-# size; wall time (date, around the process) and "Maximum resident set size" from /usr/bin/time -v. Not run by CI.
+# size; wall time measured around the process (includes reading the CSV), peak memory as
+# "Maximum resident set size" from /usr/bin/time -v. Not run by CI.
 #
 # Record: exact discrete 2nd-order plant (fn 20 Hz, ζ 0.3, 1 kHz), one one-sample throttle pulse
 # (1300 → 1500 µs) at sample 100, thrust noise-free; CSV `t_s,throttle,thrust_N`.
