@@ -1,5 +1,5 @@
 //! `propid identify FILE [--order N] [--json] [--input NAME] [--output NAME]... [--fs HZ]
-//! [--svd auto|dense|truncated]`: a model from a TSP/1 recording or a CSV file, by the pulse path
+//! [--svd auto|dense|truncated] [--hankel auto|square|RxC]`: a model from a TSP/1 recording or a CSV file, by the pulse path
 //! for a clean pulse experiment and by OKID otherwise.
 //!
 //! With `--json` exactly one JSON object: `{"model": {...}, "source": {...},
@@ -7,6 +7,11 @@
 //! [`ModelReport`](crate::core::ModelReport) (`dc_gain` a number for one output, a list for
 //! several), `"source"` says which file format, columns, rate and path were used, and
 //! `"operating_points"` is the gain schedule (one model per level, where the data allows).
+//!
+//! `--hankel` sizes ERA's Hankel matrix: `auto` (default) from the noise floor, `square` the
+//! largest near-square one the Markov sequence allows (`r = c ≈ (L − 1)/2` blocks), `RxC`
+//! explicit block counts. The size used is `model.hankel_block_rows`/`hankel_block_cols`.
+//! Large sizes take the truncated FFT + Lanczos SVD (O(N) memory; `docs/svd.md`).
 
 mod load;
 mod summary;
@@ -14,7 +19,7 @@ mod summary;
 use std::path::PathBuf;
 
 use super::CliError;
-use crate::core::okid::select::{identify_any, AnyError, AnyInput};
+use crate::core::okid::select::{identify_any_sized, AnyError, AnyInput, HankelSize};
 use crate::core::okid::OkidOptions;
 use crate::core::operating_points::{operating_points, OpOptions};
 use crate::core::svd::SvdChoice;
@@ -43,6 +48,9 @@ pub struct Args {
     /// SVD path: auto, dense or truncated.
     #[arg(long, default_value = "auto", value_parser = parse_svd)]
     pub svd: SvdChoice,
+    /// Hankel size: auto (from the noise floor), square (largest near-square) or RxC blocks.
+    #[arg(long, default_value = "auto", value_parser = parse_hankel)]
+    pub hankel: HankelSize,
     /// Column names for a CSV file without a header, comma separated.
     #[arg(long, value_delimiter = ',')]
     pub columns: Option<Vec<String>>,
@@ -58,6 +66,25 @@ fn parse_svd(s: &str) -> Result<SvdChoice, String> {
         "truncated" => Ok(SvdChoice::Truncated),
         _ => Err(format!("expected auto, dense or truncated, got {s:?}")),
     }
+}
+
+/// Parses `auto`, `square` or `RxC` (block rows × columns, both >= 1).
+fn parse_hankel(s: &str) -> Result<HankelSize, String> {
+    match s {
+        "auto" => return Ok(HankelSize::Auto),
+        "square" => return Ok(HankelSize::Square),
+        _ => {}
+    }
+    let bad = || format!("expected auto, square or RxC (e.g. 64x64), got {s:?}");
+    let (r, c) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let r: usize = r.trim().parse().map_err(|_| bad())?;
+    let c: usize = c.trim().parse().map_err(|_| bad())?;
+    if r == 0 || c == 0 {
+        return Err(format!(
+            "Hankel block rows and columns must be >= 1, got {s:?}"
+        ));
+    }
+    Ok(HankelSize::Blocks(r, c))
 }
 
 /// Runs `propid identify`.
@@ -77,7 +104,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         missing: &loaded.missing,
         pulse_starts: loaded.pulse_starts.as_deref(),
     };
-    let model = identify_any(&input, &ident, &OkidOptions::default()).map_err(ident_error)?;
+    let model = identify_any_sized(&input, &ident, &OkidOptions::default(), args.hankel)
+        .map_err(ident_error)?;
     let ops = operating_points(&input, &ident, &OpOptions::default());
     let out = summary::Output::new(&loaded, &model, &ops);
     if args.json {
@@ -93,4 +121,19 @@ pub fn run(args: Args) -> Result<(), CliError> {
 
 fn ident_error(e: AnyError) -> CliError {
     CliError::Identification(e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn hankel_sizes_parse() {
+        assert_eq!(parse_hankel("auto"), Ok(HankelSize::Auto));
+        assert_eq!(parse_hankel("square"), Ok(HankelSize::Square));
+        assert_eq!(parse_hankel("40x60"), Ok(HankelSize::Blocks(40, 60)));
+        for bad in ["0x5", "5x0", "5", "x", "ax3", "-1x2", "big"] {
+            assert!(parse_hankel(bad).is_err(), "{bad}");
+        }
+    }
 }

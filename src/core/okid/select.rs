@@ -150,18 +150,79 @@ pub struct AnyInput<'a> {
     pub pulse_starts: Option<&'a [usize]>,
 }
 
+/// How ERA's Hankel matrix is sized (`propid identify --hankel auto|square|RxC`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum HankelSize {
+    /// From the noise floor (`sizing::hankel_dims`), at most the default [`Limits`] blocks.
+    #[default]
+    Auto,
+    /// The largest near-square Hankel the Markov sequence `Y_0 .. Y_{L−1}` allows
+    /// ([`square_blocks`]): `r = c = ⌊(L − 1)/2⌋` blocks for one input and one output.
+    Square,
+    /// Explicit block rows and columns `(r, c)`.
+    Blocks(usize, usize),
+}
+
+/// Block counts `(r, c)` of the largest near-square Hankel from `len` Markov blocks with `q`
+/// outputs and `p` inputs: `H(0)` and `H(1)` use `Y_1 .. Y_{r+c}`, so `r + c = L − 1`, and
+/// `r q ≈ c p` (the split that maximises the rank bound `min(r q, c p)`), i.e.
+/// `r = round((L − 1) p / (p + q))`. Square Hankel matrices give the least biased and least
+/// scattered damping under noise (issue 6). Every dimension is at least one block.
+pub fn square_blocks(len: usize, q: usize, p: usize) -> Result<(usize, usize), IdentError> {
+    let avail = len.saturating_sub(1);
+    let (q, p) = (q.max(1), p.max(1));
+    if avail < 2 {
+        return Err(IdentError::RecordTooShort {
+            needed: 3,
+            available: len,
+        });
+    }
+    let r = ((avail * p) as f64 / (p + q) as f64).round() as usize;
+    let r = r.clamp(1, avail - 1);
+    Ok((r, avail - r))
+}
+
 /// Identifies `input` by the pulse path when it is a clean pulse experiment, by OKID + ERA
-/// otherwise.
+/// otherwise, with the Hankel sized automatically.
 pub fn identify_any(
     input: &AnyInput<'_>,
     ident: &IdentOptions,
     okid_opts: &OkidOptions,
 ) -> Result<AnyModel, AnyError> {
+    identify_any_sized(input, ident, okid_opts, HankelSize::Auto)
+}
+
+/// [`identify_any`] with the Hankel size chosen by `size` (an explicit `ident.hankel_blocks`
+/// is overridden unless `size` is [`HankelSize::Auto`]). For large sizes the workspace is
+/// sized to the Hankel, whose dense buffers stay capped at [`crate::core::svd::DENSE_MAX_DIM`]:
+/// beyond it the truncated (FFT + Lanczos, O(N) memory) SVD runs.
+pub fn identify_any_sized(
+    input: &AnyInput<'_>,
+    ident: &IdentOptions,
+    okid_opts: &OkidOptions,
+    size: HankelSize,
+) -> Result<AnyModel, AnyError> {
     let n = input.u.first().map_or(0, |c| c.len());
     let q = input.y.len();
-    check_order(n, q, input.u.len(), ident)?;
+    check_order(n, q, input.u.len(), ident, size)?;
+    if let HankelSize::Blocks(r, c) = size {
+        // Refused before any buffer is sized from it: the Markov sequence is never longer
+        // than the record.
+        if r == 0 || c == 0 {
+            return Err(
+                IdentError::InvalidInput("Hankel block rows and columns must be >= 1").into(),
+            );
+        }
+        if r.saturating_add(c) > n.saturating_sub(1) {
+            return Err(IdentError::RecordTooShort {
+                needed: r.saturating_add(c).saturating_add(1),
+                available: n,
+            }
+            .into());
+        }
+    }
     if input.u.len() == 1 && looks_like_pulses(input, ident.max_pulse_width) {
-        let limits = limits_for(n, q, 1, ident);
+        let limits = limits_for(n, q, 1, ident, size);
         let mut ws = Workspace::new(&limits)?;
         let pulse = PulseInput {
             dt_s: input.dt_s,
@@ -170,7 +231,31 @@ pub fn identify_any(
             missing: input.missing,
             pulse_starts: input.pulse_starts,
         };
-        match ws.identify(&pulse, ident) {
+        let mut opts = *ident;
+        match size {
+            HankelSize::Auto => {}
+            HankelSize::Blocks(r, c) => opts.hankel_blocks = Some((r, c)),
+            HankelSize::Square => {
+                // The pulse window (hence L) is known only once the ensemble is built: a
+                // small probe builds it, then the square Hankel is cut from its length.
+                let m = ident.order.unwrap_or(2) + 1;
+                let probe = IdentOptions {
+                    hankel_blocks: Some((m, m)),
+                    jackknife: false,
+                    ..*ident
+                };
+                let probed = ws.identify(&pulse, &probe).map(|_| ()).err();
+                let len = match probed {
+                    Some(IdentError::NoPulse | IdentError::AllPulsesSkipped { .. }) => 0,
+                    Some(e) if ws.markov().is_empty() => return Err(e.into()),
+                    _ => ws.markov().len(),
+                };
+                if len > 0 {
+                    opts.hankel_blocks = Some(square_blocks(len, q, 1)?);
+                }
+            }
+        }
+        match ws.identify(&pulse, &opts) {
             Ok(_) => {
                 let report = ws.to_report();
                 check_finite(&report, None)?;
@@ -184,7 +269,7 @@ pub fn identify_any(
             Err(e) => return Err(e.into()),
         }
     }
-    identify_okid(input, ident, okid_opts)
+    identify_okid_sized(input, ident, okid_opts, size)
 }
 
 /// OKID, then ERA on the recovered Markov parameters.
@@ -193,8 +278,18 @@ pub fn identify_okid(
     ident: &IdentOptions,
     okid_opts: &OkidOptions,
 ) -> Result<AnyModel, AnyError> {
+    identify_okid_sized(input, ident, okid_opts, HankelSize::Auto)
+}
+
+/// [`identify_okid`] with the Hankel size chosen by `size` (see [`identify_any_sized`]).
+pub fn identify_okid_sized(
+    input: &AnyInput<'_>,
+    ident: &IdentOptions,
+    okid_opts: &OkidOptions,
+    size: HankelSize,
+) -> Result<AnyModel, AnyError> {
     let n = input.u.first().map_or(0, |c| c.len());
-    check_order(n, input.y.len(), input.u.len(), ident)?;
+    check_order(n, input.y.len(), input.u.len(), ident, size)?;
     let missing = (!input.missing.is_empty()).then_some(input.missing);
     let mut r = okid(input.u, input.y, missing, okid_opts)?;
     let from = match split_half_noise(input, &r, okid_opts) {
@@ -205,10 +300,15 @@ pub fn identify_okid(
         Some(_) | None => "regression",
     };
     let markov = MarkovSeq::from_data(r.q, r.p, r.markov.clone())?;
-    check_order(r.len, r.q, r.p, ident)?;
-    let limits = limits_for(r.len, r.q, r.p, ident);
+    check_order(r.len, r.q, r.p, ident, size)?;
+    let limits = limits_for(r.len, r.q, r.p, ident, size);
     let mut ws = Workspace::new(&limits)?;
     let mut opts = *ident;
+    match size {
+        HankelSize::Auto => {}
+        HankelSize::Square => opts.hankel_blocks = Some(square_blocks(r.len, r.q, r.p)?),
+        HankelSize::Blocks(rb, cb) => opts.hankel_blocks = Some((rb, cb)),
+    }
     if opts.hankel_blocks.is_none() {
         let signal = sizing::signal_length(&markov, &r.markov_noise, &[]).max(8);
         let min_size = opts.order.map_or(3, |n| n + 1);
@@ -347,16 +447,27 @@ fn rms(v: &[f64]) -> f64 {
 /// `p` inputs can support, before any workspace is sized from it. ERA's Hankel `H(0)` of `r × c`
 /// blocks from `Y_1 .. Y_{r+c−1}` (and `H(1)` one block further) needs `r + c ≤ n − 1`; its
 /// rank is at most `min(r q, c p)`, largest for `r q = c p`: `(n − 1) p q / (p + q)`. The
-/// workspace also caps `r` and `c` at the default block counts of [`Limits`]. The core checks
-/// the exact Hankel later ([`IdentError::OrderTooHigh`] too); this bound only has to be safe.
-fn check_order(n: usize, q: usize, p: usize, ident: &IdentOptions) -> Result<(), IdentError> {
+/// workspace also caps `r` and `c` at the default block counts of [`Limits`] when the size is
+/// automatic. The core checks the exact Hankel later ([`IdentError::OrderTooHigh`] too); this
+/// bound only has to be safe.
+fn check_order(
+    n: usize,
+    q: usize,
+    p: usize,
+    ident: &IdentOptions,
+    size: HankelSize,
+) -> Result<(), IdentError> {
     let Some(order) = ident.order else {
         return Ok(());
     };
     let (q, p) = (q.max(1), p.max(1));
     let d = Limits::default();
     let data = n.saturating_sub(1) * p * q / (p + q);
-    let max = data.min((d.max_block_rows * q).min(d.max_block_cols * p));
+    let max = match size {
+        HankelSize::Auto => data.min((d.max_block_rows * q).min(d.max_block_cols * p)),
+        HankelSize::Square => data,
+        HankelSize::Blocks(r, c) => data.min((r * q).min(c * p)),
+    };
     if order > max {
         return Err(IdentError::OrderTooHigh { order, max });
     }
@@ -396,15 +507,30 @@ pub fn check_finite(r: &ModelReport, condition: Option<f64>) -> Result<(), AnyEr
     Err(AnyError::NonFiniteModel { what, condition })
 }
 
-/// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs.
-fn limits_for(n: usize, q: usize, p: usize, ident: &IdentOptions) -> Limits {
+/// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs and the Hankel
+/// `size`. Automatic sizing keeps the default block caps; a square or explicit Hankel raises
+/// them to what it needs (square: at most `n / 2` blocks each way, since `r + c ≤ L − 1 < n`).
+/// With a given order and a sized Hankel, `max_order` is that order: the singular-vector
+/// buffers hold `rows × (max_order + 4)` doubles, which at 50 000 rows is what keeps the
+/// process within O(N) memory of a few MB per buffer.
+fn limits_for(n: usize, q: usize, p: usize, ident: &IdentOptions, size: HankelSize) -> Limits {
     let d = Limits::default();
+    let (max_block_rows, max_block_cols) = match size {
+        HankelSize::Auto => (d.max_block_rows, d.max_block_cols),
+        HankelSize::Square => ((n / 2).max(1), (n / 2).max(1)),
+        HankelSize::Blocks(r, c) => (r.max(1), c.max(1)),
+    };
+    let max_order = match (size, ident.order) {
+        (HankelSize::Auto, o) | (_, o @ None) => o.unwrap_or(d.max_order).max(d.max_order),
+        (_, Some(o)) => o.max(1),
+    };
     Limits {
         max_samples: n.max(4),
         max_outputs: q.max(1),
         max_inputs: p.max(1),
-        max_order: ident.order.unwrap_or(d.max_order).max(d.max_order),
+        max_order,
         max_pulses: (n / 4).clamp(1, 4096),
-        ..d
+        max_block_rows,
+        max_block_cols,
     }
 }
