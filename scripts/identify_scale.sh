@@ -6,7 +6,7 @@
 # "Maximum resident set size" from /usr/bin/time -v. Not run by CI.
 #
 # Record: exact discrete 2nd-order plant (fn 20 Hz, ζ 0.3, 1 kHz), one one-sample throttle pulse
-# (1300 → 1500 µs) at sample 100, thrust noise-free; CSV `t_s,throttle,thrust_N`.
+# (1300 → 1500 µs) at sample 100, thrust noise-free; CSV `t_s,throttle_us,thrust_N`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet --bin propid
@@ -19,7 +19,7 @@ for n in ${SIZES:-1000 4000 100000}; do
         pi = atan2(0, -1); dt = 0.001; w = 2 * pi * 20; z = 0.3;
         r = exp(-z * w * dt); th = w * sqrt(1 - z * z) * dt;
         a1 = 2 * r * cos(th); a2 = -r * r; b = (1 - a1 - a2) / 2;
-        print "t_s,throttle,thrust_N";
+        print "t_s,throttle_us,thrust_N";
         for (k = 0; k < n; k++) { u[k] = (k == 100) ? 1500 : 1300; un[k] = (u[k] - 1000) / 1000 }
         y[0] = un[0]; y[1] = un[0];
         for (k = 2; k < n; k++) y[k] = a1 * y[k-1] + a2 * y[k-2] + b * (un[k-1] + un[k-2]);

@@ -27,7 +27,8 @@ fn write_csv(path: &std::path::Path) {
     for k in 2..N {
         y[k] = a1 * y[k - 1] + a2 * y[k - 2] + b * (un(k - 1) + un(k - 2));
     }
-    let mut s = String::from("t_s,throttle,thrust_N\n");
+    // `throttle_us` with the default ESC range 1000..2000 µs: throttle = (µs − 1000)/1000.
+    let mut s = String::from("t_s,throttle_us,thrust_N\n");
     for k in 0..N {
         s.push_str(&format!("{:.6},{:.3},{:.12}\n", k as f64 * dt, u[k], y[k]));
     }
@@ -65,17 +66,16 @@ fn square_hankel_on_a_long_pulse_record() {
     let zeta = m["zeta"].as_f64().unwrap();
     assert!((fn_hz - FN).abs() < 1e-3 * FN, "fn {fn_hz}");
     assert!((zeta - ZETA).abs() < 1e-3, "zeta {zeta}");
-    // DC gain in the CLI's input units: the same as the automatically sized (128 × 128) Hankel.
+    // DC gain: the truth, and the same as the automatically sized (128 × 128) Hankel.
     let auto = identify(&path, "auto");
     assert_eq!(auto["hankel_block_rows"].as_u64(), Some(128));
     let (g, ga) = (
         m["dc_gain"].as_f64().unwrap(),
         auto["dc_gain"].as_f64().unwrap(),
     );
-    assert!(
-        g.is_finite() && g > 0.0 && (g - ga).abs() < 1e-6 * ga,
-        "{g} vs {ga}"
-    );
+    assert!((g - ga).abs() < 1e-6 * ga, "{g} vs {ga}");
+    // The plant's gain per unit throttle is exactly 1 (b·2 / (1 − a1 − a2)).
+    assert!((g - 1.0).abs() < 1e-6, "dc gain {g}");
 }
 
 #[test]
