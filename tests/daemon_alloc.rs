@@ -1,6 +1,7 @@
 //! The worker's hot path allocates nothing: window bookkeeping and the core identification
 //! over a whole synthetic experiment, counted by a global allocator.
 
+use propid::core::svd::SvdChoice;
 use propid::daemon::identify::CoreIdentifier;
 use propid::daemon::item::SampleItem;
 use propid::daemon::synth::{frames_of, synth_stream, SynthConfig};
@@ -43,7 +44,13 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 #[test]
-fn window_and_identification_allocate_nothing() {
+fn window_and_identification_allocate_nothing_on_both_svd_paths() {
+    for svd in [SvdChoice::Auto, SvdChoice::Dense, SvdChoice::Truncated] {
+        window_and_identification_allocate_nothing(svd);
+    }
+}
+
+fn window_and_identification_allocate_nothing(svd: SvdChoice) {
     let cfg = Config::default();
     let synth = SynthConfig {
         noise: 0.01,
@@ -73,7 +80,7 @@ fn window_and_identification_allocate_nothing() {
         cfg.identify.level_tolerance,
         OutputChannel::Thrust,
     );
-    let mut id = CoreIdentifier::new(&cfg).unwrap();
+    let mut id = CoreIdentifier::new(&cfg).unwrap().with_svd(svd);
     let mut ok = 0u32;
     let mut failed = 0u32;
     COUNTING.with(|c| c.set(true));
@@ -88,10 +95,10 @@ fn window_and_identification_allocate_nothing() {
         Err(_) => failed += 1,
     });
     COUNTING.with(|c| c.set(false));
-    assert_eq!((ok, failed), (6, 0));
+    assert_eq!((ok, failed), (6, 0), "{svd:?}");
     assert_eq!(
-        ALLOCS.load(Ordering::SeqCst),
+        ALLOCS.swap(0, Ordering::SeqCst),
         0,
-        "allocations in the hot path"
+        "allocations in the hot path ({svd:?})"
     );
 }

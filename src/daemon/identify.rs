@@ -12,6 +12,7 @@ use super::window::WindowView;
 use super::worker::Identifier;
 use super::DaemonError;
 use crate::core::pulses::PulseInput;
+use crate::core::svd::SvdChoice;
 use crate::core::workspace::{IdentOptions, Limits, Workspace};
 
 /// The core's workspace behind the daemon's [`Identifier`] trait.
@@ -44,6 +45,12 @@ impl CoreIdentifier {
             opts,
             ok: false,
         })
+    }
+
+    /// Forces one SVD path (the default is [`SvdChoice::Auto`]); both are allocation-free.
+    pub fn with_svd(mut self, svd: SvdChoice) -> CoreIdentifier {
+        self.opts.svd = svd;
+        self
     }
 }
 
