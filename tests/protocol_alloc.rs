@@ -2,41 +2,14 @@
 //! encoding commands with `encode_frame`, and the CSV line decoder on data rows. A counting
 //! global allocator counts this thread's allocations.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
+
+use counting_alloc::allocations;
 
 use propid::protocol::csv::{CsvDecoder, CsvItem};
 use propid::protocol::message::{Log, Sample, SampleFlags};
 use propid::protocol::{encode_frame, Decoder, Impulse, Message, MAX_FRAME_LEN};
-
-struct Counting;
-
-thread_local! {
-    static COUNT: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        COUNT.with(|c| c.set(c.get() + 1));
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        COUNT.with(|c| c.set(c.get() + 1));
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
-fn allocations<T>(f: impl FnOnce() -> T) -> (usize, T) {
-    let before = COUNT.with(|c| c.get());
-    let out = f();
-    (COUNT.with(|c| c.get()) - before, out)
-}
 
 #[test]
 fn decoding_and_encoding_allocate_nothing() {
