@@ -3,6 +3,9 @@
 //! and exits 0 with the stats line; hang-up and reconnect (new boot: never re-armed); the
 //! device watchdog trips when the daemon's heartbeats stop; injected link faults are counted.
 
+#[path = "support/csv_bench.rs"]
+mod csv_bench;
+
 use propid::sim::pty::{RunOptions, SimHandle};
 use propid::sim::SimConfig;
 use serde_json::Value;
@@ -331,4 +334,135 @@ fn injected_link_faults_are_counted_and_the_run_completes() {
     dec.push(&bytes, |_| n += 1);
     assert_eq!(s["frames_ok"].as_u64().unwrap(), n);
     assert_eq!(dec.stats().dropped.total(), dropped);
+}
+
+/// The models of a run (model and schedule lines).
+fn models_of(v: &[Value]) -> Vec<Value> {
+    v.iter()
+        .filter(|l| l["type"] == "model" || l["type"] == "schedule")
+        .cloned()
+        .collect()
+}
+
+#[test]
+fn csv_bench_is_detected_driven_identified_and_replayed_identically() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = daemon_config(dir.path(), "[0.35, 0.5]", 4, 4);
+    let rec = dir.path().join("run.csv");
+    let sim = sim(
+        500,
+        |c| c.stand.protocol = propid::sim::config::WireProtocol::Csv,
+        None,
+    );
+    let truth = SimConfig::default().plant;
+    let port = sim.path().display().to_string();
+    let d = Daemon::start(&[
+        "run",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--port",
+        &port,
+        "--record",
+        rec.to_str().unwrap(),
+    ]);
+    let (status, live, err) = d.finish(30.0);
+    let report = sim.stop().unwrap();
+    assert!(status.success(), "{err}");
+    // detected as CSV ("auto"), driven through the plan in CSV commands
+    assert_eq!(kind(&live, "csv_link").len(), 1, "{live:#?}");
+    assert_eq!(kind(&live, "plan_finished").len(), 1, "{live:#?}");
+    assert!(report.firmware.executed > 0);
+    let stats = live.last().unwrap();
+    assert_eq!(stats["wire"], "csv");
+    assert_eq!(stats["samples_lost"], 0);
+    assert_eq!(stats["duplicates"], 0);
+    let dropped: u64 = stats["frames_dropped"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    assert_eq!(dropped, 0, "{stats}");
+    // pulses found from the throttle column: one model per level, near the simulator's plant
+    let models = of_type(&live, "model");
+    assert_eq!(models.len(), 2, "{live:#?}");
+    for m in &models {
+        let f = m["fn_hz"].as_f64().unwrap();
+        assert!(
+            (f / truth.fn_hz - 1.0).abs() < 0.1,
+            "fn {f} vs {}",
+            truth.fn_hz
+        );
+        assert_eq!(m["pulses"], 4, "{m}");
+    }
+    // the raw CSV bytes replay to the same models
+    let out = Command::new(BIN)
+        .args(["replay", rec.to_str().unwrap(), "--config"])
+        .arg(&cfg)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let replayed: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(models_of(&live), models_of(&replayed));
+    assert_eq!(replayed.last().unwrap()["samples"], stats["samples"]);
+}
+
+#[test]
+fn passive_csv_bench_is_sampled_and_identified_from_its_throttle_column() {
+    use serialport::SerialPort;
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("passive.toml");
+    std::fs::write(
+        &cfg,
+        "[device]\nprotocol = \"csv\"\n[daemon]\nmax_run_s = 3.6\nstop_timeout_ms = 50\n",
+    )
+    .unwrap();
+    // streams CSV rows and never answers (see tests/support/csv_bench.rs for the plant)
+    let rows: String =
+        csv_bench::HEADER.to_string() + &csv_bench::rows(csv_bench::PLANT, 3_000).concat();
+    let (fn_hz, zeta) = (csv_bench::PLANT.fn_hz, csv_bench::PLANT.zeta);
+    let (mut master, slave) = serialport::TTYPort::pair().unwrap();
+    let port = slave.name().unwrap();
+    master.set_timeout(Duration::from_millis(5)).unwrap();
+    let d = Daemon::start(&["run", "--config", cfg.to_str().unwrap(), "--port", &port]);
+    // paced like a real bench: 10 rows every 10 ms; what the daemon writes is read and ignored
+    let bench = std::thread::spawn(move || {
+        let lines: Vec<&str> = rows.lines().collect();
+        let mut sink = [0u8; 256];
+        for chunk in lines.chunks(10) {
+            let mut s = chunk.join("\n");
+            s.push('\n');
+            if master.write_all(s.as_bytes()).is_err() {
+                return;
+            }
+            let _ = std::io::Read::read(&mut master, &mut sink);
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        std::thread::sleep(Duration::from_secs(2));
+    });
+    let (status, lines, err) = d.finish(20.0);
+    bench.join().unwrap();
+    drop(slave);
+    assert!(status.success(), "{err}");
+    assert_eq!(kind(&lines, "passive_bench").len(), 1, "{lines:#?}");
+    let models = of_type(&lines, "model");
+    assert!(models.len() >= 3, "{lines:#?}");
+    for m in &models {
+        let f = m["fn_hz"].as_f64().unwrap();
+        let z = m["zeta"].as_f64().unwrap();
+        assert!((f / fn_hz - 1.0).abs() < 0.02, "fn {f}");
+        assert!((z / zeta - 1.0).abs() < 0.05, "zeta {z}");
+        assert!(
+            (m["dc_gain"].as_f64().unwrap() / 10.0 - 1.0).abs() < 0.05,
+            "{m}"
+        );
+    }
+    let stats = lines.last().unwrap();
+    assert_eq!(stats["wire"], "csv");
+    assert_eq!(stats["samples_lost"], 0, "{stats}");
 }

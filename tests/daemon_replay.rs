@@ -6,6 +6,9 @@ use propid::daemon::synth::{synth_stream, SynthConfig};
 use serde_json::Value;
 use std::process::Command;
 
+#[path = "support/csv_bench.rs"]
+mod csv_bench;
+
 const BIN: &str = env!("CARGO_BIN_EXE_propid");
 
 /// Writes the stream, replays it, returns the parsed lines and the exit status.
@@ -296,13 +299,58 @@ fn replay_of_a_simulated_stand_recording_identifies_the_plant() {
 }
 
 #[test]
-fn csv_recording_is_refused_with_exit_3_not_decoded_as_nothing() {
-    let csv = b"t_us,throttle,thrust_N\n0,0.3,1.0\n1000,0.3,1.1\n2000,0.3,1.2\n";
-    let (lines, status, err) = replay(csv, &[]);
-    assert_eq!(status.code(), Some(3), "{err}");
-    assert!(err.contains("CSV"), "{err}");
-    assert!(
-        of_type(&lines, "model").is_empty(),
-        "no model from a refused stream"
+fn csv_recording_replays_with_every_bad_line_counted_and_nothing_else_lost() {
+    use csv_bench::{rows, with_checksum, HEADER, PLANT};
+    let mut text = String::from("# bench v2 booting\n") + HEADER;
+    for (k, row) in rows(PLANT, 2_000).iter().enumerate() {
+        match k {
+            550 => text += &with_checksum(row).replace(",3000,", ",3001,"), // bad checksum
+            750 => {}                                                       // lost on the way
+            900 => {
+                text += row;
+                text += &"9".repeat(300); // a line far too long
+                text += "\n";
+            }
+            1100 => {
+                text += row;
+                text += &rows(PLANT, 1_098)[1_097]; // a row 3 ms back: out of order
+            }
+            1300 => text += &with_checksum(row),
+            _ => text += row,
+        }
+    }
+    let (lines, status, err) = replay(text.as_bytes(), &[]);
+    assert!(status.success(), "{err}");
+    assert_eq!(
+        lines.iter().filter(|l| l["kind"] == "csv_link").count(),
+        1,
+        "{lines:#?}"
     );
+    let s = stats(&lines);
+    assert_eq!(s["wire"], "csv");
+    assert_eq!(s["samples"], 1_998);
+    assert_eq!(
+        s["samples_lost"], 2,
+        "the bad-checksum row and the lost row"
+    );
+    assert_eq!(s["gaps"], 2);
+    let d = &s["frames_dropped"];
+    assert_eq!(
+        (
+            d["bad_checksum"].as_u64(),
+            d["line_too_long"].as_u64(),
+            d["row_out_of_order"].as_u64(),
+            d["bad_row"].as_u64()
+        ),
+        (Some(1), Some(1), Some(1), Some(0)),
+        "{s}"
+    );
+    assert_eq!(dropped_total(s), 3);
+    // 10 pulses, K = 4: models from pulses 1-4 and 5-8, the last from what is left
+    let models = of_type(&lines, "model");
+    assert!(models.len() >= 2, "{lines:#?}");
+    for m in &models {
+        let f = m["fn_hz"].as_f64().unwrap();
+        assert!((f / PLANT.fn_hz - 1.0).abs() < 0.02, "{m}");
+    }
 }

@@ -40,7 +40,6 @@ pub fn daemon_error(e: DaemonError) -> CliError {
             }
         }
         DaemonError::Identify(m) => CliError::Identification(m),
-        e @ DaemonError::UnsupportedFormat(_) => CliError::Input(e.to_string()),
     }
 }
 

@@ -109,6 +109,20 @@ pub struct RawPublish {
     pub client_queue_lines: Option<usize>,
 }
 
+/// `[csv]` as written: how a CSV bench (PROTOCOL.md §6) is read.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCsv {
+    /// ESC pulse width at zero throttle, µs (for a `throttle_us` column).
+    pub esc_min_us: Option<f64>,
+    /// ESC pulse width at full throttle, µs.
+    pub esc_max_us: Option<f64>,
+    /// Motor magnet poles (for an `erpm` column; 0 = unknown).
+    pub motor_poles: Option<u32>,
+    /// A throttle excursion that returns within this many samples is a pulse.
+    pub max_pulse_samples: Option<usize>,
+}
+
 /// The whole file as written (phase 1).
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -125,6 +139,9 @@ pub struct RawConfig {
     /// `[publish]`.
     #[serde(default)]
     pub publish: RawPublish,
+    /// `[csv]`.
+    #[serde(default)]
+    pub csv: RawCsv,
     /// `[experiment]`: passed through to the experiment plan, which validates it.
     #[serde(default)]
     pub experiment: Option<toml::Table>,
@@ -150,11 +167,11 @@ pub struct DeviceConfig {
 /// `[device] protocol`: which wire format the daemon expects (PROTOCOL.md §6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WireProtocol {
-    /// Decide from the first bytes ([`crate::protocol::detect`]); a CSV stream is refused.
+    /// Decide from the first bytes ([`crate::protocol::detect`]).
     Auto,
     /// Binary TSP/1 only.
     Tsp,
-    /// The CSV fallback: not supported by the daemon (refused at start).
+    /// The CSV fallback (read through [`super::csv_link`]).
     Csv,
 }
 
@@ -201,6 +218,19 @@ pub struct PublishConfig {
     pub client_queue_lines: usize,
 }
 
+/// Validated CSV-bench settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CsvConfig {
+    /// ESC pulse width at zero throttle, µs.
+    pub esc_min_us: f64,
+    /// ESC pulse width at full throttle, µs.
+    pub esc_max_us: f64,
+    /// Motor magnet poles; `None` = unknown (an `erpm` column is then not read).
+    pub motor_poles: Option<u32>,
+    /// Longest throttle excursion read as a pulse, samples.
+    pub max_pulse_samples: usize,
+}
+
 /// The validated configuration (phase 2).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Config {
@@ -212,6 +242,8 @@ pub struct Config {
     pub identify: IdentifyConfig,
     /// `[publish]`.
     pub publish: PublishConfig,
+    /// `[csv]`.
+    pub csv: CsvConfig,
     /// `[experiment]` table, validated by the experiment plan.
     pub experiment: toml::Table,
 }
@@ -298,6 +330,7 @@ impl RawConfig {
             daemon: self.daemon.validate()?,
             identify: self.identify.validate()?,
             publish: self.publish.validate()?,
+            csv: self.csv.validate()?,
             experiment: self.experiment.unwrap_or_default(),
         })
     }
@@ -447,6 +480,46 @@ impl RawPublish {
     }
 }
 
+impl RawCsv {
+    fn validate(self) -> Result<CsvConfig, ConfigError> {
+        let esc_min_us = float_in(
+            "csv.esc_min_us",
+            self.esc_min_us.unwrap_or(1_000.0),
+            0.0,
+            3_000.0,
+            "0..=3000 µs",
+        )?;
+        let esc_max_us = self.esc_max_us.unwrap_or(2_000.0);
+        if !(esc_max_us.is_finite() && esc_max_us > esc_min_us && esc_max_us <= 3_000.0) {
+            return Err(ConfigError::OutOfRange {
+                key: "csv.esc_max_us",
+                value: esc_max_us.to_string(),
+                expected: "above csv.esc_min_us, at most 3000 µs",
+            });
+        }
+        let poles = self.motor_poles.unwrap_or(0);
+        if !(poles == 0 || (2..=64).contains(&poles) && poles % 2 == 0) {
+            return Err(ConfigError::OutOfRange {
+                key: "csv.motor_poles",
+                value: poles.to_string(),
+                expected: "0 (unknown) or an even number 2..=64",
+            });
+        }
+        Ok(CsvConfig {
+            esc_min_us,
+            esc_max_us,
+            motor_poles: (poles > 0).then_some(poles),
+            max_pulse_samples: int_in(
+                "csv.max_pulse_samples",
+                self.max_pulse_samples.unwrap_or(64),
+                1,
+                4_096,
+                "1..=4096 samples",
+            )?,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -536,6 +609,24 @@ mod tests {
         assert!(e.contains("device.protocol") && e.contains("nmea"), "{e}");
         let e = err("[device]\nreconnect_initial_ms = 500\nreconnect_max_ms = 100\n");
         assert!(e.contains("device.reconnect_max_ms"), "{e}");
+    }
+
+    #[test]
+    fn csv_keys_are_checked() {
+        let c = Config::parse("[csv]\nesc_min_us = 1100\nmotor_poles = 14\n", "t").unwrap();
+        assert_eq!(c.csv.esc_min_us, 1100.0);
+        assert_eq!(c.csv.motor_poles, Some(14));
+        assert_eq!(c.csv.max_pulse_samples, 64);
+        let e = err("[csv]\nesc_min_us = 1500\nesc_max_us = 1200\n");
+        assert!(e.contains("csv.esc_max_us") && e.contains("1200"), "{e}");
+        let e = err("[csv]\nmotor_poles = 7\n");
+        assert!(e.contains("csv.motor_poles") && e.contains('7'), "{e}");
+        let e = err("[csv]\nmax_pulse_samples = 0\n");
+        assert!(e.contains("csv.max_pulse_samples"), "{e}");
+        let e = err("[csv]\nesc_min_us = nan\n");
+        assert!(e.contains("csv.esc_min_us") && e.contains("NaN"), "{e}");
+        let e = err("[csv]\nbaud = 3\n");
+        assert!(e.contains("baud"), "{e}");
     }
 
     #[test]

@@ -75,6 +75,10 @@ pub enum Notice {
     Stopped,
     /// STOP was not acknowledged within the shutdown timeout.
     StopUnacknowledged,
+    /// The link speaks the CSV fallback (PROTOCOL.md §6).
+    CsvLink,
+    /// A CSV bench that never acknowledged a command: sampled only, no plan (PROTOCOL.md §6).
+    PassiveBench,
 }
 
 impl Notice {
@@ -85,12 +89,17 @@ impl Notice {
             Notice::Reconnected => "reconnected",
             Notice::Stopped => "shutdown_stop_acknowledged",
             Notice::StopUnacknowledged => "shutdown_stop_unacknowledged",
+            Notice::CsvLink => "csv_link",
+            Notice::PassiveBench => "passive_bench",
         }
     }
 
     /// Whether it is published as a warning rather than an event.
     pub fn is_warning(self) -> bool {
-        matches!(self, Notice::Disconnected | Notice::StopUnacknowledged)
+        matches!(
+            self,
+            Notice::Disconnected | Notice::StopUnacknowledged | Notice::PassiveBench
+        )
     }
 }
 

@@ -15,6 +15,7 @@
 //! run and the replay of its recording publish the same model lines.
 
 pub mod config;
+pub mod csv_link;
 pub mod identify;
 pub mod item;
 pub mod plan;
@@ -27,6 +28,7 @@ pub mod stats;
 pub mod synth;
 pub mod tracker;
 pub mod window;
+pub mod wire;
 pub mod worker;
 
 pub use config::{Config, ConfigError};
@@ -57,9 +59,6 @@ pub enum DaemonError {
     /// The signal handler could not be installed.
     #[error("cannot install the signal handler: {0}")]
     Signal(String),
-    /// The stream speaks a wire format the daemon does not decode (the CSV fallback).
-    #[error("unsupported wire format: {0}")]
-    UnsupportedFormat(String),
     /// The device stopped answering commands.
     #[error("link failed: {0}")]
     LinkFailed(String),

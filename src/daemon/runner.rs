@@ -6,6 +6,7 @@ use std::fs::File;
 use std::time::Instant;
 
 use super::config::Config;
+use super::csv_link::CsvLinkOptions;
 use super::publish::Publisher;
 use super::sampler::{Plan, Sampler, SamplerConfig};
 use super::shutdown::Shutdown;
@@ -14,6 +15,8 @@ use super::stats::{LinkStats, StatsLine, WorkStats};
 use super::window::{OutputChannel, Window};
 use super::worker::{Identifier, Worker};
 use super::DaemonError;
+use crate::protocol::csv::CsvOptions;
+use crate::protocol::csv_columns::ConvOptions;
 
 /// What a finished run reports.
 #[derive(Debug, Clone)]
@@ -42,6 +45,22 @@ pub fn quantile(sorted: &[f64], q: f64) -> f64 {
     }
     let i = ((sorted.len() as f64 - 1.0) * q.clamp(0.0, 1.0)).round() as usize;
     sorted[i]
+}
+
+/// How the CSV link reads a bench, from `[csv]` and `identify.level_tolerance`.
+pub fn csv_options(cfg: &Config) -> CsvLinkOptions {
+    CsvLinkOptions {
+        csv: CsvOptions {
+            conv: ConvOptions {
+                esc_min_us: Some(cfg.csv.esc_min_us),
+                esc_max_us: Some(cfg.csv.esc_max_us),
+                motor_poles: cfg.csv.motor_poles,
+            },
+            ..CsvOptions::default()
+        },
+        level_tolerance: cfg.identify.level_tolerance,
+        max_pulse_samples: cfg.csv.max_pulse_samples,
+    }
 }
 
 /// Everything a run needs besides the configuration.
@@ -92,6 +111,7 @@ pub fn run<I: Identifier + 'static>(
             reconnect_initial: cfg.device.reconnect_initial,
             reconnect_max: cfg.device.reconnect_max,
             protocol: cfg.device.protocol,
+            csv: csv_options(cfg),
         },
     );
     let sampler = std::thread::Builder::new()

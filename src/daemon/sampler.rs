@@ -2,7 +2,8 @@
 //!
 //! One loop, each turn bounded by the source's read timeout (≤ 50 ms):
 //! 1. read whatever bytes are there (`Ok(0)` = nothing yet); append them to the raw recording;
-//! 2. push them through the protocol [`Decoder`] (fixed buffer, counts every drop by kind);
+//! 2. push them through the link's [`Wire`] decoder — binary TSP/1 (fixed buffer, counts every
+//!    drop by kind) or the CSV fallback made to look like it ([`super::csv_link`]);
 //! 3. for each frame: HELLO → new segment if its `boot_id` changed; SAMPLE → unwrapped clock and
 //!    index, gaps handed on as [`Item::Gap`], the sample queued; EVENT → queued; every frame is
 //!    shown to the experiment plan (ACKs, state);
@@ -16,10 +17,12 @@
 //! masked as missing, never bridged. For a recording (replay) there is no device to fall behind
 //! and the sampler waits instead (lossless).
 //!
-//! `[device] protocol`: with `"auto"` the first bytes are kept (at most
-//! [`DETECT_WINDOW`]) until [`detect`] decides; a stream that is the CSV fallback (PROTOCOL.md
-//! §6) stops the run with [`DaemonError::UnsupportedFormat`] instead of quietly decoding
-//! nothing. `"csv"` is refused before anything is read; `"tsp"` skips the detection.
+//! `[device] protocol`: with `"auto"` the first bytes are held until the wire format is decided
+//! ([`Wire`]); the experiment plan starts then, so its first command is written in the format
+//! the device speaks. `"tsp"` and `"csv"` skip the detection. A CSV bench that never
+//! acknowledges the handshake's PING is *passive* (PROTOCOL.md §6): the plan is dropped, a
+//! `passive_bench` warning is published, and the bench is sampled and identified from its
+//! throttle column.
 //!
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
 //! exponential backoff; the plan is told, does a HELLO handshake again and never re-arms by
@@ -32,15 +35,17 @@ use std::io::{BufWriter, Write};
 use std::time::{Duration, Instant};
 
 use super::config::WireProtocol;
+use super::csv_link::CsvLinkOptions;
 use super::item::{EventItem, Item, Notice, PlanNote, SampleItem};
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
 use super::tracker::Tracker;
+use super::wire::Wire;
 use super::DaemonError;
-use crate::protocol::detect::{detect, Detection, WireFormat, DETECT_WINDOW};
+use crate::protocol::detect::WireFormat;
 use crate::protocol::message::{msg_type, Frame, Message};
-use crate::protocol::{encode_frame, DecodeStats, Decoder, MAX_FRAME_LEN};
+use crate::protocol::MAX_FRAME_LEN;
 
 /// Where the experiment stands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -87,6 +92,8 @@ pub struct SamplerConfig {
     pub reconnect_max: Duration,
     /// Expected wire format.
     pub protocol: WireProtocol,
+    /// How a CSV bench is read.
+    pub csv: CsvLinkOptions,
 }
 
 /// What the sampler hands back.
@@ -208,7 +215,7 @@ fn valid(v: f32, flags: u16, bit: u16) -> f32 {
 /// The sampler thread's state.
 pub struct Sampler {
     source: Box<dyn Source>,
-    decoder: Decoder,
+    wire: Wire,
     handler: Handler,
     record: Option<BufWriter<File>>,
     shutdown: Shutdown,
@@ -216,8 +223,6 @@ pub struct Sampler {
     start: Instant,
     buf: Box<[u8; 4096]>,
     cmd: [u8; MAX_FRAME_LEN],
-    /// The first bytes while `protocol = "auto"` has not decided (`None` once decided).
-    prefix: Option<Vec<u8>>,
 }
 
 impl Sampler {
@@ -231,11 +236,9 @@ impl Sampler {
         cfg: SamplerConfig,
     ) -> Sampler {
         let lossless = !source.is_live();
-        let prefix =
-            (cfg.protocol == WireProtocol::Auto).then(|| Vec::with_capacity(DETECT_WINDOW));
         Sampler {
             source,
-            decoder: Decoder::new(),
+            wire: Wire::new(cfg.protocol, cfg.csv),
             handler: Handler {
                 tx,
                 lossless,
@@ -254,13 +257,16 @@ impl Sampler {
             start: Instant::now(),
             buf: Box::new([0u8; 4096]),
             cmd: [0u8; MAX_FRAME_LEN],
-            prefix,
         }
     }
 
     /// Runs until the source ends, the plan finishes, the run time is up or a stop is requested.
     pub fn run(mut self) -> SamplerOutcome {
         let error = self.run_loop().err();
+        let handler = &mut self.handler;
+        if let Some(f) = self.wire.finish(&mut |f| handler.on_frame(f)) {
+            self.decided(f);
+        }
         if let Some(r) = self.record.as_mut() {
             let _ = r.flush();
         }
@@ -272,18 +278,9 @@ impl Sampler {
     }
 
     fn run_loop(&mut self) -> Result<(), DaemonError> {
-        if self.cfg.protocol == WireProtocol::Csv {
-            return Err(csv_refused(
-                &*self.source,
-                "protocol = \"csv\" is configured",
-            ));
-        }
         let live = self.source.is_live();
-        if live {
-            let now = self.now_us();
-            if let Some(p) = self.handler.plan.as_mut() {
-                p.on_connect(now);
-            }
+        if let Some(f) = self.wire.format() {
+            self.decided(f);
         }
         loop {
             if self.shutdown.requested() || self.time_up() {
@@ -293,8 +290,8 @@ impl Sampler {
                 return Ok(());
             }
             match self.read_once() {
-                Ok(()) => self.check_format(false)?,
-                Err(SourceError::Finished { .. }) => return self.check_format(true),
+                Ok(()) => {}
+                Err(SourceError::Finished { .. }) => return Ok(()),
                 Err(SourceError::Disconnected { .. }) => self.reconnect()?,
                 Err(e @ SourceError::Open { .. }) => return Err(e.into()),
             }
@@ -303,6 +300,13 @@ impl Sampler {
             }
             match self.handler.plan.as_ref().map(|p| p.status()) {
                 Some(PlanStatus::Done) => return Ok(()),
+                Some(PlanStatus::LinkFailed)
+                    if self.wire.format() == Some(WireFormat::Csv) && self.wire.csv_acks() == 0 =>
+                {
+                    // PROTOCOL.md §6: a bench that never acknowledges is passive
+                    self.handler.plan = None;
+                    self.handler.send(Item::Notice(Notice::PassiveBench));
+                }
                 Some(PlanStatus::LinkFailed) => {
                     let _ = self.stop_device();
                     return Err(DaemonError::LinkFailed(format!(
@@ -315,27 +319,22 @@ impl Sampler {
         }
     }
 
-    /// `protocol = "auto"`: decides the wire format from the first bytes; CSV is refused.
-    fn check_format(&mut self, at_end: bool) -> Result<(), DaemonError> {
-        let Some(prefix) = self.prefix.as_ref() else {
-            return Ok(());
-        };
-        if prefix.is_empty() && at_end {
-            return Ok(());
+    /// The wire format is known: a CSV link is announced, and the plan starts (live links).
+    fn decided(&mut self, format: WireFormat) {
+        if format == WireFormat::Csv {
+            self.handler.send(Item::Notice(Notice::CsvLink));
         }
-        match detect(prefix, at_end) {
-            Detection::Undecided => Ok(()),
-            Detection::Format(WireFormat::Binary) => {
-                self.prefix = None;
-                Ok(())
-            }
-            Detection::Format(WireFormat::Csv) => {
-                self.prefix = None;
-                Err(csv_refused(
-                    &*self.source,
-                    "the stream is CSV text (detected by protocol = \"auto\")",
-                ))
-            }
+        self.start_plan();
+    }
+
+    /// Tells the plan the link is up, once the wire format is known (live links only).
+    fn start_plan(&mut self) {
+        if !self.source.is_live() || self.wire.format().is_none() {
+            return;
+        }
+        let now = self.now_us();
+        if let Some(p) = self.handler.plan.as_mut() {
+            p.on_connect(now);
         }
     }
 
@@ -358,14 +357,12 @@ impl Sampler {
                 self.record = None; // a full disk must not stop the stand; stats show bytes
             }
         }
-        if let Some(p) = self.prefix.as_mut() {
-            let room = DETECT_WINDOW.saturating_sub(p.len()).min(n);
-            p.extend_from_slice(&self.buf[..room]);
-        }
         self.handler.stats.bytes += n as u64;
         self.handler.now_us = self.now_us();
         let handler = &mut self.handler;
-        self.decoder.push(&self.buf[..n], |f| handler.on_frame(f));
+        if let Some(f) = self.wire.push(&self.buf[..n], &mut |f| handler.on_frame(f)) {
+            self.decided(f);
+        }
         Ok(())
     }
 
@@ -390,6 +387,7 @@ impl Sampler {
         let mut notes: Vec<PlanNote> = Vec::new();
         let source = &mut self.source;
         let cmd = &mut self.cmd;
+        let wire = &mut self.wire;
         let awaiting = &mut self.handler.awaiting_stop;
         plan.next(
             &mut |seq, msg| {
@@ -399,7 +397,9 @@ impl Sampler {
                 if failed.is_some() {
                     return;
                 }
-                let n = encode_frame(seq, msg, &mut cmd[..]);
+                let Some(n) = wire.encode(seq, msg, &mut cmd[..]) else {
+                    return; // no CSV form (the plan sends none such)
+                };
                 if let Err(e) = source.write_all(&cmd[..n]) {
                     failed = Some(e);
                 }
@@ -429,10 +429,7 @@ impl Sampler {
         }
         self.handler.stats.reconnects += 1;
         self.handler.send(Item::Notice(Notice::Reconnected));
-        let now = self.now_us();
-        if let Some(p) = self.handler.plan.as_mut() {
-            p.on_connect(now);
-        }
+        self.start_plan();
         Ok(())
     }
 
@@ -453,7 +450,10 @@ impl Sampler {
                 STOP_SEQ
             }
         };
-        let n = encode_frame(seq, &Message::Stop, &mut self.cmd[..]);
+        let n = self
+            .wire
+            .encode(seq, &Message::Stop, &mut self.cmd[..])
+            .unwrap_or(0);
         let frame: [u8; MAX_FRAME_LEN] = self.cmd;
         let deadline = Instant::now() + self.cfg.stop_timeout;
         let mut next_send = Instant::now();
@@ -479,19 +479,10 @@ impl Sampler {
     }
 
     fn finish_stats(&mut self) {
-        let d: &DecodeStats = self.decoder.stats();
         let s = &mut self.handler.stats;
-        s.frames_ok = d.frames_ok;
-        let dr = &d.dropped;
-        for (k, v) in [
-            ("cobs_error", dr.cobs_error),
-            ("crc_error", dr.crc_error),
-            ("bad_version", dr.bad_version),
-            ("short_frame", dr.short_frame),
-            ("short_payload", dr.short_payload),
-            ("oversize", dr.oversize),
-            ("unknown_type", dr.unknown_type),
-        ] {
+        s.wire = self.wire.name().to_string();
+        s.frames_ok = self.wire.frames_ok();
+        for (k, v) in self.wire.dropped() {
             s.frames_dropped.insert(k.to_string(), v);
         }
         s.samples_lost = self.handler.tracker.samples_lost + self.handler.overflow_lost;
@@ -500,15 +491,6 @@ impl Sampler {
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
     }
-}
-
-/// The error for a CSV stream: the daemon decodes binary TSP/1 only.
-fn csv_refused(source: &dyn Source, why: &str) -> DaemonError {
-    DaemonError::UnsupportedFormat(format!(
-        "{}: {why}; the daemon decodes binary TSP/1 only (PROTOCOL.md §1-5). \
-         Identify a CSV recording offline with `propid identify`",
-        source.describe()
-    ))
 }
 
 /// Sleeps `d`, waking early when a stop is requested.
@@ -536,27 +518,47 @@ mod tests {
             reconnect_initial: Duration::from_millis(1),
             reconnect_max: Duration::from_millis(2),
             protocol: WireProtocol::Auto,
+            csv: CsvLinkOptions::default(),
         }
     }
 
     #[test]
-    fn csv_stream_is_refused_not_decoded_as_nothing() {
-        let csv = b"t_us,throttle,thrust_N\n0,0.3,1.0\n1000,0.3,1.1\n2000,0.3,1.2\n".to_vec();
-        let src = ScriptedSource::new(vec![Step::Data(csv.clone())]);
-        let (tx, _rx) = crossbeam_channel::bounded(64);
-        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
-        let e = out.error.expect("a CSV stream must be refused");
-        assert!(matches!(e, DaemonError::UnsupportedFormat(_)), "{e}");
-        assert!(e.to_string().contains("CSV"), "{e}");
-        // protocol = "csv" is refused before reading
-        let src = ScriptedSource::new(vec![Step::Data(csv)]);
-        let (tx, _rx) = crossbeam_channel::bounded(64);
-        let c = SamplerConfig {
-            protocol: WireProtocol::Csv,
-            ..cfg()
-        };
-        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), c).run();
-        assert!(matches!(out.error, Some(DaemonError::UnsupportedFormat(_))));
+    fn csv_stream_is_decoded_by_auto_and_by_csv() {
+        let mut csv = String::from("t_us,throttle,thrust_N\n");
+        for k in 0..100 {
+            let thr = if k % 25 == 10 { 3500 } else { 3000 };
+            csv += &format!("{},{thr},1.0\n", 5_000 + k * 1000);
+        }
+        for protocol in [WireProtocol::Auto, WireProtocol::Csv] {
+            let src = ScriptedSource::new(vec![Step::Data(csv.clone().into_bytes())]);
+            let (tx, rx) = crossbeam_channel::bounded(1024);
+            let c = SamplerConfig { protocol, ..cfg() };
+            let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), c).run();
+            assert!(out.error.is_none(), "{:?}", out.error);
+            assert_eq!(out.stats.wire, "csv");
+            assert_eq!(out.stats.samples, 100);
+            assert_eq!(out.stats.frames_ok, 101);
+            assert_eq!(out.stats.samples_lost, 0);
+            let items: Vec<Item> = rx.try_iter().collect();
+            let notices = items
+                .iter()
+                .filter(|i| **i == Item::Notice(Notice::CsvLink));
+            assert_eq!(notices.count(), 1);
+            let samples: Vec<&SampleItem> = items
+                .iter()
+                .filter_map(|i| match i {
+                    Item::Sample(s) => Some(s),
+                    _ => None,
+                })
+                .collect();
+            assert_eq!(samples.len(), 100);
+            let pulses = samples
+                .iter()
+                .filter(|s| s.flags & crate::daemon::item::flags::IMPULSE_ACTIVE != 0)
+                .count();
+            assert_eq!(pulses, 4);
+            assert!(samples.iter().enumerate().all(|(k, s)| s.index == k as u64));
+        }
     }
 
     #[test]

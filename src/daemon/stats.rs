@@ -10,7 +10,9 @@ use std::collections::BTreeMap;
 /// Link-side counters, kept by the sampler.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct LinkStats {
-    /// Frames that decoded.
+    /// Wire format of the link: `"tsp"`, `"csv"` or `"undecided"` (no byte arrived).
+    pub wire: String,
+    /// Frames that decoded (lines, for a CSV link).
     pub frames_ok: u64,
     /// Frames dropped, one count per kind of drop (names from the protocol decoder).
     pub frames_dropped: BTreeMap<String, u64>,
