@@ -212,3 +212,52 @@ fn a_new_boot_releases_the_old_rows_first_and_numbers_again() {
     // frames are numbered like a device's
     assert!(got.windows(2).all(|w| w[1].seq == w[0].seq.wrapping_add(1)));
 }
+
+#[test]
+fn every_chunking_gives_the_same_frames() {
+    let w = CsvWriter::new();
+    let mut h = made_up_hello(1000);
+    h.boot_id = 9;
+    let mut text = w.format(&Message::Hello(h)).unwrap();
+    for k in 0..120u32 {
+        let thr = if k % 40 == 20 { 3600 } else { 3000 };
+        text += &w.format(&Message::Sample(sample(k, thr, 1.0))).unwrap();
+        if k == 60 {
+            text += "#ACK THR OK 99\n# a banner line\n";
+        }
+    }
+    let bytes = text.as_bytes();
+    let whole = frames(&mut CsvLink::new(CsvLinkOptions::default()), &text);
+    assert_eq!(whole.len(), 1 + 120 + 1);
+    // every fixed chunk size, and pseudo-random cuts
+    let mut cuts: Vec<Vec<usize>> = (1..=64)
+        .map(|c| (c..bytes.len()).step_by(c).collect())
+        .collect();
+    let mut x = 0x2545_F491_u64;
+    for _ in 0..50 {
+        let mut v = Vec::new();
+        let mut at = 0;
+        loop {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            at += 1 + (x % 97) as usize;
+            if at >= bytes.len() {
+                break;
+            }
+            v.push(at);
+        }
+        cuts.push(v);
+    }
+    for c in cuts {
+        let mut link = CsvLink::new(CsvLinkOptions::default());
+        let mut got = Vec::new();
+        let mut from = 0;
+        for &to in c.iter().chain([bytes.len()].iter()) {
+            link.push(&bytes[from..to], &mut |f| got.push(f));
+            from = to;
+        }
+        link.finish(&mut |f| got.push(f));
+        assert_eq!(got, whole);
+    }
+}
