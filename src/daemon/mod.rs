@@ -20,6 +20,7 @@ pub mod identify;
 pub mod item;
 pub mod plan;
 pub mod publish;
+pub mod quality;
 pub mod runner;
 pub mod sampler;
 pub mod shutdown;

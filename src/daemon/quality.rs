@@ -1,0 +1,109 @@
+//! Whether an identified model may be published as a model.
+//!
+//! ERA always returns *a* realisation; when the pulse responses are not resolved above the
+//! noise (one-sample pulses at 10 kHz carry a tenth of the energy they carry at 1 kHz), that
+//! realisation is noise fitted by a 2nd-order model: poles on the wrong side of the imaginary
+//! axis, DC gains of either sign. A flight controller must never receive such a model as a
+//! model, so the worker checks each one against facts that hold for any motor–propeller and
+//! publishes a failing one as a `model_unreliable` warning instead (with its numbers and the
+//! reasons), outside the gain schedule:
+//!
+//! - `unstable_pole`: a continuous pole with `Re(s) ≥ 0`. A motor–propeller's thrust, torque
+//!   and speed responses to throttle settle; a pole that does not is not the plant's.
+//! - `fn_uncertain`, `dc_gain_uncertain`: the jackknife standard deviation (leave one pulse
+//!   out, [`crate::core::uncertainty`]) is larger than the value itself — the pulses disagree
+//!   on even the sign or the order of magnitude. (Only with `identify.jackknife = true`.)
+//!
+//! The checks are deliberately coarse: a model that passes may still be imprecise, and its
+//! `uncertainty` says by how much; a model that fails is certainly not the plant.
+
+use serde_json::{Map, Value};
+
+/// Relative jackknife standard deviation above which a value is unknown.
+pub const MAX_RELATIVE_SD: f64 = 1.0;
+
+/// Hint published with an unreliable model.
+pub const HINT: &str = "the pulse responses are not resolved above the noise: use wider pulses \
+    ([experiment] pulse_width_samples, e.g. 1 ms worth of samples), larger pulse_amplitudes, \
+    or more pulses per model ([identify] pulses_per_model)";
+
+/// The reasons a model report fails the checks (empty: publish it as a model).
+pub fn judge(model: &Map<String, Value>) -> Vec<&'static str> {
+    let mut reasons = Vec::new();
+    let unstable = model
+        .get("poles_s")
+        .and_then(Value::as_array)
+        .is_some_and(|poles| {
+            poles.iter().any(|p| {
+                // [re, im]; a null (non-finite) real part is not a settled pole either
+                p.get(0)
+                    .is_some_and(|re| re.as_f64().is_none_or(|re| re >= 0.0))
+            })
+        });
+    if unstable {
+        reasons.push("unstable_pole");
+    }
+    let u = model.get("uncertainty");
+    for (key, reason) in [("fn_hz", "fn_uncertain"), ("dc_gain", "dc_gain_uncertain")] {
+        let value = model.get(key).and_then(Value::as_f64);
+        let sd = u.and_then(|u| u.get(key)).and_then(Value::as_f64);
+        if let (Some(v), Some(sd)) = (value, sd) {
+            if sd > MAX_RELATIVE_SD * v.abs() {
+                reasons.push(reason);
+            }
+        }
+    }
+    reasons
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn map(v: Value) -> Map<String, Value> {
+        match v {
+            Value::Object(m) => m,
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn a_resolved_model_passes() {
+        // 1 kHz, one-sample pulses, 0.01 N noise: a typical daemon model
+        let m = map(json!({
+            "fn_hz": 12.4, "zeta": 0.78, "dc_gain": 12.2,
+            "poles_s": [[-61.0, 48.5], [-61.0, -48.5]],
+            "uncertainty": {"fn_hz": 0.56, "zeta": 0.26, "dc_gain": 2.6}
+        }));
+        assert!(judge(&m).is_empty());
+        // without jackknife only the poles are judged
+        let m = map(
+            json!({"fn_hz": 12.4, "dc_gain": 12.2, "poles_s": [[-30.0, 0.0], [-900.0, 0.0]],
+            "uncertainty": {"fn_hz": null, "zeta": null, "dc_gain": null}}),
+        );
+        assert!(judge(&m).is_empty());
+    }
+
+    #[test]
+    fn noise_fitted_models_fail_with_their_reasons() {
+        // measured: 10 kHz, one-sample pulses, 0.01 N noise (the default sim plant)
+        let m = map(json!({
+            "fn_hz": null, "zeta": null, "dc_gain": -565.8,
+            "poles_s": [[0.632, 0.0], [-2709.3, 31415.9]],
+            "uncertainty": {"dc_gain": 211.5, "fn_hz": null, "zeta": null}
+        }));
+        assert_eq!(judge(&m), vec!["unstable_pole"]);
+        let m = map(json!({
+            "fn_hz": 61.4, "zeta": 22.2, "dc_gain": 45.3,
+            "poles_s": [[-8.69, 0.0], [-17110.8, 0.0]],
+            "uncertainty": {"dc_gain": 472.1, "fn_hz": null, "zeta": null}
+        }));
+        assert_eq!(judge(&m), vec!["dc_gain_uncertain"]);
+        let m = map(json!({
+            "fn_hz": 3.0, "dc_gain": 1.0, "poles_s": [[null, 0.0]],
+            "uncertainty": {"fn_hz": 3.5, "dc_gain": 0.1}
+        }));
+        assert_eq!(judge(&m), vec!["unstable_pole", "fn_uncertain"]);
+    }
+}
