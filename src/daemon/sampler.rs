@@ -145,11 +145,11 @@ impl Handler {
             Message::Sample(s) => {
                 self.stats.samples += 1;
                 let placed = self.tracker.sample(s.sample_index, s.t_us);
-                if placed.new_segment {
-                    if !std::mem::take(&mut self.segment_announced) {
-                        self.send(Item::Segment { boot_id: 0 });
-                    }
-                } else if placed.lost_before > 0 {
+                if placed.new_segment && !std::mem::take(&mut self.segment_announced) {
+                    self.send(Item::Segment { boot_id: 0 });
+                }
+                // After a new segment: a gap too long to mask (announced, not bridged).
+                if placed.lost_before > 0 {
                     self.send(Item::Gap {
                         before: placed.index,
                         count: placed.lost_before,
@@ -496,6 +496,7 @@ impl Sampler {
         }
         s.samples_lost = self.handler.tracker.samples_lost + self.handler.overflow_lost;
         s.gaps = self.handler.tracker.gaps;
+        s.large_gaps = self.handler.tracker.large_gaps;
         s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;

@@ -22,6 +22,9 @@ pub struct LinkStats {
     pub samples_lost: u64,
     /// Gaps (index jumps) seen.
     pub gaps: u64,
+    /// Of those, gaps longer than the largest one masked (ingest's `max_gap_samples`): each
+    /// ended its segment instead of being bridged.
+    pub large_gaps: u64,
     /// Items the sampler could not queue to the worker (queue full).
     pub overflows: u64,
     /// Successful reconnects after a disconnection.
