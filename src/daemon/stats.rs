@@ -96,6 +96,7 @@ mod tests {
             samples_lost: 2,
             overflows: 1,
             reconnects: 3,
+            large_gaps: 1,
             ..Default::default()
         };
         link.frames_dropped.insert("crc_error".into(), 4);
@@ -109,5 +110,6 @@ mod tests {
         assert_eq!(v["samples_lost"], 2);
         assert_eq!(v["overflows"], 1);
         assert_eq!(v["reconnects"], 3);
+        assert_eq!(v["large_gaps"], 1);
     }
 }

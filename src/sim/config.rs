@@ -372,6 +372,22 @@ mod tests {
     }
 
     #[test]
+    fn fault_index_lists_are_read_and_bounded() {
+        let cfg = SimConfig::from_toml_str("[faults]\ndrop_samples_at = [3, 1]\n", "t").unwrap();
+        assert_eq!(cfg.faults.drop_samples_at, vec![3, 1]);
+        assert!(!cfg.faults.is_clean());
+        let err = SimConfig::from_toml_str("[faults]\ncorrupt_samples_at = [-1]\n", "t");
+        assert!(matches!(err, Err(ConfigError::Parse { .. })), "{err:?}");
+        let mut cfg = SimConfig::default();
+        cfg.faults.garbage_before_samples_at = vec![0; 65_537];
+        let msg = cfg.validate().unwrap_err().to_string();
+        assert!(
+            msg.contains("faults.garbage_before_samples_at.len()") && msg.contains("65537"),
+            "{msg}"
+        );
+    }
+
+    #[test]
     fn plant_values_are_checked_against_the_sample_rate() {
         let text = "[stand]\nsample_rate_hz = 100\n[plant]\nfn_hz = 80.0\n";
         let msg = SimConfig::from_toml_str(text, "t").unwrap_err().to_string();
