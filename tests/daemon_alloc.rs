@@ -1,14 +1,16 @@
 //! The worker's hot path allocates nothing: window bookkeeping and the core identification
-//! over a whole synthetic experiment, counted by a global allocator.
+//! over a whole experiment recorded from the simulated stand (noise and quantisation on),
+//! counted by a global allocator.
 
 use propid::core::svd::SvdChoice;
 use propid::daemon::identify::CoreIdentifier;
 use propid::daemon::item::SampleItem;
-use propid::daemon::synth::{frames_of, synth_stream, SynthConfig};
 use propid::daemon::window::{OutputChannel, Window};
 use propid::daemon::worker::Identifier;
 use propid::daemon::Config;
 use propid::protocol::message::Message;
+use propid::protocol::Decoder;
+use propid::sim::SimConfig;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -52,13 +54,14 @@ fn window_and_identification_allocate_nothing_on_both_svd_paths() {
 
 fn window_and_identification_allocate_nothing(svd: SvdChoice) {
     let cfg = Config::default();
-    let synth = SynthConfig {
-        noise: 0.01,
-        ..SynthConfig::default()
-    };
-    let (bytes, _) = synth_stream(&synth);
+    // three operating points of 8 pulses, 0.01 N of noise, 1 mN quantisation
+    let mut bytes = Vec::new();
+    let sum = propid::sim::record::record(&SimConfig::default(), 120.0, &mut bytes).unwrap();
+    assert!(sum.finished);
+    let mut frames = Vec::new();
+    Decoder::new().push(&bytes, |f| frames.push(f));
     let now = Instant::now();
-    let samples: Vec<SampleItem> = frames_of(&bytes)
+    let samples: Vec<SampleItem> = frames
         .into_iter()
         .filter_map(|f| match f.msg {
             Message::Sample(s) => Some(SampleItem {

@@ -1,8 +1,11 @@
-//! `propid replay` on synthetic recordings with exactly known content, through the real binary:
+//! `propid replay` on recordings of the simulated stand (`propid sim --record`: firmware and
+//! experiment plan, faster than real time) with exactly known content, through the real binary:
 //! a clean stream, byte-at-a-time versus burst delivery, bit flips and garbage counted exactly,
 //! sample gaps, the device clock wrapping, bad input.
 
-use propid::daemon::synth::{synth_stream, SynthConfig};
+use propid::protocol::{Decoder, EventCode, Message};
+use propid::sim::record::{record, RecordSummary};
+use propid::sim::SimConfig;
 use serde_json::Value;
 use std::process::Command;
 
@@ -62,10 +65,48 @@ fn assert_plant(m: &Value, fn_hz: f64, zeta: f64, gain: f64, tol: f64) {
     assert!((g / gain - 1.0).abs() < tol, "gain {g} vs {gain}");
 }
 
+/// The simulated stand with the plant the assertions know (fn 25 Hz, ζ 0.5, 8 N per unit
+/// throttle), without noise or quantisation, running the default experiment: three operating
+/// points (0.3, 0.45, 0.6) of 8 pulses.
+fn stand() -> SimConfig {
+    let mut cfg = SimConfig::default();
+    cfg.plant.fn_hz = 25.0;
+    cfg.plant.zeta = 0.5;
+    cfg.plant.gain_n_per_throttle = 8.0;
+    cfg.plant.noise_rms_n = 0.0;
+    cfg.plant.quantum_n = 0.0;
+    cfg
+}
+
+/// The recording of `cfg` and what it holds (the firmware's and the fault injector's counts).
+fn record_stand(cfg: &SimConfig) -> (Vec<u8>, RecordSummary) {
+    let mut bytes = Vec::new();
+    let sum = record(cfg, 120.0, &mut bytes).unwrap();
+    assert!(sum.finished, "{sum:?}");
+    (bytes, sum)
+}
+
+/// SAMPLE frames written intact.
+fn samples_sent(sum: &RecordSummary) -> u64 {
+    sum.firmware.samples - sum.faults.samples_lost()
+}
+
+/// The `sample_index` of every pulse start (EVENT IMPULSE_START) in a recording.
+fn pulse_starts(bytes: &[u8]) -> Vec<u32> {
+    let mut v = Vec::new();
+    Decoder::new().push(bytes, |f| {
+        if let Message::Event(e) = f.msg {
+            if e.code == EventCode::ImpulseStart {
+                v.push(e.sample_index);
+            }
+        }
+    });
+    v
+}
+
 #[test]
 fn clean_stream_publishes_models_schedule_and_stats() {
-    let cfg = SynthConfig::default();
-    let (bytes, facts) = synth_stream(&cfg);
+    let (bytes, sum) = record_stand(&stand());
     let (lines, status, err) = replay(&bytes, &[]);
     assert!(status.success(), "{err}");
     let models = of_type(&lines, "model");
@@ -84,9 +125,9 @@ fn clean_stream_publishes_models_schedule_and_stats() {
     assert_eq!(sched.len(), 1);
     assert_eq!(sched[0]["models"].as_array().unwrap().len(), 3);
     let s = stats(&lines);
-    assert_eq!(s["frames_ok"].as_u64().unwrap(), facts.frames_intact);
+    assert_eq!(s["frames_ok"].as_u64().unwrap(), sum.decode.frames_ok);
     assert_eq!(dropped_total(s), 0);
-    assert_eq!(s["samples"].as_u64().unwrap(), facts.samples_taken);
+    assert_eq!(s["samples"].as_u64().unwrap(), sum.firmware.samples);
     assert_eq!(s["samples_lost"], 0);
     assert_eq!(s["overflows"], 0);
     assert_eq!(s["reconnects"], 0);
@@ -111,14 +152,16 @@ fn deterministic(lines: &[Value]) -> Vec<Value> {
 
 #[test]
 fn byte_at_a_time_and_burst_delivery_publish_identical_lines() {
-    let cfg = SynthConfig {
-        levels: vec![0.4],
-        noise: 0.002,
-        flip_samples: vec![400, 1000],
-        garbage_before: vec![700],
-        ..SynthConfig::default()
-    };
-    let (bytes, _) = synth_stream(&cfg);
+    let mut cfg = stand();
+    cfg.experiment.levels = vec![0.4];
+    cfg.plant.noise_rms_n = 0.002;
+    let p = pulse_starts(&record_stand(&cfg).0);
+    // a lost sample in the settle time and one in a pulse response; a burst between pulses
+    cfg.faults.corrupt_samples_at = vec![p[0] - 300, p[2] + 30];
+    cfg.faults.garbage_before_samples_at = vec![p[1] + 100];
+    let (bytes, sum) = record_stand(&cfg);
+    assert_eq!(pulse_starts(&bytes), p, "faults do not move the experiment");
+    assert_eq!(sum.faults.frames_dropped(), 3);
     let (one, s1, e1) = replay(&bytes, &["--chunk", "1"]);
     let (burst, s2, e2) = replay(&bytes, &["--chunk", "1000000"]);
     let (odd, s3, e3) = replay(&bytes, &["--chunk", "37"]);
@@ -132,18 +175,18 @@ fn byte_at_a_time_and_burst_delivery_publish_identical_lines() {
 fn bit_flips_and_garbage_are_counted_exactly_and_nothing_else_is_lost() {
     let flips = vec![5, 333, 334, 1200, 2500];
     let garbage = vec![10, 900, 2000];
-    let cfg = SynthConfig {
-        flip_samples: flips.clone(),
-        garbage_before: garbage.clone(),
-        ..SynthConfig::default()
-    };
-    let (bytes, facts) = synth_stream(&cfg);
+    let mut cfg = stand();
+    cfg.faults.corrupt_samples_at = flips.clone();
+    cfg.faults.garbage_before_samples_at = garbage.clone();
+    let (bytes, sum) = record_stand(&cfg);
+    assert_eq!(sum.faults.corrupted_samples, flips.len() as u64);
+    assert_eq!(sum.faults.garbage_bursts, garbage.len() as u64);
     let (lines, status, err) = replay(&bytes, &[]);
     assert!(status.success(), "{err}");
     let s = stats(&lines);
     assert_eq!(dropped_total(s), (flips.len() + garbage.len()) as u64);
-    assert_eq!(s["frames_ok"].as_u64().unwrap(), facts.frames_intact);
-    assert_eq!(s["samples"].as_u64().unwrap(), facts.samples_sent);
+    assert_eq!(s["frames_ok"].as_u64().unwrap(), sum.decode.frames_ok);
+    assert_eq!(s["samples"].as_u64().unwrap(), samples_sent(&sum));
     // a corrupted SAMPLE is a lost sample, found from the index jump
     assert_eq!(s["samples_lost"].as_u64().unwrap(), flips.len() as u64);
     assert_eq!(
@@ -160,19 +203,22 @@ fn bit_flips_and_garbage_are_counted_exactly_and_nothing_else_is_lost() {
 
 #[test]
 fn sample_gaps_are_counted_masked_and_never_bridged() {
-    // drops inside the settle time of level 2 and the pulse train of level 1
-    let cfg = SynthConfig {
-        drop_samples: vec![100, 101, 102, 801, 1950],
-        ..SynthConfig::default()
-    };
-    let (bytes, facts) = synth_stream(&cfg);
+    let mut cfg = stand();
+    let p = pulse_starts(&record_stand(&cfg).0);
+    assert_eq!(p.len(), 24);
+    // three in a row in the settle time of level 1, one just after its 4th pulse (in the
+    // response of the first model's last pulse), one in the response of level 2's first pulse
+    cfg.faults.drop_samples_at = vec![p[0] - 250, p[0] - 249, p[0] - 248, p[3] + 1, p[8] + 50];
+    let (bytes, sum) = record_stand(&cfg);
+    assert_eq!(pulse_starts(&bytes), p, "faults do not move the experiment");
+    assert_eq!(sum.faults.dropped_samples, 5);
     let (lines, status, err) = replay(&bytes, &[]);
     assert!(status.success(), "{err}");
     let s = stats(&lines);
     assert_eq!(s["samples_lost"], 5);
     assert_eq!(s["gaps"], 3);
     assert_eq!(dropped_total(s), 0);
-    assert_eq!(s["samples"].as_u64().unwrap(), facts.samples_sent);
+    assert_eq!(s["samples"].as_u64().unwrap(), samples_sent(&sum));
     let gaps: Vec<u64> = of_type(&lines, "event")
         .iter()
         .filter(|e| e["kind"] == "gap")
@@ -198,11 +244,9 @@ fn sample_gaps_are_counted_masked_and_never_bridged() {
 #[test]
 fn device_clock_wrap_is_unwrapped() {
     // the 32-bit µs clock wraps 1.2 s into the run
-    let cfg = SynthConfig {
-        t0_us: u32::MAX - 1_200_000,
-        ..SynthConfig::default()
-    };
-    let (bytes, _) = synth_stream(&cfg);
+    let mut cfg = stand();
+    cfg.stand.initial_t_us = u32::MAX - 1_200_000;
+    let (bytes, _) = record_stand(&cfg);
     let (lines, status, err) = replay(&bytes, &[]);
     assert!(status.success(), "{err}");
     let s = stats(&lines);

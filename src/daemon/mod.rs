@@ -26,7 +26,6 @@ pub mod sampler;
 pub mod shutdown;
 pub mod source;
 pub mod stats;
-pub mod synth;
 pub mod tracker;
 pub mod window;
 pub mod wire;

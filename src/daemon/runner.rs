@@ -178,7 +178,7 @@ mod replay_tests {
     use super::*;
     use crate::daemon::identify::CoreIdentifier;
     use crate::daemon::source::RecordingSource;
-    use crate::daemon::synth::{synth_stream, SynthConfig};
+    use crate::sim::SimConfig;
     use std::path::Path;
 
     fn replay(bytes: Vec<u8>, chunk: usize) -> (RunSummary, Vec<serde_json::Value>) {
@@ -186,7 +186,7 @@ mod replay_tests {
         let (publisher, lines) = Publisher::capture();
         let parts = RunParts {
             source: Box::new(RecordingSource::from_bytes(
-                Path::new("synth"),
+                Path::new("sim.tsp"),
                 bytes,
                 chunk,
             )),
@@ -207,11 +207,19 @@ mod replay_tests {
     }
 
     #[test]
-    fn replay_of_a_clean_synthetic_stream_recovers_the_plant() {
-        let cfg = SynthConfig::default();
-        let (bytes, facts) = synth_stream(&cfg);
+    fn replay_of_a_clean_simulated_stand_recovers_the_plant() {
+        // the simulated stand without noise or quantisation, three levels of 8 pulses
+        let mut cfg = SimConfig::default();
+        cfg.plant.fn_hz = 25.0;
+        cfg.plant.zeta = 0.5;
+        cfg.plant.gain_n_per_throttle = 8.0;
+        cfg.plant.noise_rms_n = 0.0;
+        cfg.plant.quantum_n = 0.0;
+        let mut bytes = Vec::new();
+        let facts = crate::sim::record::record(&cfg, 60.0, &mut bytes).unwrap();
+        assert!(facts.finished);
         let (summary, lines) = replay(bytes, 4096);
-        assert_eq!(summary.link.samples, facts.samples_sent);
+        assert_eq!(summary.link.samples, facts.firmware.samples);
         assert_eq!(summary.link.samples_lost, 0);
         let models: Vec<_> = lines.iter().filter(|l| l["type"] == "model").collect();
         assert_eq!(models.len(), 6, "{lines:#?}");

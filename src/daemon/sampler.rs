@@ -152,11 +152,11 @@ impl Handler {
             Message::Sample(s) => {
                 self.stats.samples += 1;
                 let placed = self.tracker.sample(s.sample_index, s.t_us);
-                if placed.new_segment {
-                    if !std::mem::take(&mut self.segment_announced) {
-                        self.send(Item::Segment { boot_id: 0 });
-                    }
-                } else if placed.lost_before > 0 {
+                if placed.new_segment && !std::mem::take(&mut self.segment_announced) {
+                    self.send(Item::Segment { boot_id: 0 });
+                }
+                // After a new segment: a gap too long to mask (announced, not bridged).
+                if placed.lost_before > 0 {
                     self.send(Item::Gap {
                         before: placed.index,
                         count: placed.lost_before,
@@ -487,6 +487,7 @@ impl Sampler {
         }
         s.samples_lost = self.handler.tracker.samples_lost + self.handler.overflow_lost;
         s.gaps = self.handler.tracker.gaps;
+        s.large_gaps = self.handler.tracker.large_gaps;
         s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
@@ -509,7 +510,10 @@ fn sleep_unless(shutdown: &Shutdown, d: Duration) {
 mod tests {
     use super::*;
     use crate::daemon::source::{ScriptedSource, Step};
-    use crate::daemon::synth::{synth_stream, SynthConfig};
+    use crate::protocol::message::{Hello, Sample, SampleFlags};
+    use crate::protocol::EscProtocol;
+    use crate::sim::record::{record, RecordSummary};
+    use crate::sim::SimConfig;
 
     fn cfg() -> SamplerConfig {
         SamplerConfig {
@@ -520,6 +524,23 @@ mod tests {
             protocol: WireProtocol::Auto,
             csv: CsvLinkOptions::default(),
         }
+    }
+
+    /// A recording of the simulated stand (`propid sim --record`: firmware + plan, faster than
+    /// real time): one operating point, `pulses` pulses; and what it holds.
+    fn stand(pulses: u32) -> (Vec<u8>, RecordSummary) {
+        let mut cfg = SimConfig::default();
+        cfg.experiment.levels = vec![0.4];
+        cfg.experiment.pulses_per_level = pulses;
+        let mut bytes = Vec::new();
+        let sum = record(&cfg, 60.0, &mut bytes).unwrap();
+        assert!(sum.finished);
+        (bytes, sum)
+    }
+
+    /// SAMPLE frames the recording holds intact.
+    fn samples_sent(sum: &RecordSummary) -> u64 {
+        sum.firmware.samples - sum.faults.samples_lost()
     }
 
     #[test]
@@ -563,26 +584,18 @@ mod tests {
 
     #[test]
     fn binary_stream_passes_detection() {
-        let (bytes, facts) = synth_stream(&SynthConfig {
-            levels: vec![0.4],
-            pulses_per_level: 1,
-            ..SynthConfig::default()
-        });
+        let (bytes, sum) = stand(1);
         let src = ScriptedSource::new(vec![Step::Data(bytes)]);
         let (tx, _rx) = crossbeam_channel::bounded(1 << 16);
         let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
         assert!(out.error.is_none());
-        assert_eq!(out.stats.samples, facts.samples_sent);
+        assert_eq!(out.stats.samples, samples_sent(&sum));
+        assert_eq!(out.stats.frames_ok, sum.decode.frames_ok);
     }
 
     #[test]
     fn hangup_reconnects_and_counts_everything_once() {
-        let synth = SynthConfig {
-            levels: vec![0.4],
-            pulses_per_level: 2,
-            ..SynthConfig::default()
-        };
-        let (bytes, facts) = synth_stream(&synth);
+        let (bytes, sum) = stand(2);
         let half = bytes.len() / 2;
         let mut src = ScriptedSource::new(vec![
             Step::Data(bytes[..half].to_vec()),
@@ -596,8 +609,9 @@ mod tests {
         let out = s.run();
         assert!(out.error.is_none());
         assert_eq!(out.stats.reconnects, 1);
-        assert_eq!(out.stats.samples, facts.samples_sent);
-        assert_eq!(out.stats.frames_ok, facts.frames_intact);
+        assert_eq!(out.stats.samples, samples_sent(&sum));
+        assert_eq!(out.stats.frames_ok, sum.decode.frames_ok);
+        assert_eq!(out.stats.samples_lost, 0);
         let notices: Vec<Notice> = rx
             .try_iter()
             .filter_map(|i| match i {
@@ -610,10 +624,14 @@ mod tests {
 
     #[test]
     fn full_queue_is_counted_as_overflow_never_waited_for() {
-        let (bytes, facts) = synth_stream(&SynthConfig {
-            levels: vec![0.4],
-            pulses_per_level: 2,
-            ..SynthConfig::default()
+        let (bytes, sum) = stand(2);
+        // what the sampler queues for this stream: the first HELLO's segment, every SAMPLE
+        // and every EVENT (ACKs, LOGs and repeated HELLOs of the same boot are not queued)
+        let mut items = 1u64;
+        Decoder::new().push(&bytes, |f| {
+            if matches!(f.msg, Message::Sample(_) | Message::Event(_)) {
+                items += 1;
+            }
         });
         let src = ScriptedSource::new(vec![Step::Data(bytes)]);
         let (tx, rx) = crossbeam_channel::bounded(16);
@@ -621,14 +639,84 @@ mod tests {
         let queued: Vec<Item> = rx.try_iter().collect();
         assert_eq!(queued.len(), 16);
         // every sample and event beyond the 16 queued items was dropped and counted
-        assert_eq!(out.stats.overflows, facts.frames_intact - 16);
-        assert_eq!(out.stats.samples, facts.samples_sent);
+        assert_eq!(out.stats.overflows, items - 16);
+        assert_eq!(out.stats.samples, samples_sent(&sum));
         // every dropped sample is lost to the worker: counted in samples_lost
         let queued_samples = queued
             .iter()
             .filter(|i| matches!(i, Item::Sample(_)))
             .count() as u64;
-        assert_eq!(out.stats.samples_lost, facts.samples_sent - queued_samples);
+        assert_eq!(out.stats.samples_lost, samples_sent(&sum) - queued_samples);
+    }
+
+    fn frame(seq: u16, msg: Message) -> Vec<u8> {
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(seq, &msg, &mut buf);
+        buf[..n].to_vec()
+    }
+
+    fn sample(index: u32) -> Message {
+        Message::Sample(Sample {
+            sample_index: index,
+            t_us: index.wrapping_mul(1000),
+            throttle: 4000,
+            flags: SampleFlags(SampleFlags::THRUST_VALID.bits()),
+            thrust_n: 1.0,
+            torque_nm: f32::NAN,
+            rpm: f32::NAN,
+            voltage_v: f32::NAN,
+            current_a: f32::NAN,
+        })
+    }
+
+    #[test]
+    fn index_jump_beyond_the_largest_gap_is_a_new_segment_not_a_bridged_gap() {
+        let hello = Message::Hello(Hello {
+            proto_minor: 0,
+            esc_protocol: EscProtocol::from_u8(5),
+            fw_version: 1,
+            boot_id: 77,
+            t_us: 0,
+            sample_rate_hz: 1000,
+            channels: 1,
+            motor_poles: 14,
+            caps: 0,
+            name: Hello::name_field("t"),
+        });
+        let mut bytes = frame(0, hello);
+        let indices = [0u32, 1, 2, 3, 200_000, 200_001];
+        for (seq, &i) in indices.iter().enumerate() {
+            bytes.extend(frame(seq as u16 + 1, sample(i)));
+        }
+        let src = ScriptedSource::new(vec![Step::Data(bytes)]);
+        let (tx, rx) = crossbeam_channel::bounded(64);
+        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
+        let kinds: Vec<String> = rx
+            .try_iter()
+            .map(|i| match i {
+                Item::Sample(s) => format!("sample {}", s.index),
+                Item::Gap { before, count } => format!("gap {count} before {before}"),
+                Item::Segment { boot_id } => format!("segment {boot_id}"),
+                other => format!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(
+            kinds,
+            [
+                "segment 77",
+                "sample 0",
+                "sample 1",
+                "sample 2",
+                "sample 3",
+                "segment 0",
+                "gap 199996 before 200000",
+                "sample 200000",
+                "sample 200001",
+            ]
+        );
+        let s = &out.stats;
+        assert_eq!((s.samples, s.samples_lost), (6, 199_996));
+        assert_eq!((s.gaps, s.large_gaps, s.segments), (1, 1, 2));
     }
 
     #[test]

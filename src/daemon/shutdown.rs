@@ -3,7 +3,9 @@
 //! The first SIGINT or SIGTERM sets a flag that the sampler and the worker poll: the sampler
 //! sends STOP until it is acknowledged (at most `daemon.stop_timeout_ms`), the worker flushes
 //! every output and publishes the final stats line, and the process exits 0. A second signal
-//! exits at once (status 130), for an operator who does not want to wait.
+//! exits at once (status 130), for an operator who does not want to wait: STOP is not waited
+//! for and no stats line is written, but nothing already published is lost (stdout and the
+//! file are flushed per line; `tests/daemon_e2e.rs` checks it through the binary).
 //!
 //! The handler is process-wide (the `ctrlc` crate allows one per process); [`Shutdown::manual`]
 //! gives the same flag without a handler, for tests and in-process runs.

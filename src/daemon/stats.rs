@@ -24,6 +24,9 @@ pub struct LinkStats {
     pub samples_lost: u64,
     /// Gaps (index jumps) seen.
     pub gaps: u64,
+    /// Of those, gaps longer than the largest one masked (ingest's `max_gap_samples`): each
+    /// ended its segment instead of being bridged.
+    pub large_gaps: u64,
     /// Items the sampler could not queue to the worker (queue full).
     pub overflows: u64,
     /// Successful reconnects after a disconnection.
@@ -95,6 +98,7 @@ mod tests {
             samples_lost: 2,
             overflows: 1,
             reconnects: 3,
+            large_gaps: 1,
             ..Default::default()
         };
         link.frames_dropped.insert("crc_error".into(), 4);
@@ -108,5 +112,6 @@ mod tests {
         assert_eq!(v["samples_lost"], 2);
         assert_eq!(v["overflows"], 1);
         assert_eq!(v["reconnects"], 3);
+        assert_eq!(v["large_gaps"], 1);
     }
 }

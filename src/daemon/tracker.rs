@@ -1,140 +1,154 @@
 //! Sampler-side stream bookkeeping, pure: the device clock, sample-index gaps and boot segments.
 //!
-//! - **Clock unwrap.** `t_us` is a 32-bit microsecond counter that wraps every 2³² µs ≈ 71.6 min.
-//!   A reading smaller than the previous one by more than half the range is a wrap, and adds
-//!   2³² to the offset; a smaller backwards step is kept as it is (the device clock is
-//!   monotonic; a tiny backwards step can only be a corrupted frame that passed the CRC, and
-//!   must not be turned into a 71-minute jump). The same rule unwraps `sample_index`.
-//! - **Gaps.** Within a segment, the next sample must have index `last + 1`. A larger index is
-//!   a gap of `index − last − 1` lost samples: counted and handed on, never bridged. The same
-//!   index again is a duplicate: dropped and counted (the rule of
-//!   [`crate::ingest::assemble::SampleAssembler`], so live, replay and `propid identify`
-//!   segment a stream alike). A smaller index (with no new HELLO) means the device restarted
-//!   and its HELLO was lost: a new segment.
-//! - **Segments.** A HELLO whose `boot_id` differs from the current one starts a new segment
-//!   (the device reset: disarmed, counters restarted). The host never re-arms by itself; the
-//!   experiment plan is told and decides (it reports, it does not re-arm).
+//! A live run and the offline ingest of its recording must place every sample by **one** rule,
+//! so this tracker does not decide anything itself: every SAMPLE goes through ingest's
+//! [`SampleAssembler`] (the streaming half of `propid identify`'s TSP/1 reader) and the
+//! tracker translates what it says into a [`Placed`] for the sampler. The rules are therefore
+//! those of [`crate::ingest::assemble`]:
+//!
+//! - **Unwrap.** `t_us` (µs, wraps every 2³² µs ≈ 71.6 min) and `sample_index` are unwrapped
+//!   by [`crate::ingest::clock::Unwrap32`]: the forward distance is `(now − last) mod 2³²`; a
+//!   distance of 2³¹ or more is a step *backwards*.
+//! - **Gaps.** Within a segment the next index must be `last + 1`. A forward jump of `d > 1` is
+//!   a gap of `d − 1` lost samples: counted in `samples_lost`, handed on as a gap, never bridged.
+//! - **Largest gap.** A gap longer than [`AssembleOptions::max_gap_samples`] (ingest's default,
+//!   65 536 samples: a minute at 1 kHz), or one that would take the samples filled in so far past
+//!   `max_gap_samples + 10 × samples received`, is not a gap the window could mask: the samples
+//!   are still counted as lost, but the segment ends at its last sample and a new one starts at
+//!   the far side ([`Placed::new_segment`] *and* [`Placed::lost_before`]). A corrupted frame
+//!   whose absurd index passed the CRC, or a device that silently restarted its counter far
+//!   away, therefore never turns into millions of "lost" samples bridged inside one window.
+//! - **Duplicates.** The same index again is dropped and counted (`duplicates`).
+//! - **Resets.** A backward index with no new HELLO is a device reset whose HELLO was lost: a
+//!   new segment; the next HELLO (of that new boot) is adopted without splitting it again.
+//! - **Boots.** A HELLO whose `boot_id` differs from the current one ends the segment (the
+//!   device reset: disarmed, counters restarted); the next sample starts the new one. The host
+//!   never re-arms by itself; the experiment plan is told and decides.
+//!
+//! What the tracker adds is the sampler's view: the unwrapped *device* index of each sample
+//! (the assembler counts record positions instead), and the unwrapped index and time of
+//! device EVENTs in the current segment's numbering.
 
-/// Unwraps a 32-bit wrapping counter into 64 bits.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Unwrap32 {
-    last: Option<u32>,
-    offset: u64,
-    wraps: u64,
-}
-
-impl Unwrap32 {
-    /// Unwraps `raw`; see the module docs for the rule.
-    pub fn unwrap(&mut self, raw: u32) -> u64 {
-        if let Some(last) = self.last {
-            if raw < last && last - raw > u32::MAX / 2 {
-                self.offset += 1 << 32;
-                self.wraps += 1;
-            }
-        }
-        self.last = Some(raw);
-        self.offset + u64::from(raw)
-    }
-
-    /// Wraps seen so far.
-    pub fn wraps(&self) -> u64 {
-        self.wraps
-    }
-}
+use crate::ingest::assemble::{AssembleOptions, AssembleStats, Assembled, SampleAssembler};
+use crate::ingest::clock::Unwrap32;
 
 /// What the tracker says about one SAMPLE.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Placed {
-    /// Unwrapped sample index within the segment.
+    /// Unwrapped device sample index within the segment.
     pub index: u64,
-    /// Unwrapped device time, µs.
+    /// Unwrapped device time, µs (restarts with each segment).
     pub t_us: u64,
-    /// Samples lost just before this one (0 = contiguous).
+    /// Samples lost just before this one (0 = contiguous). With `new_segment` set, a gap too
+    /// long to mask: counted, but the window must not bridge it.
     pub lost_before: u64,
-    /// This sample starts a new segment (first sample, or the index went backwards).
+    /// This sample starts a new segment (first sample, a new boot, the index went backwards,
+    /// or a gap beyond the largest one).
     pub new_segment: bool,
     /// The same index as the previous sample: a duplicate, to be dropped.
     pub duplicate: bool,
 }
 
-/// Clock, gap and segment tracking for one link.
-#[derive(Debug, Clone, Default)]
+/// Clock, gap and segment tracking for one link; see the module documentation.
+#[derive(Debug, Clone)]
 pub struct Tracker {
-    boot_id: Option<u32>,
-    clock: Unwrap32,
+    asm: SampleAssembler,
+    /// Device index of the current segment (the assembler decides; this only numbers).
     index: Unwrap32,
-    last_index: Option<u64>,
-    segment_pending: bool,
-    /// Samples lost to index gaps.
+    /// Device clock of the current segment, for placing events.
+    clock: Unwrap32,
+    boot_id: Option<u32>,
+    /// The segment began at an inferred reset after the last HELLO (as in the assembler).
+    reset_since_hello: bool,
+    /// Samples lost to index gaps (large gaps included).
     pub samples_lost: u64,
-    /// Gaps seen.
+    /// Gaps seen (large gaps included).
     pub gaps: u64,
+    /// Gaps beyond the largest one: each ended its segment instead of being masked.
+    pub large_gaps: u64,
     /// Segments started.
     pub segments: u64,
     /// Duplicate samples dropped (same index as the previous one).
     pub duplicates: u64,
+    /// Backward index jumps without a new HELLO (inferred device resets).
+    pub resets: u64,
+}
+
+impl Default for Tracker {
+    fn default() -> Self {
+        Tracker::new(AssembleOptions::default())
+    }
 }
 
 impl Tracker {
-    /// A HELLO arrived; returns true when its `boot_id` starts a new segment.
-    /// The first HELLO of a stream joined mid-segment adopts its boot without a restart.
+    /// A tracker with ingest's rules and limits `opts`.
+    pub fn new(opts: AssembleOptions) -> Self {
+        Tracker {
+            asm: SampleAssembler::new(opts),
+            index: Unwrap32::default(),
+            clock: Unwrap32::default(),
+            boot_id: None,
+            reset_since_hello: false,
+            samples_lost: 0,
+            gaps: 0,
+            large_gaps: 0,
+            segments: 0,
+            duplicates: 0,
+            resets: 0,
+        }
+    }
+
+    /// A HELLO arrived; returns true when its `boot_id` starts a new segment (the first HELLO
+    /// before any sample, or a new boot). The first HELLO of a stream joined mid-segment, and
+    /// the HELLO of a reset already inferred from the index, are adopted without a split.
     pub fn hello(&mut self, boot_id: u32) -> bool {
-        if self.boot_id == Some(boot_id) {
-            return false;
-        }
-        if self.boot_id.is_none() && self.last_index.is_some() {
-            self.boot_id = Some(boot_id);
-            return false;
-        }
+        let starts = match self.boot_id {
+            Some(b) if b == boot_id => false,
+            Some(_) => !self.reset_since_hello,
+            None => self.asm.is_empty(),
+        };
+        // The nominal rate only serves the assembler's `dt_s`, which the daemon does not use.
+        self.asm.hello(boot_id, 0);
         self.boot_id = Some(boot_id);
-        self.restart();
-        true
+        self.reset_since_hello = false;
+        starts
     }
 
     /// Places one SAMPLE (`sample_index`, `t_us` as sent).
     pub fn sample(&mut self, raw_index: u32, raw_t_us: u32) -> Placed {
-        let mut new_segment = std::mem::take(&mut self.segment_pending);
-        let mut index = self.index.unwrap(raw_index);
-        if self.last_index == Some(index) {
-            self.segment_pending = new_segment;
-            self.duplicates += 1;
+        let before = *self.asm.stats();
+        let mut t_us = None;
+        self.asm.sample(raw_index, raw_t_us, (), &mut |a| {
+            if let Assembled::Sample { t_us: t, .. } = a {
+                t_us = Some(t);
+            }
+        });
+        let after = *self.asm.stats();
+        self.sync(&after);
+        if after.duplicates > before.duplicates {
             return Placed {
-                index,
+                index: self.index.value(),
                 t_us: self.event_time(raw_t_us),
                 lost_before: 0,
                 new_segment: false,
                 duplicate: true,
             };
         }
-        if matches!(self.last_index, Some(last) if index < last) {
-            // Backwards or repeated with no new HELLO: the device restarted (its boot HELLO
-            // was lost). Its boot id is unknown: the next HELLO is adopted, not a new segment.
-            self.restart();
-            self.boot_id = None;
-            self.segment_pending = false;
-            new_segment = true;
-            index = self.index.unwrap(raw_index);
+        if after.resets_inferred > before.resets_inferred {
+            self.reset_since_hello = true;
         }
-        let t_us = self.clock.unwrap(raw_t_us);
-        let mut lost_before = 0;
-        match self.last_index {
-            Some(last) => {
-                lost_before = index - last - 1;
-                if lost_before > 0 {
-                    self.gaps += 1;
-                    self.samples_lost += lost_before;
-                }
-            }
-            None => new_segment = true,
-        }
+        let new_segment = after.segments > before.segments;
         if new_segment {
-            self.segments += 1;
+            self.index = Unwrap32::start(raw_index);
+            self.clock = Unwrap32::start(raw_t_us);
+        } else {
+            self.index.step(raw_index);
+            self.clock.step(raw_t_us);
         }
-        self.last_index = Some(index);
         Placed {
-            index,
-            t_us,
-            lost_before,
+            index: self.index.value(),
+            t_us: t_us.unwrap_or_else(|| self.clock.value()),
+            lost_before: after.samples_lost - before.samples_lost,
             new_segment,
             duplicate: false,
         }
@@ -142,46 +156,46 @@ impl Tracker {
 
     /// Device clock wraps seen.
     pub fn clock_wraps(&self) -> u64 {
-        self.clock.wraps()
+        self.asm.stats().clock_wraps
     }
 
-    /// Unwraps an event's sample index in the current segment's numbering.
+    /// The assembler's counters (the same as `propid identify` reports for a recording).
+    pub fn assemble_stats(&self) -> &AssembleStats {
+        self.asm.stats()
+    }
+
+    /// Unwraps an event's sample index in the current segment's numbering (within half a
+    /// wrap of the last sample, before or after; as sent before the first sample).
     pub fn event_index(&self, raw_index: u32) -> u64 {
-        let mut u = self.index;
-        u.unwrap(raw_index)
+        project(&self.index, raw_index)
     }
 
     /// Unwraps an event's device time in the current segment's numbering.
     pub fn event_time(&self, raw_t_us: u32) -> u64 {
-        let mut u = self.clock;
-        u.unwrap(raw_t_us)
+        project(&self.clock, raw_t_us)
     }
 
-    fn restart(&mut self) {
-        let wraps = self.clock.wraps;
-        self.clock = Unwrap32 {
-            wraps,
-            ..Default::default()
-        };
-        self.index = Unwrap32::default();
-        self.last_index = None;
-        self.segment_pending = true;
+    fn sync(&mut self, s: &AssembleStats) {
+        self.samples_lost = s.samples_lost;
+        self.gaps = s.gaps + s.large_gaps;
+        self.large_gaps = s.large_gaps;
+        self.segments = s.segments;
+        self.duplicates = s.duplicates;
+        self.resets = s.resets_inferred;
     }
+}
+
+/// `raw` unwrapped next to `u`'s last reading (never below 0); `raw` itself before any reading.
+fn project(u: &Unwrap32, raw: u32) -> u64 {
+    u.project(raw).map_or(u64::from(raw), |v| v.max(0) as u64)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn unwrap_counts_wraps_and_ignores_small_backsteps() {
-        let mut u = Unwrap32::default();
-        assert_eq!(u.unwrap(u32::MAX - 10), u64::from(u32::MAX - 10));
-        assert_eq!(u.unwrap(5), (1u64 << 32) + 5);
-        assert_eq!(u.wraps(), 1);
-        assert_eq!(u.unwrap(3), (1u64 << 32) + 3, "small backstep is no wrap");
-        assert_eq!(u.wraps(), 1);
-    }
+    use crate::ingest::assemble::RecordBuilder;
+    use crate::protocol::message::{EscProtocol, Frame, Hello, Message};
+    use rand::{Rng, SeedableRng};
 
     #[test]
     fn contiguous_samples_have_no_gap() {
@@ -193,6 +207,7 @@ mod tests {
             let p = t.sample(i, 100 + i * 1000);
             assert_eq!(p.lost_before, 0);
             assert!(!p.new_segment);
+            assert_eq!((p.index, p.t_us), (u64::from(i), u64::from(100 + i * 1000)));
         }
         assert_eq!(t.samples_lost, 0);
         assert_eq!(t.segments, 1);
@@ -206,11 +221,66 @@ mod tests {
         let p = t.sample(11, 1000);
         assert_eq!(p.lost_before, 0);
         let p = t.sample(15, 5000);
-        assert_eq!((p.index, p.lost_before), (15, 3));
+        assert_eq!((p.index, p.lost_before, p.new_segment), (15, 3, false));
         t.sample(16, 6000);
         let p = t.sample(20, 10_000);
         assert_eq!(p.lost_before, 3);
-        assert_eq!((t.gaps, t.samples_lost), (2, 6));
+        assert_eq!((t.gaps, t.samples_lost, t.large_gaps), (2, 6, 0));
+    }
+
+    #[test]
+    fn gap_of_exactly_the_largest_size_is_masked_one_more_starts_a_segment() {
+        let max = AssembleOptions::default().max_gap_samples;
+        let mut t = Tracker::default();
+        t.hello(1);
+        t.sample(0, 0);
+        let edge = (max + 1) as u32;
+        let p = t.sample(edge, edge * 1000);
+        assert_eq!((p.lost_before, p.new_segment), (max, false));
+        let p = t.sample(edge + max as u32 + 2, 0);
+        assert_eq!((p.lost_before, p.new_segment), (max + 1, true));
+        assert_eq!((t.gaps, t.large_gaps, t.segments), (2, 1, 2));
+        assert_eq!(t.samples_lost, 2 * max + 1);
+    }
+
+    #[test]
+    fn jump_beyond_the_largest_gap_is_counted_but_never_bridged() {
+        // a frame whose absurd index passed the CRC, then the stream goes on as before
+        let mut t = Tracker::default();
+        t.hello(1);
+        for i in 0..5u32 {
+            t.sample(i, i * 1000);
+        }
+        let p = t.sample(2_000_000_000, 5000);
+        assert!(p.new_segment, "not bridged inside the segment");
+        assert_eq!(p.lost_before, 2_000_000_000 - 5);
+        assert_eq!(p.index, 2_000_000_000);
+        // back to the real numbering: the index went backwards, a reset (another segment)
+        let p = t.sample(5, 5000);
+        assert!(p.new_segment);
+        assert_eq!((p.index, p.lost_before), (5, 0));
+        let p = t.sample(6, 6000);
+        assert_eq!((p.index, p.lost_before, p.new_segment), (6, 0, false));
+        assert_eq!((t.large_gaps, t.resets, t.segments), (1, 1, 3));
+        // the same counts as ingest's assembler: one rule for live and offline
+        assert_eq!(t.assemble_stats().samples_lost, t.samples_lost);
+    }
+
+    #[test]
+    fn many_gaps_beyond_the_fill_budget_start_segments() {
+        // budget: max_gap + 10 × samples received, over the whole stream
+        let mut t = Tracker::new(AssembleOptions {
+            max_gap_samples: 1000,
+        });
+        t.hello(1);
+        for i in 0..10u32 {
+            t.sample(i, i);
+        }
+        let p = t.sample(910, 910); // 900 filled ≤ 1000 + 100
+        assert!(!p.new_segment && p.lost_before == 900);
+        let p = t.sample(1161, 1161); // 900 + 250 > 1000 + 110
+        assert!(p.new_segment && p.lost_before == 250);
+        assert_eq!((t.samples_lost, t.large_gaps), (1150, 1));
     }
 
     #[test]
@@ -228,6 +298,8 @@ mod tests {
             last = p.t_us;
         }
         assert_eq!(t.clock_wraps(), 1);
+        assert_eq!(t.event_time(start.wrapping_add(9500)), last + 500);
+        assert_eq!(t.event_index(12), 12);
     }
 
     #[test]
@@ -240,6 +312,7 @@ mod tests {
         assert_eq!(p.lost_before, 0);
         assert!(!p.new_segment);
         assert_eq!(p.index, 1u64 << 32);
+        assert_eq!(t.event_index(1), (1u64 << 32) + 1);
     }
 
     #[test]
@@ -294,5 +367,76 @@ mod tests {
         assert!(!t.hello(2), "the restarted device's HELLO is adopted");
         assert!(!t.sample(5, 30).new_segment);
         assert_eq!(t.segments, 2);
+    }
+
+    fn hello_frame(boot_id: u32) -> Frame {
+        Frame {
+            seq: 0,
+            msg: Message::Hello(Hello {
+                proto_minor: 0,
+                esc_protocol: EscProtocol::from_u8(5),
+                fw_version: 1,
+                boot_id,
+                t_us: 0,
+                sample_rate_hz: 1000,
+                channels: 1,
+                motor_poles: 14,
+                caps: 0,
+                name: [0; 16],
+            }),
+        }
+    }
+
+    #[test]
+    fn live_tracker_and_offline_record_place_random_streams_alike() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        for _ in 0..50 {
+            let opts = AssembleOptions {
+                max_gap_samples: rng.gen_range(1..200),
+            };
+            let mut t = Tracker::new(opts);
+            let mut b = RecordBuilder::new(opts);
+            let (mut idx, mut clock) = (rng.gen::<u32>(), rng.gen::<u32>());
+            let mut positions = 0u64;
+            let mut last: Option<Placed> = None;
+            for _ in 0..400 {
+                let r: f64 = rng.gen();
+                if r < 0.02 {
+                    let boot = rng.gen_range(1..4);
+                    b.push_frame(&hello_frame(boot));
+                    t.hello(boot);
+                    continue;
+                }
+                idx = match r {
+                    r if r < 0.10 => idx,                                      // duplicate
+                    r if r < 0.20 => idx.wrapping_add(rng.gen_range(2..300)),  // gap
+                    r if r < 0.23 => idx.wrapping_sub(rng.gen_range(1..1000)), // reset
+                    r if r < 0.25 => idx.wrapping_add(rng.gen_range(1 << 20..1 << 30)),
+                    _ => idx.wrapping_add(1),
+                };
+                clock = clock.wrapping_add(rng.gen_range(0..3_000_000));
+                b.push_point(idx, clock, [Some(0.5), None, None, None, None, None]);
+                let p = t.sample(idx, clock);
+                if p.duplicate {
+                    continue;
+                }
+                if !p.new_segment {
+                    positions += p.lost_before;
+                    let prev = last.expect("a sample before");
+                    assert_eq!(p.index, prev.index + p.lost_before + 1);
+                } else {
+                    assert_eq!(p.index, u64::from(idx));
+                }
+                positions += 1;
+                last = Some(p);
+            }
+            let s = *b.assembler().stats();
+            assert_eq!(b.len() as u64, positions, "same record positions");
+            assert_eq!(s.samples_lost, t.samples_lost);
+            assert_eq!(s.gaps + s.large_gaps, t.gaps);
+            assert_eq!(s.segments, t.segments);
+            assert_eq!(s.duplicates, t.duplicates);
+            assert_eq!(s.clock_wraps, t.clock_wraps());
+        }
     }
 }

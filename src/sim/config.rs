@@ -117,6 +117,15 @@ pub struct FaultConfig {
     /// After a hang-up, open a new pty (and re-point `--link`) as a new boot after this delay, ms,
     /// 0..=60000; negative means never reopen (the runner ends).
     pub reopen_after_ms: i64,
+    /// SAMPLEs never sent, by `sample_index` (as the device counts them, from 0 at boot): drops
+    /// at exact places, for tests that assert exact counts. At most 65536 indices.
+    pub drop_samples_at: Vec<u32>,
+    /// SAMPLEs whose frame gets one flipped bit, by `sample_index` (each costs the host that
+    /// frame and that sample). At most 65536 indices.
+    pub corrupt_samples_at: Vec<u32>,
+    /// SAMPLEs before whose frame a garbage burst is inserted, by `sample_index` (each costs the
+    /// host one dropped frame). At most 65536 indices.
+    pub garbage_before_samples_at: Vec<u32>,
 }
 
 impl Default for FaultConfig {
@@ -130,6 +139,9 @@ impl Default for FaultConfig {
             stall_ms: 50,
             hangup_after_s: 0.0,
             reopen_after_ms: -1,
+            drop_samples_at: Vec::new(),
+            corrupt_samples_at: Vec::new(),
+            garbage_before_samples_at: Vec::new(),
         }
     }
 }
@@ -254,6 +266,16 @@ impl FaultConfig {
             i64::MIN,
             60_000,
         )?;
+        for (key, list) in [
+            ("faults.drop_samples_at", &self.drop_samples_at),
+            ("faults.corrupt_samples_at", &self.corrupt_samples_at),
+            (
+                "faults.garbage_before_samples_at",
+                &self.garbage_before_samples_at,
+            ),
+        ] {
+            check_int(&format!("{key}.len()"), list.len() as i64, 0, 65_536)?;
+        }
         Ok(())
     }
 
@@ -264,6 +286,9 @@ impl FaultConfig {
             && self.drop_sample_prob == 0.0
             && self.stalls_per_s == 0.0
             && self.hangup_after_s == 0.0
+            && self.drop_samples_at.is_empty()
+            && self.corrupt_samples_at.is_empty()
+            && self.garbage_before_samples_at.is_empty()
     }
 }
 
@@ -342,6 +367,22 @@ mod tests {
         let msg = err.to_string();
         assert!(
             msg.contains("stand.sample_rate_hz") && msg.contains("= 5"),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn fault_index_lists_are_read_and_bounded() {
+        let cfg = SimConfig::from_toml_str("[faults]\ndrop_samples_at = [3, 1]\n", "t").unwrap();
+        assert_eq!(cfg.faults.drop_samples_at, vec![3, 1]);
+        assert!(!cfg.faults.is_clean());
+        let err = SimConfig::from_toml_str("[faults]\ncorrupt_samples_at = [-1]\n", "t");
+        assert!(matches!(err, Err(ConfigError::Parse { .. })), "{err:?}");
+        let mut cfg = SimConfig::default();
+        cfg.faults.garbage_before_samples_at = vec![0; 65_537];
+        let msg = cfg.validate().unwrap_err().to_string();
+        assert!(
+            msg.contains("faults.garbage_before_samples_at.len()") && msg.contains("65537"),
             "{msg}"
         );
     }

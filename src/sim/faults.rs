@@ -10,6 +10,10 @@
 //! - a **dropped sample** is a SAMPLE not sent: its `sample_index` is missing at the host;
 //! - a **stall** holds all output for `stall_ms`, then sends it at once (nothing lost).
 //!
+//! Drops, flips and bursts also come at exact places, by `sample_index`
+//! (`drop_samples_at`, `corrupt_samples_at`, `garbage_before_samples_at`), for tests that
+//! assert exact counts and positions; they add to the random ones.
+//!
 //! The host therefore sees `samples_lost = dropped_samples + corrupted_samples` and
 //! `frames_dropped = corrupted_frames + garbage_bursts` (summed over the kinds). Events are drawn
 //! from a seeded generator: the same seed gives the same faults. Bursts and stalls arrive as a
@@ -76,13 +80,24 @@ pub struct FaultInjector {
     pending: Vec<u8>,
     delimiter: u8,
     enabled: bool,
+    /// The next SAMPLE frame gets a flipped bit (`corrupt_samples_at`).
+    corrupt_next_sample: bool,
 }
 
 impl FaultInjector {
     /// An injector with the faults of `cfg`, drawing from `seed`.
     pub fn new(cfg: &FaultConfig, seed: u64) -> Self {
+        let mut cfg = cfg.clone();
+        for list in [
+            &mut cfg.drop_samples_at,
+            &mut cfg.corrupt_samples_at,
+            &mut cfg.garbage_before_samples_at,
+        ] {
+            list.sort_unstable();
+            list.dedup();
+        }
         let mut inj = FaultInjector {
-            cfg: cfg.clone(),
+            cfg,
             rng: StdRng::seed_from_u64(seed ^ 0x0fa1_75ee_d000_0000),
             stats: FaultStats::default(),
             next_garbage_us: None,
@@ -91,9 +106,10 @@ impl FaultInjector {
             pending: Vec::new(),
             delimiter: 0,
             enabled: true,
+            corrupt_next_sample: false,
         };
-        inj.next_garbage_us = inj.gap_us(cfg.garbage_bursts_per_s, 0);
-        inj.next_stall_us = inj.gap_us(cfg.stalls_per_s, 0);
+        inj.next_garbage_us = inj.gap_us(inj.cfg.garbage_bursts_per_s, 0);
+        inj.next_stall_us = inj.gap_us(inj.cfg.stalls_per_s, 0);
         inj
     }
 
@@ -172,17 +188,34 @@ impl FaultInjector {
         self.stats.garbage_bytes += n as u64 + 1;
     }
 
-    /// Decides whether the next SAMPLE is dropped by the device (counted). The firmware asks
-    /// before it gives the sample a link `seq`, so the host sees a `sample_index` jump without a
-    /// `seq` jump: a device-side drop (PROTOCOL.md §3).
-    pub fn drop_sample(&mut self) -> bool {
-        let drop = self.enabled
-            && self.cfg.drop_sample_prob > 0.0
-            && self.rng.gen_bool(self.cfg.drop_sample_prob);
+    /// The SAMPLE `index` is about to be sent: inserts a garbage burst before it when
+    /// `garbage_before_samples_at` lists it, and decides whether the device drops it (listed in
+    /// `drop_samples_at`, or drawn with `drop_sample_prob`; counted): true = not sent. A kept
+    /// sample listed in `corrupt_samples_at` gets one flipped bit in [`Self::push_frame`].
+    ///
+    /// The firmware asks before it gives the sample a link `seq`, so the host sees a
+    /// `sample_index` jump without a `seq` jump: a device-side drop (PROTOCOL.md §3).
+    pub fn before_sample(&mut self, index: u32) -> bool {
+        self.corrupt_next_sample = false;
+        if !self.enabled {
+            return false;
+        }
+        if self
+            .cfg
+            .garbage_before_samples_at
+            .binary_search(&index)
+            .is_ok()
+        {
+            self.burst();
+        }
+        let drop = self.cfg.drop_samples_at.binary_search(&index).is_ok()
+            || (self.cfg.drop_sample_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_sample_prob));
         if drop {
             self.stats.dropped_samples += 1;
+            return true;
         }
-        drop
+        self.corrupt_next_sample = self.cfg.corrupt_samples_at.binary_search(&index).is_ok();
+        false
     }
 
     /// Passes one encoded frame (ending in its 0x00 delimiter) through the faults into the
@@ -191,7 +224,13 @@ impl FaultInjector {
         let start = self.pending.len();
         self.pending.extend_from_slice(frame);
         let body = frame.len().saturating_sub(1);
-        if self.enabled && self.cfg.bit_flip_per_byte > 0.0 && body > 0 {
+        let listed = kind == FrameKind::Sample && std::mem::take(&mut self.corrupt_next_sample);
+        if self.enabled && listed && body > 0 {
+            let at = start + self.rng.gen_range(0..body);
+            self.flip(at);
+            self.stats.corrupted_frames += 1;
+            self.stats.corrupted_samples += 1;
+        } else if self.enabled && self.cfg.bit_flip_per_byte > 0.0 && body > 0 {
             let p_frame = 1.0 - (1.0 - self.cfg.bit_flip_per_byte).powi(body as i32);
             if self.rng.gen_bool(p_frame.clamp(0.0, 1.0)) {
                 let at = start + self.rng.gen_range(0..body);
@@ -285,7 +324,7 @@ mod tests {
         };
         let mut inj = FaultInjector::new(&cfg, 3);
         for _ in 0..100 {
-            if !inj.drop_sample() {
+            if !inj.before_sample(0) {
                 inj.push_frame(&frame(5), FrameKind::Sample);
             }
             inj.push_frame(&frame(3), FrameKind::Other);
@@ -329,7 +368,7 @@ mod tests {
         inj.set_enabled(false);
         let mut out = Vec::new();
         for k in 0..100 {
-            assert!(!inj.drop_sample());
+            assert!(!inj.before_sample(k as u32));
             inj.push_frame(&frame(20), FrameKind::Sample);
             inj.drain_ready(k * 10_000, &mut out);
         }
@@ -338,6 +377,43 @@ mod tests {
         inj.set_enabled(true);
         inj.drain_ready(2_000_000, &mut out);
         assert!(inj.stats().garbage_bursts > 0, "on again");
+    }
+
+    #[test]
+    fn faults_by_sample_index_are_placed_and_counted_exactly() {
+        let cfg = FaultConfig {
+            drop_samples_at: vec![11, 10, 500],
+            corrupt_samples_at: vec![20, 700, 701, 10],
+            garbage_before_samples_at: vec![30, 900, 10],
+            ..FaultConfig::default()
+        };
+        let mut inj = FaultInjector::new(&cfg, 1);
+        let mut out = Vec::new();
+        let mut sent = Vec::new();
+        for k in 0..1000u32 {
+            if !inj.before_sample(k) {
+                sent.push(k);
+                inj.push_frame(&frame(20), FrameKind::Sample);
+            }
+            inj.push_frame(&frame(8), FrameKind::Other);
+            inj.drain_ready(u64::from(k), &mut out);
+        }
+        let s = inj.stats();
+        // 10 is dropped (a dropped sample cannot also be corrupted); its burst still comes
+        assert_eq!(s.dropped_samples, 3);
+        assert_eq!((s.corrupted_frames, s.corrupted_samples), (3, 3));
+        assert_eq!(s.garbage_bursts, 3);
+        assert_eq!(sent.len(), 997);
+        // every corrupted frame and every burst is one dropped frame, nothing else is
+        assert_eq!(
+            out.iter().filter(|&&b| b == 0).count() as u64,
+            997 + 1000 + s.garbage_bursts
+        );
+        let changed = out
+            .split_inclusive(|&b| b == 0)
+            .filter(|c| c.len() == 21 && *c != frame(20).as_slice())
+            .count();
+        assert_eq!(changed, 3);
     }
 
     #[test]

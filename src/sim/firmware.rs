@@ -381,7 +381,7 @@ impl<D: Dynamics> Firmware<D> {
             voltage_v: m.voltage_v as f32,
             current_a: m.current_a as f32,
         };
-        if self.faults.drop_sample() {
+        if self.faults.before_sample(sample.sample_index) {
             return;
         }
         self.emit(Message::Sample(sample));

@@ -1,0 +1,183 @@
+//! The real `propid` binary as a child process, for the end-to-end daemon tests: its stdout
+//! lines arrive parsed on a channel, signals go to its pid, and `finish` waits for the exit.
+
+#![allow(dead_code)]
+
+use serde_json::Value;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::mpsc::{channel, Receiver};
+use std::time::{Duration, Instant};
+
+/// The binary under test.
+pub const BIN: &str = env!("CARGO_BIN_EXE_propid");
+
+/// Writes a daemon config with a short experiment at `levels`, plus `extra` TOML lines
+/// (whole tables, e.g. `"[daemon]\nqueue_capacity = 16\n"`).
+pub fn daemon_config(dir: &Path, levels: &str, pulses: u32, k: u32, extra: &str) -> PathBuf {
+    let p = dir.join("propid.toml");
+    let text = format!(
+        "[device]\nreconnect_initial_ms = 50\nreconnect_max_ms = 200\n\
+         [identify]\npulses_per_model = {k}\n\
+         [experiment]\nlevels = {levels}\nramp_ms = 100\nsettle_ms = 300\n\
+         pulse_amplitudes = [0.1, 0.15]\npulse_spacing_ms = 150\npulses_per_level = {pulses}\n\
+         {extra}"
+    );
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// A running child with its stdout lines arriving on a channel.
+pub struct Daemon {
+    pub child: Child,
+    rx: Receiver<Value>,
+    pub lines: Vec<Value>,
+}
+
+impl Daemon {
+    /// Starts `propid ARGS` with stdout and stderr piped.
+    pub fn start(args: &[&str]) -> Daemon {
+        let mut child = Command::new(BIN)
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = child.stdout.take().unwrap();
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            for l in BufReader::new(out).lines() {
+                let Ok(l) = l else { return };
+                // every line is whole JSON: a torn line would fail here
+                let v: Value = serde_json::from_str(&l).unwrap_or_else(|e| panic!("{l}: {e}"));
+                if tx.send(v).is_err() {
+                    return;
+                }
+            }
+        });
+        Daemon {
+            child,
+            rx,
+            lines: Vec::new(),
+        }
+    }
+
+    /// Waits for a line matching `pred` (panics after `secs`).
+    pub fn wait_for(&mut self, secs: f64, pred: impl Fn(&Value) -> bool) -> Value {
+        let end = Instant::now() + Duration::from_secs_f64(secs);
+        loop {
+            let left = end.saturating_duration_since(Instant::now());
+            match self.rx.recv_timeout(left) {
+                Ok(v) => {
+                    self.lines.push(v.clone());
+                    if pred(&v) {
+                        return v;
+                    }
+                }
+                Err(_) => panic!("no matching line within {secs} s; got {:#?}", self.lines),
+            }
+        }
+    }
+
+    /// Sends `sig` to the child.
+    pub fn signal(&self, sig: i32) {
+        signal(self.child.id(), sig);
+    }
+
+    /// Waits for the exit (kills the child and panics after `secs`); returns the status,
+    /// every stdout line and stderr.
+    pub fn finish(mut self, secs: f64) -> (ExitStatus, Vec<Value>, String) {
+        let status = wait_exit(&mut self.child, secs)
+            .unwrap_or_else(|| panic!("propid did not exit; lines {:#?}", self.lines));
+        while let Ok(v) = self.rx.recv_timeout(Duration::from_millis(500)) {
+            self.lines.push(v);
+        }
+        let mut err = String::new();
+        if let Some(mut e) = self.child.stderr.take() {
+            use std::io::Read;
+            let _ = e.read_to_string(&mut err);
+        }
+        (status, self.lines, err)
+    }
+}
+
+/// Sends `sig` to process `pid` (a child this test started).
+pub fn signal(pid: u32, sig: i32) {
+    let r = unsafe { libc::kill(pid as i32, sig) };
+    assert_eq!(r, 0, "kill({pid}, {sig})");
+}
+
+/// Waits up to `secs` for `child` to exit; kills it and returns None when it does not.
+pub fn wait_exit(child: &mut Child, secs: f64) -> Option<ExitStatus> {
+    let end = Instant::now() + Duration::from_secs_f64(secs);
+    loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            return Some(s);
+        }
+        if Instant::now() > end {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Lines with `"kind": k`.
+pub fn kind<'a>(lines: &'a [Value], k: &str) -> Vec<&'a Value> {
+    lines.iter().filter(|l| l["kind"] == k).collect()
+}
+
+/// Lines with `"type": t`.
+pub fn of_type<'a>(lines: &'a [Value], t: &str) -> Vec<&'a Value> {
+    lines.iter().filter(|l| l["type"] == t).collect()
+}
+
+/// The final stats line (asserted to be the last line).
+pub fn stats(lines: &[Value]) -> &Value {
+    let s = lines.last().expect("no lines");
+    assert_eq!(s["type"], "stats", "{lines:#?}");
+    s
+}
+
+/// Sum of `frames_dropped` over its kinds.
+pub fn dropped_total(s: &Value) -> u64 {
+    s["frames_dropped"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum()
+}
+
+/// A child process killed (by its pid) when the test ends, even on a panic.
+pub struct KillOnDrop(pub Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Starts `propid sim --seconds S --link LINK ARGS` as its own process (as in deployment) and
+/// waits for the link to appear.
+pub fn sim_process(link: &Path, seconds: f64, args: &[&str]) -> KillOnDrop {
+    let child = Command::new(BIN)
+        .args(["sim", "--seconds", &seconds.to_string()])
+        .args(args)
+        .arg("--link")
+        .arg(link)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let guard = KillOnDrop(child);
+    let t = Instant::now();
+    while !link.exists() {
+        assert!(t.elapsed() < Duration::from_secs(10), "no pty link");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    guard
+}
