@@ -37,7 +37,7 @@ pub fn judge(model: &Map<String, Value>) -> Vec<&'static str> {
             poles.iter().any(|p| {
                 // [re, im]; a null (non-finite) real part is not a settled pole either
                 p.get(0)
-                    .is_some_and(|re| re.as_f64().is_none_or(|re| re >= 0.0))
+                    .is_some_and(|re| !matches!(re.as_f64(), Some(r) if r < 0.0))
             })
         });
     if unstable {

@@ -511,7 +511,7 @@ mod tests {
     use super::*;
     use crate::daemon::source::{ScriptedSource, Step};
     use crate::protocol::message::{Hello, Sample, SampleFlags};
-    use crate::protocol::EscProtocol;
+    use crate::protocol::{encode_frame, Decoder, EscProtocol};
     use crate::sim::record::{record, RecordSummary};
     use crate::sim::SimConfig;
 
