@@ -466,3 +466,75 @@ fn passive_csv_bench_is_sampled_and_identified_from_its_throttle_column() {
     assert_eq!(stats["wire"], "csv");
     assert_eq!(stats["samples_lost"], 0, "{stats}");
 }
+
+#[test]
+fn csv_link_faults_are_counted_and_the_live_counts_equal_the_replay_of_the_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = daemon_config(dir.path(), "[0.4]", 8, 4);
+    let rec = dir.path().join("run.csv");
+    let sim = sim(
+        1000,
+        |c| {
+            c.stand.protocol = propid::sim::config::WireProtocol::Csv;
+            c.faults.bit_flip_per_byte = 1e-4;
+            c.faults.garbage_bursts_per_s = 2.0;
+            c.faults.drop_sample_prob = 0.002;
+        },
+        None,
+    );
+    let port = sim.path().display().to_string();
+    let d = Daemon::start(&[
+        "run",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--port",
+        &port,
+        "--record",
+        rec.to_str().unwrap(),
+    ]);
+    let (status, live, err) = d.finish(30.0);
+    let report = sim.stop().unwrap();
+    assert!(status.success(), "{err}");
+    assert_eq!(kind(&live, "plan_finished").len(), 1, "{live:#?}");
+    let s = live.last().unwrap();
+    assert_eq!(s["wire"], "csv");
+    let dropped: u64 = s["frames_dropped"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    assert!(dropped > 0, "{s}");
+    assert!(s["samples_lost"].as_u64().unwrap() > 0, "{s}");
+    // every row the stand took is received or counted lost (the last few may be in flight)
+    let seen = s["samples"].as_u64().unwrap() + s["samples_lost"].as_u64().unwrap();
+    assert!(seen <= report.firmware.samples, "{s} {:?}", report.firmware);
+    assert!(
+        seen + 50 >= report.firmware.samples,
+        "{s} {:?}",
+        report.firmware
+    );
+    // the replay of the recorded bytes counts exactly the same
+    let out = Command::new(BIN)
+        .args(["replay", rec.to_str().unwrap(), "--config"])
+        .arg(&cfg)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let replayed: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let r = replayed.last().unwrap();
+    for key in [
+        "frames_ok",
+        "frames_dropped",
+        "samples",
+        "samples_lost",
+        "gaps",
+    ] {
+        assert_eq!(r[key], s[key], "{key}");
+    }
+    assert_eq!(models_of(&live), models_of(&replayed));
+}
