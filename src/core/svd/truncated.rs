@@ -45,11 +45,13 @@
 //! `compute`, `apply`, `apply_t` and `project` allocate nothing.
 
 pub mod error;
+pub mod ritz_check;
 pub mod small_jacobi;
 
 pub use error::TruncatedError;
 
 use super::hankel_op::HankelOp;
+use ritz_check::RitzCheck;
 use small_jacobi::SmallJacobi;
 
 /// Default acceptance threshold for the residual `‖Hᵀu − σv‖ / σ₁` of every requested triplet.
@@ -88,7 +90,10 @@ pub struct TruncatedSvd {
     beta: Vec<f64>,
     coef: Vec<f64>,
     small: SmallJacobi,
+    cheap: RitzCheck,
     residuals: Vec<f64>,
+    /// Last components of the leading left Ritz vectors (`max_k`).
+    last: Vec<f64>,
     ritz: Vec<f64>,
     n_ritz: usize,
     ritz_prev: Vec<f64>,
@@ -151,7 +156,9 @@ impl TruncatedSvd {
             beta: vec![0.0; max_steps],
             coef: vec![0.0; max_steps + 1],
             small: SmallJacobi::new(max_steps),
+            cheap: RitzCheck::new(max_steps),
             residuals: vec![0.0; max_k],
+            last: vec![0.0; max_k],
             ritz: vec![0.0; max_steps],
             n_ritz: 0,
             ritz_prev: vec![0.0; max_steps],
@@ -378,8 +385,9 @@ impl TruncatedSvd {
                 self.random_unit(false, j + 1, cols);
             }
             self.steps = j + 1;
-            if self.steps >= k && (self.steps >= next_check || breakdown || self.steps == m_max) {
-                if self.check(k, need)? {
+            let last = self.steps == m_max;
+            if self.steps >= k && (self.steps >= next_check || breakdown || last) {
+                if self.check(k, need, last)? {
                     return Ok(());
                 }
                 next_check = self.steps + (self.steps / 2).max(2);
@@ -389,38 +397,58 @@ impl TruncatedSvd {
         Ok(())
     }
 
-    /// Small SVD of `B_m`, residuals of the leading `k` Ritz triplets; `true` when all pass,
-    /// or when the leading `need < k` pass and the leading `k` Ritz values moved by at most
-    /// [`RITZ_STABLE`]` · σ₁` since the previous check.
-    fn check(&mut self, k: usize, need: usize) -> Result<bool, TruncatedError> {
+    /// Convergence check at `m` steps: `true` when the leading `k` Ritz triplets pass the
+    /// residual test, or when the leading `need < k` pass and the leading `k` Ritz values
+    /// moved by at most [`RITZ_STABLE`]` · σ₁` since the previous check. The test runs first on
+    /// the `O(m²)` values and last components of [`RitzCheck`]; only a check that stops the
+    /// iteration (it passes, or `last`: the step budget is spent) runs the `O(m³)` Jacobi SVD
+    /// whose triplets are handed out, and decides again on its values.
+    fn check(&mut self, k: usize, need: usize, last: bool) -> Result<bool, TruncatedError> {
         let m = self.steps;
+        let n_prev = self.n_ritz;
+        self.ritz_prev[..n_prev].copy_from_slice(&self.ritz[..n_prev]);
+        self.n_prev = n_prev;
+        if !last {
+            if !self.cheap.compute(&self.alpha[..m], &self.beta[..m]) {
+                return Err(self.failed(k));
+            }
+            for i in 0..m {
+                self.ritz[i] = self.cheap.sigma(i);
+            }
+            for i in 0..k {
+                self.last[i] = self.cheap.last(i);
+            }
+            if !self.decide(k, need)? {
+                return Ok(false);
+            }
+        }
         if !self
             .small
             .load_bidiagonal(&self.alpha[..m], &self.beta[..m])
             || !self.small.decompose()
         {
-            return Err(TruncatedError::NotConverged {
-                k,
-                converged: 0,
-                steps: m,
-                residual: f64::INFINITY,
-                tolerance: self.tolerance,
-            });
+            return Err(self.failed(k));
         }
-        let s = self.small.sigma();
-        let n_prev = self.n_ritz;
-        self.ritz_prev[..n_prev].copy_from_slice(&self.ritz[..n_prev]);
-        self.n_prev = n_prev;
+        self.ritz[..m].copy_from_slice(self.small.sigma());
+        for i in 0..k {
+            self.last[i] = self.small.left(i)[m - 1];
+        }
+        self.decide(k, need)
+    }
+
+    /// From the Ritz values in `ritz[..m]` and the last components `last[..k]` of the leading
+    /// left vectors: the residuals `β_m |last_i| / σ₁`, and the stopping rule of
+    /// [`check`](Self::check).
+    fn decide(&mut self, k: usize, need: usize) -> Result<bool, TruncatedError> {
+        let m = self.steps;
         self.n_ritz = m;
-        self.ritz[..m].copy_from_slice(s);
-        let s1 = s[0];
+        let s1 = self.ritz[0];
         if s1 <= 0.0 {
             return Err(TruncatedError::ZeroMatrix);
         }
         let beta_m = self.beta[m - 1];
         for i in 0..k {
-            let last = self.small.left(i)[m - 1];
-            self.residuals[i] = (beta_m * last).abs() / s1;
+            self.residuals[i] = (beta_m * self.last[i]).abs() / s1;
         }
         let converged = self.converged(k);
         if converged == k {
@@ -429,6 +457,16 @@ impl TruncatedSvd {
         let stable = self.n_prev >= k
             && (0..k).all(|i| (self.ritz[i] - self.ritz_prev[i]).abs() <= RITZ_STABLE * s1);
         Ok(need < k && converged >= need && stable)
+    }
+
+    fn failed(&self, k: usize) -> TruncatedError {
+        TruncatedError::NotConverged {
+            k,
+            converged: 0,
+            steps: self.steps,
+            residual: f64::INFINITY,
+            tolerance: self.tolerance,
+        }
     }
 
     /// `u_i = U_m p_i`, `v_i = V_m q_i` for the leading `k` Ritz triplets of the last check.
