@@ -622,21 +622,23 @@ impl Engine {
                 &mut self.jk_v,
             )?,
             SvdPath::Truncated => {
-                self.trunc
-                    .compute_at_least(
-                        markov.as_slice(),
-                        dims.q,
-                        dims.p,
-                        dims.r,
-                        dims.c,
-                        0,
-                        b,
-                        n,
-                        &mut self.jk_sigma[..b],
-                        &mut self.jk_u,
-                        &mut self.jk_v,
-                    )
-                    .map_err(svd::SvdError::from)?;
+                // fn, ζ and the DC gain do not depend on the signs of the singular vectors.
+                self.trunc.set_sign_free(true);
+                let r = self.trunc.compute_at_least(
+                    markov.as_slice(),
+                    dims.q,
+                    dims.p,
+                    dims.r,
+                    dims.c,
+                    0,
+                    b,
+                    n,
+                    &mut self.jk_sigma[..b],
+                    &mut self.jk_u,
+                    &mut self.jk_v,
+                );
+                self.trunc.set_sign_free(false);
+                r.map_err(svd::SvdError::from)?;
             }
         }
         self.h1v(markov, dims, n, path, true)?;

@@ -44,6 +44,7 @@
 //! length for a fixed step budget. Everything is allocated in [`TruncatedSvd::new`];
 //! `compute`, `apply`, `apply_t` and `project` allocate nothing.
 
+pub mod eigen_svd;
 pub mod error;
 pub mod ritz_check;
 pub mod small_jacobi;
@@ -51,6 +52,7 @@ pub mod small_jacobi;
 pub use error::TruncatedError;
 
 use super::hankel_op::HankelOp;
+use eigen_svd::EigenSvd;
 use ritz_check::RitzCheck;
 use small_jacobi::SmallJacobi;
 
@@ -91,6 +93,13 @@ pub struct TruncatedSvd {
     coef: Vec<f64>,
     small: SmallJacobi,
     cheap: RitzCheck,
+    /// The final small SVD when signs are free ([`set_sign_free`](Self::set_sign_free)).
+    eig: EigenSvd,
+    sign_free: bool,
+    /// Whether the last stopping check's triplets come from `eig` (else from `small`).
+    from_eig: bool,
+    /// Scratch for one right Ritz vector of `B_m` (`max_steps`).
+    qbuf: Vec<f64>,
     residuals: Vec<f64>,
     /// Last components of the leading left Ritz vectors (`max_k`).
     last: Vec<f64>,
@@ -157,6 +166,10 @@ impl TruncatedSvd {
             coef: vec![0.0; max_steps + 1],
             small: SmallJacobi::new(max_steps),
             cheap: RitzCheck::new(max_steps),
+            eig: EigenSvd::new(max_steps),
+            sign_free: false,
+            from_eig: false,
+            qbuf: vec![0.0; max_steps],
             residuals: vec![0.0; max_k],
             last: vec![0.0; max_k],
             ritz: vec![0.0; max_steps],
@@ -183,6 +196,16 @@ impl TruncatedSvd {
     /// The acceptance threshold in use.
     pub fn tolerance(&self) -> f64 {
         self.tolerance
+    }
+
+    /// With `true`, the stopping check decomposes the Lanczos bidiagonal through the eigenvectors
+    /// of `B Bᵀ` ([`eigen_svd`], several times faster than the Jacobi SVD) whenever the
+    /// requested singular values are at least [`eigen_svd::MIN_RATIO`]` · σ₁`: values and
+    /// subspaces agree with the Jacobi ones to rounding, but the sign of each triplet
+    /// `(u_i, v_i)` is arbitrary. For callers that use only sign-invariant results (poles, DC
+    /// gains: the jackknife). Default `false`: Jacobi, whose signs are reproducible.
+    pub fn set_sign_free(&mut self, sign_free: bool) {
+        self.sign_free = sign_free;
     }
 
     /// Largest number of triplets `compute` accepts.
@@ -422,6 +445,16 @@ impl TruncatedSvd {
                 return Ok(false);
             }
         }
+        self.from_eig = self.sign_free && self.eig.compute(&self.alpha[..m], &self.beta[..m], need);
+        if self.from_eig {
+            for i in 0..m {
+                self.ritz[i] = self.eig.sigma(i);
+            }
+            for i in 0..k {
+                self.last[i] = self.eig.left(i)[m - 1];
+            }
+            return self.decide(k, need);
+        }
         if !self
             .small
             .load_bidiagonal(&self.alpha[..m], &self.beta[..m])
@@ -471,7 +504,7 @@ impl TruncatedSvd {
 
     /// `u_i = U_m p_i`, `v_i = V_m q_i` for the leading `k` Ritz triplets of the last check.
     fn write_triplets(
-        &self,
+        &mut self,
         rows: usize,
         cols: usize,
         k: usize,
@@ -480,9 +513,13 @@ impl TruncatedSvd {
         v: &mut [f64],
     ) {
         let m = self.steps;
-        sigma[..k].copy_from_slice(&self.small.sigma()[..k]);
+        sigma[..k].copy_from_slice(&self.ritz[..k]);
         for i in 0..k {
-            let (p, qv) = (self.small.left(i), self.small.right(i));
+            let p = if self.from_eig {
+                self.eig.left(i)
+            } else {
+                self.small.left(i)
+            };
             let ui = &mut u[i * rows..(i + 1) * rows];
             ui.fill(0.0);
             for (l, &w) in p.iter().enumerate().take(m) {
@@ -492,6 +529,12 @@ impl TruncatedSvd {
                     ui,
                 );
             }
+            let qv = if self.from_eig {
+                self.eig.right_into(i, &mut self.qbuf[..m]);
+                &self.qbuf[..m]
+            } else {
+                self.small.right(i)
+            };
             let vi = &mut v[i * cols..(i + 1) * cols];
             vi.fill(0.0);
             for (l, &w) in qv.iter().enumerate().take(m) {

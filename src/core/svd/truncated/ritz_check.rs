@@ -85,7 +85,7 @@ impl RitzCheck {
             self.z[i] = 0.0;
         }
         self.z[n - 1] = 1.0;
-        if !ql_last_row(&mut self.d[..n], &mut self.e[..n], &mut self.z[..n]) {
+        if !ql_implicit(&mut self.d[..n], &mut self.e[..n], &mut self.z[..n], 1) {
             return false;
         }
         for v in &mut self.d[..n] {
@@ -117,10 +117,14 @@ impl RitzCheck {
 }
 
 /// Implicit QL with Wilkinson shifts on the symmetric tridiagonal (`d` diagonal, `e[i]` =
-/// `T[i, i+1]`, `e[n-1] = 0`), rotating only the row `z` of the eigenvector matrix. On return
-/// `d` holds the eigenvalues (unsorted) and `z[j]` the last component of eigenvector `j`.
-/// `tql2` in the 0-based form of Press et al., *Numerical Recipes* §11.3 (`tqli`).
-fn ql_last_row(d: &mut [f64], e: &mut [f64], z: &mut [f64]) -> bool {
+/// `T[i, i+1]`, `e[n-1] = 0`), applying every rotation to the `zrows` rows of the column-major
+/// `zrows × n` matrix `z` (start from the identity for the eigenvectors, from `e_nᵀ` for their
+/// last components only). On return `d` holds the eigenvalues (unsorted) and column `j` of `z`
+/// the rows of eigenvector `j`. `tql2` in the 0-based form of Press et al., *Numerical Recipes*
+/// §11.3 (`tqli`). The entries must be scaled to order one: plane rotations use
+/// `√(f² + g²)`, which neither overflows nor (below the `ε`-level convergence threshold)
+/// matters when it underflows.
+pub(crate) fn ql_implicit(d: &mut [f64], e: &mut [f64], z: &mut [f64], zrows: usize) -> bool {
     let n = d.len();
     for l in 0..n {
         let mut iter = 0;
@@ -141,7 +145,7 @@ fn ql_last_row(d: &mut [f64], e: &mut [f64], z: &mut [f64]) -> bool {
                 return false;
             }
             let mut g = (d[l + 1] - d[l]) / (2.0 * e[l]);
-            let mut r = g.hypot(1.0);
+            let mut r = (g * g + 1.0).sqrt();
             g = d[m] - d[l] + e[l] / (g + r.copysign(g));
             let (mut s, mut c, mut p) = (1.0f64, 1.0f64, 0.0f64);
             let mut underflow = false;
@@ -150,7 +154,7 @@ fn ql_last_row(d: &mut [f64], e: &mut [f64], z: &mut [f64]) -> bool {
                 i -= 1;
                 let f = s * e[i];
                 let b = c * e[i];
-                r = f.hypot(g);
+                r = (f * f + g * g).sqrt();
                 e[i + 1] = r;
                 if r == 0.0 {
                     d[i + 1] -= p;
@@ -165,9 +169,13 @@ fn ql_last_row(d: &mut [f64], e: &mut [f64], z: &mut [f64]) -> bool {
                 p = s * r;
                 d[i + 1] = g + p;
                 g = c * r - b;
-                let f = z[i + 1];
-                z[i + 1] = s * z[i] + c * f;
-                z[i] = c * z[i] - s * f;
+                let (lo, hi) = z.split_at_mut((i + 1) * zrows);
+                let (zi, zj) = (&mut lo[i * zrows..], &mut hi[..zrows]);
+                for (a, b) in zi.iter_mut().zip(zj.iter_mut()) {
+                    let f = *b;
+                    *b = s * *a + c * f;
+                    *a = c * *a - s * f;
+                }
             }
             if underflow {
                 continue;
@@ -177,7 +185,7 @@ fn ql_last_row(d: &mut [f64], e: &mut [f64], z: &mut [f64]) -> bool {
             e[m] = 0.0;
         }
     }
-    d.iter().chain(z.iter()).all(|v| v.is_finite())
+    d.iter().chain(z[..n * zrows].iter()).all(|v| v.is_finite())
 }
 
 #[cfg(test)]
