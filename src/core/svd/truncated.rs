@@ -458,7 +458,7 @@ impl TruncatedSvd {
         if !self
             .small
             .load_bidiagonal(&self.alpha[..m], &self.beta[..m])
-            || !self.small.decompose()
+            || !self.small.decompose_leading(k)
         {
             return Err(self.failed(k));
         }
