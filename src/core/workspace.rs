@@ -33,7 +33,8 @@ use super::{IdentError, MarkovSeq};
 
 type C64 = Complex<f64>;
 
-/// Extra singular triplets beyond the order kept for the jackknife's subspace iteration.
+/// Extra singular triplets beyond the order kept for the jackknife's subspace iteration (dense
+/// path).
 const EXTRA_TRIPLETS: usize = 4;
 
 /// Subspace iterations per jackknife re-identification.
@@ -595,7 +596,9 @@ impl Engine {
     }
 
     /// Re-identifies the leave-one-out sequence at the model's order and Hankel size and
-    /// stores fn, ζ and the DC gains as estimate number `slot`.
+    /// stores fn, ζ and the DC gains as estimate number `slot`. On the truncated path only the
+    /// `n` triplets the realisation uses are computed, converged to the SVD's tolerance (no
+    /// extra Ritz values: the order is fixed), with the sign-free final small SVD.
     fn jackknife_one(
         &mut self,
         markov: &MarkovSeq,
@@ -631,9 +634,9 @@ impl Engine {
                     dims.r,
                     dims.c,
                     0,
-                    b,
                     n,
-                    &mut self.jk_sigma[..b],
+                    n,
+                    &mut self.jk_sigma[..n],
                     &mut self.jk_u,
                     &mut self.jk_v,
                 );
