@@ -17,6 +17,8 @@
 //! quadratic convergence (typically 5–10 sweeps); the matrices here are at most a few dozen
 //! columns wide, so `O(m³)` per sweep is negligible next to the Hankel products.
 
+use crate::core::svd::kernels::dot;
+
 /// Largest number of sweeps before giving up (never reached in practice: Jacobi converges
 /// quadratically once the off-diagonal mass is small).
 const MAX_SWEEPS: usize = 60;
@@ -176,7 +178,7 @@ impl SmallJacobi {
         let mut rotated = false;
         for i in 0..n {
             let col = &self.w[i * n..(i + 1) * n];
-            self.norms[i] = col.iter().map(|v| v * v).sum();
+            self.norms[i] = dot(col, col);
         }
         for i in 0..n {
             for j in i + 1..n {
@@ -185,7 +187,7 @@ impl SmallJacobi {
                     continue;
                 }
                 let (wi, wj) = two_cols(&mut self.w, n, i, j);
-                let g: f64 = wi.iter().zip(wj.iter()).map(|(x, y)| x * y).sum();
+                let g = dot(wi, wj);
                 if g == 0.0 || g.abs() <= eps * (a * b).sqrt() {
                     continue;
                 }
