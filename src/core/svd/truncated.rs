@@ -8,8 +8,9 @@
 //! $$\alpha_j u_j = H v_j - \beta_{j-1} u_{j-1}, \qquad
 //!   \beta_j v_{j+1} = H^T u_j - \alpha_j v_j ,$$
 //!
-//! each new vector reorthogonalised twice against all previous ones (classical Gram–Schmidt
-//! twice, "twice is enough", Giraud et al. 2005), so that after `m` steps
+//! each new vector reorthogonalised against all previous ones (classical Gram–Schmidt, with a
+//! second pass when Kahan's criterion asks for it: "twice is enough", Giraud et al. 2005), so
+//! that after `m` steps
 //!
 //! $$H V_m = U_m B_m, \qquad H^T U_m = V_m B_m^T + \beta_m v_{m+1} e_m^T$$
 //!
@@ -52,9 +53,13 @@ pub mod small_jacobi;
 pub use error::TruncatedError;
 
 use super::hankel_op::HankelOp;
+use super::kernels::dot;
 use eigen_svd::EigenSvd;
 use ritz_check::RitzCheck;
 use small_jacobi::SmallJacobi;
+
+/// Kahan's criterion for a second Gram–Schmidt pass (see `reorthonormalise`).
+const KAHAN_KAPPA: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// Default acceptance threshold for the residual `‖Hᵀu − σv‖ / σ₁` of every requested triplet.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -548,8 +553,12 @@ impl TruncatedSvd {
     }
 
     /// Orthogonalises basis vector `idx` (of `U` if `left`, else `V`) against vectors
-    /// `0..idx` by classical Gram–Schmidt twice, normalises it if nonzero and returns its
-    /// norm before normalisation.
+    /// `0..idx` by classical Gram–Schmidt, normalises it if nonzero and returns its norm
+    /// before normalisation. The second pass runs only when the first removed more than a
+    /// fraction of the norm (`‖w'‖ < κ ‖w‖`, [`KAHAN_KAPPA`]): otherwise `w'` is already
+    /// orthogonal to working precision (Kahan's "twice is enough" criterion, Parlett, *The
+    /// Symmetric Eigenvalue Problem*, §6.9; Giraud, Langou & Rozložník 2005). In Lanczos the
+    /// recurrence has removed the large components already, so one pass usually suffices.
     fn reorthonormalise(&mut self, left: bool, idx: usize, len: usize) -> f64 {
         let (basis, stride) = if left {
             (&mut self.ub, self.row_stride)
@@ -558,6 +567,7 @@ impl TruncatedSvd {
         };
         let (prev, cur) = basis.split_at_mut(idx * stride);
         let w = &mut cur[..len];
+        let mut norm = dot(w, w).sqrt();
         for _ in 0..2 {
             for (l, c) in self.coef[..idx].iter_mut().enumerate() {
                 *c = dot(&prev[l * stride..l * stride + len], w);
@@ -565,8 +575,12 @@ impl TruncatedSvd {
             for (l, &c) in self.coef[..idx].iter().enumerate() {
                 axpy(-c, &prev[l * stride..l * stride + len], w);
             }
+            let before = norm;
+            norm = dot(w, w).sqrt();
+            if norm >= KAHAN_KAPPA * before {
+                break;
+            }
         }
-        let norm = dot(w, w).sqrt();
         if norm > 0.0 {
             w.iter_mut().for_each(|x| *x /= norm);
         }
@@ -674,10 +688,6 @@ fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Trun
         });
     }
     Ok(())
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// `y += a x`.
