@@ -43,6 +43,10 @@ pub struct SmallJacobi {
     orig: Vec<f64>,
     /// Squared column norms of `W`, updated by every rotation.
     norms: Vec<f64>,
+    /// Rotation clock of the last rotation of each column (see `sweep`).
+    touched: Vec<u64>,
+    /// Rotation clock at which pair `(i, j)` (at `i + j n`) was last found orthogonal (0: never).
+    checked: Vec<u64>,
 }
 
 impl SmallJacobi {
@@ -59,6 +63,8 @@ impl SmallJacobi {
             tmp: vec![0.0; max_n * max_n],
             orig: vec![0.0; max_n * max_n],
             norms: vec![0.0; max_n],
+            touched: vec![0; max_n],
+            checked: vec![0; max_n * max_n],
         }
     }
 
@@ -138,6 +144,9 @@ impl SmallJacobi {
     }
 
     /// The Jacobi sweeps (rotating `Q` too when `with_q`), then [`finish`](Self::finish).
+    /// `W` is first scaled by the power of two `2^-e` that brings its largest entry into
+    /// `[½, 1)`: exact in floating point, so every rotation is the one of the unscaled matrix,
+    /// and the squares in `sweep` can neither overflow nor underflow; `σ` is scaled back.
     fn iterate(&mut self, with_q: bool) -> bool {
         let n = self.n;
         if n == 0 || self.w[..n * n].iter().any(|v| !v.is_finite()) {
@@ -150,11 +159,22 @@ impl SmallJacobi {
                 q[i + i * n] = 1.0;
             }
         }
+        let big = self.w[..n * n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let e = if big > 0.0 {
+            (big.log2().floor() as i32 + 1).clamp(-1000, 1000)
+        } else {
+            0
+        };
+        let down = 2f64.powi(-e);
+        self.w[..n * n].iter_mut().for_each(|v| *v *= down);
         let fro2: f64 = self.w[..n * n].iter().map(|v| v * v).sum();
         let negligible = fro2 * f64::EPSILON * f64::EPSILON;
+        self.touched[..n].fill(1);
+        self.checked[..n * n].fill(0);
+        let mut clock = 1u64;
         let mut converged = false;
         for _ in 0..MAX_SWEEPS {
-            if !self.sweep(negligible, with_q) {
+            if !self.sweep(negligible, with_q, &mut clock) {
                 converged = true;
                 break;
             }
@@ -163,6 +183,8 @@ impl SmallJacobi {
             return false;
         }
         self.finish(negligible.sqrt(), with_q);
+        let up = 2f64.powi(e);
+        self.sigma[..n].iter_mut().for_each(|s| *s *= up);
         true
     }
 
@@ -171,10 +193,16 @@ impl SmallJacobi {
     /// zero: rotating them would chase rounding noise forever. The squared column norms are
     /// computed at the start of the sweep and updated by each rotation (`‖w_i‖² − t γ`,
     /// `‖w_j‖² + t γ`, exact for the rotation that annihilates `γ`), so a pair costs one dot
-    /// product instead of three.
-    fn sweep(&mut self, negligible: f64, with_q: bool) -> bool {
+    /// product instead of three; a pair found orthogonal whose columns no rotation touched
+    /// since (the `clock` stamps) is orthogonal still and is not recomputed.
+    ///
+    /// The rotation of the module docs in a form with two square roots and one division:
+    /// with `d = β − α`, `h = 2γ`, `r = √(d² + h²)`, it is
+    /// `c = (r + |d|) / √(2r(r + |d|))`, `s = sign(d h) |h| / √(2r(r + |d|))`
+    /// (`t = s/c = sign(ζ) / (|ζ| + √(1 + ζ²))`, the smaller angle).
+    fn sweep(&mut self, negligible: f64, with_q: bool, clock: &mut u64) -> bool {
         let n = self.n;
-        let eps = 4.0 * f64::EPSILON;
+        let eps2 = (4.0 * f64::EPSILON) * (4.0 * f64::EPSILON);
         let mut rotated = false;
         for i in 0..n {
             let col = &self.w[i * n..(i + 1) * n];
@@ -182,20 +210,27 @@ impl SmallJacobi {
         }
         for i in 0..n {
             for j in i + 1..n {
+                let stamp = self.checked[i + j * n];
+                if self.touched[i] <= stamp && self.touched[j] <= stamp {
+                    continue;
+                }
                 let (a, b) = (self.norms[i], self.norms[j]);
                 if a <= negligible || b <= negligible {
                     continue;
                 }
                 let (wi, wj) = two_cols(&mut self.w, n, i, j);
                 let g = dot(wi, wj);
-                if g == 0.0 || g.abs() <= eps * (a * b).sqrt() {
+                if g * g <= eps2 * a * b {
+                    self.checked[i + j * n] = *clock;
                     continue;
                 }
                 rotated = true;
-                let zeta = (b - a) / (2.0 * g);
-                let t = zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
-                let c = 1.0 / (1.0 + t * t).sqrt();
-                let s = c * t;
+                let (d, h) = (b - a, 2.0 * g);
+                let r = (d * d + h * h).sqrt();
+                let inv = 1.0 / (2.0 * r * (r + d.abs())).sqrt();
+                let c = (r + d.abs()) * inv;
+                let s = (h.abs() * inv).copysign(d * h);
+                let t = s / c;
                 rotate(wi, wj, c, s);
                 self.norms[i] = a - t * g;
                 self.norms[j] = b + t * g;
@@ -203,6 +238,9 @@ impl SmallJacobi {
                     let (qi, qj) = two_cols(&mut self.q, n, i, j);
                     rotate(qi, qj, c, s);
                 }
+                *clock += 1;
+                self.touched[i] = *clock;
+                self.touched[j] = *clock;
             }
         }
         rotated
