@@ -162,8 +162,9 @@ pub(crate) fn ql_implicit(d: &mut [f64], e: &mut [f64], z: &mut [f64], zrows: us
                     underflow = true;
                     break;
                 }
-                s = f / r;
-                c = g / r;
+                let inv = 1.0 / r;
+                s = f * inv;
+                c = g * inv;
                 g = d[i + 1] - p;
                 r = (d[i] - g) * s + 2.0 * c * b;
                 p = s * r;
