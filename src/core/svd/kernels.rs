@@ -10,7 +10,7 @@
 pub const LANES: usize = 8;
 
 /// `Σ a_i b_i` over the common length, with [`LANES`] partial sums.
-#[inline]
+#[inline(always)]
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);

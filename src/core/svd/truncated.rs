@@ -560,6 +560,24 @@ impl TruncatedSvd {
     /// Symmetric Eigenvalue Problem*, §6.9; Giraud, Langou & Rozložník 2005). In Lanczos the
     /// recurrence has removed the large components already, so one pass usually suffices.
     fn reorthonormalise(&mut self, left: bool, idx: usize, len: usize) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor supports AVX2 (checked just above).
+            return unsafe { self.reorthonormalise_avx2(left, idx, len) };
+        }
+        self.reorthonormalise_body(left, idx, len)
+    }
+
+    /// [`reorthonormalise`](Self::reorthonormalise) compiled with AVX2: the same operations
+    /// in the same order on wider registers, so the same bits (see [`super::kernels`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn reorthonormalise_avx2(&mut self, left: bool, idx: usize, len: usize) -> f64 {
+        self.reorthonormalise_body(left, idx, len)
+    }
+
+    #[inline(always)]
+    fn reorthonormalise_body(&mut self, left: bool, idx: usize, len: usize) -> f64 {
         let (basis, stride) = if left {
             (&mut self.ub, self.row_stride)
         } else {
@@ -691,6 +709,7 @@ fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Trun
 }
 
 /// `y += a x`.
+#[inline(always)]
 fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     for (yi, xi) in y.iter_mut().zip(x) {
         *yi += a * xi;
