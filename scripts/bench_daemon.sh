@@ -13,7 +13,8 @@
 #  - live, sim at 10 kHz: 100 035 samples in 10.0 s, 0 lost, 0 overflows, 0 frames dropped;
 #    daemon CPU 0.46 s user + 0.18 s sys (~6 % of a core). At 20 kHz: 200 121 samples, 0 lost.
 #  - latency last sample -> model line (10 kHz, K = 4): p50 27 ms, p99 138 ms (loaded machine;
-#    dominated by the identification itself).
+#    dominated by the identification itself); 2026-11-21 23:49 UTC after the issue-3 perf work,
+#    load ~2: p50 2.2 ms, p99 2.7 ms.
 #  - replay of one hour at 1 kHz (3.6 M samples, 145 MB, 3 582 models with the jackknife),
 #    measured 2026-11-21 23:49 UTC (load average ~2 from other jobs): 1.90 s wall, 2.87 s user
 #    + 0.15 s sys CPU (target < 2 s: met when two cores are free; 2.9 s when another job holds
