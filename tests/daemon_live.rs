@@ -419,7 +419,7 @@ fn passive_csv_bench_is_sampled_and_identified_from_its_throttle_column() {
     let cfg = dir.path().join("passive.toml");
     std::fs::write(
         &cfg,
-        "[device]\nprotocol = \"csv\"\n[daemon]\nmax_run_s = 3.6\nstop_timeout_ms = 50\n",
+        "[device]\nprotocol = \"csv\"\n[daemon]\nmax_run_s = 4.0\nstop_timeout_ms = 50\n",
     )
     .unwrap();
     // streams CSV rows and never answers (see tests/support/csv_bench.rs for the plant)
@@ -430,11 +430,12 @@ fn passive_csv_bench_is_sampled_and_identified_from_its_throttle_column() {
     let port = slave.name().unwrap();
     master.set_timeout(Duration::from_millis(5)).unwrap();
     let d = Daemon::start(&["run", "--config", cfg.to_str().unwrap(), "--port", &port]);
-    // paced like a real bench: 10 rows every 10 ms; what the daemon writes is read and ignored
+    // paced like a bench (20 rows every 10 ms: twice real time, so a loaded machine still ends
+    // the stream well before max_run_s); what the daemon writes is read and ignored
     let bench = std::thread::spawn(move || {
         let lines: Vec<&str> = rows.lines().collect();
         let mut sink = [0u8; 256];
-        for chunk in lines.chunks(10) {
+        for chunk in lines.chunks(20) {
             let mut s = chunk.join("\n");
             s.push('\n');
             if master.write_all(s.as_bytes()).is_err() {
