@@ -248,3 +248,47 @@ fn passive_csv_bench_is_sampled_and_identified_from_its_throttle_column() {
     assert_eq!(s["wire"], "csv");
     assert_eq!(s["samples_lost"], 0, "{s}");
 }
+
+#[test]
+fn csv_link_faults_are_counted_and_the_live_counts_equal_the_replay_of_the_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = daemon_config(dir.path(), "[0.4]", 8, 4, "");
+    let rec = dir.path().join("run.csv");
+    let sim = sim_stand(1000, |c| {
+        c.stand.protocol = propid::sim::config::WireProtocol::Csv;
+        c.faults.bit_flip_per_byte = 1e-4;
+        c.faults.garbage_bursts_per_s = 2.0;
+        c.faults.drop_sample_prob = 0.002;
+    });
+    let port = sim.path().display().to_string();
+    let d = Daemon::run(&cfg, &port, Some(&rec));
+    let (status, live, err) = d.finish(30.0);
+    let report = sim.stop().unwrap();
+    assert!(status.success(), "{err}");
+    assert_eq!(kind(&live, "plan_finished").len(), 1, "{live:#?}");
+    let s = stats(&live);
+    assert_eq!(s["wire"], "csv");
+    assert!(dropped_total(s) > 0, "{s}");
+    assert!(s["samples_lost"].as_u64().unwrap() > 0, "{s}");
+    // every row the stand took is received or counted lost (the last few may be in flight)
+    let seen = s["samples"].as_u64().unwrap() + s["samples_lost"].as_u64().unwrap();
+    assert!(seen <= report.firmware.samples, "{s} {:?}", report.firmware);
+    assert!(
+        seen + 50 >= report.firmware.samples,
+        "{s} {:?}",
+        report.firmware
+    );
+    // the replay of the recorded bytes counts exactly the same
+    let replayed = replay(&rec, &cfg);
+    let r = replayed.last().unwrap();
+    for key in [
+        "frames_ok",
+        "frames_dropped",
+        "samples",
+        "samples_lost",
+        "gaps",
+    ] {
+        assert_eq!(r[key], s[key], "{key}");
+    }
+    assert_eq!(models_of(&live), models_of(&replayed));
+}

@@ -46,6 +46,9 @@ pub struct WorkStats {
     pub models: u64,
     /// Identifications that failed (each published as a warning).
     pub identify_errors: u64,
+    /// Models that failed the quality checks ([`super::quality`]), published as
+    /// `model_unreliable` warnings instead of models.
+    pub models_unreliable: u64,
     /// Pulses seen (EVENT IMPULSE_START).
     pub pulses: u64,
 }

@@ -23,6 +23,7 @@ use std::time::Instant;
 
 use super::item::{EventItem, Item, PlanNote, SampleItem};
 use super::publish::Publisher;
+use super::quality;
 use super::stats::WorkStats;
 use super::window::{Reason, Window, WindowView};
 use super::DaemonError;
@@ -225,6 +226,17 @@ impl<I: Identifier> Worker<I> {
         for (k, v) in &report {
             line.entry(k.clone()).or_insert_with(|| v.clone());
         }
+        let reasons = quality::judge(&report);
+        if !reasons.is_empty() {
+            // not the plant: published for inspection, never as a model nor in the schedule
+            line.insert("type".into(), json!("warning"));
+            line.insert("kind".into(), json!("model_unreliable"));
+            line.insert("reasons".into(), json!(reasons));
+            line.insert("message".into(), json!(quality::HINT));
+            self.emit(Value::Object(line));
+            self.stats.models_unreliable += 1;
+            return;
+        }
         self.emit(Value::Object(line));
         self.stats.models += 1;
         if let Some(t) = d.last_received {
@@ -307,6 +319,8 @@ mod tests {
     struct Fake {
         last: Option<(usize, usize)>,
         fail_every: usize,
+        /// Every n-th model has an unstable pole (0 = never).
+        unstable_every: usize,
         calls: usize,
     }
 
@@ -321,8 +335,10 @@ mod tests {
         }
         fn report(&self) -> Result<Map<String, Value>, String> {
             let (n, p) = self.last.ok_or("nothing")?;
-            let v =
-                json!({"order": 2, "fn_hz": n as f64, "zeta": 0.5, "dc_gain": 1.0, "pulses": p});
+            let unstable = self.unstable_every > 0 && self.calls % self.unstable_every == 0;
+            let re = if unstable { 3.0 } else { -30.0 };
+            let v = json!({"order": 2, "fn_hz": n as f64, "zeta": 0.5, "dc_gain": 1.0,
+                "pulses": p, "poles_s": [[re, 40.0], [re, -40.0]]});
             Ok(v.as_object().unwrap().clone())
         }
     }
@@ -340,11 +356,12 @@ mod tests {
         })
     }
 
-    fn run_levels(fail_every: usize) -> Vec<Value> {
+    fn run_levels(fail_every: usize, unstable_every: usize) -> Vec<Value> {
         let (publisher, lines) = Publisher::capture();
         let fake = Fake {
             last: None,
             fail_every,
+            unstable_every,
             calls: 0,
         };
         let window = Window::new(10_000, 2, 0.005, OutputChannel::Thrust);
@@ -384,7 +401,7 @@ mod tests {
 
     #[test]
     fn publishes_models_per_level_and_the_schedule() {
-        let lines = run_levels(0);
+        let lines = run_levels(0, 0);
         let models: Vec<&Value> = lines.iter().filter(|l| l["type"] == "model").collect();
         // 4 pulses per level, K = 2: one model at pulse 3, one at the level end.
         assert_eq!(models.len(), 6);
@@ -401,6 +418,34 @@ mod tests {
         let rows = sched["models"].as_array().unwrap();
         assert_eq!(rows.len(), 3);
         assert_eq!(rows[2]["operating_point"], 0.6);
+    }
+
+    #[test]
+    fn an_unreliable_model_is_a_warning_and_stays_out_of_the_schedule() {
+        // models 2, 4, 6 (the level-end one of each level) have an unstable pole
+        let lines = run_levels(0, 2);
+        let models: Vec<&Value> = lines.iter().filter(|l| l["type"] == "model").collect();
+        assert_eq!(models.len(), 3);
+        assert!(models.iter().all(|m| m["reason"] == "pulses"));
+        let bad: Vec<&Value> = lines
+            .iter()
+            .filter(|l| l["kind"] == "model_unreliable")
+            .collect();
+        assert_eq!(bad.len(), 3);
+        assert_eq!(bad[0]["type"], "warning");
+        assert_eq!(bad[0]["reasons"], json!(["unstable_pole"]));
+        assert_eq!(
+            bad[0]["reason"], "level_end",
+            "the numbers are kept for inspection"
+        );
+        // the schedule keeps each level's last reliable model
+        let sched = lines.last().unwrap();
+        assert_eq!(sched["type"], "schedule");
+        let rows = sched["models"].as_array().unwrap();
+        assert_eq!(rows.len(), 3);
+        for (row, m) in rows.iter().zip(&models) {
+            assert_eq!(row["fn_hz"], m["fn_hz"]);
+        }
     }
 
     #[test]
@@ -443,7 +488,7 @@ mod tests {
 
     #[test]
     fn failed_identification_is_a_warning_not_a_model() {
-        let lines = run_levels(2);
+        let lines = run_levels(2, 0);
         let models = lines.iter().filter(|l| l["type"] == "model").count();
         let failed = lines
             .iter()

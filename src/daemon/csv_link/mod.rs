@@ -11,7 +11,7 @@
 //! |                                       | flags from the throttle ([`pulse_flags`]), VALID    |
 //! |                                       | flags from the columns present                      |
 //! | `#ACK <CMD> OK <t_us>` / `ERR <code>` | ACK of the last command of that kind sent ([`CsvLink::command_sent`]) — CSV lines carry no seq |
-//! | `# HELLO … boot_id H rate_hz R`       | HELLO ([`comments`])                                |
+//! | `# HELLO … boot_id H rate_hz R`       | HELLO ([`comments`]); a changed boot id only once two lines agree ([`boot`]) |
 //! | `#EVENT NAME arg t_us index`          | EVENT                                               |
 //! | first `#ACK PING OK` without a HELLO  | a HELLO with boot id 0 and the measured rate, so the plan's handshake completes with a bench that never says HELLO |
 //!
@@ -23,6 +23,7 @@
 //! Every line is accounted for: decoded lines are `frames_ok`, dropped ones are counted by
 //! kind ([`CsvLinkStats::dropped`]).
 
+pub mod boot;
 pub mod comments;
 pub mod placer;
 pub mod pulse_flags;
@@ -32,6 +33,7 @@ use crate::protocol::csv_command::{encode_csv_command, CsvCommandError, CsvComma
 use crate::protocol::message::{
     msg_type, Ack, AckResult, EscProtocol, Frame, Hello, Message, Sample, SampleFlags,
 };
+use boot::{BootTracker, HelloVerdict};
 use comments::{parse_comment, CommentFact};
 use placer::{IndexPlacer, Placement};
 use pulse_flags::PulseFlagger;
@@ -72,6 +74,8 @@ pub struct CsvLinkStats {
     pub acks: u64,
     /// Pulses found from the throttle column.
     pub pulses: u64,
+    /// HELLO lines naming another boot, held back until a second one confirmed it.
+    pub unconfirmed_hellos: u64,
 }
 
 /// The daemon's CSV link (see the module documentation).
@@ -81,8 +85,8 @@ pub struct CsvLink {
     flagger: PulseFlagger,
     /// Per command kind: the seq and wire type of the last one sent.
     sent: [Option<(u16, u8)>; 6],
-    /// The boot id of the last HELLO (real or made up), `None` before one.
-    boot_id: Option<u32>,
+    /// The bench's boot as its HELLO lines (or a made-up one) tell it.
+    boot_id: BootTracker,
     stats: CsvLinkStats,
     seq: u16,
 }
@@ -95,7 +99,7 @@ impl CsvLink {
             placer: IndexPlacer::new(),
             flagger: PulseFlagger::new(opts.level_tolerance, opts.max_pulse_samples),
             sent: [None; 6],
-            boot_id: None,
+            boot_id: BootTracker::default(),
             stats: CsvLinkStats::default(),
             seq: 0,
         }
@@ -203,7 +207,7 @@ fn on_item<F: FnMut(Frame)>(
     placer: &mut IndexPlacer,
     flagger: &mut PulseFlagger,
     sent: &[Option<(u16, u8)>; 6],
-    boot_id: &mut Option<u32>,
+    boot_id: &mut BootTracker,
     stats: &mut CsvLinkStats,
     out: &mut Out<'_, F>,
 ) {
@@ -229,9 +233,9 @@ fn on_item<F: FnMut(Frame)>(
         }
         CsvItem::Ack(ack) => {
             stats.acks += 1;
-            if ack.command == CsvCommandKind::Ping && ack.result.is_ok() && boot_id.is_none() {
+            if ack.command == CsvCommandKind::Ping && ack.result.is_ok() && !boot_id.known() {
                 // A bench that never says HELLO: one is made up so the handshake completes.
-                *boot_id = Some(0);
+                boot_id.make_up();
                 let rate = placer
                     .period_us()
                     .map_or(0, |p| (1e6 / p).round().clamp(0.0, 65_535.0) as u16);
@@ -242,14 +246,21 @@ fn on_item<F: FnMut(Frame)>(
             }
         }
         CsvItem::Comment(text) => match parse_comment(text) {
-            Some(CommentFact::Hello(h)) => {
+            Some(CommentFact::Hello(mut h)) => {
                 let mut to_flagger = |s: Sample| flagger.push(s, &mut |s| out.sample(s));
-                if boot_id.is_some_and(|b| b != h.boot_id) {
-                    // a new boot: what the old one sent goes first, then numbering restarts
-                    placer.restart(&mut to_flagger);
-                    flagger.restart(&mut |s| out.sample(s));
-                }
-                *boot_id = Some(h.boot_id);
+                h.boot_id = match boot_id.hello(h.boot_id) {
+                    HelloVerdict::Same(b) => b,
+                    HelloVerdict::New(b) => {
+                        // a new boot: what the old one sent goes first, then numbering restarts
+                        placer.restart(&mut to_flagger);
+                        flagger.restart(&mut |s| out.sample(s));
+                        b
+                    }
+                    HelloVerdict::Unconfirmed => {
+                        stats.unconfirmed_hellos += 1;
+                        return;
+                    }
+                };
                 let mut to_flagger = |s: Sample| flagger.push(s, &mut |s| out.sample(s));
                 placer.announce_rate(h.sample_rate_hz, &mut to_flagger);
                 out.frame(Message::Hello(h));

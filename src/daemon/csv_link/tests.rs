@@ -188,6 +188,7 @@ fn a_new_boot_releases_the_old_rows_first_and_numbers_again() {
     text += &w.format(&Message::Sample(sample(10, 3600, 1.0))).unwrap(); // open excursion
     h.boot_id = 2;
     text += &w.format(&Message::Hello(h)).unwrap();
+    text += &w.format(&Message::Hello(h)).unwrap(); // a reset is believed when confirmed
     for k in 0..5u32 {
         text += &w.format(&Message::Sample(sample(k, 0, 0.0))).unwrap();
     }
