@@ -6,7 +6,8 @@
 mod daemon_proc;
 
 use daemon_proc::{
-    daemon_config, dropped_total, kind, of_type, replay, sim_process, sim_stand, stats, Daemon,
+    daemon_config, dropped_total, kind, of_type, replay, sim_process, sim_stand, stats,
+    stopped_by_signal, Daemon,
 };
 use std::time::{Duration, Instant};
 
@@ -56,26 +57,10 @@ fn tiny_queue_overflows_are_counted_as_lost_samples_and_the_run_completes() {
 
 #[test]
 fn sigterm_sends_stop_until_acknowledged_and_exits_zero_with_stats() {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = daemon_config(dir.path(), "[0.4]", 1000, 4, "");
-    let sim = sim_stand(1000, |_| {});
-    let port = sim.path().display().to_string();
-    let mut d = Daemon::run(&cfg, &port, None);
-    d.wait_for(10.0, |l| l["kind"] == "level_reached");
-    let t = Instant::now();
-    d.signal(libc::SIGTERM);
-    let (status, lines, err) = d.finish(5.0);
-    assert!(t.elapsed() < Duration::from_secs(3));
-    let report = sim.stop().unwrap();
-    assert!(status.success(), "{status:?} {err}");
-    assert_eq!(
-        kind(&lines, "shutdown_stop_acknowledged").len(),
-        1,
-        "{lines:#?}"
-    );
+    // exit 0 within 3 s, STOP acknowledged once, stats last, the stand executed commands
+    let (lines, _) = stopped_by_signal(libc::SIGTERM);
     // the stand executed the STOP: it disarmed (its EVENT arrived before the ACK)
     assert!(!kind(&lines, "disarmed").is_empty(), "{lines:#?}");
-    assert!(report.firmware.executed > 0, "{report:?}");
     let s = stats(&lines);
     assert!(s["samples"].as_u64().unwrap() > 0);
     assert_eq!(of_type(&lines, "stats").len(), 1);

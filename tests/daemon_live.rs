@@ -11,10 +11,10 @@ mod daemon_proc;
 
 use daemon_proc::{
     daemon_config, dropped_total, kind, models_of, of_type, replay, sim_process, sim_stand, stats,
-    Daemon,
+    stopped_by_signal, Daemon,
 };
 use propid::sim::SimConfig;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 #[test]
 fn live_run_and_replay_of_its_recording_publish_identical_models() {
@@ -43,25 +43,7 @@ fn live_run_and_replay_of_its_recording_publish_identical_models() {
 
 #[test]
 fn sigint_sends_stop_until_acknowledged_and_exits_zero_with_stats() {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = daemon_config(dir.path(), "[0.4]", 1000, 4, "");
-    let sim = sim_stand(1000, |_| {});
-    let port = sim.path().display().to_string();
-    let mut d = Daemon::run(&cfg, &port, None);
-    d.wait_for(10.0, |l| l["kind"] == "level_reached");
-    let t = Instant::now();
-    d.signal(libc::SIGINT);
-    let (status, lines, err) = d.finish(5.0);
-    assert!(t.elapsed() < Duration::from_secs(3));
-    let report = sim.stop().unwrap();
-    assert!(status.success(), "{status:?} {err}");
-    assert_eq!(
-        kind(&lines, "shutdown_stop_acknowledged").len(),
-        1,
-        "{lines:#?}"
-    );
-    stats(&lines);
-    assert!(report.firmware.executed > 0);
+    stopped_by_signal(libc::SIGINT);
 }
 
 #[test]

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use propid::sim::pty::{RunOptions, SimHandle};
+use propid::sim::pty::{RunOptions, SimHandle, SimReport};
 use propid::sim::SimConfig;
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
@@ -209,6 +209,33 @@ pub fn sim_stand(rate: u32, tweak: impl FnOnce(&mut SimConfig)) -> SimHandle {
         seconds: Some(60.0),
     };
     SimHandle::spawn(cfg, opts).unwrap()
+}
+
+/// `propid run` against the stand at 1 kHz, stopped by signal `sig` once the first level is
+/// reached: asserts the shutdown contract (exit 0 within 3 s, the STOP acknowledged exactly
+/// once, the stats line last, the stand executed commands) and returns the lines and the
+/// stand's report.
+pub fn stopped_by_signal(sig: i32) -> (Vec<Value>, SimReport) {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = daemon_config(dir.path(), "[0.4]", 1000, 4, "");
+    let sim = sim_stand(1000, |_| {});
+    let port = sim.path().display().to_string();
+    let mut d = Daemon::run(&cfg, &port, None);
+    d.wait_for(10.0, |l| l["kind"] == "level_reached");
+    let t = Instant::now();
+    d.signal(sig);
+    let (status, lines, err) = d.finish(5.0);
+    assert!(t.elapsed() < Duration::from_secs(3));
+    let report = sim.stop().unwrap();
+    assert!(status.success(), "{status:?} {err}");
+    assert_eq!(
+        kind(&lines, "shutdown_stop_acknowledged").len(),
+        1,
+        "{lines:#?}"
+    );
+    stats(&lines);
+    assert!(report.firmware.executed > 0, "{report:?}");
+    (lines, report)
 }
 
 /// A child process killed (by its pid) when the test ends, even on a panic.
