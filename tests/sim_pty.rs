@@ -51,6 +51,14 @@ fn ack_of(frames: &[Frame], seq: u16) -> Option<propid::protocol::Ack> {
     })
 }
 
+/// The first HELLO among `frames`.
+fn hello_of(frames: &[Frame]) -> Option<propid::protocol::Hello> {
+    frames.iter().find_map(|f| match f.msg {
+        Message::Hello(h) => Some(h),
+        _ => None,
+    })
+}
+
 #[test]
 fn hello_req_over_the_pty_gets_hello_and_ack_and_samples_are_paced() {
     let sim = SimHandle::spawn(SimConfig::default(), RunOptions::default()).unwrap();
@@ -60,11 +68,7 @@ fn hello_req_over_the_pty_gets_hello_and_ack_and_samples_are_paced() {
     let frames = collect(&mut *port, &mut dec, Duration::from_secs(2), |f| {
         ack_of(f, 1).is_some()
     });
-    let hello = frames.iter().find_map(|f| match f.msg {
-        Message::Hello(h) => Some(h),
-        _ => None,
-    });
-    let hello = hello.expect("HELLO");
+    let hello = hello_of(&frames).expect("HELLO");
     assert_eq!(hello.boot_id, sim.report().boot_id);
     let ack = ack_of(&frames, 1).expect("ACK");
     assert_eq!(
@@ -216,11 +220,10 @@ fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
     let frames = collect(&mut *port, &mut dec, Duration::from_secs(2), |f| {
         ack_of(f, 9).is_some()
     });
-    let hello = frames.iter().find_map(|f| match f.msg {
-        Message::Hello(h) => Some(h),
-        _ => None,
-    });
-    assert_ne!(hello.expect("HELLO after re-open").boot_id, first_boot);
+    assert_ne!(
+        hello_of(&frames).expect("HELLO after re-open").boot_id,
+        first_boot
+    );
     let r = sim.stop().unwrap();
     assert_eq!((r.faults.hangups, r.faults.reopens), (1, 1));
 }
