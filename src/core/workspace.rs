@@ -33,7 +33,8 @@ use super::{IdentError, MarkovSeq};
 
 type C64 = Complex<f64>;
 
-/// Extra singular triplets beyond the order kept for the jackknife's subspace iteration.
+/// Extra singular triplets beyond the order kept for the jackknife's subspace iteration (dense
+/// path).
 const EXTRA_TRIPLETS: usize = 4;
 
 /// Subspace iterations per jackknife re-identification.
@@ -212,6 +213,104 @@ impl Workspace {
         input: &PulseInput<'_>,
         opts: &IdentOptions,
     ) -> Result<&Model, IdentError> {
+        self.identify_model(input, opts)?;
+        if opts.jackknife {
+            self.jackknife_model(input)?;
+        }
+        Ok(&self.engine.model)
+    }
+
+    /// The jackknife uncertainty of the model [`identify_model`](Self::identify_model) just
+    /// identified from `input` (the second half of [`identify`](Self::identify)).
+    pub fn jackknife_model(&mut self, input: &PulseInput<'_>) -> Result<&Model, IdentError> {
+        let base = self.engine.model.pair_s();
+        self.jackknife(input, base)?;
+        Ok(&self.engine.model)
+    }
+
+    /// [`identify`](Self::identify) without the jackknife (`uncertainty` stays NaN; see
+    /// [`jackknife_only`](Self::jackknife_only) to compute it beside). No heap allocation.
+    pub fn identify_model(
+        &mut self,
+        input: &PulseInput<'_>,
+        opts: &IdentOptions,
+    ) -> Result<&Model, IdentError> {
+        self.prepare_pulses(input, opts)?;
+        let q = input.y.len();
+        let rms = (self
+            .ensemble
+            .output_noise()
+            .iter()
+            .map(|s| s * s)
+            .sum::<f64>()
+            / q as f64)
+            .sqrt();
+        let e = &mut self.engine;
+        e.run(&self.grouped, input.dt_s, &[], true, opts)?;
+        e.single_input(self.groups.widths(), self.groups.weights(), self.groups.d())?;
+        e.model.finish_gain()?;
+        e.model.pulses = self.ensemble.kept();
+        e.model.skipped = self.ensemble.skipped();
+        e.model.noise_rms = rms;
+        Ok(&self.engine.model)
+    }
+
+    /// The jackknife uncertainty of an order-2 model on the truncated SVD path, without the
+    /// model itself: the same pulses, Hankel size and leave-one-out re-identifications as
+    /// [`identify`](Self::identify), so that a second workspace (another thread) can compute
+    /// it while this one's twin runs [`identify_model`](Self::identify_model) on the same
+    /// input; [`set_uncertainty`](Self::set_uncertainty) then completes the model, identical to
+    /// what `identify` gives. For order 2 the leave-one-out pole pair needs no reference pair
+    /// (both orderings give the same fn and ζ). Returns `Ok(false)` (nothing computed) when
+    /// this does not apply: jackknife off, order not fixed at 2, or the dense path (whose
+    /// jackknife starts from the model's singular vectors). The uncertainty is then read with
+    /// [`Model::uncertainty`] on [`model`](Self::model). No heap allocation.
+    pub fn jackknife_only(
+        &mut self,
+        input: &PulseInput<'_>,
+        opts: &IdentOptions,
+    ) -> Result<bool, IdentError> {
+        if !opts.jackknife || opts.order != Some(2) {
+            return Ok(false);
+        }
+        self.prepare_pulses(input, opts)?;
+        let (dims, path) = self.engine.plan(&self.grouped, &[], true, opts)?;
+        if path != SvdPath::Truncated {
+            return Ok(false);
+        }
+        let m = &mut self.engine.model;
+        m.n = 2;
+        m.q = input.y.len();
+        m.p = self.grouped.inputs();
+        m.dt_s = input.dt_s;
+        m.dims = dims;
+        m.path = path;
+        m.std_fn = f64::NAN;
+        m.std_zeta = f64::NAN;
+        m.std_dc.fill(f64::NAN);
+        let zero = C64::new(0.0, 0.0);
+        self.jackknife(input, Some((zero, zero)))?;
+        Ok(true)
+    }
+
+    /// Sets the jackknife uncertainty of the last model (from [`jackknife_only`] of a twin
+    /// workspace): std of fn, ζ and of the DC gain of each output.
+    ///
+    /// [`jackknife_only`]: Self::jackknife_only
+    pub fn set_uncertainty(&mut self, std_fn: f64, std_zeta: f64, std_dc: &[f64]) {
+        let m = &mut self.engine.model;
+        m.std_fn = std_fn;
+        m.std_zeta = std_zeta;
+        let q = std_dc.len().min(m.std_dc.len());
+        m.std_dc[..q].copy_from_slice(&std_dc[..q]);
+    }
+
+    /// Ensemble, per-width responses and the Markov-parameter noise of a pulse experiment.
+    fn prepare_pulses(
+        &mut self,
+        input: &PulseInput<'_>,
+        opts: &IdentOptions,
+    ) -> Result<(), IdentError> {
         self.ensemble
             .build(input, opts.max_pulse_width, &mut self.markov)?;
         self.groups
@@ -231,40 +330,46 @@ impl Workspace {
         if e.noise[..q].iter().any(|v| !v.is_finite()) {
             sizing::tail_noise(&self.grouped, &mut e.noise[..q]);
         }
-        let rms = (out_noise.iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
-        e.run(&self.grouped, input.dt_s, &[], true, opts)?;
-        e.single_input(self.groups.widths(), self.groups.weights(), self.groups.d())?;
-        e.model.finish_gain()?;
-        e.model.pulses = self.ensemble.kept();
-        e.model.skipped = self.ensemble.skipped();
-        e.model.noise_rms = rms;
-        let kept = self.ensemble.kept();
-        if opts.jackknife && kept >= 2 {
-            let mut count = 0;
-            for i in 0..self.ensemble.pulses().len() {
-                if !self.ensemble.pulses()[i].kept {
-                    continue;
-                }
-                self.groups.leave_one_out(
-                    &self.ensemble,
-                    input,
-                    i,
-                    &mut self.jk_markov,
-                    &mut self.jk_weights,
-                )?;
-                let w = &self.jk_weights[..self.groups.groups()];
-                e.jackknife_one(
-                    &self.jk_markov,
-                    count,
-                    self.groups.widths(),
-                    w,
-                    self.groups.d(),
-                )?;
-                count += 1;
-            }
-            e.finish_jackknife(count);
+        Ok(())
+    }
+
+    /// Leave-one-pulse-out re-identifications of the last model (its order, Hankel size and
+    /// SVD path; `base` the pole pair to match), then the jackknife std. Needs at least two
+    /// kept pulses (else the uncertainty stays NaN).
+    fn jackknife(
+        &mut self,
+        input: &PulseInput<'_>,
+        base: Option<(C64, C64)>,
+    ) -> Result<(), IdentError> {
+        if self.ensemble.kept() < 2 {
+            return Ok(());
         }
-        Ok(&self.engine.model)
+        let e = &mut self.engine;
+        let mut count = 0;
+        for i in 0..self.ensemble.pulses().len() {
+            if !self.ensemble.pulses()[i].kept {
+                continue;
+            }
+            self.groups.leave_one_out(
+                &self.ensemble,
+                input,
+                i,
+                &mut self.jk_markov,
+                &mut self.jk_weights,
+            )?;
+            let w = &self.jk_weights[..self.groups.groups()];
+            e.jackknife_one(
+                &self.jk_markov,
+                count,
+                self.groups.widths(),
+                w,
+                self.groups.d(),
+                base,
+            )?;
+            count += 1;
+        }
+        e.finish_jackknife(count);
+        Ok(())
     }
 
     /// Identifies from given Markov parameters (`Y_0 = D`, `Y_k = C A^(k-1) B`), e.g. from
@@ -363,16 +468,15 @@ impl Engine {
         }
     }
 
-    /// Sizing, SVD, order, realisation and modal analysis of `markov`; `pulse` stretches the
-    /// automatic Hankel span past the noise crossing ([`sizing::pulse_span`]).
-    fn run(
-        &mut self,
+    /// Order checks, Hankel size and SVD path of `markov` (the first part of `run`); `pulse`
+    /// stretches the automatic Hankel span past the noise crossing ([`sizing::pulse_span`]).
+    fn plan(
+        &self,
         markov: &MarkovSeq,
-        dt_s: f64,
         growth: &[f64],
         pulse: bool,
         opts: &IdentOptions,
-    ) -> Result<(), IdentError> {
+    ) -> Result<(HankelDims, SvdPath), IdentError> {
         let l = self.limits;
         let (q, p, len) = (markov.outputs(), markov.inputs(), markov.len());
         if let Some(n) = opts.order {
@@ -426,6 +530,23 @@ impl Engine {
             }
         }
         let path = svd::resolve(opts.svd, rows, cols, self.dense_rows, self.dense_cols)?;
+        Ok((dims, path))
+    }
+
+    /// Sizing ([`plan`](Self::plan)), SVD, order, realisation and modal analysis of `markov`.
+    fn run(
+        &mut self,
+        markov: &MarkovSeq,
+        dt_s: f64,
+        growth: &[f64],
+        pulse: bool,
+        opts: &IdentOptions,
+    ) -> Result<(), IdentError> {
+        let l = self.limits;
+        let (q, p) = (markov.outputs(), markov.inputs());
+        let (dims, path) = self.plan(markov, growth, pulse, opts)?;
+        let (rows, cols) = (dims.rows(), dims.cols());
+        let wide = rows.min(cols);
         let k = self.kmax.min(wide);
         let mut converged = k;
         match path {
@@ -595,7 +716,9 @@ impl Engine {
     }
 
     /// Re-identifies the leave-one-out sequence at the model's order and Hankel size and
-    /// stores fn, ζ and the DC gains as estimate number `slot`.
+    /// stores fn, ζ and the DC gains as estimate number `slot`. On the truncated path only the
+    /// `n` triplets the realisation uses are computed, converged to the SVD's tolerance (no
+    /// extra Ritz values: the order is fixed), with the sign-free final small SVD.
     fn jackknife_one(
         &mut self,
         markov: &MarkovSeq,
@@ -603,6 +726,7 @@ impl Engine {
         widths: &[usize],
         weights: &[f64],
         d: &[f64],
+        base: Option<(C64, C64)>,
     ) -> Result<(), IdentError> {
         let m = &self.model;
         let (n, q, dims) = (m.n, m.q, m.dims);
@@ -622,21 +746,23 @@ impl Engine {
                 &mut self.jk_v,
             )?,
             SvdPath::Truncated => {
-                self.trunc
-                    .compute_at_least(
-                        markov.as_slice(),
-                        dims.q,
-                        dims.p,
-                        dims.r,
-                        dims.c,
-                        0,
-                        b,
-                        n,
-                        &mut self.jk_sigma[..b],
-                        &mut self.jk_u,
-                        &mut self.jk_v,
-                    )
-                    .map_err(svd::SvdError::from)?;
+                // fn, ζ and the DC gain do not depend on the signs of the singular vectors.
+                self.trunc.set_sign_free(true);
+                let r = self.trunc.compute_at_least(
+                    markov.as_slice(),
+                    dims.q,
+                    dims.p,
+                    dims.r,
+                    dims.c,
+                    0,
+                    n,
+                    n,
+                    &mut self.jk_sigma[..n],
+                    &mut self.jk_u,
+                    &mut self.jk_v,
+                );
+                self.trunc.set_sign_free(false);
+                r.map_err(svd::SvdError::from)?;
             }
         }
         self.h1v(markov, dims, n, path, true)?;
@@ -657,7 +783,7 @@ impl Engine {
         let m = &self.model;
         lt.m[..n * n].copy_from_slice(&lt.a[..n * n]);
         eigenvalues(&mut lt.m, n, &mut lt.poles)?;
-        let (f, z) = match m.pair_s() {
+        let (f, z) = match base {
             Some(base) => {
                 let (s1, s2) = closest_pair(&lt.poles[..n], base, m.dt_s);
                 fn_zeta(s1, s2)

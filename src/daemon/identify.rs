@@ -4,8 +4,19 @@
 //! The window's throttle is the input, the configured channel the output, the device's pulse
 //! starts (rising edges of IMPULSE_ACTIVE) are given to the core as its pulse starts, and the
 //! sample period comes from the device clock.
+//!
+//! **Jackknife beside the model.** The jackknife uncertainty (one leave-one-pulse-out
+//! re-identification per pulse) is about a third of an identification. For the configuration
+//! the daemon runs by default (order 2, truncated SVD path) it does not depend on the model's
+//! own SVD ([`Workspace::jackknife_only`]), so a helper thread with a second workspace computes
+//! it from a copy of the window while this thread identifies the model; the result is the one
+//! [`Workspace::identify`] gives, to the bit. The window copy goes into buffers allocated at
+//! start-up, and the hand-over is a mutex and a condition variable: still no heap allocation.
+//! Other configurations (automatic order, the dense path) run the jackknife after the model.
 
 use serde_json::{Map, Value};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::thread::JoinHandle;
 
 use super::config::Config;
 use super::window::WindowView;
@@ -14,16 +25,62 @@ use super::DaemonError;
 use crate::core::pulses::PulseInput;
 use crate::core::svd::SvdChoice;
 use crate::core::workspace::{IdentOptions, Limits, Workspace};
+use crate::core::IdentError;
 
 /// The core's workspace behind the daemon's [`Identifier`] trait.
 pub struct CoreIdentifier {
     ws: Workspace,
     opts: IdentOptions,
     ok: bool,
+    helper: Option<Helper>,
+}
+
+/// A window copy for the helper, in buffers allocated once.
+#[derive(Default)]
+struct Job {
+    dt_s: f64,
+    u: Vec<f64>,
+    y: Vec<f64>,
+    missing: Vec<bool>,
+    starts: Vec<usize>,
+}
+
+/// What the helper computed: the uncertainty `(std fn, std ζ, std DC gain)`, `None` when the
+/// jackknife-only path does not apply.
+type JkResult = Result<Option<(f64, f64, f64)>, IdentError>;
+
+/// State shared with the helper thread.
+struct State {
+    job: Job,
+    opts: IdentOptions,
+    pending: bool,
+    done: bool,
+    exit: bool,
+    result: JkResult,
+}
+
+struct Shared {
+    state: Mutex<State>,
+    cv: Condvar,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, State> {
+        // A panic in the helper cannot leave the state half-written in a way that matters:
+        // the flags are set last. Recover the guard instead of propagating the poison.
+        self.state.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+/// The helper thread computing the jackknife beside the model.
+struct Helper {
+    shared: Arc<Shared>,
+    thread: Option<JoinHandle<()>>,
 }
 
 impl CoreIdentifier {
-    /// Sizes the workspace for the configured window length and pulses per model.
+    /// Sizes the workspace for the configured window length and pulses per model (and the
+    /// helper's twin workspace when the jackknife is on).
     pub fn new(cfg: &Config) -> Result<CoreIdentifier, DaemonError> {
         let limits = Limits {
             max_samples: cfg.identify.max_window_samples,
@@ -40,10 +97,18 @@ impl CoreIdentifier {
             jackknife: cfg.identify.jackknife,
             ..IdentOptions::default()
         };
+        let helper = if opts.jackknife && opts.order == Some(2) {
+            let twin = Workspace::new(&limits).map_err(|e| DaemonError::Identify(e.to_string()))?;
+            let cap = cfg.identify.max_window_samples.max(4);
+            Helper::spawn(twin, cap, limits.max_pulses + 1, opts)
+        } else {
+            None
+        };
         Ok(CoreIdentifier {
             ws,
             opts,
             ok: false,
+            helper,
         })
     }
 
@@ -51,6 +116,140 @@ impl CoreIdentifier {
     pub fn with_svd(mut self, svd: SvdChoice) -> CoreIdentifier {
         self.opts.svd = svd;
         self
+    }
+
+    /// Model and jackknife, the jackknife on the helper thread when it applies.
+    fn identify_beside(&mut self, input: &PulseInput<'_>, v: &WindowView<'_>) -> JkResult {
+        let Some(helper) = &self.helper else {
+            return Ok(None);
+        };
+        helper.post(v, self.opts);
+        let main = self.ws.identify_model(input, &self.opts).map(|_| ());
+        let jk = helper.wait();
+        main?;
+        jk
+    }
+}
+
+impl Helper {
+    /// Starts the helper thread with its twin workspace and window buffers of `cap` samples
+    /// and `max_starts` pulse starts. `None` if the thread cannot be started (the jackknife
+    /// then runs after the model, as without a helper).
+    fn spawn(
+        mut twin: Workspace,
+        cap: usize,
+        max_starts: usize,
+        opts: IdentOptions,
+    ) -> Option<Helper> {
+        let job = Job {
+            dt_s: f64::NAN,
+            u: Vec::with_capacity(cap),
+            y: Vec::with_capacity(cap),
+            missing: Vec::with_capacity(cap),
+            starts: Vec::with_capacity(max_starts),
+        };
+        let shared = Arc::new(Shared {
+            state: Mutex::new(State {
+                job,
+                opts,
+                pending: false,
+                done: false,
+                exit: false,
+                result: Ok(None),
+            }),
+            cv: Condvar::new(),
+        });
+        let sh = shared.clone();
+        let thread = std::thread::Builder::new()
+            .name("propid-jackknife".into())
+            .spawn(move || helper_loop(&sh, &mut twin))
+            .ok()?;
+        Some(Helper {
+            shared,
+            thread: Some(thread),
+        })
+    }
+
+    /// Copies the window into the job buffers (within their capacity: no allocation) and
+    /// wakes the helper.
+    fn post(&self, v: &WindowView<'_>, opts: IdentOptions) {
+        let mut st = self.shared.lock();
+        let job = &mut st.job;
+        job.dt_s = v.dt_s;
+        copy_into(&mut job.u, v.input);
+        copy_into(&mut job.y, v.output);
+        copy_into(&mut job.missing, v.missing);
+        copy_into(&mut job.starts, v.pulse_starts);
+        st.opts = opts;
+        st.pending = true;
+        st.done = false;
+        drop(st);
+        self.shared.cv.notify_all();
+    }
+
+    /// Waits for the helper's result.
+    fn wait(&self) -> JkResult {
+        let mut st = self.shared.lock();
+        while !st.done {
+            st = self.shared.cv.wait(st).unwrap_or_else(|p| p.into_inner());
+        }
+        st.result.clone()
+    }
+}
+
+impl Drop for Helper {
+    fn drop(&mut self) {
+        self.shared.lock().exit = true;
+        self.shared.cv.notify_all();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// `dst = src` within `dst`'s capacity (the window never outgrows the buffers sized from the
+/// same configuration; a longer one would only reallocate, not fail).
+fn copy_into<T: Copy>(dst: &mut Vec<T>, src: &[T]) {
+    dst.clear();
+    dst.extend_from_slice(src);
+}
+
+/// The helper thread: waits for a job, computes the jackknife alone, hands the result back.
+fn helper_loop(shared: &Shared, ws: &mut Workspace) {
+    loop {
+        let mut st = shared.lock();
+        while !st.pending && !st.exit {
+            st = shared.cv.wait(st).unwrap_or_else(|p| p.into_inner());
+        }
+        if st.exit {
+            return;
+        }
+        st.pending = false;
+        let job = std::mem::take(&mut st.job);
+        let opts = st.opts;
+        drop(st);
+        let y = [&job.y[..]];
+        let input = PulseInput {
+            dt_s: job.dt_s,
+            u: &job.u,
+            y: &y,
+            missing: &job.missing,
+            pulse_starts: Some(&job.starts),
+        };
+        let result = match ws.jackknife_only(&input, &opts) {
+            Ok(true) => {
+                let (f, z, d) = ws.model().uncertainty(0);
+                Ok(Some((f, z, d)))
+            }
+            Ok(false) => Ok(None),
+            Err(e) => Err(e),
+        };
+        let mut st = shared.lock();
+        st.job = job;
+        st.result = result;
+        st.done = true;
+        drop(st);
+        shared.cv.notify_all();
     }
 }
 
@@ -65,9 +264,21 @@ impl Identifier for CoreIdentifier {
             missing: v.missing,
             pulse_starts: Some(v.pulse_starts),
         };
-        self.ws
-            .identify(&input, &self.opts)
-            .map_err(|e| e.to_string())?;
+        match self.identify_beside(&input, v) {
+            Ok(Some((f, z, d))) => self.ws.set_uncertainty(f, z, &[d]),
+            Ok(None) if self.helper.is_some() => {
+                // The helper did not apply (the dense path): the jackknife after the model.
+                if self.opts.jackknife {
+                    self.ws.jackknife_model(&input).map_err(|e| e.to_string())?;
+                }
+            }
+            Ok(None) => {
+                self.ws
+                    .identify(&input, &self.opts)
+                    .map_err(|e| e.to_string())?;
+            }
+            Err(e) => return Err(e.to_string()),
+        }
         self.ok = true;
         Ok(())
     }
@@ -81,5 +292,118 @@ impl Identifier for CoreIdentifier {
             Ok(_) => Err("the model report is not a JSON object".into()),
             Err(e) => Err(format!("cannot serialise the model: {e}")),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::daemon::window::Reason;
+
+    /// A 1 kHz window of four ±pulses on a noisy 2nd-order response (fn 12 Hz, ζ 0.6),
+    /// 300 samples apart: (throttle, thrust, pulse starts).
+    fn window() -> (Vec<f64>, Vec<f64>, Vec<usize>) {
+        let n = 1300;
+        let dt = 1e-3;
+        let (w, z) = (2.0 * std::f64::consts::PI * 12.0, 0.6);
+        let (a1, a2) = (
+            2.0 * (-z * w * dt).exp() * ((w * dt) * (1.0 - z * z).sqrt()).cos(),
+            -(-2.0 * z * w * dt).exp(),
+        );
+        let starts = vec![100, 400, 700, 1000];
+        let mut u = vec![0.3; n];
+        for (k, &s) in starts.iter().enumerate() {
+            u[s] += if k % 2 == 0 { 0.1 } else { -0.1 };
+        }
+        let (mut y, mut rng) = (vec![0.0; n], 0x2545_F491_4F6C_DD1Du64);
+        let (mut y1, mut y2) = (0.0, 0.0);
+        for k in 0..n {
+            let x = if k > 0 { u[k - 1] - 0.3 } else { 0.0 };
+            let v = a1 * y1 + a2 * y2 + 0.5 * x;
+            (y2, y1) = (y1, v);
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            y[k] = 3.0 + v + 1e-3 * ((rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5);
+        }
+        (u, y, starts)
+    }
+
+    fn view<'a>(u: &'a [f64], y: &'a [f64], m: &'a [bool], s: &'a [usize]) -> WindowView<'a> {
+        WindowView {
+            input: u,
+            output: y,
+            missing: m,
+            pulse_starts: s,
+            dt_s: 1e-3,
+            level: 0.3,
+            level_number: 0,
+            first_index: 0,
+            last_t_us: 0,
+            last_received: None,
+            reason: Reason::Pulses,
+        }
+    }
+
+    /// The jackknife on the helper thread gives the sequential `Workspace::identify` model,
+    /// to the bit, on both SVD paths (the dense one falls back to the jackknife after the
+    /// model), and over several windows in a row.
+    #[test]
+    fn helper_jackknife_equals_the_sequential_identification() {
+        let (u, y, starts) = window();
+        let missing = vec![false; u.len()];
+        let cfg = Config::default();
+        for svd in [SvdChoice::Truncated, SvdChoice::Dense] {
+            let mut id = CoreIdentifier::new(&cfg).unwrap().with_svd(svd);
+            assert!(
+                id.helper.is_some(),
+                "order 2 with jackknife starts the helper"
+            );
+            let mut ws = Workspace::new(&id.ws.limits().clone()).unwrap();
+            let opts = IdentOptions { svd, ..id.opts };
+            for round in 0..3 {
+                let len = u.len() - 100 * round;
+                let v = view(&u[..len], &y[..len], &missing[..len], &starts[..4 - round]);
+                id.identify(&v).unwrap();
+                let yy = [&y[..len]];
+                let input = PulseInput {
+                    dt_s: 1e-3,
+                    u: &u[..len],
+                    y: &yy,
+                    missing: &missing[..len],
+                    pulse_starts: Some(&starts[..4 - round]),
+                };
+                ws.identify(&input, &opts).unwrap();
+                let (a, b) = (
+                    id.report().unwrap(),
+                    serde_json::to_value(ws.to_report()).unwrap(),
+                );
+                assert_eq!(Value::Object(a), b, "{svd:?} round {round}");
+                assert!(b["uncertainty"]["fn_hz"].as_f64().is_some_and(|s| s > 0.0));
+            }
+        }
+    }
+
+    /// An identification error is reported as the sequential path reports it.
+    #[test]
+    fn helper_path_reports_the_same_errors() {
+        let cfg = Config::default();
+        let mut id = CoreIdentifier::new(&cfg).unwrap();
+        let u = vec![0.3; 400];
+        let y = vec![1.0; 400];
+        let missing = vec![false; 400];
+        let err = id.identify(&view(&u, &y, &missing, &[100])).unwrap_err();
+        let mut ws = Workspace::new(id.ws.limits()).unwrap();
+        let yy = [&y[..]];
+        let input = PulseInput {
+            dt_s: 1e-3,
+            u: &u,
+            y: &yy,
+            missing: &missing,
+            pulse_starts: Some(&[100]),
+        };
+        let want = ws.identify(&input, &id.opts).unwrap_err().to_string();
+        assert_eq!(err, want);
+        assert!(id.report().is_err());
     }
 }

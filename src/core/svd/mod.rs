@@ -8,6 +8,7 @@
 
 pub mod dense;
 pub mod hankel_op;
+pub mod kernels;
 pub mod subspace;
 pub mod truncated;
 

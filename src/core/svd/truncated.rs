@@ -8,8 +8,9 @@
 //! $$\alpha_j u_j = H v_j - \beta_{j-1} u_{j-1}, \qquad
 //!   \beta_j v_{j+1} = H^T u_j - \alpha_j v_j ,$$
 //!
-//! each new vector reorthogonalised twice against all previous ones (classical Gram–Schmidt
-//! twice, "twice is enough", Giraud et al. 2005), so that after `m` steps
+//! each new vector reorthogonalised against all previous ones (classical Gram–Schmidt, with a
+//! second pass when Kahan's criterion asks for it: "twice is enough", Giraud et al. 2005), so
+//! that after `m` steps
 //!
 //! $$H V_m = U_m B_m, \qquad H^T U_m = V_m B_m^T + \beta_m v_{m+1} e_m^T$$
 //!
@@ -44,13 +45,21 @@
 //! length for a fixed step budget. Everything is allocated in [`TruncatedSvd::new`];
 //! `compute`, `apply`, `apply_t` and `project` allocate nothing.
 
+pub mod eigen_svd;
 pub mod error;
+pub mod ritz_check;
 pub mod small_jacobi;
 
 pub use error::TruncatedError;
 
 use super::hankel_op::HankelOp;
+use super::kernels::dot;
+use eigen_svd::EigenSvd;
+use ritz_check::RitzCheck;
 use small_jacobi::SmallJacobi;
+
+/// Kahan's criterion for a second Gram–Schmidt pass (see `reorthonormalise`).
+const KAHAN_KAPPA: f64 = std::f64::consts::FRAC_1_SQRT_2;
 
 /// Default acceptance threshold for the residual `‖Hᵀu − σv‖ / σ₁` of every requested triplet.
 pub const DEFAULT_TOLERANCE: f64 = 1e-12;
@@ -88,7 +97,17 @@ pub struct TruncatedSvd {
     beta: Vec<f64>,
     coef: Vec<f64>,
     small: SmallJacobi,
+    cheap: RitzCheck,
+    /// The final small SVD when signs are free ([`set_sign_free`](Self::set_sign_free)).
+    eig: EigenSvd,
+    sign_free: bool,
+    /// Whether the last stopping check's triplets come from `eig` (else from `small`).
+    from_eig: bool,
+    /// Scratch for one right Ritz vector of `B_m` (`max_steps`).
+    qbuf: Vec<f64>,
     residuals: Vec<f64>,
+    /// Last components of the leading left Ritz vectors (`max_k`).
+    last: Vec<f64>,
     ritz: Vec<f64>,
     n_ritz: usize,
     ritz_prev: Vec<f64>,
@@ -151,7 +170,13 @@ impl TruncatedSvd {
             beta: vec![0.0; max_steps],
             coef: vec![0.0; max_steps + 1],
             small: SmallJacobi::new(max_steps),
+            cheap: RitzCheck::new(max_steps),
+            eig: EigenSvd::new(max_steps),
+            sign_free: false,
+            from_eig: false,
+            qbuf: vec![0.0; max_steps],
             residuals: vec![0.0; max_k],
+            last: vec![0.0; max_k],
             ritz: vec![0.0; max_steps],
             n_ritz: 0,
             ritz_prev: vec![0.0; max_steps],
@@ -176,6 +201,16 @@ impl TruncatedSvd {
     /// The acceptance threshold in use.
     pub fn tolerance(&self) -> f64 {
         self.tolerance
+    }
+
+    /// With `true`, the stopping check decomposes the Lanczos bidiagonal through the eigenvectors
+    /// of `B Bᵀ` ([`eigen_svd`], several times faster than the Jacobi SVD) whenever the
+    /// requested singular values are at least [`eigen_svd::MIN_RATIO`]` · σ₁`: values and
+    /// subspaces agree with the Jacobi ones to rounding, but the sign of each triplet
+    /// `(u_i, v_i)` is arbitrary. For callers that use only sign-invariant results (poles, DC
+    /// gains: the jackknife). Default `false`: Jacobi, whose signs are reproducible.
+    pub fn set_sign_free(&mut self, sign_free: bool) {
+        self.sign_free = sign_free;
     }
 
     /// Largest number of triplets `compute` accepts.
@@ -378,8 +413,9 @@ impl TruncatedSvd {
                 self.random_unit(false, j + 1, cols);
             }
             self.steps = j + 1;
-            if self.steps >= k && (self.steps >= next_check || breakdown || self.steps == m_max) {
-                if self.check(k, need)? {
+            let last = self.steps == m_max;
+            if self.steps >= k && (self.steps >= next_check || breakdown || last) {
+                if self.check(k, need, last)? {
                     return Ok(());
                 }
                 next_check = self.steps + (self.steps / 2).max(2);
@@ -389,38 +425,68 @@ impl TruncatedSvd {
         Ok(())
     }
 
-    /// Small SVD of `B_m`, residuals of the leading `k` Ritz triplets; `true` when all pass,
-    /// or when the leading `need < k` pass and the leading `k` Ritz values moved by at most
-    /// [`RITZ_STABLE`]` · σ₁` since the previous check.
-    fn check(&mut self, k: usize, need: usize) -> Result<bool, TruncatedError> {
+    /// Convergence check at `m` steps: `true` when the leading `k` Ritz triplets pass the
+    /// residual test, or when the leading `need < k` pass and the leading `k` Ritz values
+    /// moved by at most [`RITZ_STABLE`]` · σ₁` since the previous check. The test runs first on
+    /// the `O(m²)` values and last components of [`RitzCheck`]; only a check that stops the
+    /// iteration (it passes, or `last`: the step budget is spent) runs the `O(m³)` Jacobi SVD
+    /// whose triplets are handed out, and decides again on its values.
+    fn check(&mut self, k: usize, need: usize, last: bool) -> Result<bool, TruncatedError> {
         let m = self.steps;
-        if !self
-            .small
-            .load_bidiagonal(&self.alpha[..m], &self.beta[..m])
-            || !self.small.decompose()
-        {
-            return Err(TruncatedError::NotConverged {
-                k,
-                converged: 0,
-                steps: m,
-                residual: f64::INFINITY,
-                tolerance: self.tolerance,
-            });
-        }
-        let s = self.small.sigma();
         let n_prev = self.n_ritz;
         self.ritz_prev[..n_prev].copy_from_slice(&self.ritz[..n_prev]);
         self.n_prev = n_prev;
+        if !last {
+            if !self.cheap.compute(&self.alpha[..m], &self.beta[..m]) {
+                return Err(self.failed(k));
+            }
+            for i in 0..m {
+                self.ritz[i] = self.cheap.sigma(i);
+            }
+            for i in 0..k {
+                self.last[i] = self.cheap.last(i);
+            }
+            if !self.decide(k, need)? {
+                return Ok(false);
+            }
+        }
+        self.from_eig = self.sign_free && self.eig.compute(&self.alpha[..m], &self.beta[..m], need);
+        if self.from_eig {
+            for i in 0..m {
+                self.ritz[i] = self.eig.sigma(i);
+            }
+            for i in 0..k {
+                self.last[i] = self.eig.left(i)[m - 1];
+            }
+            return self.decide(k, need);
+        }
+        if !self
+            .small
+            .load_bidiagonal(&self.alpha[..m], &self.beta[..m])
+            || !self.small.decompose_leading(k)
+        {
+            return Err(self.failed(k));
+        }
+        self.ritz[..m].copy_from_slice(self.small.sigma());
+        for i in 0..k {
+            self.last[i] = self.small.left(i)[m - 1];
+        }
+        self.decide(k, need)
+    }
+
+    /// From the Ritz values in `ritz[..m]` and the last components `last[..k]` of the leading
+    /// left vectors: the residuals `β_m |last_i| / σ₁`, and the stopping rule of
+    /// [`check`](Self::check).
+    fn decide(&mut self, k: usize, need: usize) -> Result<bool, TruncatedError> {
+        let m = self.steps;
         self.n_ritz = m;
-        self.ritz[..m].copy_from_slice(s);
-        let s1 = s[0];
+        let s1 = self.ritz[0];
         if s1 <= 0.0 {
             return Err(TruncatedError::ZeroMatrix);
         }
         let beta_m = self.beta[m - 1];
         for i in 0..k {
-            let last = self.small.left(i)[m - 1];
-            self.residuals[i] = (beta_m * last).abs() / s1;
+            self.residuals[i] = (beta_m * self.last[i]).abs() / s1;
         }
         let converged = self.converged(k);
         if converged == k {
@@ -431,9 +497,19 @@ impl TruncatedSvd {
         Ok(need < k && converged >= need && stable)
     }
 
+    fn failed(&self, k: usize) -> TruncatedError {
+        TruncatedError::NotConverged {
+            k,
+            converged: 0,
+            steps: self.steps,
+            residual: f64::INFINITY,
+            tolerance: self.tolerance,
+        }
+    }
+
     /// `u_i = U_m p_i`, `v_i = V_m q_i` for the leading `k` Ritz triplets of the last check.
     fn write_triplets(
-        &self,
+        &mut self,
         rows: usize,
         cols: usize,
         k: usize,
@@ -442,9 +518,13 @@ impl TruncatedSvd {
         v: &mut [f64],
     ) {
         let m = self.steps;
-        sigma[..k].copy_from_slice(&self.small.sigma()[..k]);
+        sigma[..k].copy_from_slice(&self.ritz[..k]);
         for i in 0..k {
-            let (p, qv) = (self.small.left(i), self.small.right(i));
+            let p = if self.from_eig {
+                self.eig.left(i)
+            } else {
+                self.small.left(i)
+            };
             let ui = &mut u[i * rows..(i + 1) * rows];
             ui.fill(0.0);
             for (l, &w) in p.iter().enumerate().take(m) {
@@ -454,6 +534,12 @@ impl TruncatedSvd {
                     ui,
                 );
             }
+            let qv = if self.from_eig {
+                self.eig.right_into(i, &mut self.qbuf[..m]);
+                &self.qbuf[..m]
+            } else {
+                self.small.right(i)
+            };
             let vi = &mut v[i * cols..(i + 1) * cols];
             vi.fill(0.0);
             for (l, &w) in qv.iter().enumerate().take(m) {
@@ -467,9 +553,31 @@ impl TruncatedSvd {
     }
 
     /// Orthogonalises basis vector `idx` (of `U` if `left`, else `V`) against vectors
-    /// `0..idx` by classical Gram–Schmidt twice, normalises it if nonzero and returns its
-    /// norm before normalisation.
+    /// `0..idx` by classical Gram–Schmidt, normalises it if nonzero and returns its norm
+    /// before normalisation. The second pass runs only when the first removed more than a
+    /// fraction of the norm (`‖w'‖ < κ ‖w‖`, [`KAHAN_KAPPA`]): otherwise `w'` is already
+    /// orthogonal to working precision (Kahan's "twice is enough" criterion, Parlett, *The
+    /// Symmetric Eigenvalue Problem*, §6.9; Giraud, Langou & Rozložník 2005). In Lanczos the
+    /// recurrence has removed the large components already, so one pass usually suffices.
     fn reorthonormalise(&mut self, left: bool, idx: usize, len: usize) -> f64 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor supports AVX2 (checked just above).
+            return unsafe { self.reorthonormalise_avx2(left, idx, len) };
+        }
+        self.reorthonormalise_body(left, idx, len)
+    }
+
+    /// [`reorthonormalise`](Self::reorthonormalise) compiled with AVX2: the same operations
+    /// in the same order on wider registers, so the same bits (see [`super::kernels`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn reorthonormalise_avx2(&mut self, left: bool, idx: usize, len: usize) -> f64 {
+        self.reorthonormalise_body(left, idx, len)
+    }
+
+    #[inline(always)]
+    fn reorthonormalise_body(&mut self, left: bool, idx: usize, len: usize) -> f64 {
         let (basis, stride) = if left {
             (&mut self.ub, self.row_stride)
         } else {
@@ -477,6 +585,7 @@ impl TruncatedSvd {
         };
         let (prev, cur) = basis.split_at_mut(idx * stride);
         let w = &mut cur[..len];
+        let mut norm = dot(w, w).sqrt();
         for _ in 0..2 {
             for (l, c) in self.coef[..idx].iter_mut().enumerate() {
                 *c = dot(&prev[l * stride..l * stride + len], w);
@@ -484,8 +593,12 @@ impl TruncatedSvd {
             for (l, &c) in self.coef[..idx].iter().enumerate() {
                 axpy(-c, &prev[l * stride..l * stride + len], w);
             }
+            let before = norm;
+            norm = dot(w, w).sqrt();
+            if norm >= KAHAN_KAPPA * before {
+                break;
+            }
         }
-        let norm = dot(w, w).sqrt();
         if norm > 0.0 {
             w.iter_mut().for_each(|x| *x /= norm);
         }
@@ -595,11 +708,8 @@ fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Trun
     Ok(())
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 /// `y += a x`.
+#[inline(always)]
 fn axpy(a: f64, x: &[f64], y: &mut [f64]) {
     for (yi, xi) in y.iter_mut().zip(x) {
         *yi += a * xi;

@@ -17,9 +17,15 @@
 //! quadratic convergence (typically 5–10 sweeps); the matrices here are at most a few dozen
 //! columns wide, so `O(m³)` per sweep is negligible next to the Hankel products.
 
+use crate::core::svd::kernels::dot;
+
 /// Largest number of sweeps before giving up (never reached in practice: Jacobi converges
 /// quadratically once the off-diagonal mass is small).
 const MAX_SWEEPS: usize = 60;
+
+/// In [`SmallJacobi::decompose_leading`], the smallest `σ_i / σ₁` of a requested triplet for
+/// which `q_i = Bᵀ p_i / σ_i` is used (error `~ε σ₁ / σ_i ≤ 2e-10`).
+pub const RIGHT_FROM_LEFT_MIN: f64 = 1e-6;
 
 /// Workspace for the SVD of square matrices of order up to `max_n`.
 #[derive(Debug, Clone)]
@@ -33,6 +39,14 @@ pub struct SmallJacobi {
     sigma: Vec<f64>,
     order: Vec<usize>,
     tmp: Vec<f64>,
+    /// The loaded matrix, kept for [`decompose_leading`](SmallJacobi::decompose_leading).
+    orig: Vec<f64>,
+    /// Squared column norms of `W`, updated by every rotation.
+    norms: Vec<f64>,
+    /// Rotation clock of the last rotation of each column (see `sweep`).
+    touched: Vec<u64>,
+    /// Rotation clock at which pair `(i, j)` (at `i + j n`) was last found orthogonal (0: never).
+    checked: Vec<u64>,
 }
 
 impl SmallJacobi {
@@ -47,6 +61,10 @@ impl SmallJacobi {
             sigma: vec![0.0; max_n],
             order: vec![0; max_n],
             tmp: vec![0.0; max_n * max_n],
+            orig: vec![0.0; max_n * max_n],
+            norms: vec![0.0; max_n],
+            touched: vec![0; max_n],
+            checked: vec![0; max_n * max_n],
         }
     }
 
@@ -71,6 +89,7 @@ impl SmallJacobi {
                 w[i + (i + 1) * n] = sup[i];
             }
         }
+        self.orig[..n * n].copy_from_slice(&self.w[..n * n]);
         true
     }
 
@@ -82,26 +101,80 @@ impl SmallJacobi {
         }
         self.n = n;
         self.w[..n * n].copy_from_slice(&a[..n * n]);
+        self.orig[..n * n].copy_from_slice(&a[..n * n]);
         true
     }
 
     /// Decomposes the loaded matrix. Returns `false` if the sweeps did not converge (or the
     /// matrix holds non-finite values).
     pub fn decompose(&mut self) -> bool {
+        self.iterate(true)
+    }
+
+    /// Decomposes the loaded matrix for its leading `k` triplets: the sweeps rotate `W` only,
+    /// and the leading right vectors follow from `Bᵀ p_i = σ_i q_i` (exact for the SVD
+    /// `B = P Σ Qᵀ`; error `~ε σ₁/σ_i`), at `O(n²)` each instead of rotating `Q` in every
+    /// sweep. The rotations, hence the values, left vectors and signs, are those of
+    /// [`decompose`](Self::decompose). If one of the leading `k` singular values is below
+    /// [`RIGHT_FROM_LEFT_MIN`]` · σ₁` (where that error would grow), the decomposition is
+    /// repeated with `Q` accumulated. [`right`](Self::right) is valid for `i < k` only.
+    pub fn decompose_leading(&mut self, k: usize) -> bool {
+        let n = self.n;
+        if n == 0 || k == 0 || k > n {
+            return false;
+        }
+        if !self.iterate(false) {
+            return false;
+        }
+        let s1 = self.sigma[0];
+        if self.sigma[k - 1] < RIGHT_FROM_LEFT_MIN * s1 || s1 <= 0.0 {
+            self.w[..n * n].copy_from_slice(&self.orig[..n * n]);
+            return self.iterate(true);
+        }
+        for i in 0..k {
+            let inv = 1.0 / self.sigma[i];
+            let p = &self.w[i * n..(i + 1) * n];
+            for j in 0..n {
+                let col = &self.orig[j * n..(j + 1) * n];
+                let bp: f64 = col.iter().zip(p).map(|(a, b)| a * b).sum();
+                self.q[i * n + j] = bp * inv;
+            }
+        }
+        true
+    }
+
+    /// The Jacobi sweeps (rotating `Q` too when `with_q`), then [`finish`](Self::finish).
+    /// `W` is first scaled by the power of two `2^-e` that brings its largest entry into
+    /// `[½, 1)`: exact in floating point, so every rotation is the one of the unscaled matrix,
+    /// and the squares in `sweep` can neither overflow nor underflow; `σ` is scaled back.
+    fn iterate(&mut self, with_q: bool) -> bool {
         let n = self.n;
         if n == 0 || self.w[..n * n].iter().any(|v| !v.is_finite()) {
             return false;
         }
-        let q = &mut self.q[..n * n];
-        q.fill(0.0);
-        for i in 0..n {
-            q[i + i * n] = 1.0;
+        if with_q {
+            let q = &mut self.q[..n * n];
+            q.fill(0.0);
+            for i in 0..n {
+                q[i + i * n] = 1.0;
+            }
         }
+        let big = self.w[..n * n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let e = if big > 0.0 {
+            (big.log2().floor() as i32 + 1).clamp(-1000, 1000)
+        } else {
+            0
+        };
+        let down = 2f64.powi(-e);
+        self.w[..n * n].iter_mut().for_each(|v| *v *= down);
         let fro2: f64 = self.w[..n * n].iter().map(|v| v * v).sum();
         let negligible = fro2 * f64::EPSILON * f64::EPSILON;
+        self.touched[..n].fill(1);
+        self.checked[..n * n].fill(0);
+        let mut clock = 1u64;
         let mut converged = false;
         for _ in 0..MAX_SWEEPS {
-            if !self.sweep(negligible) {
+            if !self.sweep(negligible, with_q, &mut clock) {
                 converged = true;
                 break;
             }
@@ -109,46 +182,176 @@ impl SmallJacobi {
         if !converged {
             return false;
         }
-        self.finish(negligible.sqrt());
+        self.finish(negligible.sqrt(), with_q);
+        let up = 2f64.powi(e);
+        self.sigma[..n].iter_mut().for_each(|s| *s *= up);
         true
     }
 
     /// One cyclic sweep over all column pairs; returns whether any rotation was applied.
     /// Columns with squared norm at most `negligible` (rounding level of `‖B‖_F²`) count as
-    /// zero: rotating them would chase rounding noise forever.
-    fn sweep(&mut self, negligible: f64) -> bool {
+    /// zero: rotating them would chase rounding noise forever. The squared column norms are
+    /// computed at the start of the sweep and updated by each rotation (`‖w_i‖² − t γ`,
+    /// `‖w_j‖² + t γ`, exact for the rotation that annihilates `γ`), so a pair costs one dot
+    /// product instead of three; a pair found orthogonal whose columns no rotation touched
+    /// since (the `clock` stamps) is orthogonal still and is not recomputed.
+    ///
+    /// The rotation of the module docs in a form with two square roots and one division:
+    /// with `d = β − α`, `h = 2γ`, `r = √(d² + h²)`, it is
+    /// `c = (r + |d|) / √(2r(r + |d|))`, `s = sign(d h) |h| / √(2r(r + |d|))`
+    /// (`t = s/c = sign(ζ) / (|ζ| + √(1 + ζ²))`, the smaller angle).
+    fn sweep(&mut self, negligible: f64, with_q: bool, clock: &mut u64) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the processor supports AVX2 (checked just above).
+            return unsafe { self.sweep_avx2(negligible, with_q, clock) };
+        }
+        self.sweep_body(negligible, with_q, clock)
+    }
+
+    /// [`sweep`](Self::sweep) compiled with AVX2: the same operations in the same order on
+    /// wider registers, so the same bits (see [`crate::core::svd::kernels`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn sweep_avx2(&mut self, negligible: f64, with_q: bool, clock: &mut u64) -> bool {
+        self.sweep_body(negligible, with_q, clock)
+    }
+
+    #[inline(always)]
+    fn sweep_body(&mut self, negligible: f64, with_q: bool, clock: &mut u64) -> bool {
         let n = self.n;
-        let eps = 4.0 * f64::EPSILON;
-        let mut rotated = false;
         for i in 0..n {
-            for j in i + 1..n {
-                let (wi, wj) = two_cols(&mut self.w, n, i, j);
-                let (mut a, mut b, mut g) = (0.0, 0.0, 0.0);
-                for (x, y) in wi.iter().zip(wj.iter()) {
-                    a += x * x;
-                    b += y * y;
-                    g += x * y;
+            let col = &self.w[i * n..(i + 1) * n];
+            self.norms[i] = dot(col, col);
+        }
+        let mut rotated = false;
+        // The pairs (i, j) of one anti-diagonal i + j = τ + 1 share no column, so the order
+        // within it is free; the dependences of the row-cyclic order ((i, j) after (i, j−1) and
+        // after (i−1, j)) are kept, so every rotation is the row-cyclic one, bit for bit. Two
+        // pairs of an anti-diagonal are processed together, so that their dot products and
+        // rotation parameters (latency-bound chains of square roots and a division) overlap.
+        for tau in 0..(2 * n).saturating_sub(3) {
+            let (lo, hi) = ((tau + 2).saturating_sub(n), tau / 2);
+            let mut i = lo;
+            while i <= hi {
+                let j = tau + 1 - i;
+                if i < hi {
+                    rotated |= self.pair2(i, j, negligible, with_q, clock);
+                    i += 2;
+                } else {
+                    rotated |= self.pair1(i, j, negligible, with_q, clock);
+                    i += 1;
                 }
-                if g == 0.0 || a <= negligible || b <= negligible || g.abs() <= eps * (a * b).sqrt()
-                {
-                    continue;
-                }
-                rotated = true;
-                let zeta = (b - a) / (2.0 * g);
-                let t = zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
-                let c = 1.0 / (1.0 + t * t).sqrt();
-                let s = c * t;
-                rotate(wi, wj, c, s);
-                let (qi, qj) = two_cols(&mut self.q, n, i, j);
-                rotate(qi, qj, c, s);
             }
         }
         rotated
     }
 
+    /// Pair `(i, j)` alone.
+    #[inline(always)]
+    fn pair1(
+        &mut self,
+        i: usize,
+        j: usize,
+        negligible: f64,
+        with_q: bool,
+        clock: &mut u64,
+    ) -> bool {
+        if !self.live(i, j, negligible) {
+            return false;
+        }
+        let (a, b) = (self.norms[i], self.norms[j]);
+        let (wi, wj) = two_cols(&mut self.w, self.n, i, j);
+        let g = dot(wi, wj);
+        let rot = needs_rotation(a, b, g).then(|| rotation(a, b, g));
+        if let Some((c, s, _)) = rot {
+            rotate(wi, wj, c, s);
+        }
+        self.settle((i, j), (a, b, g), rot, with_q, clock)
+    }
+
+    /// Pairs `(i, j)` and `(i + 1, j − 1)` of one anti-diagonal (`i + 1 < j − 1`), their
+    /// chains interleaved, the bookkeeping in the row-cyclic order.
+    #[inline(always)]
+    fn pair2(
+        &mut self,
+        i: usize,
+        j: usize,
+        negligible: f64,
+        with_q: bool,
+        clock: &mut u64,
+    ) -> bool {
+        let (i2, j2) = (i + 1, j - 1);
+        let live = (self.live(i, j, negligible), self.live(i2, j2, negligible));
+        let (a1, b1) = (self.norms[i], self.norms[j]);
+        let (a2, b2) = (self.norms[i2], self.norms[j2]);
+        let n = self.n;
+        let (wi, wi2, wj2, wj) = four_cols(&mut self.w, n, i, j2, j);
+        let g1 = if live.0 { dot(wi, wj) } else { 0.0 };
+        let g2 = if live.1 { dot(wi2, wj2) } else { 0.0 };
+        let need = (
+            live.0 && needs_rotation(a1, b1, g1),
+            live.1 && needs_rotation(a2, b2, g2),
+        );
+        let (p1, p2) = (rotation(a1, b1, g1), rotation(a2, b2, g2));
+        let rot1 = need.0.then_some(p1);
+        let rot2 = need.1.then_some(p2);
+        if let Some((c, s, _)) = rot1 {
+            rotate(wi, wj, c, s);
+        }
+        if let Some((c, s, _)) = rot2 {
+            rotate(wi2, wj2, c, s);
+        }
+        let mut rotated = false;
+        if live.0 {
+            rotated |= self.settle((i, j), (a1, b1, g1), rot1, with_q, clock);
+        }
+        if live.1 {
+            rotated |= self.settle((i2, j2), (a2, b2, g2), rot2, with_q, clock);
+        }
+        rotated
+    }
+
+    /// Whether pair `(i, j)` needs its dot product: not found orthogonal with both columns
+    /// untouched since, and neither column numerically zero.
+    #[inline(always)]
+    fn live(&self, i: usize, j: usize, negligible: f64) -> bool {
+        let stamp = self.checked[i + j * self.n];
+        let fresh = self.touched[i] > stamp || self.touched[j] > stamp;
+        fresh && self.norms[i] > negligible && self.norms[j] > negligible
+    }
+
+    /// Bookkeeping after pair `(i, j)` with Gram entries `a, b, g` and rotation `rot`
+    /// (`c, s, t`); returns whether it rotated.
+    #[inline(always)]
+    fn settle(
+        &mut self,
+        (i, j): (usize, usize),
+        (a, b, g): (f64, f64, f64),
+        rot: Option<(f64, f64, f64)>,
+        with_q: bool,
+        clock: &mut u64,
+    ) -> bool {
+        let n = self.n;
+        let Some((c, s, t)) = rot else {
+            self.checked[i + j * n] = *clock;
+            return false;
+        };
+        self.norms[i] = a - t * g;
+        self.norms[j] = b + t * g;
+        if with_q {
+            let (qi, qj) = two_cols(&mut self.q, n, i, j);
+            rotate(qi, qj, c, s);
+        }
+        *clock += 1;
+        self.touched[i] = *clock;
+        self.touched[j] = *clock;
+        true
+    }
+
     /// Column norms into `sigma`, normalise `W` into `P`, sort descending, complete `P` to
     /// an orthonormal basis where `σ ≤ zero` (numerically zero columns have no direction).
-    fn finish(&mut self, zero: f64) {
+    fn finish(&mut self, zero: f64, with_q: bool) {
         let n = self.n;
         for i in 0..n {
             let col = &mut self.w[i * n..(i + 1) * n];
@@ -172,7 +375,9 @@ impl SmallJacobi {
             }
         }
         permute_cols(&mut self.w, &mut self.tmp, order, n);
-        permute_cols(&mut self.q, &mut self.tmp, order, n);
+        if with_q {
+            permute_cols(&mut self.q, &mut self.tmp, order, n);
+        }
         for (t, &o) in self.tmp[..n].iter_mut().zip(order.iter()) {
             *t = self.sigma[o];
         }
@@ -204,13 +409,52 @@ impl SmallJacobi {
     }
 }
 
+/// Orthogonality test of a column pair with squared norms `a, b` and inner product `g`:
+/// rotate unless `|g| ≤ 4ε √(ab)` (squared; `W` is scaled to order one, see `iterate`).
+#[inline(always)]
+fn needs_rotation(a: f64, b: f64, g: f64) -> bool {
+    let eps = 4.0 * f64::EPSILON;
+    g * g > eps * eps * a * b
+}
+
+/// `(c, s, t)` of the rotation annihilating `g` (see `sweep`); meaningless (NaN) when
+/// `g = 0` and `a = b`, a case [`needs_rotation`] excludes.
+#[inline(always)]
+fn rotation(a: f64, b: f64, g: f64) -> (f64, f64, f64) {
+    let (d, h) = (b - a, 2.0 * g);
+    let r = (d * d + h * h).sqrt();
+    let inv = 1.0 / (2.0 * r * (r + d.abs())).sqrt();
+    let c = (r + d.abs()) * inv;
+    let s = (h.abs() * inv).copysign(d * h);
+    (c, s, s / c)
+}
+
+/// Mutable views of columns `i < i + 1 < l < j` of a column-major `n`-row matrix, as
+/// `(i, i + 1, l, j)`.
+#[inline(always)]
+fn four_cols(
+    m: &mut [f64],
+    n: usize,
+    i: usize,
+    l: usize,
+    j: usize,
+) -> (&mut [f64], &mut [f64], &mut [f64], &mut [f64]) {
+    let (lo, rest) = m.split_at_mut((i + 1) * n);
+    let (mid, rest) = rest.split_at_mut(n);
+    let (gap, hi) = rest.split_at_mut((j - i - 2) * n);
+    let col_l = &mut gap[(l - i - 2) * n..(l - i - 1) * n];
+    (&mut lo[i * n..], &mut mid[..], col_l, &mut hi[..n])
+}
+
 /// Mutable views of columns `i < j` of a column-major `n`-row matrix.
+#[inline(always)]
 fn two_cols(m: &mut [f64], n: usize, i: usize, j: usize) -> (&mut [f64], &mut [f64]) {
     let (lo, hi) = m.split_at_mut(j * n);
     (&mut lo[i * n..(i + 1) * n], &mut hi[..n])
 }
 
 /// `(x, y) ← (c x − s y, s x + c y)`.
+#[inline(always)]
 fn rotate(x: &mut [f64], y: &mut [f64], c: f64, s: f64) {
     for (a, b) in x.iter_mut().zip(y.iter_mut()) {
         let (xa, yb) = (*a, *b);
@@ -308,6 +552,35 @@ mod tests {
         assert!(k.load(&b, 5));
         assert!(k.decompose());
         assert_eq!(j.sigma(), k.sigma());
+    }
+
+    #[test]
+    fn leading_triplets_match_the_full_decomposition() {
+        let n = 12;
+        let diag: Vec<f64> = (0..n).map(|i| 5.0 / (i + 1) as f64).collect();
+        let sup: Vec<f64> = (0..n - 1)
+            .map(|i| 0.3 * ((i * 7 % 5) as f64 - 2.0))
+            .collect();
+        let mut full = SmallJacobi::new(n);
+        assert!(full.load_bidiagonal(&diag, &sup) && full.decompose());
+        let mut lead = SmallJacobi::new(n);
+        assert!(lead.load_bidiagonal(&diag, &sup) && lead.decompose_leading(4));
+        for i in 0..4 {
+            assert!((full.sigma()[i] - lead.sigma()[i]).abs() < 1e-14 * full.sigma()[0]);
+            // Same rotations: same signs.
+            for (a, b) in full.left(i).iter().zip(lead.left(i)) {
+                assert!((a - b).abs() < 1e-13, "left {i}");
+            }
+            for (a, b) in full.right(i).iter().zip(lead.right(i)) {
+                assert!((a - b).abs() < 1e-13, "right {i}");
+            }
+        }
+        // A leading value below RIGHT_FROM_LEFT_MIN σ₁: Q is accumulated after all.
+        let mut tiny = SmallJacobi::new(3);
+        assert!(tiny.load_bidiagonal(&[1.0, 1e-9, 0.5], &[0.0, 0.0]) && tiny.decompose_leading(3));
+        assert!((tiny.sigma()[2] - 1e-9).abs() < 1e-20);
+        assert!((tiny.right(2)[1].abs() - 1.0).abs() < 1e-15);
+        assert!(!tiny.decompose_leading(4));
     }
 
     #[test]
