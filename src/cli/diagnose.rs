@@ -219,3 +219,47 @@ fn fill_gaps(mut x: Vec<f64>) -> Vec<f64> {
     }
     x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaps_are_held_from_the_last_finite_value_and_leading_gaps_from_the_first() {
+        let x = fill_gaps(vec![f64::NAN, 2.0, f64::NAN, f64::INFINITY, 5.0, f64::NAN]);
+        assert_eq!(x, [2.0, 2.0, 2.0, 2.0, 5.0, 5.0]);
+        assert!(fill_gaps(vec![f64::NAN; 3]).iter().all(|v| v.is_nan()));
+    }
+
+    #[test]
+    fn samples_marked_missing_become_nan_and_others_stay() {
+        let mut y = vec![1.0, 2.0, 3.0];
+        mark_missing(&mut y, &[false, true, false]);
+        assert_eq!((y[0], y[2]), (1.0, 3.0));
+        assert!(y[1].is_nan());
+    }
+
+    #[test]
+    fn a_response_without_steps_and_without_input_is_an_identification_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("flat.csv");
+        let rows: String = (0..300)
+            .map(|k| format!("{},1.0\n", k as f64 * 0.01))
+            .collect();
+        std::fs::write(&file, format!("t_s,thrust_N\n{rows}")).unwrap();
+        let args = Args {
+            file,
+            json: true,
+            report: None,
+            input: None,
+            output: None,
+            fs: None,
+            columns: None,
+            esc_us: None,
+            estimation_fraction: 0.7,
+        };
+        let e = load(&args).unwrap_err();
+        assert_eq!(e.exit_code(), 4, "{e}");
+        assert!(e.to_string().ends_with("(give --input NAME)"), "{e}");
+    }
+}
