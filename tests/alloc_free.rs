@@ -8,7 +8,7 @@ mod counting_alloc;
 
 use counting_alloc::allocations;
 
-use core_support::{throttle, Plant};
+use core_support::{record_input, throttle, Plant};
 use propid::core::{IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
@@ -37,13 +37,7 @@ fn pulse_identification_allocates_nothing() {
         }
     }
     let chans = [&y[0][..], &y[1][..]];
-    let input = PulseInput {
-        dt_s: plant.dt,
-        u: &u,
-        y: &chans,
-        missing: &[],
-        pulse_starts: None,
-    };
+    let input = record_input(plant.dt, &u, &chans);
     let mut ws = Workspace::new(&Limits::default()).unwrap();
     let opts = IdentOptions::default();
     for round in 0..3 {

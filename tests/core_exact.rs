@@ -2,19 +2,13 @@
 
 mod core_support;
 
-use core_support::{rel, throttle, Plant, PulseSpec};
-use propid::core::{IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};
+use core_support::{record_input, rel, throttle, Plant, PulseSpec};
+use propid::core::{IdentOptions, Limits, MarkovSeq, Workspace};
 
 fn identify(plant: &Plant, u: &[f64], order: Option<usize>) -> propid::core::ModelReport {
     let y = plant.simulate(u, 3.0);
     let chans: Vec<&[f64]> = y.iter().map(|c| &c[..]).collect();
-    let input = PulseInput {
-        dt_s: plant.dt,
-        u,
-        y: &chans,
-        missing: &[],
-        pulse_starts: None,
-    };
+    let input = record_input(plant.dt, u, &chans);
     let mut ws = Workspace::new(&Limits::default()).unwrap();
     let opts = IdentOptions {
         order,
@@ -123,13 +117,7 @@ fn state_space_simulation_reproduces_the_markov_parameters() {
     let u = throttle(2400, &[(0, 0.4)], &pulses(100, 400, 5, &[1]));
     let y = plant.simulate(&u, 0.0);
     let chans = [&y[0][..]];
-    let input = PulseInput {
-        dt_s: plant.dt,
-        u: &u,
-        y: &chans,
-        missing: &[],
-        pulse_starts: None,
-    };
+    let input = record_input(plant.dt, &u, &chans);
     let mut ws = Workspace::new(&Limits::default()).unwrap();
     let ss = ws
         .identify(&input, &IdentOptions::default())
@@ -210,13 +198,7 @@ fn truncated_svd_path_matches_dense() {
     let u = throttle(2400, &[(0, 0.4)], &pulses(100, 400, 5, &[1, 2]));
     let y = plant.simulate(&u, 3.0);
     let chans: Vec<&[f64]> = y.iter().map(|c| &c[..]).collect();
-    let input = PulseInput {
-        dt_s: plant.dt,
-        u: &u,
-        y: &chans,
-        missing: &[],
-        pulse_starts: None,
-    };
+    let input = record_input(plant.dt, &u, &chans);
     let mut ws = Workspace::new(&Limits::default()).unwrap();
     let opts = IdentOptions {
         svd: SvdChoice::Truncated,

@@ -3,11 +3,8 @@
 
 mod core_support;
 
-use core_support::{throttle, Plant};
-use propid::core::{IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};
-use rand::rngs::StdRng;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
+use core_support::{add_noise, record_input, throttle, Plant};
+use propid::core::{IdentOptions, Limits, MarkovSeq, Workspace};
 
 #[test]
 fn exact_data_gives_unit_coherence() {
@@ -35,19 +32,9 @@ fn noise_modes_have_low_indicators() {
         .collect();
     let u = throttle(200 + 250 * 30 + 50, &[(0, 0.5)], &pulses);
     let mut y = plant.simulate(&u, 2.0).remove(0);
-    let mut rng = StdRng::seed_from_u64(11);
-    let noise = Normal::new(0.0, 0.005).unwrap();
-    for v in &mut y {
-        *v += noise.sample(&mut rng);
-    }
+    add_noise(&mut y, 0.005, 11);
     let chans = [&y[..]];
-    let input = PulseInput {
-        dt_s: plant.dt,
-        u: &u,
-        y: &chans,
-        missing: &[],
-        pulse_starts: None,
-    };
+    let input = record_input(plant.dt, &u, &chans);
     let mut ws = Workspace::new(&Limits {
         max_samples: 16384,
         ..Limits::default()

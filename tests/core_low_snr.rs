@@ -4,11 +4,8 @@
 
 mod core_support;
 
-use core_support::{throttle, Plant};
-use propid::core::{IdentOptions, Limits, PulseInput, Workspace};
-use rand::rngs::StdRng;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
+use core_support::{add_noise, record_input, throttle, Plant};
+use propid::core::{IdentOptions, Limits, Workspace};
 
 /// RMS relative error of (fn, ζ) over `seeds` records at 1 kHz.
 fn rms_errors(seeds: u64) -> (f64, f64) {
@@ -28,19 +25,9 @@ fn rms_errors(seeds: u64) -> (f64, f64) {
         let mut y = plant.simulate(&u, 5.4).remove(0);
         y.remove(0);
         y.push(y[y.len() - 1]);
-        let mut rng = StdRng::seed_from_u64(seed);
-        let noise = Normal::new(0.0, 0.01).unwrap();
-        for v in &mut y {
-            *v += noise.sample(&mut rng);
-        }
+        add_noise(&mut y, 0.01, seed);
         let chans = [&y[..]];
-        let input = PulseInput {
-            dt_s: plant.dt,
-            u: &u,
-            y: &chans,
-            missing: &[],
-            pulse_starts: None,
-        };
+        let input = record_input(plant.dt, &u, &chans);
         let m = ws.identify(&input, &opts).unwrap();
         ef += (m.fn_hz() / 12.0 - 1.0).powi(2);
         ez += (m.zeta() / 0.7 - 1.0).powi(2);

@@ -4,11 +4,8 @@
 
 mod core_support;
 
-use core_support::{throttle, Plant};
-use propid::core::{IdentOptions, Limits, PulseInput, Workspace};
-use rand::rngs::StdRng;
-use rand::SeedableRng;
-use rand_distr::{Distribution, Normal};
+use core_support::{add_noise, record_input, throttle, Plant};
+use propid::core::{IdentOptions, Limits, Workspace};
 
 const TRIALS: u64 = 30;
 
@@ -20,11 +17,7 @@ fn record(seed: u64, plant: &Plant) -> (Vec<f64>, Vec<f64>) {
         .collect();
     let u = throttle(200 + 250 * 40 + 50, &[(0, 0.5)], &pulses);
     let mut y = plant.simulate(&u, 2.0).remove(0);
-    let mut rng = StdRng::seed_from_u64(seed);
-    let noise = Normal::new(0.0, 0.005).unwrap();
-    for v in &mut y {
-        *v += noise.sample(&mut rng);
-    }
+    add_noise(&mut y, 0.005, seed);
     (u, y)
 }
 
@@ -52,13 +45,7 @@ fn run(opts: &IdentOptions) -> (Vec<[f64; 6]>, Vec<usize>) {
     for seed in 0..TRIALS {
         let (u, y) = record(seed, &plant);
         let chans = [&y[..]];
-        let input = PulseInput {
-            dt_s: plant.dt,
-            u: &u,
-            y: &chans,
-            missing: &[],
-            pulse_starts: None,
-        };
+        let input = record_input(plant.dt, &u, &chans);
         let m = ws.identify(&input, opts).unwrap();
         let (sf, sz, sd) = m.uncertainty(0);
         orders.push(m.order());
@@ -170,19 +157,9 @@ fn wide_noisy_pulses_identify_like_one_sample_pulses() {
                 .collect();
             let u = throttle(200 + 250 * 40 + 50, &[(0, 0.5)], &pulses);
             let mut y = plant.simulate(&u, 2.0).remove(0);
-            let mut rng = StdRng::seed_from_u64(100 + seed);
-            let noise = Normal::new(0.0, 0.005).unwrap();
-            for v in &mut y {
-                *v += noise.sample(&mut rng);
-            }
+            add_noise(&mut y, 0.005, 100 + seed);
             let chans = [&y[..]];
-            let input = PulseInput {
-                dt_s: plant.dt,
-                u: &u,
-                y: &chans,
-                missing: &[],
-                pulse_starts: None,
-            };
+            let input = record_input(plant.dt, &u, &chans);
             let m = ws
                 .identify(
                     &input,

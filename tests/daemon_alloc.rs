@@ -2,6 +2,10 @@
 //! over a whole experiment recorded from the simulated stand (noise and quantisation on),
 //! counted by a global allocator.
 
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
+
+use counting_alloc::allocations;
 use propid::core::svd::SvdChoice;
 use propid::daemon::identify::CoreIdentifier;
 use propid::daemon::item::SampleItem;
@@ -11,39 +15,7 @@ use propid::daemon::Config;
 use propid::protocol::message::Message;
 use propid::protocol::Decoder;
 use propid::sim::SimConfig;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
-
-struct Counting;
-
-thread_local! {
-    /// Counting is on for this thread only (the test harness's other threads may allocate).
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-}
-static ALLOCS: AtomicU64 = AtomicU64::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        if COUNTING.with(Cell::get) {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
-        }
-        System.alloc(l)
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        System.dealloc(p, l)
-    }
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        if COUNTING.with(Cell::get) {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
-        }
-        System.realloc(p, l, n)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn window_and_identification_allocate_nothing_on_both_svd_paths() {
@@ -86,22 +58,19 @@ fn window_and_identification_allocate_nothing(svd: SvdChoice) {
     let mut id = CoreIdentifier::new(&cfg).unwrap().with_svd(svd);
     let mut ok = 0u32;
     let mut failed = 0u32;
-    COUNTING.with(|c| c.set(true));
-    for s in &samples {
-        window.on_sample(s, |v| match id.identify(v) {
+    // counted on this thread only (the test harness's other threads may allocate)
+    let (allocs, ()) = allocations(|| {
+        for s in &samples {
+            window.on_sample(s, |v| match id.identify(v) {
+                Ok(()) => ok += 1,
+                Err(_) => failed += 1,
+            });
+        }
+        window.finish(|v| match id.identify(v) {
             Ok(()) => ok += 1,
             Err(_) => failed += 1,
         });
-    }
-    window.finish(|v| match id.identify(v) {
-        Ok(()) => ok += 1,
-        Err(_) => failed += 1,
     });
-    COUNTING.with(|c| c.set(false));
     assert_eq!((ok, failed), (6, 0), "{svd:?}");
-    assert_eq!(
-        ALLOCS.swap(0, Ordering::SeqCst),
-        0,
-        "allocations in the hot path ({svd:?})"
-    );
+    assert_eq!(allocs, 0, "allocations in the hot path ({svd:?})");
 }

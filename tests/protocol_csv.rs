@@ -79,6 +79,19 @@ fn shared_data(folder: &str) -> Option<PathBuf> {
     }
 }
 
+/// Options for an exported stand log: ESC range 1000–2000 µs, lines up to 4096 bytes (their
+/// headers are long).
+fn export_options() -> CsvOptions {
+    CsvOptions {
+        conv: ConvOptions {
+            esc_min_us: Some(1000.0),
+            esc_max_us: Some(2000.0),
+            motor_poles: None,
+        },
+        max_line: 4096,
+    }
+}
+
 /// vanderploeg-rcbenchmark-steps (no licence: read in place, never copied): the Tyto /
 /// RCbenchmark export with a BOM, µs and N·m in its names, and empty servo columns.
 #[test]
@@ -87,15 +100,7 @@ fn rcbenchmark_export_maps_every_channel() {
         return;
     };
     let bytes = std::fs::read(dir.join("90PERCENT_2024-08-13_185523.csv")).unwrap();
-    let opts = CsvOptions {
-        conv: ConvOptions {
-            esc_min_us: Some(1000.0),
-            esc_max_us: Some(2000.0),
-            motor_poles: None,
-        },
-        max_line: 4096,
-    };
-    let mut dec = CsvDecoder::new(opts);
+    let mut dec = CsvDecoder::new(export_options());
     let r = rows(&mut dec, &[&bytes]);
     let h = dec.header().expect("header recognised");
     for q in [
@@ -129,15 +134,7 @@ fn rcbenchmark_gram_force_export_converts_to_newtons() {
         return;
     };
     let bytes = std::fs::read(dir.join("StepsTest20230615_2023-06-15_174003.csv")).unwrap();
-    let opts = CsvOptions {
-        conv: ConvOptions {
-            esc_min_us: Some(1000.0),
-            esc_max_us: Some(2000.0),
-            motor_poles: None,
-        },
-        max_line: 4096,
-    };
-    let mut dec = CsvDecoder::new(opts);
+    let mut dec = CsvDecoder::new(export_options());
     let r = rows(&mut dec, &[&bytes]);
     assert!(!r.is_empty());
     // First row: 0.18824050492747205 gf.

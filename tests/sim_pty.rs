@@ -51,6 +51,25 @@ fn ack_of(frames: &[Frame], seq: u16) -> Option<propid::protocol::Ack> {
     })
 }
 
+/// The sample indices of the SAMPLE frames among `frames`, in order.
+fn sample_indices(frames: &[Frame]) -> Vec<u32> {
+    frames
+        .iter()
+        .filter_map(|f| match f.msg {
+            Message::Sample(s) => Some(s.sample_index),
+            _ => None,
+        })
+        .collect()
+}
+
+/// The first HELLO among `frames`.
+fn hello_of(frames: &[Frame]) -> Option<propid::protocol::Hello> {
+    frames.iter().find_map(|f| match f.msg {
+        Message::Hello(h) => Some(h),
+        _ => None,
+    })
+}
+
 #[test]
 fn hello_req_over_the_pty_gets_hello_and_ack_and_samples_are_paced() {
     let sim = SimHandle::spawn(SimConfig::default(), RunOptions::default()).unwrap();
@@ -60,11 +79,7 @@ fn hello_req_over_the_pty_gets_hello_and_ack_and_samples_are_paced() {
     let frames = collect(&mut *port, &mut dec, Duration::from_secs(2), |f| {
         ack_of(f, 1).is_some()
     });
-    let hello = frames.iter().find_map(|f| match f.msg {
-        Message::Hello(h) => Some(h),
-        _ => None,
-    });
-    let hello = hello.expect("HELLO");
+    let hello = hello_of(&frames).expect("HELLO");
     assert_eq!(hello.boot_id, sim.report().boot_id);
     let ack = ack_of(&frames, 1).expect("ACK");
     assert_eq!(
@@ -75,13 +90,7 @@ fn hello_req_over_the_pty_gets_hello_and_ack_and_samples_are_paced() {
     let t0 = Instant::now();
     let frames = collect(&mut *port, &mut dec, Duration::from_millis(300), |_| false);
     let wall = t0.elapsed().as_secs_f64();
-    let idx: Vec<u32> = frames
-        .iter()
-        .filter_map(|f| match f.msg {
-            Message::Sample(s) => Some(s.sample_index),
-            _ => None,
-        })
-        .collect();
+    let idx = sample_indices(&frames);
     assert!(idx.windows(2).all(|w| w[1] == w[0] + 1), "no gaps");
     let rate = idx.len() as f64 / wall;
     assert!(
@@ -153,13 +162,7 @@ fn injected_faults_match_what_the_host_counts() {
         s1.0 - s0.0,
         s2.0 - s0.0
     );
-    let idx: Vec<u32> = frames
-        .iter()
-        .filter_map(|f| match f.msg {
-            Message::Sample(s) => Some(s.sample_index),
-            _ => None,
-        })
-        .collect();
+    let idx = sample_indices(&frames);
     let gaps: u64 = idx.windows(2).map(|w| (w[1] - w[0] - 1) as u64).sum();
     assert!(
         gaps + 2 >= s1.1 - s0.1 && gaps <= s2.1 - s0.1 + 2,
@@ -216,11 +219,10 @@ fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
     let frames = collect(&mut *port, &mut dec, Duration::from_secs(2), |f| {
         ack_of(f, 9).is_some()
     });
-    let hello = frames.iter().find_map(|f| match f.msg {
-        Message::Hello(h) => Some(h),
-        _ => None,
-    });
-    assert_ne!(hello.expect("HELLO after re-open").boot_id, first_boot);
+    assert_ne!(
+        hello_of(&frames).expect("HELLO after re-open").boot_id,
+        first_boot
+    );
     let r = sim.stop().unwrap();
     assert_eq!((r.faults.hangups, r.faults.reopens), (1, 1));
 }

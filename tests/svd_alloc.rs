@@ -2,43 +2,11 @@
 //! binary only) checks `compute`, `compute_at_least`, `apply`, `apply_t` and `project` after
 //! the workspace was built by `TruncatedSvd::new`.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+#[path = "support/counting_alloc.rs"]
+mod counting_alloc;
 
+use counting_alloc::allocations;
 use propid::core::svd::truncated::TruncatedSvd;
-
-/// Counts allocations of the current thread only (the test harness allocates on its own
-/// threads at any time).
-struct Counting;
-
-thread_local! {
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn bump() {
-    let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
-}
-
-fn allocs() -> usize {
-    ALLOCS.with(|c| c.get())
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        bump();
-        System.alloc(layout)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        bump();
-        System.realloc(ptr, layout, new_size)
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 /// Damped two-output response with a little deterministic "noise".
 fn markov(q: usize, len: usize) -> Vec<f64> {
@@ -64,23 +32,22 @@ fn compute_and_products_allocate_nothing() {
     let mut out = vec![0.0; k * k];
     let mut y = vec![0.0; rmax * q];
     let mut z = vec![0.0; cmax * p];
-    let before = allocs();
-    for &(r, c) in &[(120, 140), (50, 60), (120, 140), (7, 9)] {
-        let k = k.min(r * q).min(c * p);
-        svd.compute(&data, q, p, r, c, 0, k, &mut sigma, &mut u, &mut v)
-            .unwrap();
-        svd.compute_at_least(&data, q, p, r, c, 0, k, 1, &mut sigma, &mut u, &mut v)
-            .unwrap();
-        svd.project(&data, q, p, r, c, 1, k, &u, &v, &mut out)
-            .unwrap();
-        svd.apply(&data, q, p, r, c, 1, &v[..c * p], &mut y)
-            .unwrap();
-        svd.apply_t(&data, q, p, r, c, 0, &u[..r * q], &mut z)
-            .unwrap();
-    }
-    // Error paths allocate nothing either.
-    assert!(svd
-        .compute(
+    let (n, error_path_refused) = allocations(|| {
+        for &(r, c) in &[(120, 140), (50, 60), (120, 140), (7, 9)] {
+            let k = k.min(r * q).min(c * p);
+            svd.compute(&data, q, p, r, c, 0, k, &mut sigma, &mut u, &mut v)
+                .unwrap();
+            svd.compute_at_least(&data, q, p, r, c, 0, k, 1, &mut sigma, &mut u, &mut v)
+                .unwrap();
+            svd.project(&data, q, p, r, c, 1, k, &u, &v, &mut out)
+                .unwrap();
+            svd.apply(&data, q, p, r, c, 1, &v[..c * p], &mut y)
+                .unwrap();
+            svd.apply_t(&data, q, p, r, c, 0, &u[..r * q], &mut z)
+                .unwrap();
+        }
+        // Error paths allocate nothing either.
+        svd.compute(
             &data,
             q,
             p,
@@ -90,14 +57,15 @@ fn compute_and_products_allocate_nothing() {
             k,
             &mut sigma,
             &mut u,
-            &mut v
+            &mut v,
         )
-        .is_err());
-    let after = allocs();
-    assert_eq!(after - before, 0, "heap allocations during compute/apply");
+        .is_err()
+    });
+    assert!(error_path_refused);
+    assert_eq!(n, 0, "heap allocations during compute/apply");
     // The counter does see this thread's allocations.
-    let probe: Vec<u8> = Vec::with_capacity(16);
-    assert_eq!(allocs() - after, 1);
+    let (n, probe) = allocations(|| Vec::<u8>::with_capacity(16));
+    assert_eq!(n, 1);
     drop(probe);
     assert!(sigma[0] > 0.0);
 }

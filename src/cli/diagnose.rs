@@ -5,12 +5,9 @@
 
 use std::path::PathBuf;
 
+use super::load::{self as shared, steps_from_response, LoadedFile, Request};
 use super::CliError;
 use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
-use crate::ingest::csv_file::{read_csv, CsvFileOptions};
-use crate::ingest::steps::find_steps;
-use crate::ingest::{read_record_with, IngestOptions};
-use crate::protocol::detect::{detect, Detection, WireFormat};
 use crate::record::names;
 
 /// Arguments of `propid diagnose`.
@@ -144,106 +141,45 @@ fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
     }
 }
 
-/// Reads FILE: TSP/1 binary recordings through `ingest::read_record_with`, everything else
-/// through the CSV reader of `propid identify`.
+/// Reads FILE with the loader `propid identify` uses ([`crate::cli::load`]; the output
+/// defaults to thrust, the supply voltage is read when the file has it), then makes the
+/// [`Signals`] diagnose works on ([`signals`]).
 pub fn load(args: &Args) -> Result<Signals, CliError> {
-    let name = args.file.display().to_string();
-    let bytes =
-        std::fs::read(&args.file).map_err(|e| CliError::io(format!("reading {name}"), e))?;
-    if bytes.is_empty() {
-        return Err(CliError::Input(format!("{name}: the file is empty")));
-    }
-    match detect(&bytes, true) {
-        Detection::Format(WireFormat::Binary) => load_tsp(args, &name, &bytes),
-        _ => load_csv(args, &name, &bytes),
-    }
+    let outputs = [args.output.clone().unwrap_or(names::THRUST.into())];
+    let req = Request {
+        input: args.input.as_deref(),
+        outputs: &outputs,
+        optional: Some(names::VOLTAGE),
+        fs_hz: args.fs,
+        columns: args.columns.as_deref(),
+        esc_us: args.esc_us.as_deref(),
+    };
+    signals(&shared::load(&args.file, &req)?)
 }
 
-fn load_tsp(args: &Args, name: &str, bytes: &[u8]) -> Result<Signals, CliError> {
-    let opts = IngestOptions {
-        fs_hz: args.fs,
-        ..IngestOptions::default()
-    };
-    let (rec, _) =
-        read_record_with(bytes, &opts).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
-    let pick = |want: &str| -> Result<Vec<f64>, CliError> {
-        rec.channel(want).map(|c| c.data.clone()).ok_or_else(|| {
-            let have: Vec<&str> = rec.channels.iter().map(|c| c.name.as_str()).collect();
-            CliError::Input(format!(
-                "{name}: no channel {want}; the recording has {}",
-                have.join(", ")
-            ))
-        })
-    };
-    let input_name = args.input.clone().unwrap_or(names::THROTTLE.into());
-    let output_name = args.output.clone().unwrap_or(names::THRUST.into());
-    let u = pick(&input_name)?;
-    let mut y = pick(&output_name)?;
-    mark_missing(&mut y, &rec.missing);
-    let voltage = rec.channel(names::VOLTAGE).map(|c| c.data.clone());
-    let u = fill_gaps(u);
-    let voltage = voltage
-        .map(fill_gaps)
-        .filter(|v| v.iter().all(|x| x.is_finite()));
-    Ok(Signals {
-        dt_s: rec.dt_s,
-        u,
-        y,
-        voltage,
-        input_name,
-        output_name,
-    })
-}
-
-fn load_csv(args: &Args, name: &str, bytes: &[u8]) -> Result<Signals, CliError> {
-    let text = String::from_utf8_lossy(bytes);
-    let esc_us = match args.esc_us.as_deref() {
-        Some([lo, hi]) => Some((*lo, *hi)),
-        Some(_) => return Err(CliError::Usage("--esc-us takes MIN,MAX".into())),
-        None => None,
-    };
-    let output = args.output.clone().unwrap_or(names::THRUST.into());
-    let opts = |outputs: Vec<String>| CsvFileOptions {
-        input: args.input.clone(),
-        outputs,
-        fs_hz: args.fs,
-        columns: args.columns.clone(),
-        esc_us,
-        motor_poles: None,
-    };
-    // With the voltage when the file has one, without it otherwise.
-    let with_v = read_csv(&text, &opts(vec![output.clone(), names::VOLTAGE.into()]));
-    let file = match with_v {
-        Ok(f) => f,
-        Err(_) => read_csv(&text, &opts(vec![output.clone()]))
-            .map_err(|e| CliError::Input(format!("{name}: {e}")))?,
-    };
+/// Diagnose's step after the shared load: the output NaN at every sample marked missing; the
+/// input (without an input column: the level sequence of the steps found in the response) and
+/// the voltage held across gaps ([`fill_gaps`]); the voltage dropped when it has no finite
+/// sample.
+fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
     let rec = &file.record;
-    let out_name = file.outputs.first().cloned().unwrap_or(output);
-    let mut y = rec
-        .channel(&out_name)
-        .map(|c| c.data.clone())
-        .unwrap_or_default();
+    let output_name = file.outputs.first().cloned().unwrap_or_default();
+    let mut y = file.data(&output_name);
     mark_missing(&mut y, &rec.missing);
     let voltage = file
-        .outputs
-        .get(1)
-        .and_then(|n| rec.channel(n))
-        .map(|c| fill_gaps(c.data.clone()))
+        .optional
+        .as_ref()
+        .map(|n| fill_gaps(file.data(n)))
         .filter(|v| v.iter().all(|x| x.is_finite()));
     let (u, input_name) = match &file.input {
-        Some(n) => (
-            rec.channel(n).map(|c| c.data.clone()).unwrap_or_default(),
-            n.clone(),
-        ),
+        Some(n) => (file.data(n), n.clone()),
         None => {
-            let f = find_steps(&y)
-                .filter(|f| !f.steps.is_empty())
-                .ok_or_else(|| {
-                    CliError::Identification(format!(
-                    "{name}: no input column and no step found in the response (give --input NAME)"
+            let f = steps_from_response(&y).map_err(|_| {
+                CliError::Identification(format!(
+                    "{}: no input column and no step found in the response (give --input NAME)",
+                    file.name
                 ))
-                })?;
+            })?;
             (f.input, "steps found from the response".to_string())
         }
     };
@@ -253,7 +189,7 @@ fn load_csv(args: &Args, name: &str, bytes: &[u8]) -> Result<Signals, CliError> 
         y,
         voltage,
         input_name,
-        output_name: out_name,
+        output_name,
     })
 }
 
@@ -282,4 +218,48 @@ fn fill_gaps(mut x: Vec<f64>) -> Vec<f64> {
         }
     }
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaps_are_held_from_the_last_finite_value_and_leading_gaps_from_the_first() {
+        let x = fill_gaps(vec![f64::NAN, 2.0, f64::NAN, f64::INFINITY, 5.0, f64::NAN]);
+        assert_eq!(x, [2.0, 2.0, 2.0, 2.0, 5.0, 5.0]);
+        assert!(fill_gaps(vec![f64::NAN; 3]).iter().all(|v| v.is_nan()));
+    }
+
+    #[test]
+    fn samples_marked_missing_become_nan_and_others_stay() {
+        let mut y = vec![1.0, 2.0, 3.0];
+        mark_missing(&mut y, &[false, true, false]);
+        assert_eq!((y[0], y[2]), (1.0, 3.0));
+        assert!(y[1].is_nan());
+    }
+
+    #[test]
+    fn a_response_without_steps_and_without_input_is_an_identification_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("flat.csv");
+        let rows: String = (0..300)
+            .map(|k| format!("{},1.0\n", k as f64 * 0.01))
+            .collect();
+        std::fs::write(&file, format!("t_s,thrust_N\n{rows}")).unwrap();
+        let args = Args {
+            file,
+            json: true,
+            report: None,
+            input: None,
+            output: None,
+            fs: None,
+            columns: None,
+            esc_us: None,
+            estimation_fraction: 0.7,
+        };
+        let e = load(&args).unwrap_err();
+        assert_eq!(e.exit_code(), 4, "{e}");
+        assert!(e.to_string().ends_with("(give --input NAME)"), "{e}");
+    }
 }

@@ -5,6 +5,7 @@
 pub mod demo;
 pub mod diagnose;
 pub mod identify;
+pub mod load;
 pub mod replay;
 pub mod run;
 pub mod sim;

@@ -109,27 +109,37 @@ fn open_link(link: Option<&Path>) -> Result<Link, SimError> {
 /// (a daemon started by the same process, a test's `propid run`) would inherit it, hold the
 /// pty open and never see the hang-up when the simulator closes its end.
 fn set_cloexec(fd: i32) -> Result<(), SimError> {
-    // SAFETY: fcntl on a descriptor we own; no memory is passed.
-    let flags = unsafe { libc::fcntl(fd, libc::F_GETFD) };
-    // SAFETY: as above.
-    if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFD, flags | libc::FD_CLOEXEC) } < 0 {
-        return Err(SimError::io(
-            "making the pty master close-on-exec",
-            std::io::Error::last_os_error(),
-        ));
-    }
-    Ok(())
+    add_fcntl_flag(
+        fd,
+        (libc::F_GETFD, libc::F_SETFD),
+        libc::FD_CLOEXEC,
+        "making the pty master close-on-exec",
+    )
 }
 
 fn set_nonblocking(fd: i32) -> Result<(), SimError> {
+    add_fcntl_flag(
+        fd,
+        (libc::F_GETFL, libc::F_SETFL),
+        libc::O_NONBLOCK,
+        "making the pty master non-blocking",
+    )
+}
+
+/// Adds `flag` to the flags of `fd` that the fcntl commands `(get, set)` read and write
+/// (descriptor flags `F_GETFD`/`F_SETFD`, status flags `F_GETFL`/`F_SETFL`); `what` names the
+/// step in the error.
+fn add_fcntl_flag(
+    fd: i32,
+    (get, set): (libc::c_int, libc::c_int),
+    flag: libc::c_int,
+    what: &str,
+) -> Result<(), SimError> {
     // SAFETY: fcntl on a descriptor we own; no memory is passed.
-    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+    let flags = unsafe { libc::fcntl(fd, get) };
     // SAFETY: as above.
-    if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFL, flags | libc::O_NONBLOCK) } < 0 {
-        return Err(SimError::io(
-            "making the pty master non-blocking",
-            std::io::Error::last_os_error(),
-        ));
+    if flags < 0 || unsafe { libc::fcntl(fd, set, flags | flag) } < 0 {
+        return Err(SimError::io(what, std::io::Error::last_os_error()));
     }
     Ok(())
 }

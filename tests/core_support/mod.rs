@@ -2,6 +2,10 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, Matrix2, Vector2};
+use propid::core::PulseInput;
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
 
 /// A 2nd-order plant `K ωn² / (s² + 2ζωn s + ωn²)` on output 0, sampled with a zero-order hold;
 /// extra outputs are other rows of `C` (with a feed-through each).
@@ -113,4 +117,26 @@ pub fn throttle(n: usize, levels: &[(usize, f64)], pulses: &[PulseSpec]) -> Vec<
 /// Relative error.
 pub fn rel(got: f64, want: f64) -> f64 {
     ((got - want) / want).abs()
+}
+
+/// Adds zero-mean Gaussian noise of standard deviation `sd` (a load cell's) to `y`, drawn in
+/// order from `StdRng::seed_from_u64(seed)`: the same seed gives the same record.
+pub fn add_noise(y: &mut [f64], sd: f64, seed: u64) {
+    let mut rng = StdRng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, sd).unwrap();
+    for v in y {
+        *v += noise.sample(&mut rng);
+    }
+}
+
+/// The identification input of a record without gaps: throttle `u` and output channels `y`
+/// at period `dt_s`, nothing missing, no device pulse starts (pulses are found from `u`).
+pub fn record_input<'a>(dt_s: f64, u: &'a [f64], y: &'a [&'a [f64]]) -> PulseInput<'a> {
+    PulseInput {
+        dt_s,
+        u,
+        y,
+        missing: &[],
+        pulse_starts: None,
+    }
 }

@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+use propid::sim::pty::{RunOptions, SimHandle, SimReport};
+use propid::sim::SimConfig;
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -63,6 +65,15 @@ impl Daemon {
         }
     }
 
+    /// Starts `propid run --config CFG --port PORT` (`--record RECORD` when given).
+    pub fn run(cfg: &Path, port: &str, record: Option<&Path>) -> Daemon {
+        let mut args = vec!["run", "--config", path_str(cfg), "--port", port];
+        if let Some(r) = record {
+            args.extend(["--record", path_str(r)]);
+        }
+        Daemon::start(&args)
+    }
+
     /// Waits for a line matching `pred` (panics after `secs`).
     pub fn wait_for(&mut self, secs: f64, pred: impl Fn(&Value) -> bool) -> Value {
         let end = Instant::now() + Duration::from_secs_f64(secs);
@@ -100,6 +111,42 @@ impl Daemon {
         }
         (status, self.lines, err)
     }
+}
+
+/// A path as the `&str` an argument list needs (test paths are UTF-8).
+fn path_str(p: &Path) -> &str {
+    p.to_str().expect("a UTF-8 test path")
+}
+
+/// `propid replay RECORD --config CFG` to its end: every stdout line, parsed (panics when the
+/// replay fails).
+pub fn replay(record: &Path, cfg: &Path) -> Vec<Value> {
+    let out = Command::new(BIN)
+        .arg("replay")
+        .arg(record)
+        .arg("--config")
+        .arg(cfg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "replay failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
+        .collect()
+}
+
+/// The model and schedule lines of a run, in order.
+pub fn models_of(lines: &[Value]) -> Vec<Value> {
+    lines
+        .iter()
+        .filter(|l| l["type"] == "model" || l["type"] == "schedule")
+        .cloned()
+        .collect()
 }
 
 /// Sends `sig` to process `pid` (a child this test started).
@@ -149,6 +196,46 @@ pub fn dropped_total(s: &Value) -> u64 {
         .values()
         .map(|v| v.as_u64().unwrap())
         .sum()
+}
+
+/// The simulated stand on a pty in this test process, at `rate` Hz, with `tweak` applied to the
+/// default configuration (stops by itself after 60 s).
+pub fn sim_stand(rate: u32, tweak: impl FnOnce(&mut SimConfig)) -> SimHandle {
+    let mut cfg = SimConfig::default();
+    cfg.stand.sample_rate_hz = rate;
+    tweak(&mut cfg);
+    let opts = RunOptions {
+        link: None,
+        seconds: Some(60.0),
+    };
+    SimHandle::spawn(cfg, opts).unwrap()
+}
+
+/// `propid run` against the stand at 1 kHz, stopped by signal `sig` once the first level is
+/// reached: asserts the shutdown contract (exit 0 within 3 s, the STOP acknowledged exactly
+/// once, the stats line last, the stand executed commands) and returns the lines and the
+/// stand's report.
+pub fn stopped_by_signal(sig: i32) -> (Vec<Value>, SimReport) {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = daemon_config(dir.path(), "[0.4]", 1000, 4, "");
+    let sim = sim_stand(1000, |_| {});
+    let port = sim.path().display().to_string();
+    let mut d = Daemon::run(&cfg, &port, None);
+    d.wait_for(10.0, |l| l["kind"] == "level_reached");
+    let t = Instant::now();
+    d.signal(sig);
+    let (status, lines, err) = d.finish(5.0);
+    assert!(t.elapsed() < Duration::from_secs(3));
+    let report = sim.stop().unwrap();
+    assert!(status.success(), "{status:?} {err}");
+    assert_eq!(
+        kind(&lines, "shutdown_stop_acknowledged").len(),
+        1,
+        "{lines:#?}"
+    );
+    stats(&lines);
+    assert!(report.firmware.executed > 0, "{report:?}");
+    (lines, report)
 }
 
 /// A child process killed (by its pid) when the test ends, even on a panic.

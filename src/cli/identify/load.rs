@@ -3,12 +3,11 @@
 use serde::Serialize;
 
 use super::Args;
+use crate::cli::load::{self as shared, steps_from_response, NoSteps, Origin, Request};
 use crate::cli::CliError;
-use crate::ingest::csv_file::{read_csv, CsvFileOptions, CsvSource};
-use crate::ingest::steps::{find_steps, FoundStep};
-use crate::ingest::{read_record_with, IngestOptions, IngestStats};
-use crate::protocol::detect::{detect, Detection, WireFormat};
-use crate::record::names;
+use crate::ingest::csv_file::CsvSource;
+use crate::ingest::steps::FoundStep;
+use crate::ingest::IngestStats;
 
 /// What `identify` works on.
 #[derive(Debug, Clone)]
@@ -73,116 +72,57 @@ pub struct StepOut {
     pub to: f64,
 }
 
-/// Reads FILE as the options say.
+/// Reads FILE as the options say: the shared loader ([`crate::cli::load`]), then what identify
+/// keeps (the missing mask, device pulse starts, the JSON `"source"`), with the input found from
+/// the response's steps when a CSV file has no input column.
 pub fn load(args: &Args) -> Result<Loaded, CliError> {
-    let name = args.file.display().to_string();
-    let bytes =
-        std::fs::read(&args.file).map_err(|e| CliError::io(format!("reading {name}"), e))?;
-    if bytes.is_empty() {
-        return Err(CliError::Input(format!("{name}: the file is empty")));
-    }
-    match detect(&bytes, true) {
-        Detection::Format(WireFormat::Binary) => load_tsp(args, name, &bytes),
-        _ => load_csv(args, name, &bytes),
-    }
-}
-
-fn load_csv(args: &Args, name: String, bytes: &[u8]) -> Result<Loaded, CliError> {
-    let text = String::from_utf8_lossy(bytes);
-    let esc_us = match args.esc_us.as_deref() {
-        Some([lo, hi]) => Some((*lo, *hi)),
-        Some(_) => return Err(CliError::Usage("--esc-us takes MIN,MAX".into())),
-        None => None,
-    };
-    let opts = CsvFileOptions {
-        input: args.input.clone(),
-        outputs: args.output.clone(),
+    let req = Request {
+        input: args.input.as_deref(),
+        outputs: &args.output,
+        optional: None,
         fs_hz: args.fs,
-        columns: args.columns.clone(),
-        esc_us,
-        motor_poles: None,
+        columns: args.columns.as_deref(),
+        esc_us: args.esc_us.as_deref(),
     };
-    let file = read_csv(&text, &opts).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
+    let file = shared::load(&args.file, &req)?;
     let rec = &file.record;
-    let outputs: Vec<Vec<f64>> = file
-        .outputs
-        .iter()
-        .filter_map(|n| rec.channel(n).map(|c| c.data.clone()))
-        .collect();
+    let outputs: Vec<Vec<f64>> = file.outputs.iter().map(|n| file.data(n)).collect();
     let (input, input_name, steps) = match &file.input {
         Some(n) => {
-            let data = rec.channel(n).map(|c| c.data.clone()).unwrap_or_default();
-            let label = file.source.input.clone().unwrap_or_else(|| n.clone());
-            (data, label, None)
+            let label = match &file.origin {
+                Origin::Csv(src) => src.input.clone().unwrap_or_else(|| n.clone()),
+                Origin::Tsp1(_) => n.clone(),
+            };
+            (file.data(n), label, None)
         }
         None => {
-            let f = find_steps(&outputs[0]).ok_or_else(|| {
-                CliError::Identification(format!("{name}: too short to find steps in"))
+            let y = outputs.first().map_or(&[][..], Vec::as_slice);
+            let f = steps_from_response(y).map_err(|e| {
+                CliError::Identification(match e {
+                    NoSteps::TooShort => format!("{}: too short to find steps in", file.name),
+                    NoSteps::NoneFound => format!(
+                        "{}: no input column and no step found in the response \
+                         (give --input NAME, or a record with steps)",
+                        file.name
+                    ),
+                })
             })?;
-            if f.steps.is_empty() {
-                return Err(CliError::Identification(format!(
-                    "{name}: no input column and no step found in the response \
-                     (give --input NAME, or a record with steps)"
-                )));
-            }
             let steps = f.steps.iter().map(|s| step_out(s, rec.t0_s, rec.dt_s));
             let label = "steps found from the response".to_string();
             (f.input, label, Some(steps.collect()))
         }
     };
-    Ok(Loaded {
-        dt_s: rec.dt_s,
-        input,
-        outputs,
-        missing: rec.missing.clone(),
-        pulse_starts: None,
-        source: Source {
-            file: name,
-            format: "csv",
-            input: input_name,
-            outputs: file.source.outputs.clone(),
-            rate_hz: file.source.rate_hz,
-            samples: rec.len(),
-            missing: rec.missing_count(),
-            path: "",
-            tsp1: None,
-            csv: Some(file.source),
-            steps,
-            okid: None,
-        },
-    })
-}
-
-/// A binary TSP/1 recording: channels by canonical name (`--input`, `--output` pick others),
-/// device impulse events as pulse starts.
-fn load_tsp(args: &Args, name: String, bytes: &[u8]) -> Result<Loaded, CliError> {
-    let opts = IngestOptions {
-        fs_hz: args.fs,
-        ..IngestOptions::default()
-    };
-    let (rec, stats) =
-        read_record_with(bytes, &opts).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
-    let pick = |want: &str| {
-        rec.channel(want).map(|c| c.data.clone()).ok_or_else(|| {
-            let have: Vec<&str> = rec.channels.iter().map(|c| c.name.as_str()).collect();
-            CliError::Input(format!(
-                "{name}: no channel {want}; the recording has {}",
-                have.join(", ")
-            ))
-        })
-    };
-    let input_name = args.input.clone().unwrap_or(names::THROTTLE.into());
-    let output_names = if args.output.is_empty() {
-        vec![names::THRUST.to_string()]
-    } else {
-        args.output.clone()
-    };
-    let input = pick(&input_name)?;
-    let outputs = output_names
-        .iter()
-        .map(|n| pick(n))
-        .collect::<Result<Vec<_>, _>>()?;
     let starts: Vec<usize> = rec.impulse_starts().collect();
+    let (format, output_names, rate_hz, tsp1, csv) = match file.origin {
+        Origin::Tsp1(stats) => (
+            "tsp1",
+            file.outputs.clone(),
+            1.0 / rec.dt_s,
+            Some(*stats),
+            None,
+        ),
+        Origin::Csv(src) => ("csv", src.outputs.clone(), src.rate_hz, None, Some(*src)),
+    };
     Ok(Loaded {
         dt_s: rec.dt_s,
         input,
@@ -190,17 +130,17 @@ fn load_tsp(args: &Args, name: String, bytes: &[u8]) -> Result<Loaded, CliError>
         missing: rec.missing.clone(),
         pulse_starts: (!starts.is_empty()).then_some(starts),
         source: Source {
-            file: name,
-            format: "tsp1",
+            file: file.name,
+            format,
             input: input_name,
             outputs: output_names,
-            rate_hz: 1.0 / rec.dt_s,
+            rate_hz,
             samples: rec.len(),
             missing: rec.missing_count(),
             path: "",
-            tsp1: Some(stats),
-            csv: None,
-            steps: None,
+            tsp1,
+            csv,
+            steps,
             okid: None,
         },
     })

@@ -24,20 +24,7 @@ pub fn plots(d: &Derivation, out: &Path) -> Result<Vec<&'static str>, String> {
         "x (m)",
         dt,
         &[&truth.impulse],
-        &[
-            Series {
-                name: "measured",
-                y: &d.measured,
-                color: MEASURED,
-                dots: true,
-            },
-            Series {
-                name: "truth",
-                y: &truth.impulse,
-                color: TRUTH,
-                dots: false,
-            },
-        ],
+        &[measured_series(d), truth_series(&truth.impulse)],
     )?;
     files.push("pareto.svg");
     plot::pareto(
@@ -83,24 +70,9 @@ fn response_pair(
         dt,
         &[&d.truth.impulse],
         &[
-            Series {
-                name: "measured",
-                y: &d.measured,
-                color: MEASURED,
-                dots: true,
-            },
-            Series {
-                name: "truth",
-                y: &d.truth.impulse,
-                color: TRUTH,
-                dots: false,
-            },
-            Series {
-                name: label,
-                y: &model.impulse,
-                color: MODEL,
-                dots: false,
-            },
+            measured_series(d),
+            truth_series(&d.truth.impulse),
+            model_series(label, &model.impulse),
         ],
     )?;
     plot::lines(
@@ -110,20 +82,40 @@ fn response_pair(
         dt,
         &[&d.truth.step],
         &[
-            Series {
-                name: "truth",
-                y: &d.truth.step,
-                color: TRUTH,
-                dots: false,
-            },
-            Series {
-                name: label,
-                y: &model.step,
-                color: MODEL,
-                dots: false,
-            },
+            truth_series(&d.truth.step),
+            model_series(label, &model.step),
         ],
     )
+}
+
+/// The measured impulse response, as grey dots.
+fn measured_series(d: &Derivation) -> Series<'_> {
+    Series {
+        name: "measured",
+        y: &d.measured,
+        color: MEASURED,
+        dots: true,
+    }
+}
+
+/// A response of the true system, as a black line.
+fn truth_series(y: &[f64]) -> Series<'_> {
+    Series {
+        name: "truth",
+        y,
+        color: TRUTH,
+        dots: false,
+    }
+}
+
+/// A model's response, as a red line named `label`.
+fn model_series<'a>(label: &'a str, y: &'a [f64]) -> Series<'a> {
+    Series {
+        name: label,
+        y,
+        color: MODEL,
+        dots: false,
+    }
 }
 
 /// Root-mean-square difference of two responses over their common length.

@@ -1,0 +1,293 @@
+//! FILE → a [`Record`] holding the channels a subcommand asked for: the one file loader of
+//! `propid identify` and `propid diagnose`.
+//!
+//! The format is detected from the bytes ([`detect`]): a binary TSP/1 recording goes through
+//! [`read_record_with`] (channels by canonical name, device events kept), everything else through
+//! the CSV reader [`read_csv`] (TSP/1 CSV §6, exported stand logs: aliases, units, BOM, files
+//! without a header or a time column; see [`crate::ingest::csv_file`]). Errors are the same for
+//! both subcommands: an unreadable file is an I/O error (exit 7), an empty or bad file, an absent
+//! channel or column an input error (exit 3), a malformed `--esc-us` a usage error (exit 2).
+//!
+//! What a subcommand does with the channels afterwards (identify: the missing mask and the JSON
+//! `"source"`; diagnose: gap-filled signals) is its own step after [`load`]; finding the input
+//! from the response's steps, for a CSV file without an input column, is the shared step
+//! [`steps_from_response`].
+
+use std::path::Path;
+
+use super::CliError;
+use crate::ingest::csv_file::{read_csv, CsvFileOptions, CsvSource};
+use crate::ingest::steps::{find_steps, StepFinding};
+use crate::ingest::{read_record_with, IngestOptions, IngestStats};
+use crate::protocol::detect::{detect, Detection, WireFormat};
+use crate::record::{names, Record};
+
+/// What to read from a file (the options `identify` and `diagnose` share).
+#[derive(Debug, Clone, Default)]
+pub struct Request<'a> {
+    /// Input column or channel; `None` = the throttle (a CSV file without one: no input).
+    pub input: Option<&'a str>,
+    /// Output columns or channels; empty = the thrust (by quantity in a CSV file).
+    pub outputs: &'a [String],
+    /// A channel read too when the file has it (diagnose: the supply voltage); in a CSV file it
+    /// is asked for after the outputs (after `thrust` when `outputs` is empty), and the file is
+    /// read again without it when that fails.
+    pub optional: Option<&'a str>,
+    /// Sample rate, Hz (`--fs`).
+    pub fs_hz: Option<f64>,
+    /// Column names for a CSV file without a header (`--columns`).
+    pub columns: Option<&'a [String]>,
+    /// ESC pulse range for throttle columns, µs (`--esc-us MIN,MAX`, CSV files only).
+    pub esc_us: Option<&'a [f64]>,
+}
+
+/// The format a file was read as, with what its reader reports.
+#[derive(Debug, Clone)]
+pub enum Origin {
+    /// A binary TSP/1 recording and its decoding counters.
+    Tsp1(Box<IngestStats>),
+    /// A CSV file: columns as named in the file, time base, skipped rows (with
+    /// [`Request::optional`] found, its column is the last of `outputs`).
+    Csv(Box<CsvSource>),
+}
+
+/// A file read as a [`Request`] asked.
+#[derive(Debug, Clone)]
+pub struct LoadedFile {
+    /// The file as given (the prefix of every message about it).
+    pub name: String,
+    /// The channels read; missing samples are NaN and marked in `record.missing`.
+    pub record: Record,
+    /// How it was read.
+    pub origin: Origin,
+    /// The input channel in `record`; `None` for a CSV file without an input column.
+    pub input: Option<String>,
+    /// The output channels in `record`, in the order asked for.
+    pub outputs: Vec<String>,
+    /// The optional channel in `record`, when the file has it.
+    pub optional: Option<String>,
+}
+
+impl LoadedFile {
+    /// A copy of the samples of channel `name` (empty when the record has no such channel).
+    pub fn data(&self, name: &str) -> Vec<f64> {
+        self.record
+            .channel(name)
+            .map(|c| c.data.clone())
+            .unwrap_or_default()
+    }
+}
+
+/// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
+pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
+    let name = file.display().to_string();
+    let bytes = std::fs::read(file).map_err(|e| CliError::io(format!("reading {name}"), e))?;
+    if bytes.is_empty() {
+        return Err(CliError::Input(format!("{name}: the file is empty")));
+    }
+    match detect(&bytes, true) {
+        Detection::Format(WireFormat::Binary) => load_tsp(req, name, &bytes),
+        _ => load_csv(req, name, &bytes),
+    }
+}
+
+/// A binary TSP/1 recording: every channel the device sent; the input (default throttle) and
+/// the outputs (default thrust) must be among them.
+fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, CliError> {
+    let opts = IngestOptions {
+        fs_hz: req.fs_hz,
+        ..IngestOptions::default()
+    };
+    let (record, stats) =
+        read_record_with(bytes, &opts).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
+    let present = |want: &str| -> Result<String, CliError> {
+        match record.channel(want) {
+            Some(_) => Ok(want.to_string()),
+            None => {
+                let have: Vec<&str> = record.channels.iter().map(|c| c.name.as_str()).collect();
+                Err(CliError::Input(format!(
+                    "{name}: no channel {want}; the recording has {}",
+                    have.join(", ")
+                )))
+            }
+        }
+    };
+    let input = present(req.input.unwrap_or(names::THROTTLE))?;
+    let outputs = if req.outputs.is_empty() {
+        vec![present(names::THRUST)?]
+    } else {
+        req.outputs
+            .iter()
+            .map(|n| present(n))
+            .collect::<Result<_, _>>()?
+    };
+    let optional = req.optional.and_then(|n| present(n).ok());
+    Ok(LoadedFile {
+        name,
+        record,
+        origin: Origin::Tsp1(Box::new(stats)),
+        input: Some(input),
+        outputs,
+        optional,
+    })
+}
+
+/// A CSV file: the columns asked for (with the optional one when the file has it).
+fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, CliError> {
+    let text = String::from_utf8_lossy(bytes);
+    let esc_us = match req.esc_us {
+        Some([lo, hi]) => Some((*lo, *hi)),
+        Some(_) => return Err(CliError::Usage("--esc-us takes MIN,MAX".into())),
+        None => None,
+    };
+    let read = |outputs: Vec<String>| {
+        read_csv(
+            &text,
+            &CsvFileOptions {
+                input: req.input.map(str::to_string),
+                outputs,
+                fs_hz: req.fs_hz,
+                columns: req.columns.map(<[String]>::to_vec),
+                esc_us,
+                motor_poles: None,
+            },
+        )
+    };
+    let with_optional = req.optional.and_then(|extra| {
+        let mut outputs = req.outputs.to_vec();
+        if outputs.is_empty() {
+            outputs.push(names::THRUST.into());
+        }
+        outputs.push(extra.into());
+        read(outputs).ok()
+    });
+    let (file, optional) = match with_optional {
+        Some(mut f) => {
+            let extra = f.outputs.pop();
+            (f, extra)
+        }
+        None => (
+            read(req.outputs.to_vec()).map_err(|e| CliError::Input(format!("{name}: {e}")))?,
+            None,
+        ),
+    };
+    Ok(LoadedFile {
+        name,
+        record: file.record,
+        origin: Origin::Csv(Box::new(file.source)),
+        input: file.input,
+        outputs: file.outputs,
+        optional,
+    })
+}
+
+/// Why no input could be found from the response.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NoSteps {
+    /// Fewer finite samples than [`find_steps`] needs.
+    TooShort,
+    /// The response has no step.
+    NoneFound,
+}
+
+/// The input of a record without an input column: the steps of response `y` and the level
+/// sequence built from them ([`find_steps`], whose module documents the method).
+pub fn steps_from_response(y: &[f64]) -> Result<StepFinding, NoSteps> {
+    let found = find_steps(y).ok_or(NoSteps::TooShort)?;
+    if found.steps.is_empty() {
+        return Err(NoSteps::NoneFound);
+    }
+    Ok(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    /// `t_s,throttle,thrust_N,voltage_V` (with the voltage when `volt`), a step at sample 50.
+    fn csv(volt: bool) -> String {
+        let mut s = String::from(if volt {
+            "t_s,throttle,thrust_N,voltage_V\n"
+        } else {
+            "t_s,throttle,thrust_N\n"
+        });
+        for k in 0..100 {
+            let u = if k < 50 { 0.2 } else { 0.4 };
+            let y = if k < 51 { 1.0 } else { 3.0 };
+            s += &format!("{},{u},{y}", k as f64 * 0.01);
+            if volt {
+                s += ",12.0";
+            }
+            s += "\n";
+        }
+        s
+    }
+
+    #[test]
+    fn csv_reads_the_optional_channel_when_present_and_not_otherwise() {
+        let dir = tempfile::tempdir().unwrap();
+        let req = Request {
+            optional: Some(names::VOLTAGE),
+            ..Request::default()
+        };
+        let with = load(&write(dir.path(), "v.csv", &csv(true)), &req).unwrap();
+        assert_eq!(with.input.as_deref(), Some(names::THROTTLE));
+        assert_eq!(with.outputs, [names::THRUST]);
+        assert_eq!(with.optional.as_deref(), Some(names::VOLTAGE));
+        assert_eq!(with.data(names::VOLTAGE).len(), 100);
+        let without = load(&write(dir.path(), "n.csv", &csv(false)), &req).unwrap();
+        assert_eq!(without.outputs, [names::THRUST]);
+        assert_eq!(without.optional, None);
+        assert!(matches!(without.origin, Origin::Csv(_)));
+    }
+
+    #[test]
+    fn errors_keep_their_class_and_name_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let empty = write(dir.path(), "e.csv", "");
+        let e = load(&empty, &Request::default()).unwrap_err();
+        assert!(
+            matches!(&e, CliError::Input(m) if m.ends_with("the file is empty")),
+            "{e}"
+        );
+        let good = write(dir.path(), "g.csv", &csv(false));
+        let bad_esc = [1000.0];
+        let req = Request {
+            esc_us: Some(&bad_esc),
+            ..Request::default()
+        };
+        let e = load(&good, &req).unwrap_err();
+        assert!(matches!(e, CliError::Usage(_)), "{e}");
+        let outputs = ["rpm".to_string()];
+        let req = Request {
+            outputs: &outputs,
+            ..Request::default()
+        };
+        let e = load(&good, &req).unwrap_err();
+        assert!(matches!(&e, CliError::Input(m) if m.contains("g.csv") && m.contains("rpm")));
+        let e = load(&dir.path().join("absent.csv"), &Request::default()).unwrap_err();
+        assert_eq!(e.exit_code(), 7, "{e}");
+    }
+
+    #[test]
+    fn steps_from_response_tells_too_short_from_no_step() {
+        assert_eq!(
+            steps_from_response(&[1.0; 5]).unwrap_err(),
+            NoSteps::TooShort
+        );
+        assert_eq!(
+            steps_from_response(&[1.0; 200]).unwrap_err(),
+            NoSteps::NoneFound
+        );
+        let y: Vec<f64> = (0..200).map(|k| if k < 100 { 1.0 } else { 3.0 }).collect();
+        let found = steps_from_response(&y).unwrap();
+        assert_eq!(found.steps.len(), 1);
+        assert_eq!(found.input.len(), 200);
+    }
+}
