@@ -10,9 +10,12 @@
 //!
 //! - `unstable_pole`: a continuous pole with `Re(s) ≥ 0`. A motor–propeller's thrust, torque
 //!   and speed responses to throttle settle; a pole that does not is not the plant's.
-//! - `fn_uncertain`, `dc_gain_uncertain`: the jackknife standard deviation (leave one pulse
-//!   out, [`crate::core::uncertainty`]) is larger than the value itself — the pulses disagree
-//!   on even the sign or the order of magnitude. (Only with `identify.jackknife = true`.)
+//! - `dc_gain_uncertain`: the jackknife standard deviation of the DC gain (leave one pulse out,
+//!   [`crate::core::uncertainty`]) is larger than the DC gain itself — the pulses disagree on
+//!   even its sign. (Only with `identify.jackknife = true`.) The scatter of `fn_hz` is not
+//!   judged: near critical damping a leave-one-out model can flip between a complex and a real
+//!   pole pair, which inflates the scatter of a good estimate (measured: fn 12.8 Hz ± 14 Hz on
+//!   a 12 Hz plant); the published `uncertainty` reports it instead.
 //!
 //! The checks are deliberately coarse: a model that passes may still be imprecise, and its
 //! `uncertainty` says by how much; a model that fails is certainly not the plant.
@@ -44,13 +47,11 @@ pub fn judge(model: &Map<String, Value>) -> Vec<&'static str> {
         reasons.push("unstable_pole");
     }
     let u = model.get("uncertainty");
-    for (key, reason) in [("fn_hz", "fn_uncertain"), ("dc_gain", "dc_gain_uncertain")] {
-        let value = model.get(key).and_then(Value::as_f64);
-        let sd = u.and_then(|u| u.get(key)).and_then(Value::as_f64);
-        if let (Some(v), Some(sd)) = (value, sd) {
-            if sd > MAX_RELATIVE_SD * v.abs() {
-                reasons.push(reason);
-            }
+    let value = model.get("dc_gain").and_then(Value::as_f64);
+    let sd = u.and_then(|u| u.get("dc_gain")).and_then(Value::as_f64);
+    if let (Some(v), Some(sd)) = (value, sd) {
+        if sd > MAX_RELATIVE_SD * v.abs() {
+            reasons.push("dc_gain_uncertain");
         }
     }
     reasons
@@ -66,6 +67,17 @@ mod tests {
             Value::Object(m) => m,
             _ => unreachable!(),
         }
+    }
+
+    #[test]
+    fn a_good_estimate_with_a_wide_fn_scatter_passes() {
+        // measured at 1 kHz: one leave-one-out model flipped to real poles
+        let m = map(json!({
+            "fn_hz": 12.78, "zeta": 0.80, "dc_gain": 11.89,
+            "poles_s": [[-64.0, 48.5], [-64.0, -48.5]],
+            "uncertainty": {"fn_hz": 14.4, "zeta": 1.54, "dc_gain": 2.89}
+        }));
+        assert!(judge(&m).is_empty());
     }
 
     #[test]
@@ -102,8 +114,8 @@ mod tests {
         assert_eq!(judge(&m), vec!["dc_gain_uncertain"]);
         let m = map(json!({
             "fn_hz": 3.0, "dc_gain": 1.0, "poles_s": [[null, 0.0]],
-            "uncertainty": {"fn_hz": 3.5, "dc_gain": 0.1}
+            "uncertainty": {"fn_hz": 3.5, "dc_gain": 1.5}
         }));
-        assert_eq!(judge(&m), vec!["unstable_pole", "fn_uncertain"]);
+        assert_eq!(judge(&m), vec!["unstable_pole", "dc_gain_uncertain"]);
     }
 }
