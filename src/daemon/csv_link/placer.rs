@@ -100,7 +100,7 @@ impl IndexPlacer {
         let (_, i, e) = self.last?;
         let at = self.clock.project(t_us as u32)? as f64;
         let steps = ((at - e) / self.period_us?).round() as i64;
-        Some((i as i64 + steps).max(0) as u64)
+        Some((i as i64).saturating_add(steps).max(0) as u64)
     }
 
     /// The nominal rate announced by the bench (a HELLO line). Ignored once a period is in use,
@@ -201,7 +201,7 @@ impl IndexPlacer {
                 } else {
                     e
                 };
-                (i + steps as u64, e)
+                (i.saturating_add(steps as u64), e)
             }
         };
         self.last = Some((h.t_us, index, e));

@@ -262,3 +262,58 @@ fn every_chunking_gives_the_same_frames() {
         assert_eq!(got, whole);
     }
 }
+
+#[test]
+fn random_bytes_and_absurd_numbers_never_panic() {
+    let mut x = 0x9E37_79B9_7F4A_7C15_u64;
+    let mut next = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        x
+    };
+    let fields = [
+        "0",
+        "-1",
+        "1e300",
+        "-1e300",
+        "nan",
+        "inf",
+        "4294967295",
+        "18446744073709551616",
+        "",
+        "3000",
+        "1000",
+        "x",
+        "1.5",
+    ];
+    for round in 0..200 {
+        let mut text = String::new();
+        if round % 2 == 0 {
+            text += "idx,t_us,throttle,thrust_N\n";
+        }
+        for _ in 0..200 {
+            match next() % 5 {
+                0 => {
+                    let bytes: Vec<u8> = (0..next() % 40).map(|_| next() as u8).collect();
+                    text += &String::from_utf8_lossy(&bytes);
+                    text.push('\n');
+                }
+                1 => text += "# HELLO x boot_id ffffffff rate_hz 1\n#ACK PING OK 1\n",
+                _ => {
+                    let row: Vec<&str> = (0..4)
+                        .map(|_| fields[(next() % fields.len() as u64) as usize])
+                        .collect();
+                    text += &row.join(",");
+                    text.push('\n');
+                }
+            }
+        }
+        let mut link = CsvLink::new(CsvLinkOptions::default());
+        let mut n = 0usize;
+        link.push(text.as_bytes(), &mut |_| n += 1);
+        link.finish(&mut |_| n += 1);
+        let s = link.stats();
+        assert!(s.rows + s.out_of_order + s.untimed <= link.lines_ok());
+    }
+}
