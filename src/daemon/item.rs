@@ -79,6 +79,8 @@ pub enum Notice {
     CsvLink,
     /// A CSV bench that never acknowledged a command: sampled only, no plan (PROTOCOL.md §6).
     PassiveBench,
+    /// Nothing heard from a live link for [`super::sampler::SILENCE_TIMEOUT`] after it opened.
+    NoData,
 }
 
 impl Notice {
@@ -91,6 +93,7 @@ impl Notice {
             Notice::StopUnacknowledged => "shutdown_stop_unacknowledged",
             Notice::CsvLink => "csv_link",
             Notice::PassiveBench => "passive_bench",
+            Notice::NoData => "no_data",
         }
     }
 
@@ -98,7 +101,10 @@ impl Notice {
     pub fn is_warning(self) -> bool {
         matches!(
             self,
-            Notice::Disconnected | Notice::StopUnacknowledged | Notice::PassiveBench
+            Notice::Disconnected
+                | Notice::StopUnacknowledged
+                | Notice::PassiveBench
+                | Notice::NoData
         )
     }
 }

@@ -112,6 +112,7 @@ pub fn run<I: Identifier + 'static>(
             reconnect_max: cfg.device.reconnect_max,
             protocol: cfg.device.protocol,
             csv: csv_options(cfg),
+            silence_timeout: super::sampler::SILENCE_TIMEOUT,
         },
     );
     let sampler = std::thread::Builder::new()

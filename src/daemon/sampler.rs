@@ -94,7 +94,14 @@ pub struct SamplerConfig {
     pub protocol: WireProtocol,
     /// How a CSV bench is read.
     pub csv: CsvLinkOptions,
+    /// With `protocol = "auto"`, a live link that stays silent this long gets a `no_data`
+    /// warning and the plan starts anyway (in binary TSP/1, whose HELLO_REQ makes a device
+    /// speak); [`SILENCE_TIMEOUT`] in a run.
+    pub silence_timeout: Duration,
 }
+
+/// PROTOCOL.md §1: expect a boot banner and a HELLO within 3 s of opening.
+pub const SILENCE_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// What the sampler hands back.
 pub struct SamplerOutcome {
@@ -223,6 +230,10 @@ pub struct Sampler {
     start: Instant,
     buf: Box<[u8; 4096]>,
     cmd: [u8; MAX_FRAME_LEN],
+    /// When the link was (re)opened.
+    connected_at: Instant,
+    /// The plan was told the link is up.
+    plan_started: bool,
 }
 
 impl Sampler {
@@ -257,6 +268,8 @@ impl Sampler {
             start: Instant::now(),
             buf: Box::new([0u8; 4096]),
             cmd: [0u8; MAX_FRAME_LEN],
+            connected_at: Instant::now(),
+            plan_started: false,
         }
     }
 
@@ -296,6 +309,7 @@ impl Sampler {
                 Err(e @ SourceError::Open { .. }) => return Err(e.into()),
             }
             if live {
+                self.check_silence();
                 self.drive_plan()?;
             }
             match self.handler.plan.as_ref().map(|p| p.status()) {
@@ -324,14 +338,29 @@ impl Sampler {
         if format == WireFormat::Csv {
             self.handler.send(Item::Notice(Notice::CsvLink));
         }
-        self.start_plan();
+        self.start_plan(false);
     }
 
-    /// Tells the plan the link is up, once the wire format is known (live links only).
-    fn start_plan(&mut self) {
-        if !self.source.is_live() || self.wire.format().is_none() {
+    /// `protocol = "auto"` and nothing heard since the link opened: warn once and start the
+    /// plan anyway (see [`SamplerConfig::silence_timeout`]).
+    fn check_silence(&mut self) {
+        if self.plan_started
+            || self.wire.format().is_some()
+            || self.connected_at.elapsed() < self.cfg.silence_timeout
+        {
             return;
         }
+        self.handler.send(Item::Notice(Notice::NoData));
+        self.start_plan(true);
+    }
+
+    /// Tells the plan the link is up, once the wire format is known (or `force`d after a
+    /// silence); live links only.
+    fn start_plan(&mut self, force: bool) {
+        if !self.source.is_live() || (self.wire.format().is_none() && !force) {
+            return;
+        }
+        self.plan_started = true;
         let now = self.now_us();
         if let Some(p) = self.handler.plan.as_mut() {
             p.on_connect(now);
@@ -429,7 +458,8 @@ impl Sampler {
         }
         self.handler.stats.reconnects += 1;
         self.handler.send(Item::Notice(Notice::Reconnected));
-        self.start_plan();
+        self.connected_at = Instant::now();
+        self.start_plan(false);
         Ok(())
     }
 
@@ -523,6 +553,7 @@ mod tests {
             reconnect_max: Duration::from_millis(2),
             protocol: WireProtocol::Auto,
             csv: CsvLinkOptions::default(),
+            silence_timeout: SILENCE_TIMEOUT,
         }
     }
 
@@ -717,6 +748,74 @@ mod tests {
         let s = &out.stats;
         assert_eq!((s.samples, s.samples_lost), (6, 199_996));
         assert_eq!((s.gaps, s.large_gaps, s.segments), (1, 1, 2));
+    }
+
+    /// A live link that never says anything.
+    struct Silent;
+    impl Source for Silent {
+        fn read(&mut self, _: &mut [u8]) -> Result<usize, SourceError> {
+            std::thread::sleep(Duration::from_millis(2));
+            Ok(0)
+        }
+        fn write_all(&mut self, _: &[u8]) -> Result<(), SourceError> {
+            Ok(())
+        }
+        fn reconnect(&mut self) -> Result<(), SourceError> {
+            Ok(())
+        }
+        fn is_live(&self) -> bool {
+            true
+        }
+        fn describe(&self) -> String {
+            "silent".into()
+        }
+    }
+
+    /// A plan that only counts how often it was told the link is up.
+    struct Counting(std::sync::Arc<std::sync::atomic::AtomicUsize>);
+    impl Plan for Counting {
+        fn on_connect(&mut self, _: u64) {
+            self.0.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        }
+        fn on_frame(&mut self, _: u64, _: &Frame) {}
+        fn poll(&mut self, _: u64) {}
+        fn abort(&mut self, _: u64) {}
+        fn next(&mut self, _: &mut dyn FnMut(u16, &Message), _: &mut dyn FnMut(PlanNote)) {}
+        fn status(&self) -> PlanStatus {
+            PlanStatus::Running
+        }
+    }
+
+    #[test]
+    fn a_silent_auto_link_is_reported_once_and_the_plan_starts_anyway() {
+        let connects = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
+        let plan: Box<dyn Plan> = Box::new(Counting(connects.clone()));
+        let (tx, rx) = crossbeam_channel::bounded(64);
+        let c = SamplerConfig {
+            silence_timeout: Duration::from_millis(30),
+            max_run: Some(Duration::from_millis(150)),
+            ..cfg()
+        };
+        let out = Sampler::new(
+            Box::new(Silent),
+            tx,
+            Some(plan),
+            None,
+            Shutdown::manual(),
+            c,
+        )
+        .run();
+        assert!(out.error.is_none());
+        assert_eq!(out.stats.wire, "undecided");
+        let items: Vec<Item> = rx.try_iter().collect();
+        assert_eq!(
+            items,
+            vec![
+                Item::Notice(Notice::NoData),
+                Item::Notice(Notice::StopUnacknowledged)
+            ]
+        );
+        assert_eq!(connects.load(std::sync::atomic::Ordering::SeqCst), 1);
     }
 
     #[test]
