@@ -11,7 +11,8 @@
 # Measured 2026-11-21 on the 2-core project machine under load average ~16 (other builds running;
 # wall times there are 3-4x the CPU times, so CPU times are quoted):
 #  - live, sim at 10 kHz: 100 035 samples in 10.0 s, 0 lost, 0 overflows, 0 frames dropped;
-#    daemon CPU 0.46 s user + 0.18 s sys (~6 % of a core). At 20 kHz: 200 121 samples, 0 lost.
+#    daemon CPU 0.46 s user + 0.18 s sys (~6 % of a core). At 20 kHz: 200 121 samples, 0 lost
+#    (00:18 UTC: 200 019, 0 lost; with 1 ms pulses 6 models + 17 model_unreliable).
 #  - latency last sample -> model line (10 kHz, K = 4): p50 27 ms, p99 138 ms (loaded machine;
 #    dominated by the identification itself); 2026-11-21 23:49 UTC after the issue-3 perf work,
 #    load ~2: p50 2.2 ms, p99 2.7 ms. 2026-11-22 00:16 UTC, load ~1.4, with 1 ms pulses
