@@ -236,14 +236,21 @@ fn helper_loop(shared: &Shared, ws: &mut Workspace) {
             missing: &job.missing,
             pulse_starts: Some(&job.starts),
         };
-        let result = match ws.jackknife_only(&input, &opts) {
-            Ok(true) => {
-                let (f, z, d) = ws.model().uncertainty(0);
-                Ok(Some((f, z, d)))
+        // A panic here (a bug) must not leave the worker waiting forever: it becomes this
+        // window's error, and the helper lives on for the next one.
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            match ws.jackknife_only(&input, &opts) {
+                Ok(true) => {
+                    let (f, z, d) = ws.model().uncertainty(0);
+                    Ok(Some((f, z, d)))
+                }
+                Ok(false) => Ok(None),
+                Err(e) => Err(e),
             }
-            Ok(false) => Ok(None),
-            Err(e) => Err(e),
-        };
+        }))
+        .unwrap_or(Err(IdentError::InvalidInput(
+            "internal error: the jackknife helper panicked on this window",
+        )));
         let mut st = shared.lock();
         st.job = job;
         st.result = result;
