@@ -1,12 +1,8 @@
 //! Publishing: JSON lines fanned out to stdout, a file and a UNIX socket.
 //!
 //! One object per line. Every sink gets every line, in order:
-//! - **stdout**: written and flushed per line (a live run's subscribers see each line at
-//!   once). [`Publisher::set_line_flush`]`(false)` (a replay, whose lines nobody waits for)
-//!   collects lines in a buffer and writes it in blocks of [`STDOUT_BLOCK`] bytes and at
-//!   [`Publisher::close`]: one `write` per block instead of one per line. A closed pipe
-//!   (`propid run | head`) silently disables the sink; the daemon keeps running for the other
-//!   sinks.
+//! - **stdout**: written and flushed per line. A closed pipe (`propid run | head`) silently
+//!   disables the sink; the daemon keeps running for the other sinks.
 //! - **file**: opened for append, each line written with one `write_all` and flushed, so a crash
 //!   loses nothing already published.
 //! - **UNIX socket**: an accept thread registers clients; each client has a bounded queue of
@@ -26,9 +22,6 @@ use std::time::Duration;
 
 use super::config::PublishConfig;
 use super::DaemonError;
-
-/// Bytes collected before a buffered stdout is written (see [`Publisher::set_line_flush`]).
-pub const STDOUT_BLOCK: usize = 64 * 1024;
 
 /// A connected socket subscriber: the sending end of its queue.
 struct Client {
@@ -53,9 +46,6 @@ struct SocketSink {
 /// Fans every published line out to the configured sinks.
 pub struct Publisher {
     stdout: bool,
-    /// Lines waiting for stdout when it is not flushed per line (empty otherwise).
-    stdout_buf: Vec<u8>,
-    line_flush: bool,
     file: Option<File>,
     socket: Option<SocketSink>,
     capture: Option<Arc<Mutex<Vec<String>>>>,
@@ -83,8 +73,6 @@ impl Publisher {
         };
         Ok(Publisher {
             stdout: cfg.stdout,
-            stdout_buf: Vec::new(),
-            line_flush: true,
             file,
             socket,
             capture: None,
@@ -97,43 +85,12 @@ impl Publisher {
         let lines = Arc::new(Mutex::new(Vec::new()));
         let p = Publisher {
             stdout: false,
-            stdout_buf: Vec::new(),
-            line_flush: true,
             file: None,
             socket: None,
             capture: Some(lines.clone()),
             lines: 0,
         };
         (p, lines)
-    }
-
-    /// With `false`, stdout is no longer flushed per line: lines are collected and written in
-    /// blocks of [`STDOUT_BLOCK`] bytes, and at [`close`](Self::close) (for a replay, where
-    /// nobody waits for a line; the file sink keeps its per-line flush). The block buffer is
-    /// allocated here, once. Default `true` (a live run).
-    pub fn set_line_flush(&mut self, line_flush: bool) {
-        self.line_flush = line_flush;
-        if !line_flush && self.stdout_buf.capacity() == 0 {
-            self.stdout_buf = Vec::with_capacity(STDOUT_BLOCK + 4096);
-        }
-    }
-
-    /// Writes the collected stdout lines (buffered mode); a closed stdout disables the sink.
-    fn flush_stdout(&mut self) {
-        if self.stdout_buf.is_empty() {
-            return;
-        }
-        if self.stdout {
-            let mut out = std::io::stdout().lock();
-            if out
-                .write_all(&self.stdout_buf)
-                .and_then(|_| out.flush())
-                .is_err()
-            {
-                self.stdout = false;
-            }
-        }
-        self.stdout_buf.clear();
     }
 
     /// Also keep every line in memory (in addition to the configured sinks).
@@ -153,16 +110,7 @@ impl Publisher {
     /// Publishes one line (without its newline) to every sink.
     pub fn publish(&mut self, line: &str) -> Result<(), DaemonError> {
         self.lines += 1;
-        if self.stdout && !self.line_flush {
-            if self.stdout_buf.len() + line.len() + 1 > self.stdout_buf.capacity() {
-                self.flush_stdout();
-            }
-            self.stdout_buf.extend_from_slice(line.as_bytes());
-            self.stdout_buf.push(b'\n');
-            if self.stdout_buf.len() >= STDOUT_BLOCK {
-                self.flush_stdout();
-            }
-        } else if self.stdout {
+        if self.stdout {
             let mut out = std::io::stdout().lock();
             let r = writeln!(out, "{line}").and_then(|_| out.flush());
             if r.is_err() {
@@ -203,7 +151,6 @@ impl Publisher {
 
     /// Flushes every sink and closes the socket (queued lines are still delivered).
     pub fn close(&mut self) {
-        self.flush_stdout();
         if let Some(f) = &mut self.file {
             let _ = f.sync_data();
         }
@@ -412,24 +359,6 @@ mod tests {
                 .len(),
             0
         );
-    }
-
-    #[test]
-    fn buffered_stdout_collects_lines_until_a_block_is_full() {
-        let mut p = Publisher::open(&PublishConfig {
-            stdout: true,
-            ..cfg(None, None, 4)
-        })
-        .unwrap();
-        p.set_line_flush(false);
-        p.publish("{\"a\":1}").unwrap();
-        p.publish("{\"b\":2}").unwrap();
-        assert_eq!(p.stdout_buf, b"{\"a\":1}\n{\"b\":2}\n");
-        assert!(p.stdout_buf.capacity() > STDOUT_BLOCK);
-        assert_eq!(p.lines(), 2);
-        // Not written to the test's stdout: discard before close.
-        p.stdout_buf.clear();
-        p.stdout = false;
     }
 
     #[test]
