@@ -28,7 +28,7 @@ pub enum Wire {
 }
 
 /// Names of the drop counters of both wire formats (`frames_dropped` always has them all).
-pub const DROP_KINDS: [&str; 12] = [
+pub const DROP_KINDS: [&str; 13] = [
     "cobs_error",
     "crc_error",
     "bad_version",
@@ -41,6 +41,7 @@ pub const DROP_KINDS: [&str; 12] = [
     "bad_row",
     "row_out_of_order",
     "row_without_time",
+    "hello_unconfirmed",
 ];
 
 impl Wire {
@@ -157,7 +158,7 @@ impl Wire {
     }
 
     /// Every drop counter of [`DROP_KINDS`], in that order (zeros for the other format).
-    pub fn dropped(&self) -> [(&'static str, u64); 12] {
+    pub fn dropped(&self) -> [(&'static str, u64); 13] {
         let mut out = DROP_KINDS.map(|k| (k, 0));
         let mut set = |k: &str, v: u64| {
             if let Some(slot) = out.iter_mut().find(|s| s.0 == k) {
