@@ -7,6 +7,9 @@
 //! - A sample with RAMP_ACTIVE is between operating points: the current window closes.
 //! - A sample without IMPULSE_ACTIVE whose throttle differs from the window's level by more than
 //!   `level_tolerance` starts a new operating point: the window closes and restarts there.
+//!   The operating point published is the throttle held longest in the window (a CSV bench's
+//!   ramp carries no RAMP_ACTIVE flag, and its steps next to a level fall within the tolerance
+//!   of it); "off level" is measured from where the window started.
 //! - A rising edge of IMPULSE_ACTIVE is a pulse start (the device sets the flag on exactly the
 //!   samples during which the pulse throttle was applied).
 //! - The window is identified when it holds K complete pulses: at the start of pulse K+1, or when
@@ -127,7 +130,13 @@ pub struct Window {
     t_us: Vec<u64>,
     pulse_starts: Vec<usize>,
     first_index: u64,
+    /// The level the window started at: the reference for "off level".
     level_raw: Option<u16>,
+    /// The throttle held longest (consecutive samples off pulse) in the window, and for how
+    /// long: the operating point published.
+    held: (u16, usize),
+    /// The current run of equal throttle values off pulse.
+    run: (u16, usize),
     level_number: u32,
     levels_seen: u32,
     in_pulse: bool,
@@ -153,6 +162,8 @@ impl Window {
             pulse_starts: Vec::with_capacity(k + 1),
             first_index: 0,
             level_raw: None,
+            held: (0, 0),
+            run: (0, 0),
             level_number: 0,
             levels_seen: 0,
             in_pulse: false,
@@ -171,9 +182,10 @@ impl Window {
         self.input.is_empty()
     }
 
-    /// The current operating point, if at one.
+    /// The current operating point, if at one: the throttle held longest in the window (off
+    /// pulse, within the tolerance of the level the window started at).
     pub fn level(&self) -> Option<f64> {
-        self.level_raw.map(|l| f64::from(l) / 10_000.0)
+        self.level_raw.map(|_| f64::from(self.held.0) / 10_000.0)
     }
 
     /// Feeds one sample; calls `identify` when the rules say so (before the sample is added).
@@ -209,6 +221,17 @@ impl Window {
             // A pulse with no level to refer it to: wait for a steady sample.
             self.in_pulse = pulse;
             return out;
+        } else if !pulse {
+            // the operating point published is the throttle held longest (a ramp without
+            // RAMP_ACTIVE flags has steps within the tolerance at both ends of a level); "off
+            // level" stays measured from where the window started, so a slow ramp closes it
+            self.run = match self.run {
+                (v, n) if v == s.throttle_raw => (v, n + 1),
+                _ => (s.throttle_raw, 1),
+            };
+            if self.run.1 > self.held.1 {
+                self.held = self.run;
+            }
         }
         if pulse && !self.in_pulse {
             out.pulse = true;
@@ -311,6 +334,8 @@ impl Window {
     fn start_level(&mut self, s: &SampleItem) {
         self.clear();
         self.level_raw = Some(s.throttle_raw);
+        self.run = (s.throttle_raw, 1);
+        self.held = self.run;
         self.level_number = self.levels_seen;
         self.levels_seen += 1;
         self.first_index = s.index;
@@ -333,6 +358,7 @@ impl Window {
         self.t_us.truncate(keep);
         self.first_index += from as u64;
         self.pulse_starts.clear();
+        self.held = self.run;
     }
 
     fn clear(&mut self) {
@@ -412,6 +438,29 @@ mod tests {
             panic!("only one pulse pending")
         });
         assert_eq!(w.level(), None);
+    }
+
+    #[test]
+    fn a_ramp_without_flags_ends_at_the_level_it_reached() {
+        // a CSV bench's ramp: 0.30 -> 0.447 in steps of 0.0035 (below the 0.005 tolerance), no
+        // RAMP_ACTIVE, the window restarting every second step (last at 0.447); then 0.45
+        let mut w = Window::new(10_000, 2, 0.005, OutputChannel::Thrust);
+        let mut log = Vec::new();
+        feed(&mut w, 0, 100, 3000, 1000, 100, &mut log);
+        for (k, thr) in (3000..=4500).step_by(35).enumerate() {
+            w.on_sample(&sample(100 + k as u64, thr, 0), |_| {});
+        }
+        feed(&mut w, 143, 400, 4500, 50, 100, &mut log);
+        assert_eq!(w.level(), Some(0.45));
+        // the ramp away: its first steps are within the tolerance, then the level ends
+        for (k, thr) in [4480u16, 4460, 4440, 4420, 4400].into_iter().enumerate() {
+            w.on_sample(&sample(543 + k as u64, thr, 0), |v| {
+                log.push((v.reason, v.input.len(), v.pulse_starts.len(), v.level))
+            });
+        }
+        assert_eq!(log.len(), 2, "{log:?}");
+        assert_eq!(log[1].0, Reason::LevelEnd);
+        assert!(log.iter().all(|l| l.3 == 0.45), "{log:?}");
     }
 
     #[test]
