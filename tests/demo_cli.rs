@@ -7,9 +7,13 @@ use std::process::Command;
 
 const BIN: &str = env!("CARGO_BIN_EXE_propid");
 
-#[test]
-fn demo_identifies_the_simulated_plant_at_three_operating_points() {
-    let out = Command::new(BIN).args(["demo", "--json"]).output().unwrap();
+/// The demo's three models checked against the simulator's plant.
+fn check_demo(extra: &[&str]) {
+    let out = Command::new(BIN)
+        .args(["demo", "--json"])
+        .args(extra)
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     let lines: Vec<Value> = String::from_utf8(out.stdout)
@@ -34,4 +38,25 @@ fn demo_identifies_the_simulated_plant_at_three_operating_points() {
     assert_eq!(stats["samples_lost"], 0);
     assert_eq!(stats["overflows"], 0);
     assert_eq!(stats["models_unreliable"], 0);
+}
+
+#[test]
+fn demo_identifies_the_simulated_plant_at_three_operating_points() {
+    check_demo(&[]);
+}
+
+#[test]
+fn demo_against_a_csv_stand_gives_the_same_operating_points() {
+    // the demo's stand speaking the CSV fallback: slow ramps (steps below the level
+    // tolerance) and pulses found from the throttle column
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("sim.toml");
+    std::fs::write(
+        &cfg,
+        "[stand]\nprotocol = \"csv\"\nsample_rate_hz = 250\n[experiment]\n\
+         levels = [0.3, 0.45, 0.6]\npulse_amplitudes = [0.1, 0.15]\nramp_ms = 300\n\
+         settle_ms = 500\npulse_spacing_ms = 250\npulses_per_level = 8\n",
+    )
+    .unwrap();
+    check_demo(&["--sim-config", cfg.to_str().unwrap()]);
 }
