@@ -79,6 +79,11 @@ pub struct CsvLinkStats {
 /// The daemon's CSV link (see the module documentation).
 pub struct CsvLink {
     decoder: CsvDecoder,
+    state: LinkState,
+}
+
+/// Everything that turns decoded lines into frames.
+struct LinkState {
     placer: IndexPlacer,
     flagger: PulseFlagger,
     /// Per command kind: the seq and wire type of the last one sent.
@@ -94,20 +99,22 @@ impl CsvLink {
     pub fn new(opts: CsvLinkOptions) -> Self {
         Self {
             decoder: CsvDecoder::new(opts.csv),
-            placer: IndexPlacer::new(),
-            flagger: PulseFlagger::new(opts.level_tolerance, opts.max_pulse_samples),
-            sent: [None; 6],
-            boot_id: BootTracker::default(),
-            stats: CsvLinkStats::default(),
-            seq: 0,
+            state: LinkState {
+                placer: IndexPlacer::new(),
+                flagger: PulseFlagger::new(opts.level_tolerance, opts.max_pulse_samples),
+                sent: [None; 6],
+                boot_id: BootTracker::default(),
+                stats: CsvLinkStats::default(),
+                seq: 0,
+            },
         }
     }
 
     /// The adapter's counters.
     pub fn stats(&self) -> CsvLinkStats {
         CsvLinkStats {
-            pulses: self.flagger.pulses(),
-            ..self.stats
+            pulses: self.state.flagger.pulses(),
+            ..self.state.stats
         }
     }
 
@@ -124,9 +131,9 @@ impl CsvLink {
             ("line_too_long", d.too_long),
             ("bad_checksum", d.bad_checksum),
             ("bad_row", d.bad_row),
-            ("row_out_of_order", self.stats.out_of_order),
-            ("row_without_time", self.stats.untimed),
-            ("hello_unconfirmed", self.stats.unconfirmed_hellos),
+            ("row_out_of_order", self.state.stats.out_of_order),
+            ("row_without_time", self.state.stats.untimed),
+            ("hello_unconfirmed", self.state.stats.unconfirmed_hellos),
         ]
     }
 
@@ -140,7 +147,7 @@ impl CsvLink {
     ) -> Result<usize, CsvCommandError> {
         let n = encode_csv_command(msg, out)?;
         if let Some(k) = kind_of(msg) {
-            self.sent[k as usize] = Some((seq, msg.msg_type()));
+            self.state.sent[k as usize] = Some((seq, msg.msg_type()));
         }
         Ok(n)
     }
@@ -148,34 +155,23 @@ impl CsvLink {
     /// Bytes in; frames out, in order (samples possibly a few rows later, see the module
     /// documentation).
     pub fn push(&mut self, bytes: &[u8], on_frame: &mut impl FnMut(Frame)) {
-        let Self {
-            decoder,
-            placer,
-            flagger,
-            sent,
-            boot_id,
-            stats,
-            seq,
-        } = self;
-        let mut out = Out { seq, on_frame };
-        decoder.push(bytes, |item| {
-            on_item(item, placer, flagger, sent, boot_id, stats, &mut out)
-        });
+        let state = &mut self.state;
+        self.decoder
+            .push(bytes, |item| state.on_item(item, &mut *on_frame));
     }
 
     /// End of input: the last line, rows held for the period estimate or an open excursion.
     pub fn finish(&mut self, on_frame: &mut impl FnMut(Frame)) {
-        let Self {
-            decoder,
+        let state = &mut self.state;
+        self.decoder
+            .finish(|item| state.on_item(item, &mut *on_frame));
+        let LinkState {
             placer,
             flagger,
-            sent,
-            boot_id,
-            stats,
             seq,
-        } = self;
+            ..
+        } = state;
         let mut out = Out { seq, on_frame };
-        decoder.finish(|item| on_item(item, placer, flagger, sent, boot_id, stats, &mut out));
         let mut to_flagger = |s: Sample| flagger.push(s, &mut |s| out.sample(s));
         placer.flush(&mut to_flagger);
         flagger.flush(&mut |s| out.sample(s));
@@ -197,6 +193,29 @@ impl<F: FnMut(Frame)> Out<'_, F> {
 
     fn sample(&mut self, s: Sample) {
         self.frame(Message::Sample(s));
+    }
+}
+
+impl LinkState {
+    /// One decoded line: the frames it stands for go to `on_frame`.
+    fn on_item(&mut self, item: CsvItem<'_>, on_frame: &mut impl FnMut(Frame)) {
+        let LinkState {
+            placer,
+            flagger,
+            sent,
+            boot_id,
+            stats,
+            seq,
+        } = self;
+        on_item(
+            item,
+            placer,
+            flagger,
+            sent,
+            boot_id,
+            stats,
+            &mut Out { seq, on_frame },
+        );
     }
 }
 
