@@ -10,7 +10,6 @@ use daemon_proc::{dropped_total, kind, of_type, stats, BIN};
 use propid::ingest::read_record;
 use propid::protocol::message::SampleFlags;
 use propid::protocol::{encode_frame, Decoder, EventCode, Message, MAX_FRAME_LEN};
-use propid::sim::SimConfig;
 use serde_json::Value;
 use std::process::Command;
 
@@ -20,12 +19,7 @@ const JUMP: u32 = 200_000;
 /// A noise-free recording of the simulated stand at two operating points (fn 25 Hz, ζ 0.5,
 /// 8 N per unit throttle).
 fn recording() -> Vec<u8> {
-    let mut cfg = SimConfig::default();
-    cfg.plant.fn_hz = 25.0;
-    cfg.plant.zeta = 0.5;
-    cfg.plant.gain_n_per_throttle = 8.0;
-    cfg.plant.noise_rms_n = 0.0;
-    cfg.plant.quantum_n = 0.0;
+    let mut cfg = daemon_proc::clean_stand();
     cfg.experiment.levels = vec![0.35, 0.55];
     let mut bytes = Vec::new();
     let sum = propid::sim::record::record(&cfg, 60.0, &mut bytes).unwrap();

@@ -11,8 +11,10 @@ use std::process::Command;
 
 #[path = "support/csv_bench.rs"]
 mod csv_bench;
+#[path = "support/daemon_proc.rs"]
+mod daemon_proc;
 
-const BIN: &str = env!("CARGO_BIN_EXE_propid");
+use daemon_proc::{clean_stand as stand, dropped_total, of_type, stats, BIN};
 
 /// Writes the stream, replays it, returns the parsed lines and the exit status.
 fn replay(bytes: &[u8], extra: &[&str]) -> (Vec<Value>, std::process::ExitStatus, String) {
@@ -37,25 +39,6 @@ fn replay(bytes: &[u8], extra: &[&str]) -> (Vec<Value>, std::process::ExitStatus
     )
 }
 
-fn of_type<'a>(lines: &'a [Value], t: &str) -> Vec<&'a Value> {
-    lines.iter().filter(|l| l["type"] == t).collect()
-}
-
-fn stats(lines: &[Value]) -> &Value {
-    let s = lines.last().expect("no lines");
-    assert_eq!(s["type"], "stats");
-    s
-}
-
-fn dropped_total(s: &Value) -> u64 {
-    s["frames_dropped"]
-        .as_object()
-        .unwrap()
-        .values()
-        .map(|v| v.as_u64().unwrap())
-        .sum()
-}
-
 fn assert_plant(m: &Value, fn_hz: f64, zeta: f64, gain: f64, tol: f64) {
     let f = m["fn_hz"].as_f64().unwrap();
     let z = m["zeta"].as_f64().unwrap();
@@ -63,19 +46,6 @@ fn assert_plant(m: &Value, fn_hz: f64, zeta: f64, gain: f64, tol: f64) {
     assert!((f / fn_hz - 1.0).abs() < tol, "fn {f} vs {fn_hz}");
     assert!((z / zeta - 1.0).abs() < tol, "zeta {z} vs {zeta}");
     assert!((g / gain - 1.0).abs() < tol, "gain {g} vs {gain}");
-}
-
-/// The simulated stand with the plant the assertions know (fn 25 Hz, ζ 0.5, 8 N per unit
-/// throttle), without noise or quantisation, running the default experiment: three operating
-/// points (0.3, 0.45, 0.6) of 8 pulses.
-fn stand() -> SimConfig {
-    let mut cfg = SimConfig::default();
-    cfg.plant.fn_hz = 25.0;
-    cfg.plant.zeta = 0.5;
-    cfg.plant.gain_n_per_throttle = 8.0;
-    cfg.plant.noise_rms_n = 0.0;
-    cfg.plant.quantum_n = 0.0;
-    cfg
 }
 
 /// The recording of `cfg` and what it holds (the firmware's and the fault injector's counts).

@@ -198,6 +198,19 @@ pub fn dropped_total(s: &Value) -> u64 {
         .sum()
 }
 
+/// The simulated stand's configuration with a plant the assertions know exactly: fn 25 Hz,
+/// ζ 0.5, 8 N per unit throttle, no noise, no quantisation; the default experiment (three
+/// operating points, 0.3, 0.45, 0.6, of 8 pulses).
+pub fn clean_stand() -> SimConfig {
+    let mut cfg = SimConfig::default();
+    cfg.plant.fn_hz = 25.0;
+    cfg.plant.zeta = 0.5;
+    cfg.plant.gain_n_per_throttle = 8.0;
+    cfg.plant.noise_rms_n = 0.0;
+    cfg.plant.quantum_n = 0.0;
+    cfg
+}
+
 /// The simulated stand on a pty in this test process, at `rate` Hz, with `tweak` applied to the
 /// default configuration (stops by itself after 60 s).
 pub fn sim_stand(rate: u32, tweak: impl FnOnce(&mut SimConfig)) -> SimHandle {
