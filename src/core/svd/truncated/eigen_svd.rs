@@ -16,7 +16,7 @@
 //! back to Jacobi) when a requested singular value is below [`MIN_RATIO`]` · σ₁`: above it the
 //! relative error of every value is below ~`1e-10` and far smaller for the leading ones.
 
-use super::ritz_check::ql_implicit;
+use super::ritz_check::{bbt_tridiagonal, ql_implicit};
 
 /// Smallest `σ_i / σ₁` for which the squared form is accurate enough (see the module docs).
 pub const MIN_RATIO: f64 = 1e-3;
@@ -72,16 +72,7 @@ impl EigenSvd {
         }
         self.scale = scale;
         let inv = 1.0 / scale;
-        for i in 0..n {
-            let a = diag[i] * inv;
-            let b = if i + 1 < n { sup[i] * inv } else { 0.0 };
-            self.d[i] = a * a + b * b;
-            self.e[i] = if i + 1 < n {
-                b * diag[i + 1] * inv
-            } else {
-                0.0
-            };
-        }
+        bbt_tridiagonal(diag, sup, inv, &mut self.d[..n], &mut self.e[..n]);
         let z = &mut self.z[..n * n];
         z.fill(0.0);
         for i in 0..n {

@@ -73,17 +73,8 @@ impl RitzCheck {
             return false;
         }
         let inv = if scale > 0.0 { 1.0 / scale } else { 1.0 };
-        for i in 0..n {
-            let a = diag[i] * inv;
-            let b = if i + 1 < n { sup[i] * inv } else { 0.0 };
-            self.d[i] = a * a + b * b;
-            self.e[i] = if i + 1 < n {
-                b * diag[i + 1] * inv
-            } else {
-                0.0
-            };
-            self.z[i] = 0.0;
-        }
+        bbt_tridiagonal(diag, sup, inv, &mut self.d[..n], &mut self.e[..n]);
+        self.z[..n].fill(0.0);
         self.z[n - 1] = 1.0;
         if !ql_implicit(&mut self.d[..n], &mut self.e[..n], &mut self.z[..n], 1) {
             return false;
@@ -113,6 +104,23 @@ impl RitzCheck {
     /// Order of the last computed bidiagonal.
     pub fn n(&self) -> usize {
         self.n
+    }
+}
+
+/// The symmetric tridiagonal `B Bᵀ / scale²` of the upper bidiagonal `B` (`diag[..n]`,
+/// `sup[..n-1]`), `inv = 1 / scale`: diagonal `d_i = a_i² + b_i²`, off-diagonal
+/// `e_i = b_i a_{i+1}` (`a = diag · inv`, `b = sup · inv`, `b_{n-1} = 0`, `e_{n-1} = 0`).
+pub(crate) fn bbt_tridiagonal(diag: &[f64], sup: &[f64], inv: f64, d: &mut [f64], e: &mut [f64]) {
+    let n = d.len();
+    for i in 0..n {
+        let a = diag[i] * inv;
+        let b = if i + 1 < n { sup[i] * inv } else { 0.0 };
+        d[i] = a * a + b * b;
+        e[i] = if i + 1 < n {
+            b * diag[i + 1] * inv
+        } else {
+            0.0
+        };
     }
 }
 
