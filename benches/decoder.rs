@@ -6,8 +6,8 @@
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use propid::ingest::read_record;
-use propid::protocol::message::{Hello, Sample, SampleFlags};
-use propid::protocol::{encode_frame, Decoder, EscProtocol, Message, MAX_FRAME_LEN};
+use propid_wire::protocol::message::{Hello, Sample, SampleFlags};
+use propid_wire::protocol::{encode_frame, Decoder, EscProtocol, Message, MAX_FRAME_LEN};
 
 /// A recording of `n` SAMPLE frames at 1 kHz with a HELLO every 1000 samples.
 fn recording(n: u32) -> Vec<u8> {

@@ -4,7 +4,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::{Matrix2, Vector2};
-use propid::core::{IdentOptions, Limits, PulseInput, Workspace};
+use propid_numerics::{IdentOptions, Limits, PulseInput, Workspace};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};

@@ -9,9 +9,9 @@
 use std::time::Duration;
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
-use propid::core::svd::dense::DenseSvd;
-use propid::core::svd::hankel_op::HankelOp;
-use propid::core::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::dense::DenseSvd;
+use propid_numerics::svd::hankel_op::HankelOp;
+use propid_numerics::svd::truncated::TruncatedSvd;
 
 /// Impulse response of a 20 Hz, ζ = 0.1 oscillator at 1 kHz plus 1 % uniform noise.
 fn markov(len: usize) -> Vec<f64> {

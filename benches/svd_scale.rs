@@ -9,7 +9,7 @@
 
 use std::time::Instant;
 
-use propid::core::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::truncated::TruncatedSvd;
 
 /// Impulse response of a 20 Hz, ζ = 0.1 oscillator at 1 kHz plus 1 % uniform noise.
 fn markov(len: usize) -> Vec<f64> {

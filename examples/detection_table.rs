@@ -1,6 +1,6 @@
 //! The detection table of `propid diagnose` (issue 5): for every effect of the catalogue,
 //! `CASES` seeded synthetic cases (random plants, random effect parameters, see
-//! `propid::diagnose::synth`), and how often the effect was named, how often another one was,
+//! `propid_sim::synth`), and how often the effect was named, how often another one was,
 //! the parameter error, and the validation-fit gain; plus the false-alarm rate on clean cases.
 //!
 //! Then the real data: `propid diagnose` (the same loader and diagnosis as the CLI) on the
@@ -13,8 +13,9 @@
 use std::path::{Path, PathBuf};
 
 use propid::cli::diagnose::{load, Args};
-use propid::diagnose::{self, synth, Diagnosis};
-use propid::sim::plant::PlantConfig;
+use propid_sim::synth;
+use propid::diagnose::{self, Diagnosis};
+use propid_sim::plant::PlantConfig;
 
 /// One real-data file and how to read it (columns as `propid identify` reads them).
 struct RealCase {

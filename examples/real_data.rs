@@ -15,11 +15,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
-use propid::core::okid::select::{identify_any, AnyInput, PathTaken};
-use propid::core::okid::OkidOptions;
-use propid::core::operating_points::{operating_points, OpOptions};
-use propid::core::workspace::IdentOptions;
-use propid::core::ModelReport;
+use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::okid::OkidOptions;
+use propid_numerics::operating_points::{operating_points, OpOptions};
+use propid_numerics::workspace::IdentOptions;
+use propid_numerics::ModelReport;
 use propid::ingest::csv_file::{read_csv, CsvFileOptions};
 use propid::ingest::steps::find_steps;
 
@@ -395,8 +395,8 @@ fn list(v: &[f64]) -> String {
         .join(", ")
 }
 
-fn gain(g: &propid::core::report::Gain) -> String {
-    use propid::core::report::Gain;
+fn gain(g: &propid_numerics::report::Gain) -> String {
+    use propid_numerics::report::Gain;
     match g {
         Gain::Scalar(v) => format!("{v:.4}"),
         Gain::List(v) => v

@@ -9,7 +9,7 @@ mod counting_alloc;
 use counting_alloc::allocations;
 
 use core_support::{record_input, throttle, Plant};
-use propid::core::{IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};
+use propid_numerics::{IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -59,7 +59,7 @@ fn pulse_identification_allocates_nothing() {
     }
     // The truncated (FFT + Lanczos) path, jackknife included.
     let trunc = IdentOptions {
-        svd: propid::core::SvdChoice::Truncated,
+        svd: propid_numerics::SvdChoice::Truncated,
         ..opts
     };
     for round in 0..2 {

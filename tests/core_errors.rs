@@ -3,7 +3,7 @@
 mod core_support;
 
 use core_support::{throttle, Plant};
-use propid::core::{IdentError, IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};
+use propid_numerics::{IdentError, IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};
 
 fn ws() -> Workspace {
     Workspace::new(&Limits::default()).unwrap()
@@ -239,7 +239,7 @@ fn report_is_valid_json_with_the_public_field_names() {
         assert!(v["mass_spring_damper"].get(key).is_some());
     }
     assert!(v["dc_gain"].is_number());
-    let back: propid::core::ModelReport = serde_json::from_str(&text).unwrap();
+    let back: propid_numerics::ModelReport = serde_json::from_str(&text).unwrap();
     assert_eq!(back.order, 1);
     assert!(back.fn_hz.is_nan());
 }

@@ -3,9 +3,9 @@
 mod core_support;
 
 use core_support::{record_input, rel, throttle, Plant, PulseSpec};
-use propid::core::{IdentOptions, Limits, MarkovSeq, Workspace};
+use propid_numerics::{IdentOptions, Limits, MarkovSeq, Workspace};
 
-fn identify(plant: &Plant, u: &[f64], order: Option<usize>) -> propid::core::ModelReport {
+fn identify(plant: &Plant, u: &[f64], order: Option<usize>) -> propid_numerics::ModelReport {
     let y = plant.simulate(u, 3.0);
     let chans: Vec<&[f64]> = y.iter().map(|c| &c[..]).collect();
     let input = record_input(plant.dt, u, &chans);
@@ -17,7 +17,7 @@ fn identify(plant: &Plant, u: &[f64], order: Option<usize>) -> propid::core::Mod
     ws.identify(&input, &opts).unwrap().to_report()
 }
 
-fn check(plant: &Plant, u: &[f64]) -> propid::core::ModelReport {
+fn check(plant: &Plant, u: &[f64]) -> propid_numerics::ModelReport {
     let r = identify(plant, u, None);
     assert_eq!(r.order, 2, "{r:?}");
     assert!(
@@ -193,7 +193,7 @@ fn unit_area_scaling_makes_dc_gain_off_by_the_sample_rate() {
 /// The truncated (FFT + Lanczos) path gives the dense path's model, pulse and Markov entries.
 #[test]
 fn truncated_svd_path_matches_dense() {
-    use propid::core::SvdChoice;
+    use propid_numerics::SvdChoice;
     let plant = Plant::new(10.0, 0.2, 4.0, 0.005).with_output([0.3, 0.02], 0.1);
     let u = throttle(2400, &[(0, 0.4)], &pulses(100, 400, 5, &[1, 2]));
     let y = plant.simulate(&u, 3.0);

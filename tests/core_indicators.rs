@@ -4,7 +4,7 @@
 mod core_support;
 
 use core_support::{add_noise, record_input, throttle, Plant};
-use propid::core::{IdentOptions, Limits, MarkovSeq, Workspace};
+use propid_numerics::{IdentOptions, Limits, MarkovSeq, Workspace};
 
 #[test]
 fn exact_data_gives_unit_coherence() {

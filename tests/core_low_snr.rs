@@ -5,7 +5,7 @@
 mod core_support;
 
 use core_support::{add_noise, record_input, throttle, Plant};
-use propid::core::{IdentOptions, Limits, Workspace};
+use propid_numerics::{IdentOptions, Limits, Workspace};
 
 /// RMS relative error of (fn, ζ) over `seeds` records at 1 kHz.
 fn rms_errors(seeds: u64) -> (f64, f64) {

@@ -5,7 +5,7 @@
 mod core_support;
 
 use core_support::{add_noise, record_input, throttle, Plant};
-use propid::core::{IdentOptions, Limits, Workspace};
+use propid_numerics::{IdentOptions, Limits, Workspace};
 
 const TRIALS: u64 = 30;
 
@@ -191,7 +191,7 @@ fn wide_noisy_pulses_identify_like_one_sample_pulses() {
 /// dense square-Hankel SVD in bias and scatter of ζ (it computes the same leading triplets).
 #[test]
 fn truncated_path_matches_dense_statistics() {
-    use propid::core::SvdChoice;
+    use propid_numerics::SvdChoice;
     let base = IdentOptions {
         order: Some(2),
         jackknife: false,
@@ -221,7 +221,7 @@ fn truncated_path_matches_dense_statistics() {
 /// the workspace routes it to the truncated path and stays exact on exact data.
 #[test]
 fn large_hankel_goes_through_the_truncated_path() {
-    use propid::core::MarkovSeq;
+    use propid_numerics::MarkovSeq;
     let plant = Plant::new(15.0, 0.05, 4.0, 0.001);
     let n = 20_000;
     let markov = MarkovSeq::from_data(1, 1, plant.markov(n)).unwrap();

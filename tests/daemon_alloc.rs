@@ -6,15 +6,15 @@
 mod counting_alloc;
 
 use counting_alloc::allocations;
-use propid::core::svd::SvdChoice;
+use propid_numerics::svd::SvdChoice;
 use propid::daemon::identify::CoreIdentifier;
 use propid::daemon::item::SampleItem;
 use propid::daemon::window::{OutputChannel, Window};
 use propid::daemon::worker::Identifier;
 use propid::daemon::Config;
-use propid::protocol::message::Message;
-use propid::protocol::Decoder;
-use propid::sim::SimConfig;
+use propid_wire::protocol::message::Message;
+use propid_wire::protocol::Decoder;
+use propid_sim::SimConfig;
 use std::time::Instant;
 
 #[test]
@@ -28,7 +28,7 @@ fn window_and_identification_allocate_nothing(svd: SvdChoice) {
     let cfg = Config::default();
     // three operating points of 8 pulses, 0.01 N of noise, 1 mN quantisation
     let mut bytes = Vec::new();
-    let sum = propid::sim::record::record(&SimConfig::default(), 120.0, &mut bytes).unwrap();
+    let sum = propid_sim::record::record(&SimConfig::default(), 120.0, &mut bytes).unwrap();
     assert!(sum.finished);
     let mut frames = Vec::new();
     Decoder::new().push(&bytes, |f| frames.push(f));

@@ -8,8 +8,8 @@ mod daemon_proc;
 
 use daemon_proc::{dropped_total, kind, of_type, stats, BIN};
 use propid::ingest::read_record;
-use propid::protocol::message::SampleFlags;
-use propid::protocol::{encode_frame, Decoder, EventCode, Message, MAX_FRAME_LEN};
+use propid_wire::protocol::message::SampleFlags;
+use propid_wire::protocol::{encode_frame, Decoder, EventCode, Message, MAX_FRAME_LEN};
 use serde_json::Value;
 use std::process::Command;
 
@@ -22,7 +22,7 @@ fn recording() -> Vec<u8> {
     let mut cfg = daemon_proc::clean_stand();
     cfg.experiment.levels = vec![0.35, 0.55];
     let mut bytes = Vec::new();
-    let sum = propid::sim::record::record(&cfg, 60.0, &mut bytes).unwrap();
+    let sum = propid_sim::record::record(&cfg, 60.0, &mut bytes).unwrap();
     assert!(sum.finished);
     bytes
 }

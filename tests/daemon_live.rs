@@ -13,7 +13,7 @@ use daemon_proc::{
     daemon_config, dropped_total, kind, models_of, of_type, replay, sim_process, sim_stand, stats,
     stopped_by_signal, Daemon,
 };
-use propid::sim::SimConfig;
+use propid_sim::SimConfig;
 use std::time::Duration;
 
 #[test]
@@ -127,7 +127,7 @@ fn injected_link_faults_are_counted_and_the_run_completes() {
     assert!(s["samples_lost"].as_u64().unwrap() > 0);
     // Exactly what a plain decoder counts on the recorded bytes: nothing lost in between.
     let bytes = std::fs::read(&rec).unwrap();
-    let mut dec = propid::protocol::Decoder::new();
+    let mut dec = propid_wire::protocol::Decoder::new();
     let mut n = 0u64;
     dec.push(&bytes, |_| n += 1);
     assert_eq!(s["frames_ok"].as_u64().unwrap(), n);
@@ -140,7 +140,7 @@ fn csv_bench_is_detected_driven_identified_and_replayed_identically() {
     let cfg = daemon_config(dir.path(), "[0.35, 0.5]", 4, 4, "");
     let rec = dir.path().join("run.csv");
     let sim = sim_stand(500, |c| {
-        c.stand.protocol = propid::sim::config::WireProtocol::Csv
+        c.stand.protocol = propid_sim::config::WireProtocol::Csv
     });
     let truth = SimConfig::default().plant;
     let port = sim.path().display().to_string();
@@ -238,7 +238,7 @@ fn csv_link_faults_are_counted_and_the_live_counts_equal_the_replay_of_the_bytes
     let cfg = daemon_config(dir.path(), "[0.4]", 8, 4, "");
     let rec = dir.path().join("run.csv");
     let sim = sim_stand(1000, |c| {
-        c.stand.protocol = propid::sim::config::WireProtocol::Csv;
+        c.stand.protocol = propid_sim::config::WireProtocol::Csv;
         c.faults.bit_flip_per_byte = 1e-4;
         c.faults.garbage_bursts_per_s = 2.0;
         c.faults.drop_sample_prob = 0.002;

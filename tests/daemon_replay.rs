@@ -3,9 +3,9 @@
 //! a clean stream, byte-at-a-time versus burst delivery, bit flips and garbage counted exactly,
 //! sample gaps, the device clock wrapping, bad input.
 
-use propid::protocol::{Decoder, EventCode, Message};
-use propid::sim::record::{record, RecordSummary};
-use propid::sim::SimConfig;
+use propid_wire::protocol::{Decoder, EventCode, Message};
+use propid_sim::record::{record, RecordSummary};
+use propid_sim::SimConfig;
 use serde_json::Value;
 use std::process::Command;
 
@@ -279,11 +279,11 @@ fn bad_config_is_refused_with_key_and_value() {
 #[test]
 fn replay_of_a_simulated_stand_recording_identifies_the_plant() {
     // the sim's firmware + experiment plan, faster than real time, with noise and quantisation
-    let mut cfg = propid::sim::SimConfig::default();
+    let mut cfg = propid_sim::SimConfig::default();
     cfg.experiment.levels = vec![0.35, 0.55];
     cfg.experiment.pulses_per_level = 8;
     let mut bytes = Vec::new();
-    propid::sim::record::record(&cfg, 30.0, &mut bytes).unwrap();
+    propid_sim::record::record(&cfg, 30.0, &mut bytes).unwrap();
     let (lines, status, err) = replay(&bytes, &[]);
     assert!(status.success(), "{err}");
     let models = of_type(&lines, "model");
@@ -376,13 +376,13 @@ fn noise_fitted_models_at_10_khz_are_warnings_not_models() {
     // above the noise floor); the quality checks catch the noise fits that get past it.
     let mut lines = Vec::new();
     for seed in 1..=6 {
-        let mut cfg = propid::sim::SimConfig::default();
+        let mut cfg = propid_sim::SimConfig::default();
         cfg.stand.sample_rate_hz = 10_000;
         cfg.stand.seed = seed;
         cfg.experiment.levels = vec![0.35, 0.55];
         cfg.experiment.pulses_per_level = 8;
         let mut bytes = Vec::new();
-        propid::sim::record::record(&cfg, 30.0, &mut bytes).unwrap();
+        propid_sim::record::record(&cfg, 30.0, &mut bytes).unwrap();
         let (l, status, err) = replay(&bytes, &[]);
         assert!(status.success(), "{err}");
         let unreliable = l.iter().filter(|l| l["kind"] == "model_unreliable").count();

@@ -21,7 +21,7 @@ fn check_demo(extra: &[&str]) {
         .lines()
         .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("{l}: {e}")))
         .collect();
-    let truth = propid::sim::SimConfig::default().plant;
+    let truth = propid_sim::SimConfig::default().plant;
     let models: Vec<&Value> = lines.iter().filter(|l| l["type"] == "model").collect();
     assert_eq!(models.len(), 3, "{lines:#?}");
     for (m, level) in models.iter().zip([0.3, 0.45, 0.6]) {

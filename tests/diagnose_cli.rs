@@ -4,8 +4,8 @@
 use std::path::Path;
 use std::process::Command;
 
-use propid::diagnose::synth;
-use propid::sim::plant::PlantConfig;
+use propid_sim::synth;
+use propid_sim::plant::PlantConfig;
 
 /// Writes a §6 CSV (t_us, throttle 0..10000, thrust_N, voltage_V) of a synthetic case.
 fn write_csv(path: &Path, cfg: &PlantConfig, seed: u64, with_voltage: bool) {
@@ -48,7 +48,7 @@ fn hidden_dead_time_in_a_csv_is_named_with_json_shape_and_report() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("stand.csv");
     let (mut cfg, _) = synth::case("clean", 2).unwrap();
-    cfg.effects.dead_time = Some(propid::sim::effects::DeadTime { delay_s: 0.03 });
+    cfg.effects.dead_time = Some(propid_sim::effects::DeadTime { delay_s: 0.03 });
     write_csv(&csv, &cfg, 11, true);
     let report = dir.path().join("report");
     let out = propid(&[

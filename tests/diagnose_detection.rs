@@ -5,8 +5,9 @@
 //! other effect, and validate the extended model better than the baseline. 50 clean cases
 //! measure the false-alarm rate, which must be at most 5 %.
 
-use propid::diagnose::{self, synth, Diagnosis, Finding};
-use propid::sim::plant::PlantConfig;
+use propid_sim::synth;
+use propid::diagnose::{self, Diagnosis, Finding};
+use propid_sim::plant::PlantConfig;
 
 const CASES: u64 = 20;
 

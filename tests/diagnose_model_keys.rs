@@ -4,14 +4,14 @@
 use std::path::Path;
 use std::process::Command;
 
-use propid::diagnose::synth;
+use propid_sim::synth;
 use serde_json::Value;
 
 /// Writes a PROTOCOL.md §6 CSV (t_us, throttle 0..10000, thrust_N) of a synthetic case with a
 /// hidden dead time, so that `extended` is not null.
 fn write_csv(path: &Path) {
     let (mut cfg, _) = synth::case("clean", 3).unwrap();
-    cfg.effects.dead_time = Some(propid::sim::effects::DeadTime { delay_s: 0.02 });
+    cfg.effects.dead_time = Some(propid_sim::effects::DeadTime { delay_s: 0.02 });
     let m = synth::run(&cfg, &synth::throttle_plan(), 7).unwrap();
     let mut s = String::from("t_us,throttle,thrust_N\n");
     for k in 0..m.u.len() {

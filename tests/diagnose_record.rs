@@ -1,9 +1,10 @@
 //! `diagnose_record` on `Record`s: missing samples, a clipping sensor, and bad input (typed
 //! errors, no panic).
 
-use propid::diagnose::{self, synth, DiagnoseError, Options};
-use propid::record::{names, Channel, Record};
-use propid::sim::effects::{Saturation, SaturationSignal};
+use propid_sim::synth;
+use propid::diagnose::{self, DiagnoseError, Options};
+use propid_wire::record::{names, Channel, Record};
+use propid_sim::effects::{Saturation, SaturationSignal};
 
 fn record(u: Vec<f64>, y: Vec<f64>, missing: Vec<bool>) -> Record {
     let ch = |name: &str, unit: &str, data| Channel {

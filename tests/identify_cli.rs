@@ -219,8 +219,8 @@ fn errors_map_to_exit_codes() {
 
 #[test]
 fn tsp1_binary_recording_is_identified() {
-    use propid::protocol::encode_frame;
-    use propid::protocol::message::{Message, Sample, SampleFlags};
+    use propid_wire::protocol::encode_frame;
+    use propid_wire::protocol::message::{Message, Sample, SampleFlags};
     let plant = Plant::new(15.0, 0.3, 6.0, 0.001);
     let mut rng = rand::rngs::StdRng::seed_from_u64(9);
     let levels: Vec<u16> = (0..2000).map(|_| rng.gen_range(3500..4500)).collect();

@@ -5,9 +5,9 @@
 use std::path::Path;
 use std::process::Command;
 
-use propid::core::okid::select::{check_finite, identify_any, AnyError, AnyInput, PathTaken};
-use propid::core::okid::OkidOptions;
-use propid::core::IdentOptions;
+use propid_numerics::okid::select::{check_finite, identify_any, AnyError, AnyInput, PathTaken};
+use propid_numerics::okid::OkidOptions;
+use propid_numerics::IdentOptions;
 use serde_json::Value;
 
 /// The plant of config/sim.toml.

@@ -3,7 +3,7 @@
 //! or a counted, skipped row.
 
 use propid::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions};
-use propid::protocol::csv::checksum;
+use propid_wire::protocol::csv::checksum;
 
 fn with_checksum(line: &str) -> String {
     format!("{line}*{:02X}", checksum(line.as_bytes()))

@@ -4,11 +4,11 @@
 mod core_support;
 
 use core_support::Plant;
-use propid::core::okid::select::{identify_any, AnyInput, PathTaken};
-use propid::core::okid::OkidOptions;
-use propid::core::pulses::PulseInput;
-use propid::core::workspace::{IdentOptions, Limits, Workspace};
-use propid::core::IdentError;
+use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::okid::OkidOptions;
+use propid_numerics::pulses::PulseInput;
+use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
+use propid_numerics::IdentError;
 use rand::{Rng, SeedableRng};
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -19,7 +19,7 @@ fn identify(
     plant: &Plant,
     u: &[f64],
     order: Option<usize>,
-) -> propid::core::okid::select::AnyModel {
+) -> propid_numerics::okid::select::AnyModel {
     let y = plant.simulate(u, 2.0);
     let ys: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
     let us = [u];
@@ -48,7 +48,7 @@ fn random(n: usize, seed: u64) -> Vec<f64> {
         .collect()
 }
 
-fn assert_exact(plant: &Plant, m: &propid::core::okid::select::AnyModel) {
+fn assert_exact(plant: &Plant, m: &propid_numerics::okid::select::AnyModel) {
     assert_eq!(m.path, PathTaken::Okid);
     assert_eq!(m.report.order, 2, "{:?}", m.report.singular_values);
     assert!(
@@ -110,7 +110,7 @@ fn clean_pulse_experiment_takes_the_pulse_path() {
     assert!(rel(m.report.fn_hz, plant.fn_hz) < 1e-6);
 }
 
-use propid::core::operating_points::{operating_points, OpOptions};
+use propid_numerics::operating_points::{operating_points, OpOptions};
 
 fn input_of<'a>(dt: f64, u: &'a [&'a [f64]], y: &'a [&'a [f64]]) -> AnyInput<'a> {
     AnyInput {

@@ -22,9 +22,9 @@
 mod core_support;
 
 use core_support::Plant;
-use propid::core::okid::select::{identify_any, AnyInput, PathTaken};
-use propid::core::okid::OkidOptions;
-use propid::core::workspace::IdentOptions;
+use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::okid::OkidOptions;
+use propid_numerics::workspace::IdentOptions;
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 

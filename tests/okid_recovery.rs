@@ -3,7 +3,7 @@
 //! size is pinned here (see also `okid_noise` for the Monte Carlo after ERA).
 
 use nalgebra::{DMatrix, DVector};
-use propid::core::okid::{okid, OkidError, OkidOptions};
+use propid_numerics::okid::{okid, OkidError, OkidOptions};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
@@ -141,7 +141,7 @@ fn multisine_input(n: usize, m: usize, seed: u64) -> Vec<f64> {
         .collect()
 }
 
-fn run(sys: &Sys, u: &[Vec<f64>], opts: &OkidOptions) -> propid::core::okid::OkidResult {
+fn run(sys: &Sys, u: &[Vec<f64>], opts: &OkidOptions) -> propid_numerics::okid::OkidResult {
     let y = sys.simulate(u);
     let us: Vec<&[f64]> = u.iter().map(|c| c.as_slice()).collect();
     let ys: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
@@ -149,7 +149,7 @@ fn run(sys: &Sys, u: &[Vec<f64>], opts: &OkidOptions) -> propid::core::okid::Oki
 }
 
 /// Largest absolute error over the blocks, relative to the largest block entry.
-fn rel_err(sys: &Sys, r: &propid::core::okid::OkidResult) -> f64 {
+fn rel_err(sys: &Sys, r: &propid_numerics::okid::OkidResult) -> f64 {
     let truth = sys.markov(r.len);
     let scale = truth.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let err = truth

@@ -7,9 +7,9 @@
 mod counting_alloc;
 
 use counting_alloc::allocations;
-use propid::core::pulses::PulseInput;
-use propid::core::svd::SvdChoice;
-use propid::core::workspace::{IdentOptions, Limits, Workspace};
+use propid_numerics::pulses::PulseInput;
+use propid_numerics::svd::SvdChoice;
+use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
 
 /// Four ±pulses on a noisy 2nd-order response (fn 12 Hz, ζ 0.6) at 1 kHz.
 fn record() -> (Vec<f64>, Vec<f64>, Vec<usize>) {

@@ -7,9 +7,9 @@ mod counting_alloc;
 
 use counting_alloc::allocations;
 
-use propid::protocol::csv::{CsvDecoder, CsvItem};
-use propid::protocol::message::{Log, Sample, SampleFlags};
-use propid::protocol::{encode_frame, Decoder, Impulse, Message, MAX_FRAME_LEN};
+use propid_wire::protocol::csv::{CsvDecoder, CsvItem};
+use propid_wire::protocol::message::{Log, Sample, SampleFlags};
+use propid_wire::protocol::{encode_frame, Decoder, Impulse, Message, MAX_FRAME_LEN};
 
 #[test]
 fn decoding_and_encoding_allocate_nothing() {

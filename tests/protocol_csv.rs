@@ -4,8 +4,8 @@
 
 use std::path::PathBuf;
 
-use propid::protocol::csv::{CsvDecoder, CsvItem, CsvOptions, CsvRow};
-use propid::protocol::csv_columns::{ConvOptions, Quantity};
+use propid_wire::protocol::csv::{CsvDecoder, CsvItem, CsvOptions, CsvRow};
+use propid_wire::protocol::csv_columns::{ConvOptions, Quantity};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 

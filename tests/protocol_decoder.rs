@@ -5,8 +5,8 @@
 //! The RNG seed is fixed so that a CRC-16 collision (a corrupted frame that happens to pass the
 //! check, probability 2⁻¹⁶ per corrupted frame) cannot make the suite flaky.
 
-use propid::protocol::message::{Ack, AckResult, Event, EventCode, Log};
-use propid::protocol::{
+use propid_wire::protocol::message::{Ack, AckResult, Event, EventCode, Log};
+use propid_wire::protocol::{
     encode_frame, Arm, Decoder, Frame, Impulse, Message, Sample, SampleFlags, SetThrottle,
     MAX_FRAME_LEN,
 };

@@ -3,9 +3,9 @@
 //! and inside the record, a positive sample period.
 
 use propid::ingest::read_record;
-use propid::protocol::message::{Event, EventCode, Sample, SampleFlags};
-use propid::protocol::{encode_frame, Message, MAX_FRAME_LEN};
-use propid::record::Record;
+use propid_wire::protocol::message::{Event, EventCode, Sample, SampleFlags};
+use propid_wire::protocol::{encode_frame, Message, MAX_FRAME_LEN};
+use propid_wire::record::Record;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 

@@ -4,10 +4,10 @@
 //! samples (counted, never bridged), and the device clock unwrapped.
 
 use propid::ingest::read_record;
-use propid::protocol::{Decoder, Message};
-use propid::record::RecordEventKind;
-use propid::sim::config::SimConfig;
-use propid::sim::record::record;
+use propid_wire::protocol::{Decoder, Message};
+use propid_wire::record::RecordEventKind;
+use propid_sim::config::SimConfig;
+use propid_sim::record::record;
 
 fn sample_indices(bytes: &[u8]) -> Vec<u32> {
     let mut dec = Decoder::new();

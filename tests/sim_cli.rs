@@ -4,7 +4,7 @@ use std::io::{BufRead, BufReader, Read};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use propid::protocol::{encode_frame, Decoder, EventCode, Message, MAX_FRAME_LEN};
+use propid_wire::protocol::{encode_frame, Decoder, EventCode, Message, MAX_FRAME_LEN};
 
 fn propid() -> Command {
     Command::new(env!("CARGO_BIN_EXE_propid"))

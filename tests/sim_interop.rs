@@ -1,12 +1,12 @@
 //! The simulated stand's output read by the project's own ingest (binary and CSV dialect).
 
 use propid::ingest::tsp::read_record;
-use propid::record::names;
-use propid::sim::config::{FaultConfig, SimConfig, StandConfig, WireProtocol};
-use propid::sim::dynamics::EchoStand;
-use propid::sim::faults::FaultInjector;
-use propid::sim::firmware::Firmware;
-use propid::sim::record::record;
+use propid_wire::record::names;
+use propid_sim::config::{FaultConfig, SimConfig, StandConfig, WireProtocol};
+use propid_sim::dynamics::EchoStand;
+use propid_sim::faults::FaultInjector;
+use propid_sim::firmware::Firmware;
+use propid_sim::record::record;
 
 #[test]
 fn recording_ingests_into_a_record_with_every_pulse_at_its_sample() {

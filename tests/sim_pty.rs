@@ -4,12 +4,12 @@
 use std::io::Read;
 use std::time::{Duration, Instant};
 
-use propid::protocol::message::msg_type;
-use propid::protocol::{
+use propid_wire::protocol::message::msg_type;
+use propid_wire::protocol::{
     encode_frame, AckResult, Arm, Decoder, EventCode, Frame, Message, MAX_FRAME_LEN,
 };
-use propid::sim::config::SimConfig;
-use propid::sim::pty::{RunOptions, SimHandle};
+use propid_sim::config::SimConfig;
+use propid_sim::pty::{RunOptions, SimHandle};
 
 fn open(path: &std::path::Path) -> Box<dyn serialport::SerialPort> {
     serialport::new(path.to_string_lossy(), 921_600)
@@ -44,7 +44,7 @@ fn collect(
     frames
 }
 
-fn ack_of(frames: &[Frame], seq: u16) -> Option<propid::protocol::Ack> {
+fn ack_of(frames: &[Frame], seq: u16) -> Option<propid_wire::protocol::Ack> {
     frames.iter().find_map(|f| match f.msg {
         Message::Ack(a) if a.cmd_seq == seq => Some(a),
         _ => None,
@@ -63,7 +63,7 @@ fn sample_indices(frames: &[Frame]) -> Vec<u32> {
 }
 
 /// The first HELLO among `frames`.
-fn hello_of(frames: &[Frame]) -> Option<propid::protocol::Hello> {
+fn hello_of(frames: &[Frame]) -> Option<propid_wire::protocol::Hello> {
     frames.iter().find_map(|f| match f.msg {
         Message::Hello(h) => Some(h),
         _ => None,
@@ -136,7 +136,7 @@ fn injected_faults_match_what_the_host_counts() {
     let _ = collect(&mut *port, &mut dec, Duration::from_millis(50), |_| false);
     // Bracket: what was injected between two snapshots must be what the host counted, give or
     // take the frames in flight at each end (the test reads concurrently with the stand).
-    let injected = |r: &propid::sim::pty::SimReport| {
+    let injected = |r: &propid_sim::pty::SimReport| {
         let f = r.faults;
         (
             f.corrupted_frames + f.garbage_bursts,
@@ -230,7 +230,7 @@ fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
 #[test]
 fn csv_dialect_over_the_pty() {
     let mut cfg = SimConfig::default();
-    cfg.stand.protocol = propid::sim::config::WireProtocol::Csv;
+    cfg.stand.protocol = propid_sim::config::WireProtocol::Csv;
     let sim = SimHandle::spawn(cfg, RunOptions::default()).unwrap();
     let mut port = open(sim.path());
     std::io::Write::write_all(&mut port, b"PING\nARM 500\n").unwrap();

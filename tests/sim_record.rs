@@ -1,8 +1,8 @@
 //! Record mode and exact fault accounting, without a pty (simulated clock, fast).
 
-use propid::protocol::{Decoder, EventCode, Frame, Message};
-use propid::sim::config::SimConfig;
-use propid::sim::record::record;
+use propid_wire::protocol::{Decoder, EventCode, Frame, Message};
+use propid_sim::config::SimConfig;
+use propid_sim::record::record;
 
 fn decode(bytes: &[u8]) -> (Vec<Frame>, Decoder) {
     let mut dec = Decoder::new();
@@ -112,7 +112,7 @@ fn every_injected_fault_is_counted_exactly_by_the_host_decoder() {
 #[test]
 fn csv_stands_cannot_record_the_binary_plan() {
     let mut cfg = SimConfig::default();
-    cfg.stand.protocol = propid::sim::config::WireProtocol::Csv;
+    cfg.stand.protocol = propid_sim::config::WireProtocol::Csv;
     let err = record(&cfg, 1.0, &mut Vec::new()).unwrap_err();
     assert!(err.to_string().contains("tsp"), "{err}");
 }

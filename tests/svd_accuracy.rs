@@ -6,8 +6,8 @@
 //! residuals ‖Hv − σu‖ and ‖Hᵀu − σv‖ below 1e-10 σ₁.
 
 use nalgebra::DMatrix;
-use propid::core::svd::truncated::TruncatedError;
-use propid::core::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::truncated::TruncatedError;
+use propid_numerics::svd::truncated::TruncatedSvd;
 
 /// Markov blocks (q × p, column-major) of a sum of damped modes plus seeded uniform noise.
 fn markov(q: usize, p: usize, len: usize, modes: &[(f64, f64)], noise: f64, seed: u64) -> Vec<f64> {

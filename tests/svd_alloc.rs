@@ -6,7 +6,7 @@
 mod counting_alloc;
 
 use counting_alloc::allocations;
-use propid::core::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::truncated::TruncatedSvd;
 
 /// Damped two-output response with a little deterministic "noise".
 fn markov(q: usize, len: usize) -> Vec<f64> {

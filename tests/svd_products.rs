@@ -1,7 +1,7 @@
 //! Property test: the FFT block-Hankel products equal the dense products for arbitrary block
 //! sizes, channel counts, shifts and data (relative to the size of the terms summed).
 
-use propid::core::svd::hankel_op::HankelOp;
+use propid_numerics::svd::hankel_op::HankelOp;
 use proptest::prelude::*;
 
 fn dense_apply(m: &[f64], q: usize, p: usize, r: usize, c: usize, s: usize, x: &[f64]) -> Vec<f64> {

@@ -19,9 +19,9 @@ use crate::daemon::plan;
 use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::SerialSource;
 use crate::daemon::{Config, Publisher, Shutdown};
-use crate::sim::plant::PlantConfig;
-use crate::sim::pty::{RunOptions, SimHandle};
-use crate::sim::SimConfig;
+use propid_sim::plant::PlantConfig;
+use propid_sim::pty::{RunOptions, SimHandle};
+use propid_sim::SimConfig;
 
 /// Arguments of `propid demo`.
 #[derive(Debug, clap::Args)]
@@ -44,7 +44,7 @@ fn demo_sim() -> SimConfig {
 }
 
 /// Three operating points, eight pulses each (±0.10, ±0.15), ~9 s in all.
-fn demo_experiment(s: &SimConfig) -> crate::experiment::ExperimentConfig {
+fn demo_experiment(s: &SimConfig) -> propid_wire::experiment::ExperimentConfig {
     let mut e = s.experiment.clone();
     e.levels = vec![0.3, 0.45, 0.6];
     e.pulse_amplitudes = vec![0.1, 0.15];

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use super::load::{self as shared, steps_from_response, LoadedFile, Request};
 use super::CliError;
 use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
-use crate::record::names;
+use propid_wire::record::names;
 
 /// Arguments of `propid diagnose`.
 #[derive(Debug, clap::Args)]

@@ -4,7 +4,7 @@
 //!
 //! With `--json` exactly one JSON object: `{"model": {...}, "source": {...},
 //! "operating_points": [...]}`; `"model"` holds the fields of
-//! [`ModelReport`](crate::core::ModelReport) (`dc_gain` a number for one output, a list for
+//! [`ModelReport`](propid_numerics::ModelReport) (`dc_gain` a number for one output, a list for
 //! several), `"source"` says which file format, columns, rate and path were used, and
 //! `"operating_points"` is the gain schedule (one model per level, where the data allows).
 //!
@@ -19,11 +19,11 @@ mod summary;
 use std::path::PathBuf;
 
 use super::CliError;
-use crate::core::okid::select::{identify_any_sized, AnyError, AnyInput, HankelSize};
-use crate::core::okid::OkidOptions;
-use crate::core::operating_points::{operating_points, OpOptions};
-use crate::core::svd::SvdChoice;
-use crate::core::workspace::IdentOptions;
+use propid_numerics::okid::select::{identify_any_sized, AnyError, AnyInput, HankelSize};
+use propid_numerics::okid::OkidOptions;
+use propid_numerics::operating_points::{operating_points, OpOptions};
+use propid_numerics::svd::SvdChoice;
+use propid_numerics::workspace::IdentOptions;
 
 /// Arguments of `propid identify`.
 #[derive(Debug, clap::Args)]

@@ -19,8 +19,8 @@ use super::CliError;
 use crate::ingest::csv_file::{read_csv, CsvFileOptions, CsvSource};
 use crate::ingest::steps::{find_steps, StepFinding};
 use crate::ingest::{read_record_with, IngestOptions, IngestStats};
-use crate::protocol::detect::{detect, Detection, WireFormat};
-use crate::record::{names, Record};
+use propid_wire::protocol::detect::{detect, Detection, WireFormat};
+use propid_wire::record::{names, Record};
 
 /// What to read from a file (the options `identify` and `diagnose` share).
 #[derive(Debug, Clone, Default)]

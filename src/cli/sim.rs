@@ -13,9 +13,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use super::CliError;
-use crate::sim::config::WireProtocol;
-use crate::sim::pty::{self, RunOptions};
-use crate::sim::{record, SimConfig, SimError};
+use propid_sim::config::WireProtocol;
+use propid_sim::pty::{self, RunOptions};
+use propid_sim::{record, SimConfig, SimError};
 
 /// Arguments of `propid sim`.
 #[derive(Debug, clap::Args)]

@@ -167,7 +167,7 @@ pub struct DeviceConfig {
 /// `[device] protocol`: which wire format the daemon expects (PROTOCOL.md §6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WireProtocol {
-    /// Decide from the first bytes ([`crate::protocol::detect`]).
+    /// Decide from the first bytes ([`propid_wire::protocol::detect`]).
     Auto,
     /// Binary TSP/1 only.
     Tsp,

@@ -22,10 +22,10 @@ use super::config::Config;
 use super::window::WindowView;
 use super::worker::Identifier;
 use super::DaemonError;
-use crate::core::pulses::PulseInput;
-use crate::core::svd::SvdChoice;
-use crate::core::workspace::{IdentOptions, Limits, Workspace};
-use crate::core::IdentError;
+use propid_numerics::pulses::PulseInput;
+use propid_numerics::svd::SvdChoice;
+use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
+use propid_numerics::IdentError;
 
 /// The core's workspace behind the daemon's [`Identifier`] trait.
 pub struct CoreIdentifier {

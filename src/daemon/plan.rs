@@ -1,13 +1,13 @@
 //! The experiment plan as the sampler drives it: the pure [`Experiment`] state machine
-//! (`crate::experiment`) behind the sampler's [`Plan`] trait.
+//! (`propid_wire::experiment`) behind the sampler's [`Plan`] trait.
 //!
 //! The sampler gives it the host clock and every device frame, sends what it asks for, and
 //! turns its notices into published lines. After a device reset, a watchdog trip or a refused
 //! command the plan is over and never re-arms; the daemon keeps sampling (passively) until it
 //! is stopped. A failed link (a command unanswered after its re-sends) ends the run.
 
-use crate::experiment::{Experiment, ExperimentConfig, Notice, Output};
-use crate::protocol::message::{Frame, Message};
+use propid_wire::experiment::{Experiment, ExperimentConfig, Notice, Output};
+use propid_wire::protocol::message::{Frame, Message};
 
 use super::config::Config;
 use super::item::PlanNote;
@@ -105,7 +105,7 @@ impl Plan for ExperimentPlan {
     fn status(&self) -> PlanStatus {
         if self.link_failed {
             PlanStatus::LinkFailed
-        } else if self.exp.phase() == crate::experiment::Phase::Done {
+        } else if self.exp.phase() == propid_wire::experiment::Phase::Done {
             PlanStatus::Done
         } else if self.exp.is_over() {
             PlanStatus::Halted

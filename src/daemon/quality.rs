@@ -11,7 +11,7 @@
 //! - `unstable_pole`: a continuous pole with `Re(s) ≥ 0`. A motor–propeller's thrust, torque
 //!   and speed responses to throttle settle; a pole that does not is not the plant's.
 //! - `dc_gain_uncertain`: the jackknife standard deviation of the DC gain (leave one pulse out,
-//!   [`crate::core::uncertainty`]) is larger than the DC gain itself — the pulses disagree on
+//!   [`propid_numerics::uncertainty`]) is larger than the DC gain itself — the pulses disagree on
 //!   even its sign. (Only with `identify.jackknife = true`.) The scatter of `fn_hz` is not
 //!   judged: near critical damping a leave-one-out model can flip between a complex and a real
 //!   pole pair, which inflates the scatter of a good estimate (measured: fn 12.8 Hz ± 14 Hz on

@@ -15,8 +15,8 @@ use super::stats::{LinkStats, StatsLine, WorkStats};
 use super::window::{OutputChannel, Window};
 use super::worker::{Identifier, Worker};
 use super::DaemonError;
-use crate::protocol::csv::CsvOptions;
-use crate::protocol::csv_columns::ConvOptions;
+use propid_wire::protocol::csv::CsvOptions;
+use propid_wire::protocol::csv_columns::ConvOptions;
 
 /// What a finished run reports.
 #[derive(Debug, Clone)]
@@ -179,7 +179,7 @@ mod replay_tests {
     use super::*;
     use crate::daemon::identify::CoreIdentifier;
     use crate::daemon::source::RecordingSource;
-    use crate::sim::SimConfig;
+    use propid_sim::SimConfig;
     use std::path::Path;
 
     fn replay(bytes: Vec<u8>, chunk: usize) -> (RunSummary, Vec<serde_json::Value>) {
@@ -217,7 +217,7 @@ mod replay_tests {
         cfg.plant.noise_rms_n = 0.0;
         cfg.plant.quantum_n = 0.0;
         let mut bytes = Vec::new();
-        let facts = crate::sim::record::record(&cfg, 60.0, &mut bytes).unwrap();
+        let facts = propid_sim::record::record(&cfg, 60.0, &mut bytes).unwrap();
         assert!(facts.finished);
         let (summary, lines) = replay(bytes, 4096);
         assert_eq!(summary.link.samples, facts.firmware.samples);

@@ -43,9 +43,9 @@ use super::stats::LinkStats;
 use super::tracker::Tracker;
 use super::wire::Wire;
 use super::DaemonError;
-use crate::protocol::detect::WireFormat;
-use crate::protocol::message::{msg_type, Frame, Message};
-use crate::protocol::MAX_FRAME_LEN;
+use propid_wire::protocol::detect::WireFormat;
+use propid_wire::protocol::message::{msg_type, Frame, Message};
+use propid_wire::protocol::MAX_FRAME_LEN;
 
 /// Where the experiment stands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -60,7 +60,7 @@ pub enum PlanStatus {
     LinkFailed,
 }
 
-/// The host-side experiment as the sampler drives it (implemented over `crate::experiment` in
+/// The host-side experiment as the sampler drives it (implemented over `propid_wire::experiment` in
 /// [`super::plan`]). Pure: it is given the host time and the device's frames, and says what to
 /// send and what happened.
 pub trait Plan: Send {
@@ -540,10 +540,10 @@ fn sleep_unless(shutdown: &Shutdown, d: Duration) {
 mod tests {
     use super::*;
     use crate::daemon::source::{ScriptedSource, Step};
-    use crate::protocol::message::{Hello, Sample, SampleFlags};
-    use crate::protocol::{encode_frame, Decoder, EscProtocol};
-    use crate::sim::record::{record, RecordSummary};
-    use crate::sim::SimConfig;
+    use propid_wire::protocol::message::{Hello, Sample, SampleFlags};
+    use propid_wire::protocol::{encode_frame, Decoder, EscProtocol};
+    use propid_sim::record::{record, RecordSummary};
+    use propid_sim::SimConfig;
 
     fn cfg() -> SamplerConfig {
         SamplerConfig {

@@ -194,7 +194,7 @@ fn project(u: &Unwrap32, raw: u32) -> u64 {
 mod tests {
     use super::*;
     use crate::ingest::assemble::RecordBuilder;
-    use crate::protocol::message::{EscProtocol, Frame, Hello, Message};
+    use propid_wire::protocol::message::{EscProtocol, Frame, Hello, Message};
     use rand::{Rng, SeedableRng};
 
     #[test]

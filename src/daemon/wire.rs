@@ -8,9 +8,9 @@
 
 use super::config::WireProtocol;
 use super::csv_link::{CsvLink, CsvLinkOptions};
-use crate::protocol::detect::{detect, Detection, WireFormat, DETECT_WINDOW};
-use crate::protocol::message::{Frame, Message};
-use crate::protocol::{encode_frame, Decoder};
+use propid_wire::protocol::detect::{detect, Detection, WireFormat, DETECT_WINDOW};
+use propid_wire::protocol::message::{Frame, Message};
+use propid_wire::protocol::{encode_frame, Decoder};
 
 /// The decoder of a link.
 pub enum Wire {
@@ -190,7 +190,7 @@ impl Wire {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::message::Message;
+    use propid_wire::protocol::message::Message;
 
     fn push_in_chunks(wire: &mut Wire, bytes: &[u8], chunk: usize) -> (Vec<Frame>, usize) {
         let mut frames = Vec::new();

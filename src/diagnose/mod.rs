@@ -23,11 +23,10 @@ pub mod model;
 pub mod report;
 pub mod result;
 pub mod spectrum;
-pub mod synth;
 
 use serde_json::{json, Map, Value};
 
-use crate::record::{names, Record};
+use propid_wire::record::{names, Record};
 use catalogue::{Ctx, EFFECTS, MIN_RMS_DROP, SCORE_THRESHOLD};
 use fit::Fit;
 use model::{ix, Signals, Spec};

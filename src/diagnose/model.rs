@@ -15,9 +15,9 @@
 //! ```
 //!
 //! The states start in steady state for the first input sample. The same exact discretisation
-//! as the simulated plant is used ([`crate::sim::plant::discretise_second_order`]).
+//! as the simulated plant is used ([`propid_sim::plant::discretise_second_order`]).
 
-use crate::sim::plant::discretise_second_order;
+use propid_sim::plant::discretise_second_order;
 
 /// Index of each parameter in [`Params::v`].
 pub mod ix {
@@ -219,7 +219,7 @@ pub fn simulate(spec: &Spec, p: &Params, sig: &Signals, out: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::plant::{Plant, PlantConfig};
+    use propid_sim::plant::{Plant, PlantConfig};
 
     #[test]
     fn baseline_model_reproduces_the_clean_plant_exactly() {

@@ -1,7 +1,7 @@
 //! `propid diagnose --report DIR`: a Markdown page (`index.md`) with SVG plots (plotters):
 //! measured output against the baseline and extended simulations, their residuals, the residual
 //! spectra, the response against pulse amplitude, and the Hankel singular values of the
-//! data's Markov parameters (OKID, [`crate::core::okid::okid`]).
+//! data's Markov parameters (OKID, [`propid_numerics::okid::okid`]).
 
 use std::fmt::Write as _;
 use std::io;
@@ -11,7 +11,7 @@ use plotters::prelude::*;
 
 use super::result::{Diagnosis, Traces};
 use super::spectrum::periodogram;
-use crate::core::okid::{okid, OkidOptions};
+use propid_numerics::okid::{okid, OkidOptions};
 
 type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
 

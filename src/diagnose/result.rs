@@ -6,11 +6,11 @@ use serde_json::{json, Map, Value};
 
 use super::fit::Fit;
 use super::model::{ix, Spec};
-use crate::core::modal::mass_spring_damper;
-use crate::core::report::{
+use propid_numerics::modal::mass_spring_damper;
+use propid_numerics::report::{
     Gain as ReportGain, MassSpringDamper, ModeIndicators, ModelReport, Uncertainty,
 };
-use crate::sim::plant::discretise_second_order;
+use propid_sim::plant::discretise_second_order;
 
 /// A fitted model, published with every field of `propid identify --json`'s `"model"`
 /// ([`ModelReport`], flattened: same names, same types) plus the terms of the extension
@@ -20,7 +20,7 @@ use crate::sim::plant::discretise_second_order;
 /// - `order`, `dt_s`, `fn_hz`, `zeta`, `dc_gain`, `time_constants_s`, `poles_s`, `poles_z`,
 ///   `a`, `b`, `c`, `d`, `mass_spring_damper`: the fitted output-error model itself
 ///   (`fn_hz`, `zeta` of the 2nd-order core; `mass_spring_damper` = `k = 1/K`, `m = k/ωn²`,
-///   `d = 2ζωn m` of that core, [`crate::core::modal::mass_spring_damper`]).
+///   `d = 2ζωn m` of that core, [`propid_numerics::modal::mass_spring_damper`]).
 /// - `noise_rms`: the RMS of the model's simulation residual on the estimation samples,
 ///   `√(SSE/n)`.
 /// - `singular_values`, `pulses`, `pulses_skipped`, `hankel_block_rows`,

@@ -2,11 +2,11 @@
 //! benchmark archives.
 //!
 //! Line rules follow §6 (comments `#…`, optional `*HH` checksum verified with
-//! [`protocol::csv::checksum`](crate::protocol::csv::checksum), separator `,` else tab else `;`),
+//! [`protocol::csv::checksum`](propid_wire::protocol::csv::checksum), separator `,` else tab else `;`),
 //! with what files need on top: no line-length limit (exports have 400-character headers), a
 //! UTF-8 byte-order mark, quoted names, trailing empty columns, and columns the alias table does
 //! not know (kept under their own names so that `--input`/`--output` can pick them). Known names
-//! are mapped and converted by [`protocol::csv_columns`](crate::protocol::csv_columns) (the one
+//! are mapped and converted by [`protocol::csv_columns`](propid_wire::protocol::csv_columns) (the one
 //! alias and unit table of the project).
 //!
 //! A file without a header follows §6 (`t_us,throttle,thrust_N,…`) unless the caller names the
@@ -21,9 +21,9 @@
 use serde::Serialize;
 
 use super::resample::{to_uniform, Jitter, ResampleError};
-use crate::protocol::csv::checksum;
-use crate::protocol::csv_columns::{self, ColumnSpec, ConvOptions, Quantity};
-use crate::record::{names, Channel, Record};
+use propid_wire::protocol::csv::checksum;
+use propid_wire::protocol::csv_columns::{self, ColumnSpec, ConvOptions, Quantity};
+use propid_wire::record::{names, Channel, Record};
 
 /// Default ESC pulse range for throttle columns in µs, when none is given.
 pub const DEFAULT_ESC_US: (f64, f64) = (1000.0, 2000.0);

@@ -14,10 +14,10 @@ use serde::Serialize;
 
 use super::assemble::{AssembleOptions, AssembleStats, BuildStats, RecordBuilder, Values};
 use super::IngestError;
-use crate::protocol::csv::{CsvDecoder, CsvItem, CsvOptions, CsvRow, CsvStats};
-use crate::protocol::detect::{detect, Detection, WireFormat};
-use crate::protocol::{DecodeStats, Decoder};
-use crate::record::Record;
+use propid_wire::protocol::csv::{CsvDecoder, CsvItem, CsvOptions, CsvRow, CsvStats};
+use propid_wire::protocol::detect::{detect, Detection, WireFormat};
+use propid_wire::protocol::{DecodeStats, Decoder};
+use propid_wire::record::Record;
 
 /// Options of [`read_record_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, Matrix2, Vector2};
-use propid::core::PulseInput;
+use propid_numerics::PulseInput;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};

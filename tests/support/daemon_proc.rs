@@ -3,8 +3,8 @@
 
 #![allow(dead_code)]
 
-use propid::sim::pty::{RunOptions, SimHandle, SimReport};
-use propid::sim::SimConfig;
+use propid_sim::pty::{RunOptions, SimHandle, SimReport};
+use propid_sim::SimConfig;
 use serde_json::Value;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};

@@ -5,10 +5,10 @@ use std::fmt::Write;
 use serde::Serialize;
 
 use super::load::{Loaded, Source};
-use crate::core::okid::select::{AnyModel, PathTaken};
-use crate::core::operating_points::OpTable;
-use crate::core::report::Gain;
-use crate::core::ModelReport;
+use propid_numerics::okid::select::{AnyModel, PathTaken};
+use propid_numerics::operating_points::OpTable;
+use propid_numerics::report::Gain;
+use propid_numerics::ModelReport;
 
 /// Everything `identify` prints.
 #[derive(Debug, Clone, Serialize)]

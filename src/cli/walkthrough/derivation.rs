@@ -13,7 +13,7 @@
 //! 3. SVD `H_1 = P D Qᵀ`; the Pareto chart of the singular values with their cumulative share.
 //! 4. Cleaned full-order model with the rank-`r` pseudo-inverse
 //!    `H̃_1* = Q̃ D̃⁻¹ P̃ᵀ`: `Ã = H_2 H̃_1*`, `b̃ = H̃_1 e`, `c̃ = e`.
-//! 5. Reduced model of order `r` by the core's ERA ([`crate::core::workspace::Workspace`]):
+//! 5. Reduced model of order `r` by the core's ERA ([`propid_numerics::workspace::Workspace`]):
 //!    `A = D̃^{−½} P̃ᵀ H_2 Q̃ D̃^{−½}`, `b = D̃^{½} Q̃ᵀ e`, `cᵀ = eᵀ P̃ D̃^{½}`; its `m, d, k`
 //!    (`k = 1/DC gain`, `m = k/ωn²`, `d = 2ζωn m`) against the true ones.
 
@@ -21,11 +21,11 @@ use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
-use crate::core::markov::MarkovSeq;
-use crate::core::svd::dense::DenseSvd;
-use crate::core::svd::SvdChoice;
-use crate::core::workspace::{IdentOptions, Limits, Workspace};
-use crate::core::ModelReport;
+use propid_numerics::markov::MarkovSeq;
+use propid_numerics::svd::dense::DenseSvd;
+use propid_numerics::svd::SvdChoice;
+use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
+use propid_numerics::ModelReport;
 
 /// What the walkthrough simulates.
 #[derive(Debug, Clone, Copy, PartialEq)]

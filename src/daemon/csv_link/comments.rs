@@ -8,7 +8,7 @@
 //! HELLO without `boot_id` is boot 0, without `rate_hz` rate 0 = unknown), strict about
 //! numbers (a malformed number makes the line an ordinary comment, never a wrong fact).
 
-use crate::protocol::message::{EscProtocol, Event, EventCode, Hello};
+use propid_wire::protocol::message::{EscProtocol, Event, EventCode, Hello};
 
 /// A device fact found in a comment.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,8 +88,8 @@ fn event_code(name: &str) -> Option<EventCode> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::message::Message;
-    use crate::sim::csv::CsvWriter;
+    use propid_wire::protocol::message::Message;
+    use propid_sim::csv::CsvWriter;
 
     /// The simulated stand's own lines read back as the facts it wrote.
     #[test]

@@ -28,9 +28,9 @@ pub mod comments;
 pub mod placer;
 pub mod pulse_flags;
 
-use crate::protocol::csv::{CsvAck, CsvDecoder, CsvItem, CsvOptions, CsvRow};
-use crate::protocol::csv_command::{encode_csv_command, CsvCommandError, CsvCommandKind};
-use crate::protocol::message::{
+use propid_wire::protocol::csv::{CsvAck, CsvDecoder, CsvItem, CsvOptions, CsvRow};
+use propid_wire::protocol::csv_command::{encode_csv_command, CsvCommandError, CsvCommandKind};
+use propid_wire::protocol::message::{
     msg_type, Ack, AckResult, EscProtocol, Frame, Hello, Message, Sample, SampleFlags,
 };
 use boot::{BootTracker, HelloVerdict};

@@ -32,7 +32,7 @@
 //! a row out of order, dropped and counted.
 
 use crate::ingest::clock::{Step, Unwrap32};
-use crate::protocol::message::Sample;
+use propid_wire::protocol::message::Sample;
 
 /// Row intervals whose median gives the sample period when no HELLO announced the rate.
 pub const WARMUP_INTERVALS: usize = 16;

@@ -18,7 +18,7 @@
 //!
 //! Within the tolerance the held level follows the throttle (slow drift is not an excursion).
 
-use crate::protocol::message::{Sample, SampleFlags};
+use propid_wire::protocol::message::{Sample, SampleFlags};
 
 /// Flags pulses in a stream of samples (see the module documentation). Allocation-free after
 /// [`PulseFlagger::new`].

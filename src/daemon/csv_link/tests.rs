@@ -1,8 +1,8 @@
 //! The CSV link against the simulated stand's CSV dialect and against a plain Arduino bench.
 
 use super::*;
-use crate::protocol::message::{Event, EventCode};
-use crate::sim::csv::CsvWriter;
+use propid_wire::protocol::message::{Event, EventCode};
+use propid_sim::csv::CsvWriter;
 
 fn sample(k: u32, throttle: u16, thrust: f32) -> Sample {
     Sample {
@@ -88,7 +88,7 @@ fn acks_go_back_to_the_command_that_was_sent_and_a_silent_bench_gets_a_hello() {
     let n = link
         .encode_command(
             42,
-            &Message::SetThrottle(crate::protocol::SetThrottle {
+            &Message::SetThrottle(propid_wire::protocol::SetThrottle {
                 level: 3000,
                 ramp_ms: 200,
             }),

@@ -1,6 +1,6 @@
 use super::*;
-use crate::protocol::message::{Hello, Sample, SampleFlags};
-use crate::protocol::{encode_frame, EscProtocol, Message, MAX_FRAME_LEN};
+use propid_wire::protocol::message::{Hello, Sample, SampleFlags};
+use propid_wire::protocol::{encode_frame, EscProtocol, Message, MAX_FRAME_LEN};
 
 fn wire(seq: u16, m: &Message, out: &mut Vec<u8>) {
     let mut buf = [0u8; MAX_FRAME_LEN];

@@ -1,0 +1,40 @@
+//! The host-side experiment plan (issue 3, item 4): a pure state machine, no I/O and no clock of
+//! its own. It is handed the host's `now_us` and the frames the device sent; it says which
+//! commands to send ([`Output::Send`], encode them with
+//! [`encode_frame`](crate::protocol::encode_frame)) and tells the caller what happened
+//! ([`Output::Notice`]).
+//!
+//! The plan (PROTOCOL.md §4):
+//! 1. handshake: HELLO_REQ, then wait for HELLO (boot id, sample rate) and its ACK;
+//! 2. ARM with the configured watchdog; from its ACK on, HEARTBEAT every `heartbeat_ms`
+//!    (fire-and-forget: their ACKs are not tracked, the next one follows anyway);
+//! 3. for each operating point: SET_THROTTLE with `ramp_ms`, wait `ramp_ms + settle_ms`
+//!    ([`Notice::LevelReached`]), then `pulses_per_level` IMPULSEs to `level ± amplitude` for
+//!    `pulse_width_samples` periods, `pulse_spacing_ms` apart ([`Notice::PulseFired`]); one
+//!    spacing after the last, [`Notice::LevelDone`] — the moment to identify;
+//! 4. SET_THROTTLE 0 with the ramp, wait, DISARM ([`Notice::Finished`]).
+//!
+//! Reliability: one acknowledged command is in flight at a time; without its ACK after
+//! `retry_ms` it is re-sent with the **same seq** (the device answers a repeat as a DUPLICATE and
+//! does not execute it twice), at most `max_retries` times, then [`Notice::LinkFailed`]. An
+//! IMPULSE answered BUSY is tried again 20 ms later with a new seq; any other refusal ends the
+//! plan with [`Notice::Refused`] and a STOP. A HELLO with a new boot id means the device reset:
+//! [`Notice::DeviceReset`], and the plan is over — it never re-arms by itself. A watchdog trip
+//! ends it too. [`Experiment::abort`] sends STOP (re-sent until acknowledged) for shutdown.
+//!
+//! ```
+//! use propid::experiment::{Experiment, ExperimentConfig, Output};
+//! let mut plan = Experiment::new(ExperimentConfig::default(), 0).unwrap();
+//! plan.start(0);
+//! while let Some(out) = plan.next_output() {
+//!     if let Output::Send { seq, msg } = out {
+//!         assert_eq!((seq, msg.name()), (0, "HELLO_REQ"));
+//!     }
+//! }
+//! ```
+
+mod config;
+mod plan;
+
+pub use config::{ExperimentConfig, ExperimentConfigError};
+pub use plan::{Experiment, Notice, Output, Phase};
