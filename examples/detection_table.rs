@@ -13,9 +13,9 @@
 use std::path::{Path, PathBuf};
 
 use propid::cli::diagnose::{load, Args};
-use propid_sim::synth;
 use propid::diagnose::{self, Diagnosis};
 use propid_sim::plant::PlantConfig;
+use propid_sim::synth;
 
 /// One real-data file and how to read it (columns as `propid identify` reads them).
 struct RealCase {

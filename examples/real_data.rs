@@ -15,13 +15,13 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
+use propid::ingest::csv_file::{read_csv, CsvFileOptions};
+use propid::ingest::steps::find_steps;
 use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::workspace::IdentOptions;
 use propid_numerics::ModelReport;
-use propid::ingest::csv_file::{read_csv, CsvFileOptions};
-use propid::ingest::steps::find_steps;
 
 /// One file and how to read it.
 struct Case {

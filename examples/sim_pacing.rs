@@ -6,9 +6,9 @@
 use std::io::Read;
 use std::time::{Duration, Instant};
 
-use propid_wire::protocol::{Decoder, Message};
 use propid_sim::config::SimConfig;
 use propid_sim::pty::{RunOptions, SimHandle};
+use propid_wire::protocol::{Decoder, Message};
 
 fn main() {
     let mut args = std::env::args().skip(1);

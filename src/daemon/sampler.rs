@@ -540,10 +540,10 @@ fn sleep_unless(shutdown: &Shutdown, d: Duration) {
 mod tests {
     use super::*;
     use crate::daemon::source::{ScriptedSource, Step};
-    use propid_wire::protocol::message::{Hello, Sample, SampleFlags};
-    use propid_wire::protocol::{encode_frame, Decoder, EscProtocol};
     use propid_sim::record::{record, RecordSummary};
     use propid_sim::SimConfig;
+    use propid_wire::protocol::message::{Hello, Sample, SampleFlags};
+    use propid_wire::protocol::{encode_frame, Decoder, EscProtocol};
 
     fn cfg() -> SamplerConfig {
         SamplerConfig {

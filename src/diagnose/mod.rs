@@ -26,10 +26,10 @@ pub mod spectrum;
 
 use serde_json::{json, Map, Value};
 
-use propid_wire::record::{names, Record};
 use catalogue::{Ctx, EFFECTS, MIN_RMS_DROP, SCORE_THRESHOLD};
 use fit::Fit;
 use model::{ix, Signals, Spec};
+use propid_wire::record::{names, Record};
 pub use result::{Diagnosis, Extended, Finding, Gain, ModelSummary, Split, Stage, Traces};
 
 /// Why a diagnosis could not be made.

@@ -18,4 +18,3 @@ pub use propid_wire::stream::{
     AssembleOptions, AssembleStats, Assembled, BuildStats, RecordBuilder, SampleAssembler,
 };
 pub use tsp::{read_record, read_record_with, IngestOptions, IngestStats};
-

@@ -4,8 +4,8 @@
 //! [`Model`] without touching the heap (proven by `tests/alloc_free.rs`).
 //!
 //! ```no_run
-//! use propid::core::workspace::{IdentOptions, Limits, Workspace};
-//! use propid::core::pulses::PulseInput;
+//! use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
+//! use propid_numerics::pulses::PulseInput;
 //! # let (u, thrust) = (vec![0.0; 10], vec![0.0; 10]);
 //! let mut ws = Workspace::new(&Limits::default()).unwrap();
 //! let y = [&thrust[..]];

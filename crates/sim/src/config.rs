@@ -399,7 +399,7 @@ mod tests {
 
     #[test]
     fn shipped_config_effect_examples_are_valid_when_uncommented() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sim.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
         let text = std::fs::read_to_string(path).unwrap();
         let (head, tail) = text.split_once("# Effects (issue 5)").unwrap();
         let (effects, rest) = tail.split_once("[experiment]").unwrap();
@@ -413,7 +413,7 @@ mod tests {
 
     #[test]
     fn shipped_config_file_loads() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sim.toml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
         let cfg = SimConfig::load(&path).unwrap();
         assert_eq!(cfg.stand.protocol, WireProtocol::Tsp);
     }

@@ -1,16 +1,16 @@
 //! Tests of the experiment plan, against the real firmware state machine where it matters.
 
+use crate::config::{FaultConfig, StandConfig};
+use crate::dynamics::EchoStand;
+use crate::faults::FaultInjector;
+use crate::firmware::Firmware;
+use crate::record::run_loop;
 use propid_wire::experiment::*;
 use propid_wire::protocol::message::msg_type;
 use propid_wire::protocol::{
     encode_frame, Ack, AckResult, Decoder, Event, EventCode, Frame, Hello, Message, Sample,
     MAX_FRAME_LEN,
 };
-use crate::config::{FaultConfig, StandConfig};
-use crate::dynamics::EchoStand;
-use crate::faults::FaultInjector;
-use crate::firmware::Firmware;
-use crate::record::run_loop;
 
 fn quick() -> ExperimentConfig {
     ExperimentConfig {

@@ -2,12 +2,12 @@
 //! timing, the clock wrap. The stand is an exact [`EchoStand`] so values can be checked exactly.
 
 use super::*;
+use crate::config::FaultConfig;
+use crate::dynamics::EchoStand;
 use propid_wire::protocol::message::{msg_type, ACK_DUPLICATE};
 use propid_wire::protocol::{
     encode_raw, Ack, AckResult, Arm, Decoder, Frame, Impulse, SetRate, SetThrottle,
 };
-use crate::config::FaultConfig;
-use crate::dynamics::EchoStand;
 
 struct Bench {
     fw: Firmware<EchoStand>,

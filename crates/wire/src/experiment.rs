@@ -23,7 +23,7 @@
 //! ends it too. [`Experiment::abort`] sends STOP (re-sent until acknowledged) for shutdown.
 //!
 //! ```
-//! use propid::experiment::{Experiment, ExperimentConfig, Output};
+//! use propid_wire::experiment::{Experiment, ExperimentConfig, Output};
 //! let mut plan = Experiment::new(ExperimentConfig::default(), 0).unwrap();
 //! plan.start(0);
 //! while let Some(out) = plan.next_output() {

@@ -88,8 +88,8 @@ fn event_code(name: &str) -> Option<EventCode> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use propid_wire::protocol::message::Message;
     use propid_sim::csv::CsvWriter;
+    use propid_wire::protocol::message::Message;
 
     /// The simulated stand's own lines read back as the facts it wrote.
     #[test]

@@ -28,14 +28,14 @@ pub mod comments;
 pub mod placer;
 pub mod pulse_flags;
 
+use boot::{BootTracker, HelloVerdict};
+use comments::{parse_comment, CommentFact};
+use placer::{IndexPlacer, Placement};
 use propid_wire::protocol::csv::{CsvAck, CsvDecoder, CsvItem, CsvOptions, CsvRow};
 use propid_wire::protocol::csv_command::{encode_csv_command, CsvCommandError, CsvCommandKind};
 use propid_wire::protocol::message::{
     msg_type, Ack, AckResult, EscProtocol, Frame, Hello, Message, Sample, SampleFlags,
 };
-use boot::{BootTracker, HelloVerdict};
-use comments::{parse_comment, CommentFact};
-use placer::{IndexPlacer, Placement};
 use pulse_flags::PulseFlagger;
 
 /// How the adapter reads a CSV bench.

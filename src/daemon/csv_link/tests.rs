@@ -1,8 +1,8 @@
 //! The CSV link against the simulated stand's CSV dialect and against a plain Arduino bench.
 
 use super::*;
-use propid_wire::protocol::message::{Event, EventCode};
 use propid_sim::csv::CsvWriter;
+use propid_wire::protocol::message::{Event, EventCode};
 
 fn sample(k: u32, throttle: u16, thrust: f32) -> Sample {
     Sample {

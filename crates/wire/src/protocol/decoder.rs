@@ -113,7 +113,7 @@ pub fn decode_block(block: &mut [u8]) -> Result<Frame, DecodeError> {
 /// Fixed-buffer TSP/1 frame decoder (see the [module documentation](self)).
 ///
 /// ```
-/// use propid::protocol::{encode_frame, Decoder, Message, MAX_FRAME_LEN};
+/// use propid_wire::protocol::{encode_frame, Decoder, Message, MAX_FRAME_LEN};
 /// let mut wire = [0u8; MAX_FRAME_LEN];
 /// let n = encode_frame(10, &Message::Stop, &mut wire);
 /// let mut dec = Decoder::new();
@@ -196,7 +196,7 @@ impl Decoder {
     /// Iterate over the frames in `bytes` (drops counted, not yielded).
     ///
     /// ```
-    /// # use propid::protocol::Decoder;
+    /// # use propid_wire::protocol::Decoder;
     /// let mut dec = Decoder::new();
     /// for frame in dec.frames(&[0x03, 0x33, 0x34, 0x00]) {
     ///     println!("{frame:?}");

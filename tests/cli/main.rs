@@ -1,0 +1,12 @@
+//! The propid binary's subcommands run as a user runs them: identify, diagnose, demo, sim, walkthrough.
+
+mod demo_cli;
+mod diagnose_cli;
+mod diagnose_model_keys;
+mod diagnose_sim;
+mod identify_cli;
+mod identify_real_data;
+mod identify_sim_recording;
+mod identify_square_hankel;
+mod sim_cli;
+mod walkthrough_cli;

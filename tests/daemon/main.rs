@@ -1,0 +1,7 @@
+//! The daemon end to end: the real binary against the simulated stand on a pty, recordings replayed, faults forced.
+
+mod daemon_e2e;
+mod daemon_e2e_gaps;
+mod daemon_live;
+mod daemon_proc;
+mod daemon_replay;

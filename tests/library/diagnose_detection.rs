@@ -1,0 +1,189 @@
+//! Issue 5, "How we will know": for each effect, 20 seeded cases with random parameters and
+//! random plants (even cases underdamped, odd cases overdamped), generated in-process with the
+//! simulated plant. The detector sees only the measured throttle, thrust and supply voltage.
+//! Each case must name the effect, estimate its parameters within the stated tolerance, name no
+//! other effect, and validate the extended model better than the baseline. 50 clean cases
+//! measure the false-alarm rate, which must be at most 5 %.
+
+use propid::diagnose::{self, Diagnosis, Finding};
+use propid_sim::plant::PlantConfig;
+use propid_sim::synth;
+
+const CASES: u64 = 20;
+
+fn run(name: &str, i: u64) -> (PlantConfig, Diagnosis) {
+    let (cfg, m) = synth::case(name, i).expect("valid plant");
+    let d = diagnose::diagnose(
+        synth::DT_S,
+        &m.u,
+        &m.y,
+        Some(&m.voltage),
+        &Default::default(),
+    )
+    .expect("diagnosis");
+    (cfg, d)
+}
+
+fn num(f: &Finding, key: &str) -> f64 {
+    f.params
+        .get(key)
+        .and_then(|v| v.as_f64())
+        .unwrap_or_else(|| panic!("finding {} lacks {key}", f.effect))
+}
+
+/// Runs every case of `name` and checks naming, uniqueness, gain and `check_params`.
+fn check_effect(name: &str, check_params: impl Fn(&PlantConfig, &Finding) -> Result<(), String>) {
+    let mut failures = Vec::new();
+    for i in 0..CASES {
+        let (cfg, d) = run(name, i);
+        let names: Vec<&str> = d.findings.iter().map(|f| f.effect.as_str()).collect();
+        let Some(f) = d.findings.iter().find(|f| f.effect == name) else {
+            failures.push(format!("case {i}: not named (found {names:?})"));
+            continue;
+        };
+        if names.len() != 1 {
+            failures.push(format!("case {i}: other effects named too: {names:?}"));
+        }
+        if let Err(e) = check_params(&cfg, f) {
+            failures.push(format!("case {i}: {e}"));
+        }
+        let ext = d
+            .extended
+            .as_ref()
+            .expect("extended model when an effect is found");
+        if ext.fit_percent <= d.baseline.fit_percent {
+            failures.push(format!(
+                "case {i}: extended fit {:.2} % does not beat baseline {:.2} %",
+                ext.fit_percent, d.baseline.fit_percent
+            ));
+        }
+        assert!(f.score.is_finite() && !f.evidence.is_empty());
+    }
+    assert!(failures.is_empty(), "{name}:\n{}", failures.join("\n"));
+}
+
+fn rel(est: f64, truth: f64, tol: f64, what: &str) -> Result<(), String> {
+    let e = ((est - truth) / truth).abs();
+    if e <= tol {
+        Ok(())
+    } else {
+        Err(format!(
+            "{what} {est:.5} vs true {truth:.5} (rel. error {e:.3} > {tol})"
+        ))
+    }
+}
+
+#[test]
+fn dead_time_is_found_to_one_sample() {
+    check_effect("dead_time", |cfg, f| {
+        let truth = (cfg.effects.dead_time.as_ref().unwrap().delay_s / synth::DT_S).round();
+        let est = num(f, "delay_samples");
+        let ok =
+            (est - truth).abs() <= 1.0 && (num(f, "delay_s") - est * synth::DT_S).abs() < 1e-12;
+        ok.then_some(())
+            .ok_or(format!("delay {est} samples vs true {truth}"))
+    });
+}
+
+#[test]
+fn static_nonlinearity_exponent_within_10_percent() {
+    check_effect("static_nonlinearity", |cfg, f| {
+        let p = cfg.effects.static_nonlinearity.as_ref().unwrap().exponent;
+        let curv = f
+            .params
+            .get("curvature")
+            .and_then(|v| v.as_str())
+            .unwrap_or("");
+        let want = if p > 1.0 { "hardens" } else { "softens" };
+        if curv != want {
+            return Err(format!("curvature {curv} for exponent {p}"));
+        }
+        rel(num(f, "exponent"), p, 0.10, "exponent")
+    });
+}
+
+#[test]
+fn extra_mode_frequency_within_5_percent_and_damping_within_003() {
+    check_effect("extra_mode", |cfg, f| {
+        let m = cfg.effects.extra_mode.as_ref().unwrap();
+        rel(num(f, "fn_hz"), m.fn_hz, 0.05, "fn_hz")?;
+        let z = num(f, "zeta");
+        ((z - m.zeta).abs() <= 0.03)
+            .then_some(())
+            .ok_or(format!("zeta {z:.4} vs true {:.4}", m.zeta))
+    });
+}
+
+#[test]
+fn baseline_drift_rate_within_15_percent() {
+    check_effect("baseline_drift", |cfg, f| {
+        let r = cfg.effects.baseline_drift.as_ref().unwrap().rate_per_s;
+        rel(num(f, "rate_per_s"), r, 0.15, "rate_per_s")
+    });
+}
+
+#[test]
+fn periodic_disturbance_frequency_within_1_percent_amplitude_within_15_percent() {
+    check_effect("periodic_disturbance", |cfg, f| {
+        let p = cfg.effects.periodic_disturbance.as_ref().unwrap();
+        rel(num(f, "freq_hz"), p.freq_hz, 0.01, "freq_hz")?;
+        rel(num(f, "amplitude"), p.amplitude, 0.15, "amplitude")
+    });
+}
+
+#[test]
+fn supply_sag_gain_per_volt_within_25_percent() {
+    check_effect("supply_sag", |cfg, f| {
+        let g = cfg.effects.supply_sag.as_ref().unwrap().gain_per_volt;
+        rel(num(f, "gain_per_volt"), g, 0.25, "gain_per_volt")
+    });
+}
+
+#[test]
+fn throttle_saturation_level_within_001() {
+    check_effect("saturation", |cfg, f| {
+        let l = cfg.effects.saturation.as_ref().unwrap().level;
+        let est = num(f, "level");
+        let sig = f.params.get("signal").and_then(|v| v.as_str());
+        ((est - l).abs() <= 0.01 && sig == Some("throttle"))
+            .then_some(())
+            .ok_or(format!("level {est:.4} ({sig:?}) vs true {l:.4}"))
+    });
+}
+
+#[test]
+fn false_alarm_rate_on_50_clean_cases_is_at_most_5_percent() {
+    let n = 50;
+    // Two threads (CI has two cores); each case is independent and seeded.
+    let half = |range: std::ops::Range<u64>| {
+        let mut found = Vec::new();
+        for i in range {
+            let (_, d) = run("clean", i);
+            if !d.findings.is_empty() {
+                found.push((
+                    i,
+                    d.findings
+                        .iter()
+                        .map(|f| f.effect.clone())
+                        .collect::<Vec<_>>(),
+                ));
+            } else {
+                assert!(d.extended.is_none() && d.gain.is_none());
+            }
+        }
+        found
+    };
+    let alarms: Vec<_> = std::thread::scope(|s| {
+        let a = s.spawn(|| half(0..n / 2));
+        let b = s.spawn(|| half(n / 2..n));
+        let mut v = a.join().expect("first half");
+        v.extend(b.join().expect("second half"));
+        v
+    });
+    let rate = alarms.len() as f64 / n as f64;
+    eprintln!(
+        "false-alarm rate on {n} clean cases: {:.1} % {alarms:?}",
+        100.0 * rate
+    );
+    assert!(rate <= 0.05, "false-alarm rate {rate} > 5 %: {alarms:?}");
+}
