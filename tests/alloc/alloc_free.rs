@@ -1,7 +1,7 @@
 //! The identification hot path makes zero heap allocations: a counting global allocator
 //! counts allocations made by this thread while `identify` runs, repeatedly.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use crate::counting_alloc;
 

@@ -1,6 +1,6 @@
 //! `propid identify` as a user runs it: the real binary on small CSV files in a temp dir.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

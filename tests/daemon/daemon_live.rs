@@ -3,7 +3,7 @@
 //! and exits 0 with the stats line; hang-up and reconnect (new boot: never re-armed); the
 //! device watchdog trips when the daemon's heartbeats stop; injected link faults are counted.
 
-use propid_sim::cases::csv_bench;
+use propid_testkit::csv_bench;
 
 use crate::daemon_proc;
 

@@ -10,7 +10,7 @@ use serde_json::Value;
 use std::process::Command;
 
 use crate::daemon_proc;
-use propid_sim::cases::csv_bench;
+use propid_testkit::csv_bench;
 
 use daemon_proc::{clean_stand as stand, dropped_total, of_type, stats, BIN};
 

@@ -22,7 +22,6 @@
 //! last 8 commands, [`pace`] the monotonic clock, and the command semantics live in `execute`.
 //! The [`plant`] and its [`effects`] are the diagnose part's model of the motor + propeller.
 
-pub mod cases;
 pub mod config;
 pub mod csv;
 pub mod dedup;

@@ -1,6 +1,6 @@
 //! Bad input gives a typed error, never a panic (issue 2, item 6); the JSON report is valid.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use core_support::{throttle, Plant};
 use propid_numerics::{IdentError, IdentOptions, Limits, MarkovSeq, PulseInput, Workspace};

@@ -1,6 +1,6 @@
 //! Noise-free exact recovery of fn, ζ and DC gain (issue 2, "How we will know").
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use core_support::{record_input, rel, throttle, Plant, PulseSpec};
 use propid_numerics::{IdentOptions, Limits, MarkovSeq, Workspace};

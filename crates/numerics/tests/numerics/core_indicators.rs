@@ -1,7 +1,7 @@
 //! Accuracy indicators against known values: exact data gives MAC = EMAC = 1; modes forced
 //! into noise get low indicators while the physical mode keeps high ones.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use core_support::{add_noise, record_input, throttle, Plant};
 use propid_numerics::{IdentOptions, Limits, MarkovSeq, Workspace};

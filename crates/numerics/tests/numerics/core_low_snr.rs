@@ -2,7 +2,7 @@
 //! (fn = 12 Hz, ζ = 0.7, 12 N/throttle, 10 mN noise, four pulses of ±0.05/±0.1 throttle,
 //! order 2): the single-pulse peak is only 2–4 × the noise. Numbers in docs/core.md.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use core_support::{add_noise, record_input, throttle, Plant};
 use propid_numerics::{IdentOptions, Limits, Workspace};

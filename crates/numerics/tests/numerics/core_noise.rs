@@ -2,7 +2,7 @@
 //! (numbers documented in docs/core.md), the tiny-Hankel pitfall, and the jackknife against
 //! the observed scatter.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use core_support::{add_noise, record_input, throttle, Plant};
 use propid_numerics::{IdentOptions, Limits, Workspace};

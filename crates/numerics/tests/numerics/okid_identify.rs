@@ -1,7 +1,7 @@
 //! OKID + ERA end to end through `identify_any`: exact fn, ζ and DC gain from non-pulse
 //! excitation, including records on which the pulse path fails.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use core_support::Plant;
 use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};

@@ -19,7 +19,7 @@
 //! the size of the parameters themselves), though the DC gain stays within 1 %. The bounds
 //! asserted below leave a margin of about 2× over these numbers.
 
-use propid_sim::cases as core_support;
+use propid_testkit as core_support;
 
 use core_support::Plant;
 use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};

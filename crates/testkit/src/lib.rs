@@ -1,5 +1,10 @@
-//! Test cases the test suites share: exact zero-order-hold 2nd-order plants and pulse records
-//! (the core's tests), and a CSV bench's rows ([`csv_bench`], the daemon's tests).
+//! # propid-testkit — the test cases the suites share
+//!
+//! Exact zero-order-hold 2nd-order plants and pulse records (the core's tests, the CLI's), and a
+//! CSV bench's rows ([`csv_bench`], the daemon's tests). Pure functions, no I/O: a dev-dependency
+//! only, so the numerics crate can test against it without the simulated stand's pty and serial
+//! dependencies entering its dependency tree. Cases that need the simulated plant and its hidden
+//! effects are `propid_sim::synth`.
 
 pub mod csv_bench;
 
