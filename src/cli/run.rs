@@ -33,7 +33,7 @@ pub fn daemon_error(e: DaemonError) -> CliError {
         DaemonError::Source(e) => CliError::Device(e.to_string()),
         DaemonError::LinkFailed(m) => CliError::Device(format!("link failed: {m}")),
         DaemonError::Io { context, source } => CliError::Io { context, source },
-        e @ (DaemonError::Publish(_) | DaemonError::Signal(_) | DaemonError::Internal(_)) => {
+        e @ (DaemonError::Serialize(_) | DaemonError::Signal(_) | DaemonError::Internal(_)) => {
             CliError::Io {
                 context: "propid".into(),
                 source: std::io::Error::other(e.to_string()),

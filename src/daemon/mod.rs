@@ -16,8 +16,11 @@
 
 pub mod config;
 pub mod csv_link;
+#[cfg(test)]
+mod fixtures;
 pub mod identify;
 pub mod item;
+pub mod line;
 pub mod plan;
 pub mod publish;
 pub mod quality;
@@ -53,9 +56,9 @@ pub enum DaemonError {
         /// The OS error.
         source: std::io::Error,
     },
-    /// A line could not be published.
-    #[error("publish: {0}")]
-    Publish(String),
+    /// A line could not be serialised (a bug: every published type serialises).
+    #[error("publish: cannot serialise a line: {0}")]
+    Serialize(#[source] serde_json::Error),
     /// The signal handler could not be installed.
     #[error("cannot install the signal handler: {0}")]
     Signal(String),

@@ -62,14 +62,16 @@ impl OutputChannel {
     }
 }
 
-/// Why a window is identified.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Why a window is identified (published as the model line's `reason`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Reason {
     /// K pulses done and the next one started.
     Pulses,
     /// The operating point ended (ramp or level change).
     LevelEnd,
     /// The window reached its capacity.
+    #[serde(rename = "window_full")]
     Full,
     /// The device started a new segment.
     Segment,

@@ -2,39 +2,25 @@
 //!
 //! The worker drains the sampler's queue. For each item it does the window bookkeeping
 //! ([`Window`]), and when a window is complete the short hot call — [`Identifier::identify`],
-//! which makes no heap allocation — followed by the slow work around it: building the report,
-//! publishing the `"model"` line, updating the gain schedule and the latency statistics.
-//!
-//! Published lines (one JSON object each):
-//! - `{"type":"model", "t_s", "operating_point", "level", "first_sample", "samples",
-//!   "reason", <the model fields of propid identify --json>}` — `t_s` is the device time of the
-//!   window's last sample (unwrapped, s), `operating_point` the throttle level (fraction).
-//! - `{"type":"event", "kind", ...}` and `{"type":"warning", "kind", "message", ...}`.
-//! - At the end `{"type":"schedule", "models":[...]}`: the last model per operating point (the
-//!   gain schedule a flight controller needs), ordered by operating point.
+//! which makes no heap allocation — followed by the slow work around it: the typed model
+//! ([`Identifier::report`]), the quality checks, publishing the `"model"` line, updating the
+//! gain schedule and the latency statistics. Every line it publishes is a typed
+//! [`Line`](super::line::Line) (the shapes are documented in [`super::line`]).
 //!
 //! Nothing here depends on wall-clock time except the latency measurement, which is reported in
 //! the stats line only; the published model lines depend only on the byte stream, so a live run
 //! and the replay of its recording publish identical model lines.
 
 use crossbeam_channel::Receiver;
-use serde_json::{json, Map, Value};
-use std::time::Instant;
 
-use super::item::{EventItem, Item, PlanNote, SampleItem};
+pub use super::identify::{Identifier, IdentifyError};
+use super::item::{Item, SampleItem};
+use super::line::{Event, Line, ScheduleRow, Warning, WindowFacts, WindowModel};
 use super::publish::Publisher;
 use super::quality;
 use super::stats::WorkStats;
-use super::window::{Reason, Window, WindowView};
+use super::window::{Window, WindowView};
 use super::DaemonError;
-
-/// Identifies one window. The daemon's implementation wraps the core's workspace.
-pub trait Identifier: Send {
-    /// The hot call: identifies the window; must not allocate on success.
-    fn identify(&mut self, view: &WindowView<'_>) -> Result<(), String>;
-    /// The model fields of the last successful identification (allocates; a JSON object).
-    fn report(&self) -> Result<Map<String, Value>, String>;
-}
 
 /// Latency samples kept (the first ones of a run; enough for p99).
 const LATENCY_CAP: usize = 65_536;
@@ -57,7 +43,8 @@ pub struct Worker<I: Identifier> {
     identifier: I,
     publisher: Publisher,
     stats: WorkStats,
-    schedule: Vec<(u32, f64, Map<String, Value>)>,
+    /// The gain schedule: per operating-point number, its last reliable model.
+    schedule: Vec<(u32, ScheduleRow)>,
     latencies_s: Vec<f64>,
     error: Option<DaemonError>,
 }
@@ -90,36 +77,39 @@ impl<I: Identifier> Worker<I> {
             Item::Sample(s) => self.on_sample(&s),
             Item::Gap { before, count } => {
                 self.window.on_gap(count);
-                self.emit(
-                    json!({"type": "event", "kind": "gap", "before": before, "count": count}),
-                );
+                self.emit(&Line::Event(Event::Gap { before, count }));
             }
             Item::Segment { boot_id } => {
-                let mut done = Vec::new();
+                let mut done = None;
                 let identifier = &mut self.identifier;
                 self.window
-                    .on_segment(|v| done.push(identify_one(identifier, v)));
-                for d in done {
+                    .on_segment(|v| done = Some(identify_one(identifier, v)));
+                if let Some(d) = done {
                     self.publish_model(d);
                 }
-                self.emit(json!({"type": "event", "kind": "segment", "boot_id": boot_id}));
+                self.emit(&Line::Event(Event::Segment { boot_id }));
             }
-            Item::Event(e) => self.on_event(&e),
-            Item::Plan(n) => self.on_plan(n),
-            Item::Notice(n) => {
-                let kind = if n.is_warning() { "warning" } else { "event" };
-                self.emit(json!({"type": kind, "kind": n.name()}));
+            Item::Event(e) => {
+                if let Some(line) = Line::device_event(&e) {
+                    self.emit(&line);
+                }
             }
+            Item::Plan(n) => {
+                if let Some(line) = Line::plan(n) {
+                    self.emit(&line);
+                }
+            }
+            Item::Notice(n) => self.emit(&Line::notice(n)),
         }
     }
 
     /// Closes the last window and publishes the gain schedule.
     pub fn finish(mut self) -> WorkerOutcome {
-        let mut done = Vec::new();
+        let mut done = None;
         let identifier = &mut self.identifier;
         self.window
-            .finish(|v| done.push(identify_one(identifier, v)));
-        for d in done {
+            .finish(|v| done = Some(identify_one(identifier, v)));
+        if let Some(d) = done {
             self.publish_model(d);
         }
         self.publish_schedule();
@@ -144,130 +134,79 @@ impl<I: Identifier> Worker<I> {
         }
         if outcome.unannounced_lost > 0 {
             // Only the sampler's full queue drops samples without a gap notice.
-            self.emit(json!({"type": "warning", "kind": "overflow_gap",
-                "message": "samples dropped by a full sampler queue; masked as missing",
-                "before": s.index, "count": outcome.unannounced_lost}));
+            self.emit(&Line::Warning(Warning::OverflowGap {
+                before: s.index,
+                count: outcome.unannounced_lost,
+            }));
         }
         if let Some(d) = done {
             self.publish_model(d);
         }
         if outcome.overflowed {
-            self.emit(json!({"type": "warning", "kind": "window_full",
-                "message": "window filled before K pulses; its samples were discarded",
-                "sample_index": s.index}));
+            self.emit(&Line::Warning(Warning::WindowFull {
+                sample_index: s.index,
+            }));
         }
-    }
-
-    fn on_plan(&mut self, n: PlanNote) {
-        let line = match n {
-            PlanNote::PulseFired => return,
-            PlanNote::Connected { boot_id } => {
-                json!({"type": "event", "kind": "connected", "boot_id": boot_id})
-            }
-            PlanNote::Armed => json!({"type": "event", "kind": "arm_acknowledged"}),
-            PlanNote::LevelReached { index, level } => {
-                json!({"type": "event", "kind": "level_reached", "index": index, "operating_point": level})
-            }
-            PlanNote::LevelDone { index, level } => {
-                json!({"type": "event", "kind": "level_done", "index": index, "operating_point": level})
-            }
-            PlanNote::Finished => json!({"type": "event", "kind": "plan_finished"}),
-            PlanNote::Stopped => json!({"type": "event", "kind": "stop_acknowledged"}),
-            PlanNote::DeviceReset { new_boot_id } => json!({"type": "warning",
-                "kind": "device_reset", "boot_id": new_boot_id,
-                "message": "the device reset and is disarmed; the plan is over and will not re-arm"}),
-            PlanNote::WatchdogTripped => json!({"type": "warning", "kind": "plan_halted_watchdog",
-                "message": "the device watchdog stopped the motor; the plan is over"}),
-            PlanNote::Refused { command } => json!({"type": "warning", "kind": "command_refused",
-                "command": command, "message": "the device refused a command; the plan is over"}),
-            PlanNote::LinkFailed { command } => json!({"type": "warning", "kind": "link_failed",
-                "command": command, "message": "a command went unanswered after its re-sends"}),
-        };
-        self.emit(line);
-    }
-
-    fn on_event(&mut self, e: &EventItem) {
-        let (kind, warning) = match e.code {
-            1 | 2 => return, // impulse edges: counted through the samples' flags
-            3 => ("watchdog_trip", true),
-            4 => ("limit_cutoff", true),
-            5 => ("armed", false),
-            6 => ("disarmed", false),
-            7 => ("tx_overrun", true),
-            8 => ("reset_cause", false),
-            9 => ("tare_done", false),
-            _ => ("unknown_event", true),
-        };
-        let ty = if warning { "warning" } else { "event" };
-        self.emit(
-            json!({"type": ty, "kind": kind, "code": e.code, "arg": e.arg,
-            "t_s": e.t_us as f64 * 1e-6, "sample_index": e.sample_index}),
-        );
     }
 
     fn publish_model(&mut self, d: Done) {
         let report = match d.result.and_then(|()| self.identifier.report()) {
             Ok(r) => r,
-            Err(message) => {
+            Err(error) => {
                 self.stats.identify_errors += 1;
-                self.emit(json!({"type": "warning", "kind": "identification_failed",
-                    "message": message, "operating_point": d.level, "t_s": d.t_s}));
+                self.emit(&Line::Warning(Warning::IdentificationFailed {
+                    error: &error,
+                    operating_point: d.facts.operating_point,
+                    t_s: d.facts.t_s,
+                }));
                 return;
             }
         };
-        let mut line = Map::new();
-        line.insert("type".into(), json!("model"));
-        line.insert("t_s".into(), json!(d.t_s));
-        line.insert("operating_point".into(), json!(d.level));
-        line.insert("level".into(), json!(d.level_number));
-        line.insert("first_sample".into(), json!(d.first_index));
-        line.insert("samples".into(), json!(d.samples));
-        line.insert("reason".into(), json!(d.reason));
-        for (k, v) in &report {
-            line.entry(k.clone()).or_insert_with(|| v.clone());
-        }
-        let reasons = quality::judge(&report);
-        if !reasons.is_empty() {
+        let model = WindowModel {
+            window: d.facts,
+            report,
+        };
+        let flaws = quality::judge(&model.report);
+        if !flaws.is_empty() {
             // not the plant: published for inspection, never as a model nor in the schedule
-            line.insert("type".into(), json!("warning"));
-            line.insert("kind".into(), json!("model_unreliable"));
-            line.insert("reasons".into(), json!(reasons));
-            line.insert("message".into(), json!(quality::HINT));
-            self.emit(Value::Object(line));
+            self.emit(&Line::Warning(Warning::ModelUnreliable {
+                model: &model,
+                reasons: &flaws,
+            }));
             self.stats.models_unreliable += 1;
             return;
         }
-        self.emit(Value::Object(line));
+        self.emit(&Line::Model(&model));
         self.stats.models += 1;
-        if let Some(t) = d.last_received {
+        if let Some(t) = d.facts.last_received {
             if self.latencies_s.len() < LATENCY_CAP {
                 self.latencies_s.push(t.elapsed().as_secs_f64());
             }
         }
-        match self.schedule.iter_mut().find(|e| e.0 == d.level_number) {
-            Some(e) => e.2 = report,
-            None => self.schedule.push((d.level_number, d.level, report)),
+        let level = model.window.level;
+        match self.schedule.iter_mut().find(|e| e.0 == level) {
+            // the operating point stays the one first published for this number
+            Some(e) => e.1 = ScheduleRow::new(e.1.operating_point, &model.report),
+            None => self.schedule.push((
+                level,
+                ScheduleRow::new(model.window.operating_point, &model.report),
+            )),
         }
     }
 
     fn publish_schedule(&mut self) {
-        let mut rows: Vec<&(u32, f64, Map<String, Value>)> = self.schedule.iter().collect();
-        rows.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
-        let models: Vec<Value> = rows
-            .iter()
-            .map(|(_, level, m)| {
-                let get = |k: &str| m.get(k).cloned().unwrap_or(Value::Null);
-                json!({"operating_point": level, "order": get("order"), "fn_hz": get("fn_hz"),
-                    "zeta": get("zeta"), "dc_gain": get("dc_gain"),
-                    "time_constants_s": get("time_constants_s"), "pulses": get("pulses"),
-                    "uncertainty": get("uncertainty")})
-            })
-            .collect();
-        self.emit(json!({"type": "schedule", "models": models}));
+        let mut rows = std::mem::take(&mut self.schedule);
+        rows.sort_by(|a, b| {
+            a.1.operating_point
+                .total_cmp(&b.1.operating_point)
+                .then(a.0.cmp(&b.0))
+        });
+        let models: Vec<ScheduleRow> = rows.into_iter().map(|(_, row)| row).collect();
+        self.emit(&Line::Schedule(&models));
     }
 
-    fn emit(&mut self, v: Value) {
-        if let Err(e) = self.publisher.publish_json(&v) {
+    fn emit(&mut self, line: &Line<'_>) {
+        if let Err(e) = self.publisher.publish_line(line) {
             self.error.get_or_insert(e);
         }
     }
@@ -275,41 +214,17 @@ impl<I: Identifier> Worker<I> {
 
 /// An identification done in the hot path, waiting to be published.
 struct Done {
-    result: Result<(), String>,
-    t_s: f64,
-    level: f64,
-    level_number: u32,
-    first_index: u64,
-    samples: usize,
-    reason: &'static str,
-    last_received: Option<Instant>,
-}
-
-fn reason_name(r: Reason) -> &'static str {
-    match r {
-        Reason::Pulses => "pulses",
-        Reason::LevelEnd => "level_end",
-        Reason::Full => "window_full",
-        Reason::Segment => "segment",
-        Reason::End => "end",
-    }
+    facts: WindowFacts,
+    result: Result<(), IdentifyError>,
 }
 
 /// The hot call and the facts needed to publish it later (no allocation).
 fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>) -> Done {
     Done {
+        facts: WindowFacts::from(v),
         result: id.identify(v),
-        t_s: v.last_t_us as f64 * 1e-6,
-        level: v.level,
-        level_number: v.level_number,
-        first_index: v.first_index,
-        samples: v.input.len(),
-        reason: reason_name(v.reason),
-        last_received: v.last_received,
     }
 }
 
-#[cfg(test)]
-mod pinned;
 #[cfg(test)]
 mod tests;

@@ -3,27 +3,17 @@
 //! in order). A change of the published bytes fails here.
 
 use super::*;
-use crate::daemon::item::{flags, Notice};
+use crate::daemon::fixtures::report;
+use crate::daemon::item::{flags, EventItem, Notice, PlanNote};
 use crate::daemon::window::OutputChannel;
 use propid_numerics::{IdentError, ModelReport};
+use serde_json::json;
+use std::time::Instant;
 
-/// A complete model report with short numbers; `unstable` puts the poles in the right half-plane.
+/// The fixture's model report; `unstable` puts the poles in the right half-plane.
 fn pinned_report(unstable: bool) -> ModelReport {
     let re = if unstable { 3.0 } else { -39.25 };
-    serde_json::from_value(json!({
-        "order": 2, "dt_s": 0.001, "fn_hz": 12.5, "zeta": 0.5, "dc_gain": 2.0,
-        "time_constants_s": [], "poles_s": [[re, 68.0], [re, -68.0]],
-        "poles_z": [[0.96, 0.065], [0.96, -0.065]],
-        "a": [[0.5, 0.25], [-0.25, 0.5]], "b": [[1.0], [0.0]], "c": [[1.0, 0.0]], "d": [[0.0]],
-        "singular_values": [3.0, 1.0],
-        "indicators": [{"msv": 3.0, "mac": 1.0, "emac": 0.5, "mpc": 1.0, "cmi": 0.5},
-                       {"msv": 3.0, "mac": 1.0, "emac": 0.5, "mpc": 1.0, "cmi": 0.5}],
-        "uncertainty": {"fn_hz": 0.25, "zeta": null, "dc_gain": 0.5},
-        "pulses": 1, "pulses_skipped": 0, "noise_rms": 0.01,
-        "mass_spring_damper": {"m": 0.25, "d": 0.125, "k": 0.5},
-        "hankel_block_rows": 10, "hankel_block_cols": 10, "svd": "truncated"
-    }))
-    .unwrap()
+    report(json!({"poles_s": [[re, 68.0], [re, -68.0]]}))
 }
 
 /// Identifications 1 and 4 give the pinned model, 2 an unstable one, 3 fails.
@@ -32,18 +22,15 @@ struct Pinned {
 }
 
 impl Identifier for Pinned {
-    fn identify(&mut self, _: &WindowView<'_>) -> Result<(), String> {
+    fn identify(&mut self, _: &WindowView<'_>) -> Result<(), IdentifyError> {
         self.calls += 1;
         match self.calls {
-            3 => Err(IdentError::NoPulse.to_string()),
+            3 => Err(IdentError::NoPulse.into()),
             _ => Ok(()),
         }
     }
-    fn report(&self) -> Result<Map<String, Value>, String> {
-        match serde_json::to_value(pinned_report(self.calls == 2)) {
-            Ok(Value::Object(m)) => Ok(m),
-            _ => Err("not an object".into()),
-        }
+    fn report(&self) -> Result<ModelReport, IdentifyError> {
+        Ok(pinned_report(self.calls == 2))
     }
 }
 

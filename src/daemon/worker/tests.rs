@@ -1,8 +1,12 @@
 //! The worker's unit tests: windows per level, unreliable models, overflow holes, failures.
 
 use super::*;
-use crate::daemon::item::flags;
+use crate::daemon::fixtures::report;
+use crate::daemon::item::{flags, EventItem};
 use crate::daemon::window::OutputChannel;
+use propid_numerics::{IdentError, ModelReport};
+use serde_json::{json, Value};
+use std::time::Instant;
 
 /// A fake identifier: reports the window length and pulse count as the "model".
 struct Fake {
@@ -14,21 +18,22 @@ struct Fake {
 }
 
 impl Identifier for Fake {
-    fn identify(&mut self, v: &WindowView<'_>) -> Result<(), String> {
+    fn identify(&mut self, v: &WindowView<'_>) -> Result<(), IdentifyError> {
         self.calls += 1;
         if self.fail_every > 0 && self.calls % self.fail_every == 0 {
-            return Err("no pulse found".into());
+            return Err(IdentError::NoPulse.into());
         }
         self.last = Some((v.input.len(), v.pulse_starts.len()));
         Ok(())
     }
-    fn report(&self) -> Result<Map<String, Value>, String> {
-        let (n, p) = self.last.ok_or("nothing")?;
+    fn report(&self) -> Result<ModelReport, IdentifyError> {
+        let (n, p) = self.last.ok_or(IdentifyError::NoModel)?;
         let unstable = self.unstable_every > 0 && self.calls % self.unstable_every == 0;
         let re = if unstable { 3.0 } else { -30.0 };
-        let v = json!({"order": 2, "fn_hz": n as f64, "zeta": 0.5, "dc_gain": 1.0,
-            "pulses": p, "poles_s": [[re, 40.0], [re, -40.0]]});
-        Ok(v.as_object().unwrap().clone())
+        Ok(report(
+            json!({"order": 2, "fn_hz": n as f64, "zeta": 0.5, "dc_gain": 1.0,
+            "pulses": p, "poles_s": [[re, 40.0], [re, -40.0]]}),
+        ))
     }
 }
 
@@ -140,16 +145,15 @@ fn an_unreliable_model_is_a_warning_and_stays_out_of_the_schedule() {
 #[test]
 fn overflow_hole_inside_a_pulse_window_is_masked_and_reported() {
     let (publisher, lines) = Publisher::capture();
+    /// Reports the masked samples of the window as `pulses_skipped`.
     struct Masked(Vec<usize>);
     impl Identifier for Masked {
-        fn identify(&mut self, v: &WindowView<'_>) -> Result<(), String> {
+        fn identify(&mut self, v: &WindowView<'_>) -> Result<(), IdentifyError> {
             self.0.push(v.missing.iter().filter(|m| **m).count());
             Ok(())
         }
-        fn report(&self) -> Result<Map<String, Value>, String> {
-            let mut m = Map::new();
-            m.insert("masked".into(), json!(self.0.last()));
-            Ok(m)
+        fn report(&self) -> Result<ModelReport, IdentifyError> {
+            Ok(report(json!({ "pulses_skipped": self.0.last() })))
         }
     }
     let window = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
@@ -171,7 +175,10 @@ fn overflow_hole_inside_a_pulse_window_is_masked_and_reported() {
         .any(|l| l["kind"] == "overflow_gap" && l["count"] == 10 && l["before"] == 70));
     let models: Vec<&Value> = v.iter().filter(|l| l["type"] == "model").collect();
     assert_eq!(models.len(), 1);
-    assert_eq!(models[0]["masked"], 10, "the hole is masked, not bridged");
+    assert_eq!(
+        models[0]["pulses_skipped"], 10,
+        "the hole is masked, not bridged"
+    );
     assert_eq!(models[0]["samples"], 200);
 }
 
