@@ -31,15 +31,15 @@ pub fn daemon_error(e: DaemonError) -> CliError {
     match e {
         DaemonError::Config(e) => CliError::Config(e.to_string()),
         DaemonError::Source(e) => CliError::Device(e.to_string()),
-        DaemonError::LinkFailed(m) => CliError::Device(format!("link failed: {m}")),
+        e @ DaemonError::LinkFailed { .. } => CliError::Device(e.to_string()),
         DaemonError::Io { context, source } => CliError::Io { context, source },
-        e @ (DaemonError::Serialize(_) | DaemonError::Signal(_) | DaemonError::Internal(_)) => {
-            CliError::Io {
-                context: "propid".into(),
-                source: std::io::Error::other(e.to_string()),
-            }
-        }
-        DaemonError::Identify(m) => CliError::Identification(m),
+        e @ (DaemonError::Serialize(_)
+        | DaemonError::Signal(_)
+        | DaemonError::ThreadPanicked { .. }) => CliError::Io {
+            context: "propid".into(),
+            source: std::io::Error::other(e.to_string()),
+        },
+        DaemonError::Identify(e) => CliError::Identification(e.to_string()),
     }
 }
 

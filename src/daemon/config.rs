@@ -10,6 +10,7 @@
 //! Every key, its unit and its range are documented in `config/propid.toml`; the defaults here
 //! are the values written there.
 
+use propid_wire::experiment::ExperimentConfigError;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -26,13 +27,16 @@ pub enum ConfigError {
         source: std::io::Error,
     },
     /// The TOML is malformed, has an unknown key or a value of the wrong type.
-    #[error("config {origin}: {message}")]
+    #[error("config {origin}: {source}")]
     Parse {
-        /// Where the text came from.
+        /// Where the text came from (a file, or `[experiment]` for that table).
         origin: String,
-        /// The parser's message (names the key and shows the line).
-        message: String,
+        /// The parser's error (names the key and shows the line).
+        source: toml::de::Error,
     },
+    /// The `[experiment]` table was refused by the experiment plan.
+    #[error("config [experiment]: {0}")]
+    Experiment(#[source] ExperimentConfigError),
     /// A value is outside its range (or not a finite number).
     #[error("config key `{key}` = {value}: {expected}")]
     OutOfRange {
@@ -268,9 +272,9 @@ impl Config {
 
     /// Parses and validates config text; `origin` names it in errors.
     pub fn parse(text: &str, origin: &str) -> Result<Config, ConfigError> {
-        let raw: RawConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+        let raw: RawConfig = toml::from_str(text).map_err(|source| ConfigError::Parse {
             origin: origin.to_string(),
-            message: e.to_string(),
+            source,
         })?;
         raw.validate()
     }

@@ -113,14 +113,14 @@ impl CoreIdentifier {
             max_pulses: cfg.identify.pulses_per_model as usize + 2,
             ..Limits::default()
         };
-        let ws = Workspace::new(&limits).map_err(|e| DaemonError::Identify(e.to_string()))?;
+        let ws = Workspace::new(&limits).map_err(DaemonError::Identify)?;
         let opts = IdentOptions {
             order: cfg.identify.order,
             jackknife: cfg.identify.jackknife,
             ..IdentOptions::default()
         };
         let helper = if opts.jackknife && opts.order == Some(2) {
-            let twin = Workspace::new(&limits).map_err(|e| DaemonError::Identify(e.to_string()))?;
+            let twin = Workspace::new(&limits).map_err(DaemonError::Identify)?;
             let cap = cfg.identify.max_window_samples.max(4);
             Helper::spawn(twin, cap, limits.max_pulses + 1, opts)
         } else {

@@ -114,10 +114,10 @@ pub fn run<I: Identifier + 'static>(
     // The sampler drops its sender when it ends, which ends the worker.
     let sampled = sampler
         .join()
-        .map_err(|_| DaemonError::Internal("the sampler thread panicked".into()))?;
+        .map_err(|_| DaemonError::ThreadPanicked { thread: "sampler" })?;
     let worked = worker
         .join()
-        .map_err(|_| DaemonError::Internal("the worker thread panicked".into()))?;
+        .map_err(|_| DaemonError::ThreadPanicked { thread: "worker" })?;
     let mut publisher = worked.publisher;
     let elapsed_s = start.elapsed().as_secs_f64();
     let stats = StatsLine::new(

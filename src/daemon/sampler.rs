@@ -323,10 +323,9 @@ impl Sampler {
                 }
                 Some(PlanStatus::LinkFailed) => {
                     let _ = self.stop_device();
-                    return Err(DaemonError::LinkFailed(format!(
-                        "{} stopped acknowledging commands",
-                        self.source.describe()
-                    )));
+                    return Err(DaemonError::LinkFailed {
+                        link: self.source.describe(),
+                    });
                 }
                 _ => {}
             }
