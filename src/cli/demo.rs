@@ -13,7 +13,6 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::run::daemon_error;
 use super::CliError;
 use crate::daemon::identify::CoreIdentifier;
 use crate::daemon::line::{Line, ScheduleRow, WindowModel};
@@ -70,21 +69,21 @@ fn demo_config(sim: &SimConfig) -> Config {
 /// Runs `propid demo`.
 pub fn run(args: Args) -> Result<(), CliError> {
     let sim = match &args.sim_config {
-        Some(p) => SimConfig::load(p).map_err(|e| CliError::Config(e.to_string()))?,
+        Some(p) => SimConfig::load(p)?,
         None => demo_sim(),
     };
     let cfg = demo_config(&sim);
-    let shutdown = Shutdown::install().map_err(daemon_error)?;
-    let handle = SimHandle::spawn(sim.clone(), RunOptions::default())
-        .map_err(|e| CliError::Device(format!("simulated stand: {e}")))?;
+    let shutdown = Shutdown::install()?;
+    let handle =
+        SimHandle::spawn(sim.clone(), RunOptions::default()).map_err(CliError::SimulatedStand)?;
     let port = handle.path().display().to_string();
     eprintln!(
         "propid demo: simulated stand on {port} ({} Hz); daemon running ~10 s ...",
         sim.stand.sample_rate_hz
     );
     let source = SerialSource::open(&port, cfg.device.baud, cfg.device.read_timeout)
-        .map_err(|e| CliError::Device(e.to_string()))?;
-    let publisher = Publisher::open(&cfg.publish).map_err(daemon_error)?;
+        .map_err(CliError::Serial)?;
+    let publisher = Publisher::open(&cfg.publish)?;
     if !args.json {
         println!(
             "{:>6} {:>8} {:>22} {:>20} {:>22}",
@@ -95,15 +94,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let publisher = publisher.with_tap(printer(args.json, sim.plant.clone(), schedule.clone()));
     let parts = RunParts {
         source: Box::new(source),
-        plan: Some(plan::from_experiment(sim.experiment.clone()).map_err(daemon_error)?),
-        identifier: CoreIdentifier::new(&cfg).map_err(daemon_error)?,
+        plan: Some(plan::from_experiment(sim.experiment.clone())?),
+        identifier: CoreIdentifier::new(&cfg)?,
         publisher,
         record: None,
         shutdown,
     };
     let result = runner::run(&cfg, parts);
     let _ = handle.stop();
-    let summary = result.map_err(daemon_error)?;
+    let summary = result?;
     if args.json {
         return Ok(());
     }
