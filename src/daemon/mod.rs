@@ -105,8 +105,10 @@ mod tests {
         );
         let e = DaemonError::ThreadPanicked { thread: "worker" };
         assert_eq!(e.to_string(), "internal error: the worker thread panicked");
-        let mut cfg = Config::default();
-        cfg.experiment = toml::from_str("levels = []").unwrap();
+        let mut cfg = Config {
+            experiment: toml::from_str("levels = []").unwrap(),
+            ..Config::default()
+        };
         let e = plan::from_config(&cfg).err().unwrap();
         assert!(matches!(e, DaemonError::Config(ConfigError::Experiment(_))));
         assert_eq!(
