@@ -159,4 +159,49 @@ mod tests {
         assert_eq!(out.len(), 41);
         assert!(out.iter().all(|o| !o.1));
     }
+
+    #[test]
+    fn the_flags_are_the_pulses_a_recorded_file_is_segmented_into() {
+        // wobble of ±10 steps (within the 0.005 tolerance), pulses of both signs and widths,
+        // a pulse right after a step, two values in a row (not one flat pulse), a ramp
+        let mut t: Vec<u16> = Vec::new();
+        for (v, n) in [
+            (3000, 30),
+            (3300, 1),
+            (3000, 20),
+            (2700, 4),
+            (3000, 20),
+            (4000, 3),
+            (3700, 2),
+            (4000, 70),
+            (4500, 1),
+            (4000, 30),
+            (4300, 2),
+            (4600, 2),
+            (4000, 30),
+        ] {
+            t.extend(std::iter::repeat_n(v, n));
+        }
+        t.extend((0..40).map(|k| 4000 + 60 * k));
+        for (k, v) in t.iter_mut().enumerate() {
+            *v = (i32::from(*v) + [0, 10, -10, 5][k % 4]) as u16;
+        }
+        let (out, pulses) = run(&t, 64);
+        let u: Vec<f64> = t.iter().map(|&v| f64::from(v) / 10_000.0).collect();
+        let rules = SegmentRules::CSV_BENCH;
+        let offline: Vec<_> =
+            propid_numerics::segment::pulses(propid_numerics::segment::Command::new(&u), &rules)
+                .collect();
+        assert_eq!(pulses, 4);
+        assert_eq!(offline.len(), 4);
+        let flagged: Vec<bool> = out.iter().map(|o| o.1).collect();
+        let want: Vec<bool> = (0..t.len())
+            .map(|k| {
+                offline
+                    .iter()
+                    .any(|p| (p.start..p.start + p.width).contains(&k))
+            })
+            .collect();
+        assert_eq!(flagged, want);
+    }
 }
