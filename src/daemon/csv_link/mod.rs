@@ -44,9 +44,9 @@ use pulse_flags::PulseFlagger;
 pub struct CsvLinkOptions {
     /// Line decoder options (ESC µs range, motor poles, longest line).
     pub csv: CsvOptions,
-    /// A throttle change larger than this (fraction) is an excursion from the level.
+    /// Level tolerance of the pulse rule, fraction ([`SegmentRules::level_tolerance`]).
     pub level_tolerance: f64,
-    /// An excursion that returns within this many samples is a pulse.
+    /// Longest pulse, samples ([`SegmentRules::max_pulse_samples`]).
     pub max_pulse_samples: usize,
 }
 
