@@ -12,7 +12,7 @@
 //!    pulse width, whose tails are Markov sequences of the same `(A, C)` with input matrix
 //!    `B̃_w = Σ_{i<w} A^i B` (identical to `Y` for one-sample pulses; no deconvolution noise
 //!    for wider ones). `B` then follows by least squares, `D = P_0`.
-//! 3. [`sizing`]: noise floor, Hankel size (near-square, up to where the response sinks into
+//! 3. [`order`]: noise floor, Hankel size (near-square, up to where the response sinks into
 //!    the noise), order from the singular values against the noise floor.
 //! 4. [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is `Y_{a+b+1+s}`).
 //! 5. [`era`]: `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` = first q rows
@@ -33,6 +33,7 @@ pub mod era;
 pub mod error;
 pub mod grouped;
 pub mod hankel;
+pub mod identify;
 pub mod indicators;
 pub mod linalg;
 pub mod markov;
@@ -41,9 +42,9 @@ pub mod model;
 pub mod nullable;
 pub mod okid;
 pub mod operating_points;
+pub mod order;
 pub mod pulses;
 pub mod report;
-pub mod sizing;
 pub mod statespace;
 pub mod svd;
 pub mod uncertainty;

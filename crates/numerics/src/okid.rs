@@ -56,7 +56,7 @@
 //! parameter). Because the columns are ordered by lag, the regression with `ℓ ≤ ℓ_max` lags uses a
 //! *prefix* of the columns, so one QR serves every `ℓ`: `R_φ` is the leading `m(ℓ) × m(ℓ)` block
 //! with `m(ℓ) = 1 + p + (p+q)ℓ`, and `RSS(ℓ) = ‖z_{m(ℓ):}‖² + ‖R_res‖²`. The number used is
-//! chosen by output (simulation) error over a set of candidates ([`order`]). Too many lags are
+//! chosen by output (simulation) error over a set of candidates ([`observer`]). Too many lags are
 //! not harmless: with a band-limited input (a chirp, a multisine) the lagged input columns are
 //! numerically dependent, and with few steps and noise the extra parameters fit the noise; in
 //! both cases the recovered Markov parameters drift while the one-step fit still improves.
@@ -86,8 +86,7 @@
 
 use nalgebra::{DMatrix, SVD};
 
-pub mod order;
-pub mod select;
+use crate::order::observer;
 
 /// Rows per block of the streaming QR.
 const QR_BLOCK_ROWS: usize = 512;
@@ -186,7 +185,7 @@ pub struct OkidResult {
     pub observer_order: usize,
     /// Largest number considered (from the data length, or the one given).
     pub observer_order_max: usize,
-    /// True when `ℓ` was chosen by output error ([`order`]), false when it was given.
+    /// True when `ℓ` was chosen by output error ([`observer`]), false when it was given.
     pub observer_order_chosen: bool,
     /// Regression rows used.
     pub rows: usize,
@@ -217,7 +216,7 @@ impl OkidResult {
 /// The largest number of observer Markov parameters considered for `n` samples, `p` inputs,
 /// `q` outputs: `ℓ_max = clamp(⌊n / (10 (p + q))⌋, 1, 40)`, so that there are at least ten
 /// regression rows per parameter, enough lags for a deadbeat observer of any order up to `40·q`,
-/// and a bounded cost (`O(N·ℓ²(p+q)²)`). The number used is chosen below it ([`order`]).
+/// and a bounded cost (`O(N·ℓ²(p+q)²)`). The number used is chosen below it ([`observer`]).
 pub fn auto_observer_order(n: usize, p: usize, q: usize) -> usize {
     (n / (10 * (p + q).max(1))).clamp(1, MAX_AUTO_OBSERVER_ORDER)
 }
@@ -292,15 +291,15 @@ pub fn okid(
     let ell = match opts.observer_order {
         Some(given) => given,
         None => {
-            let scores: Vec<(usize, f64)> = order::candidates(ell_max)
+            let scores: Vec<(usize, f64)> = observer::candidates(ell_max)
                 .into_iter()
                 .map(|ell| {
                     let (_, _, theta, finite) = fit(ell);
-                    let s = order::output_error((&theta.0, &theta.1), (p, q, ell), u, y);
+                    let s = observer::output_error((&theta.0, &theta.1), (p, q, ell), u, y);
                     (ell, if finite { s } else { f64::NAN })
                 })
                 .collect();
-            order::pick(&scores).unwrap_or(ell_max)
+            observer::pick(&scores).unwrap_or(ell_max)
         }
     };
     let (params, solve, theta, finite) = fit(ell);

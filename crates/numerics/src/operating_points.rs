@@ -21,7 +21,7 @@
 
 use serde::Serialize;
 
-use super::okid::select::{identify_any, identify_okid, AnyInput, AnyModel, PathTaken};
+use super::identify::{identify_any, identify_okid, AnyInput, AnyModel, PathTaken};
 use super::okid::OkidOptions;
 use super::report::Gain;
 use super::workspace::IdentOptions;
@@ -106,7 +106,7 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
     let Some(u) = input.u.first().filter(|_| input.u.len() == 1) else {
         return OpTable::single();
     };
-    let (kind, segments) = if super::okid::select::is_piecewise_constant(u) {
+    let (kind, segments) = if super::identify::is_piecewise_constant(u) {
         ("staircase", staircase(u, opts.max_pulse_width))
     } else if is_ramp(u) {
         ("ramp", ramp(u))
@@ -189,7 +189,7 @@ fn identify_range(
     r: std::ops::Range<usize>,
     ident: &IdentOptions,
     okid_only: bool,
-) -> Result<AnyModel, super::okid::select::AnyError> {
+) -> Result<AnyModel, super::identify::AnyError> {
     let u = [&input.u[0][r.clone()]];
     let y: Vec<&[f64]> = input.y.iter().map(|c| &c[r.clone()]).collect();
     let starts: Option<Vec<usize>> = input.pulse_starts.map(|s| {

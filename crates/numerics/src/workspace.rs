@@ -22,8 +22,9 @@ use super::grouped::{input_matrix, WidthGroups, MAX_GROUPS};
 use super::hankel::HankelDims;
 use super::modal::{continuous, dc_gain, fn_zeta};
 use super::model::Model;
+use super::order::hankel_size::{self, Span};
+use super::order::{model_order, noise_floor};
 use super::pulses::{PulseEnsemble, PulseInput};
-use super::sizing;
 use super::svd::dense::DenseSvd;
 use super::svd::subspace::SubspaceSvd;
 use super::svd::truncated::TruncatedSvd;
@@ -316,20 +317,12 @@ impl Workspace {
         self.groups
             .build(&self.ensemble, input, &mut self.grouped)?;
         let q = input.y.len();
-        let e = &mut self.engine;
-        let wmin = self
-            .groups
-            .weights()
-            .iter()
-            .copied()
-            .fold(f64::INFINITY, f64::min);
-        let out_noise = self.ensemble.output_noise();
-        for c in 0..q {
-            e.noise[c] = out_noise[c] / wmin.sqrt();
-        }
-        if e.noise[..q].iter().any(|v| !v.is_finite()) {
-            sizing::tail_noise(&self.grouped, &mut e.noise[..q]);
-        }
+        noise_floor::pulse_noise(
+            self.ensemble.output_noise(),
+            self.groups.weights(),
+            &self.grouped,
+            &mut self.engine.noise[..q],
+        );
         Ok(())
     }
 
@@ -406,7 +399,7 @@ impl Workspace {
             return Err(IdentError::ConstantOutput { channel: 0 });
         }
         let e = &mut self.engine;
-        sizing::tail_noise(markov, &mut e.noise[..q]);
+        noise_floor::tail_noise(markov, &mut e.noise[..q]);
         let rms = (e.noise[..q].iter().map(|s| s * s).sum::<f64>() / q as f64).sqrt();
         e.run(markov, dt_s, &[], false, opts)?;
         e.model.finish_gain()?;
@@ -469,7 +462,7 @@ impl Engine {
     }
 
     /// Order checks, Hankel size and SVD path of `markov` (the first part of `run`); `pulse`
-    /// stretches the automatic Hankel span past the noise crossing ([`sizing::pulse_span`]).
+    /// stretches the automatic Hankel span past the noise crossing ([`Span::PulseTail`]).
     fn plan(
         &self,
         markov: &MarkovSeq,
@@ -491,32 +484,16 @@ impl Engine {
                 });
             }
         }
-        let avail = len.saturating_sub(1);
+        let max = (l.max_block_rows, l.max_block_cols);
         let dims = match opts.hankel_blocks {
-            Some((r, c)) => {
-                sizing::explicit_dims(q, p, r, c, avail, l.max_block_rows, l.max_block_cols)?
-            }
+            Some(rc) => hankel_size::explicit_dims(q, p, rc, len.saturating_sub(1), max.0, max.1)?,
             None => {
-                let mut signal = sizing::signal_length(markov, &self.noise[..q], growth);
-                if pulse {
-                    signal = sizing::pulse_span(signal, len);
-                }
-                if signal == 0 {
-                    return Err(IdentError::RankDeficient {
-                        rank: 0,
-                        order: opts.order.unwrap_or(0),
-                    });
-                }
-                let min_size = opts.order.map_or(3, |n| n + 1);
-                sizing::hankel_dims(
-                    q,
-                    p,
-                    avail,
-                    signal,
-                    min_size,
-                    l.max_block_rows,
-                    l.max_block_cols,
-                )?
+                let span = if pulse {
+                    Span::PulseTail
+                } else {
+                    Span::AboveNoise
+                };
+                hankel_size::auto_dims(markov, &self.noise[..q], growth, span, opts.order, max)?
             }
         };
         let (rows, cols) = (dims.rows(), dims.cols());
@@ -568,27 +545,9 @@ impl Engine {
                 converged = self.truncated_svd(markov, dims, k, opts.order.unwrap_or(1))?;
             }
         }
-        let pooled = (self.noise[..q]
-            .iter()
-            .map(|s| if s.is_finite() { s * s } else { 0.0 })
-            .sum::<f64>()
-            / q as f64)
-            .sqrt();
-        let noise_sv = sizing::noise_singular_value(pooled, &dims, growth);
         let sig = &self.model.sigma[..self.model.n_sigma];
-        let n = match opts.order {
-            Some(n) => {
-                let rank = sizing::auto_order(sig, 0.0, wide);
-                if rank < n {
-                    return Err(IdentError::RankDeficient { rank, order: n });
-                }
-                n
-            }
-            None => sizing::auto_order(sig, noise_sv, l.max_order.min(k)),
-        };
-        if n == 0 {
-            return Err(IdentError::RankDeficient { rank: 0, order: 0 });
-        }
+        let cap = l.max_order.min(k);
+        let n = model_order::choose(sig, &self.noise[..q], &dims, growth, opts.order, cap)?;
         if n > converged {
             // The automatic order reached past the triplets that had converged: ask for them.
             self.truncated_svd(markov, dims, k, n)?;
