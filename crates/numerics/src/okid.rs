@@ -275,15 +275,7 @@ pub fn okid(
     }
     let fit = |ell: usize| {
         let params = params_for(p, q, ell);
-        let solve = solve_truncated(
-            &r_aug,
-            (p, q),
-            params,
-            params_max,
-            rows,
-            opts.rcond,
-            opts.significance,
-        );
+        let solve = solve_truncated(&r_aug, (p, q), params, params_max, rows, opts);
         let theta = unscale(&solve.theta, &scaled, ell);
         let finite = theta.0.iter().chain(&theta.1).all(|v| v.is_finite());
         (params, solve, theta, finite)
@@ -506,17 +498,17 @@ struct Solve {
 }
 
 /// Truncated-SVD solve of `R_φ θ = z` for the first `params` columns, from the augmented
-/// triangular factor `[[R_φ, z], [0, R_res]]` of all `params_max` columns.
-#[allow(clippy::too_many_arguments)]
+/// triangular factor `[[R_φ, z], [0, R_res]]` of all `params_max` columns (`rcond` and
+/// `significance` of `opts`).
 fn solve_truncated(
     r_aug: &DMatrix<f64>,
     (p, q): (usize, usize),
     params: usize,
     params_max: usize,
     rows: usize,
-    rcond: f64,
-    significance: f64,
+    opts: &OkidOptions,
 ) -> Solve {
+    let (rcond, significance) = (opts.rcond, opts.significance);
     let r_phi = r_aug.view((0, 0), (params, params)).into_owned();
     let z = r_aug.view((0, params_max), (params, q)).into_owned();
     // Residual norm: the part of [Φ Y] that Φ does not span, plus what truncation drops.

@@ -17,18 +17,19 @@
 use nalgebra::Complex;
 
 use super::eig::eigenvalues;
-use super::era::{h1_times_v, realize};
-use super::grouped::{input_matrix, WidthGroups, MAX_GROUPS};
-use super::hankel::HankelDims;
+use super::era::{h1_times_v, realize, Factors};
+use super::grouped::{input_matrix, InputScratch, WidthGroups, MAX_GROUPS};
+use super::hankel::{Hankel, HankelDims};
 use super::modal::{continuous, dc_gain, fn_zeta};
 use super::model::Model;
 use super::order::hankel_size::{self, Span};
 use super::order::{model_order, noise_floor};
 use super::pulses::{PulseEnsemble, PulseInput};
+use super::statespace::{Abcd, AbcdMut};
 use super::svd::dense::DenseSvd;
 use super::svd::subspace::SubspaceSvd;
 use super::svd::truncated::TruncatedSvd;
-use super::svd::{self, SvdChoice, SvdPath};
+use super::svd::{self, SvdChoice, SvdPath, Triplets};
 use super::uncertainty::jackknife_std;
 use super::{IdentError, MarkovSeq};
 
@@ -530,15 +531,8 @@ impl Engine {
             SvdPath::Dense => {
                 let m = &mut self.model;
                 dims.fill(markov.as_slice(), 0, &mut self.hbuf);
-                self.dense.compute(
-                    &self.hbuf,
-                    rows,
-                    cols,
-                    k,
-                    &mut m.sigma,
-                    &mut self.u,
-                    &mut self.v,
-                )?;
+                let out = Triplets::new(&mut m.sigma, &mut self.u, &mut self.v);
+                self.dense.compute(&self.hbuf, rows, cols, k, out)?;
                 m.n_sigma = wide;
             }
             SvdPath::Truncated => {
@@ -563,19 +557,18 @@ impl Engine {
         m.std_fn = f64::NAN;
         m.std_zeta = f64::NAN;
         m.std_dc.fill(f64::NAN);
-        realize(
-            markov.as_slice(),
-            &dims,
-            n,
-            &m.sigma,
-            &self.u,
-            &self.v,
-            &self.era_scratch,
-            &mut m.a,
-            &mut m.b,
-            &mut m.c,
-            &mut m.d,
-        );
+        let f = Factors {
+            sigma: &m.sigma,
+            u: &self.u,
+            v: &self.v,
+        };
+        let out = AbcdMut {
+            a: &mut m.a,
+            b: &mut m.b,
+            c: &mut m.c,
+            d: &mut m.d,
+        };
+        realize(markov.as_slice(), &dims, n, f, &self.era_scratch, out);
         m.analyse_modes(&self.u, &self.v)
     }
 
@@ -589,22 +582,11 @@ impl Engine {
         need: usize,
     ) -> Result<usize, IdentError> {
         let m = &mut self.model;
-        let (q, p) = (dims.q, dims.p);
+        let h = Hankel::new(markov.as_slice(), dims, 0);
+        let out = Triplets::new(&mut m.sigma[..k], &mut self.u, &mut self.v);
         let got = self
             .trunc
-            .compute_at_least(
-                markov.as_slice(),
-                q,
-                p,
-                dims.r,
-                dims.c,
-                0,
-                k,
-                need.min(k),
-                &mut m.sigma[..k],
-                &mut self.u,
-                &mut self.v,
-            )
+            .compute_at_least(h, k, need.min(k), out)
             .map_err(svd::SvdError::from)?;
         m.n_sigma = k;
         Ok(got)
@@ -625,15 +607,11 @@ impl Engine {
         match path {
             SvdPath::Dense => h1_times_v(markov.as_slice(), &dims, n, v, &mut self.era_scratch),
             SvdPath::Truncated => {
+                let h1 = Hankel::new(markov.as_slice(), dims, 1);
                 for l in 0..n {
                     self.trunc
                         .apply(
-                            markov.as_slice(),
-                            dims.q,
-                            dims.p,
-                            dims.r,
-                            dims.c,
-                            1,
+                            h1,
                             &v[l * cols..(l + 1) * cols],
                             &mut self.era_scratch[l * rows..(l + 1) * rows],
                         )
@@ -655,17 +633,12 @@ impl Engine {
         let m = &mut self.model;
         let n = m.n;
         let lt = &mut self.lite;
-        if !input_matrix(
-            &m.a,
-            n,
-            &m.b,
-            widths,
-            weights,
-            &mut lt.m,
-            &mut lt.s,
-            &mut lt.nrm,
-            &mut lt.b1,
-        ) {
+        let scratch = InputScratch {
+            s: &mut lt.m,
+            t: &mut lt.s,
+            nrm: &mut lt.nrm,
+        };
+        if !input_matrix(&m.a, n, &m.b, (widths, weights), scratch, &mut lt.b1) {
             return Err(IdentError::InvalidInput(
                 "the pulse widths cannot excite a pole of the model: B is not identifiable",
             ));
@@ -694,51 +667,36 @@ impl Engine {
             .min(dims.rows().min(dims.cols()));
         let path = m.path;
         match path {
-            SvdPath::Dense => self.sub.compute(
-                markov.as_slice(),
-                dims,
-                b,
-                JACKKNIFE_ITERS,
-                &self.v,
-                &mut self.jk_sigma,
-                &mut self.jk_u,
-                &mut self.jk_v,
-            )?,
+            SvdPath::Dense => {
+                let out = Triplets::new(&mut self.jk_sigma, &mut self.jk_u, &mut self.jk_v);
+                let markov = markov.as_slice();
+                self.sub
+                    .compute(markov, dims, b, JACKKNIFE_ITERS, &self.v, out)?
+            }
             SvdPath::Truncated => {
                 // fn, ζ and the DC gain do not depend on the signs of the singular vectors.
                 self.trunc.set_sign_free(true);
-                let r = self.trunc.compute_at_least(
-                    markov.as_slice(),
-                    dims.q,
-                    dims.p,
-                    dims.r,
-                    dims.c,
-                    0,
-                    n,
-                    n,
-                    &mut self.jk_sigma[..n],
-                    &mut self.jk_u,
-                    &mut self.jk_v,
-                );
+                let h = Hankel::new(markov.as_slice(), dims, 0);
+                let out = Triplets::new(&mut self.jk_sigma[..n], &mut self.jk_u, &mut self.jk_v);
+                let r = self.trunc.compute_at_least(h, n, n, out);
                 self.trunc.set_sign_free(false);
                 r.map_err(svd::SvdError::from)?;
             }
         }
         self.h1v(markov, dims, n, path, true)?;
         let lt = &mut self.lite;
-        realize(
-            markov.as_slice(),
-            &dims,
-            n,
-            &self.jk_sigma,
-            &self.jk_u,
-            &self.jk_v,
-            &self.era_scratch,
-            &mut lt.a,
-            &mut lt.b,
-            &mut lt.c,
-            &mut lt.d,
-        );
+        let f = Factors {
+            sigma: &self.jk_sigma,
+            u: &self.jk_u,
+            v: &self.jk_v,
+        };
+        let out = AbcdMut {
+            a: &mut lt.a,
+            b: &mut lt.b,
+            c: &mut lt.c,
+            d: &mut lt.d,
+        };
+        realize(markov.as_slice(), &dims, n, f, &self.era_scratch, out);
         let m = &self.model;
         lt.m[..n * n].copy_from_slice(&lt.a[..n * n]);
         eigenvalues(&mut lt.m, n, &mut lt.poles)?;
@@ -751,21 +709,23 @@ impl Engine {
         };
         self.theta_fn[slot] = f;
         self.theta_zeta[slot] = z;
-        let ok = input_matrix(
-            &lt.a,
-            n,
-            &lt.b,
-            widths,
-            weights,
-            &mut lt.m,
-            &mut lt.s,
-            &mut lt.nrm,
-            &mut lt.b1,
-        );
+        let scratch = InputScratch {
+            s: &mut lt.m,
+            t: &mut lt.s,
+            nrm: &mut lt.nrm,
+        };
+        let ok = input_matrix(&lt.a, n, &lt.b, (widths, weights), scratch, &mut lt.b1);
         if ok {
-            dc_gain(
-                &lt.a, &lt.b1, &lt.c, d, n, q, 1, &mut lt.m, &mut lt.x, &mut lt.dc,
-            );
+            let sys = Abcd {
+                a: &lt.a,
+                b: &lt.b1,
+                c: &lt.c,
+                d,
+                n,
+                q,
+                p: 1,
+            };
+            dc_gain(sys, &mut lt.m, &mut lt.x, &mut lt.dc);
         } else {
             lt.dc[..q].fill(f64::NAN);
         }

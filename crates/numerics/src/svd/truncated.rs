@@ -54,6 +54,8 @@ pub use error::TruncatedError;
 
 use super::hankel_op::HankelOp;
 use super::kernels::dot;
+use super::Triplets;
+use crate::hankel::{Hankel, HankelDims};
 use eigen_svd::EigenSvd;
 use ritz_check::RitzCheck;
 use small_jacobi::SmallJacobi;
@@ -244,26 +246,17 @@ impl TruncatedSvd {
         self.n_ritz.min(self.max_k)
     }
 
-    /// The leading `k` singular triplets of `H(shift)` (`r × c` blocks of `q × p` from
-    /// `markov`, layout in `docs/ARCHITECTURE.md`): `sigma[..k]` descending, `u` (`r q × k`,
-    /// column-major), `v` (`c p × k`, column-major), every triplet converged to
+    /// The leading `k` singular triplets of `H(shift)` ([`Hankel`]: `r × c` blocks of `q × p`
+    /// from `markov`, layout in `docs/ARCHITECTURE.md`) into `out`: `sigma[..k]` descending, `u`
+    /// (`r q × k`, column-major), `v` (`c p × k`, column-major), every triplet converged to
     /// [`tolerance`](Self::tolerance). Allocates nothing.
-    #[allow(clippy::too_many_arguments)]
     pub fn compute(
         &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
+        h: Hankel<'_>,
         k: usize,
-        sigma: &mut [f64],
-        u: &mut [f64],
-        v: &mut [f64],
+        out: Triplets<'_>,
     ) -> Result<(), TruncatedError> {
-        self.compute_at_least(markov, q, p, r, c, shift, k, k, sigma, u, v)
-            .map(|_| ())
+        self.compute_at_least(h, k, k, out).map(|_| ())
     }
 
     /// As [`compute`](Self::compute), but requires only the leading `need ≤ k` triplets to
@@ -275,24 +268,22 @@ impl TruncatedSvd {
     /// in [`residuals`](Self::residuals)): for ERA this gives the order-`n` factors to full
     /// accuracy plus estimates of the following singular values for the order choice, without
     /// iterating into the noise cluster. Allocates nothing.
-    #[allow(clippy::too_many_arguments)]
     pub fn compute_at_least(
         &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
+        h: Hankel<'_>,
         k: usize,
         need: usize,
-        sigma: &mut [f64],
-        u: &mut [f64],
-        v: &mut [f64],
+        out: Triplets<'_>,
     ) -> Result<usize, TruncatedError> {
+        let Hankel {
+            markov,
+            dims: HankelDims { q, p, r, c },
+            shift,
+        } = h;
+        let Triplets { sigma, u, v } = out;
         self.steps = 0;
         self.n_ritz = 0;
-        self.op.prepare(markov, q, p, r, c, shift)?;
+        self.op.prepare(h)?;
         let (rows, cols) = (r * q, c * p);
         if k == 0 || k > self.max_k {
             return Err(TruncatedError::Dimension {
@@ -629,55 +620,32 @@ impl TruncatedSvd {
     }
 
     /// `y = H(shift) x` (agreed API; allocation-free).
-    #[allow(clippy::too_many_arguments)]
-    pub fn apply(
-        &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
-        x: &[f64],
-        y: &mut [f64],
-    ) -> Result<(), TruncatedError> {
-        self.op.apply(markov, q, p, r, c, shift, x, y)
+    pub fn apply(&mut self, h: Hankel<'_>, x: &[f64], y: &mut [f64]) -> Result<(), TruncatedError> {
+        self.op.apply(h, x, y)
     }
 
     /// `y = H(shift)ᵀ x` (agreed API; allocation-free).
-    #[allow(clippy::too_many_arguments)]
     pub fn apply_t(
         &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
+        h: Hankel<'_>,
         x: &[f64],
         y: &mut [f64],
     ) -> Result<(), TruncatedError> {
-        self.op.apply_t(markov, q, p, r, c, shift, x, y)
+        self.op.apply_t(h, x, y)
     }
 
     /// `out = Uᵀ H(shift) V` (`k × k`, column-major) for `u` (`r q × k`) and `v` (`c p × k`),
     /// column-major: what ERA needs from `H(1)`. One spectrum computation and `k` products.
-    #[allow(clippy::too_many_arguments)]
     pub fn project(
         &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
+        h: Hankel<'_>,
         k: usize,
         u: &[f64],
         v: &[f64],
         out: &mut [f64],
     ) -> Result<(), TruncatedError> {
-        self.op.prepare(markov, q, p, r, c, shift)?;
-        let (rows, cols) = (r * q, c * p);
+        self.op.prepare(h)?;
+        let (rows, cols) = (h.dims.rows(), h.dims.cols());
         check_len("u", u.len(), rows * k)?;
         check_len("v", v.len(), cols * k)?;
         check_len("out", out.len(), k * k)?;
