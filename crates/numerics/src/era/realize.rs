@@ -1,4 +1,4 @@
-//! The Eigensystem Realization Algorithm (Juang & Pappa 1985, J. Guidance 8(5), eqs. 29–36).
+//! The realisation step of ERA (Juang & Pappa 1985, J. Guidance 8(5), eqs. 29–36).
 //!
 //! With `H(0) = U Σ Vᵀ` truncated to the order `n` (`U_n`: `rq × n`, `V_n`: `cp × n`),
 //! `P = U_n Σ_n^½` is the realised observability matrix and `Q = Σ_n^½ V_nᵀ` the realised
@@ -15,8 +15,8 @@
 //! truncated path), `H(1)` is never formed.
 //! Storage: `a` (`n × n`), `b` (`n × p`), `c` (`q × n`), `d` (`q × p`), all column-major.
 
-use super::hankel::HankelDims;
-use super::statespace::AbcdMut;
+use crate::hankel::HankelDims;
+use crate::statespace::AbcdMut;
 
 /// `T = H(1) V_n` (`rows × n`, column-major) by direct products with the Markov parameters,
 /// `O(rows · cols · n)`; the truncated path uses FFT products instead.
