@@ -11,7 +11,7 @@
 //!    and Lanczos without forming it ([`crate::svd::truncated`]).
 //! 3. **Truncation** to the order `n`, the count of singular values above the noise
 //!    ([`crate::order::model_order`]).
-//! 4. **Realisation** (eqs. 33–36, [`realize`], [`Era::realize`]):
+//! 4. **Realisation** (eqs. 33–36, [`realize()`], [`Era::realize`]):
 //!
 //!    ```text
 //!    A = Σ_n^-½ U_nᵀ H(1) V_n Σ_n^-½
@@ -166,7 +166,7 @@ impl Era {
 
     /// Realises `(A, B, C, D)` of order `n` into `out` from the last
     /// [`decompose`](Self::decompose) (`sigma` its singular values): `T = H(1) V_n`, then
-    /// [`realize`].
+    /// [`realize()`].
     pub fn realize(
         &mut self,
         markov: &MarkovSeq,

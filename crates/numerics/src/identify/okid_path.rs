@@ -90,7 +90,7 @@ pub fn identify_okid(
     identify_okid_sized(input, ident, okid_opts, HankelSize::Auto)
 }
 
-/// [`identify_okid`] with the Hankel size chosen by `size` (see [`identify_any_sized`]).
+/// [`identify_okid`] with the Hankel size chosen by `size` (see [`super::identify_any_sized`]).
 pub fn identify_okid_sized(
     input: &AnyInput<'_>,
     ident: &IdentOptions,
