@@ -14,9 +14,11 @@
 //!    for wider ones). `B` then follows by least squares, `D = P_0`.
 //! 3. [`order`]: noise floor, Hankel size (near-square, up to where the response sinks into
 //!    the noise), order from the singular values against the noise floor.
-//! 4. [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is `Y_{a+b+1+s}`).
-//! 5. [`era`]: `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` = first q rows
-//!    of `U Σ^½`, `D = Y_0`.
+//! 4. [`era`] on [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is
+//!    `Y_{a+b+1+s}`), `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` =
+//!    first q rows of `U Σ^½`, `D = Y_0`.
+//! 5. [`okid`]: Markov parameters from any other excitation (Juang, Phan, Horta & Longman
+//!    1993); [`identify`] chooses the pulse path or OKID + ERA for a record.
 //! 6. [`modal`], [`indicators`], [`uncertainty`]: poles, fn, ζ, DC gain, m-d-k; MSV, MAC,
 //!    EMAC, MPC, CMI; jackknife over pulses.
 //! 7. [`workspace`] runs it all on preallocated buffers ([`model::Model`] holds the result);
