@@ -9,9 +9,11 @@
 use std::time::Duration;
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion};
+use propid_numerics::hankel::{Hankel, HankelDims};
 use propid_numerics::svd::dense::DenseSvd;
 use propid_numerics::svd::hankel_op::HankelOp;
 use propid_numerics::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::Triplets;
 
 /// Impulse response of a 20 Hz, ζ = 0.1 oscillator at 1 kHz plus 1 % uniform noise.
 fn markov(len: usize) -> Vec<f64> {
@@ -60,7 +62,7 @@ fn bench_svd(c: &mut Criterion) {
             bch.iter(|| {
                 dense_hankel(&m, s, &mut h);
                 dense
-                    .compute(&h, s, s, 2, &mut sigma, &mut u, &mut v)
+                    .compute(&h, s, s, 2, Triplets::new(&mut sigma, &mut u, &mut v))
                     .unwrap();
                 black_box(sigma[0])
             })
@@ -68,16 +70,43 @@ fn bench_svd(c: &mut Criterion) {
         let mut tr = TruncatedSvd::new(s, s, 1, 1, 16);
         group.bench_with_input(BenchmarkId::new("truncated_k2", s), &s, |bch, &s| {
             bch.iter(|| {
-                tr.compute(&m, 1, 1, s, s, 0, 2, &mut sigma, &mut u, &mut v)
-                    .unwrap();
+                tr.compute(
+                    Hankel::new(
+                        &m,
+                        HankelDims {
+                            q: 1,
+                            p: 1,
+                            r: s,
+                            c: s,
+                        },
+                        0,
+                    ),
+                    2,
+                    Triplets::new(&mut sigma, &mut u, &mut v),
+                )
+                .unwrap();
                 black_box(sigma[0])
             })
         });
         let k = 16.min(s);
         group.bench_with_input(BenchmarkId::new("truncated_k16_need2", s), &s, |bch, &s| {
             bch.iter(|| {
-                tr.compute_at_least(&m, 1, 1, s, s, 0, k, 2, &mut sigma, &mut u, &mut v)
-                    .unwrap();
+                tr.compute_at_least(
+                    Hankel::new(
+                        &m,
+                        HankelDims {
+                            q: 1,
+                            p: 1,
+                            r: s,
+                            c: s,
+                        },
+                        0,
+                    ),
+                    k,
+                    2,
+                    Triplets::new(&mut sigma, &mut u, &mut v),
+                )
+                .unwrap();
                 black_box(sigma[0])
             })
         });
@@ -94,7 +123,17 @@ fn bench_products(c: &mut Criterion) {
         let s = n / 2;
         let m = markov(n + 1);
         let mut op = HankelOp::new(s, s, 1, 1);
-        op.prepare(&m, 1, 1, s, s, 0).unwrap();
+        op.prepare(Hankel::new(
+            &m,
+            HankelDims {
+                q: 1,
+                p: 1,
+                r: s,
+                c: s,
+            },
+            0,
+        ))
+        .unwrap();
         let x = vec![1.0; s];
         let mut y = vec![0.0; s];
         group.bench_with_input(BenchmarkId::new("fft_apply", n), &n, |bch, _| {

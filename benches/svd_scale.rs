@@ -9,7 +9,9 @@
 
 use std::time::Instant;
 
+use propid_numerics::hankel::{Hankel, HankelDims};
 use propid_numerics::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::Triplets;
 
 /// Impulse response of a 20 Hz, ζ = 0.1 oscillator at 1 kHz plus 1 % uniform noise.
 fn markov(len: usize) -> Vec<f64> {
@@ -68,13 +70,41 @@ fn main() {
         let (mut sigma, mut u, mut v) = (vec![0.0; k], vec![0.0; s * k], vec![0.0; s * k]);
         let mut a = vec![0.0; k * k];
         let t1 = Instant::now();
-        let res = svd.compute(&m, 1, 1, s, s, 0, k, &mut sigma, &mut u, &mut v);
+        let res = svd.compute(
+            Hankel::new(
+                &m,
+                HankelDims {
+                    q: 1,
+                    p: 1,
+                    r: s,
+                    c: s,
+                },
+                0,
+            ),
+            k,
+            Triplets::new(&mut sigma, &mut u, &mut v),
+        );
         let t2 = Instant::now();
         if let Err(e) = res {
             println!("{n:>7}  {s}x{s}: {e}");
             continue;
         }
-        if let Err(e) = svd.project(&m, 1, 1, s, s, 1, k, &u, &v, &mut a) {
+        if let Err(e) = svd.project(
+            Hankel::new(
+                &m,
+                HankelDims {
+                    q: 1,
+                    p: 1,
+                    r: s,
+                    c: s,
+                },
+                1,
+            ),
+            k,
+            &u,
+            &v,
+            &mut a,
+        ) {
             println!("{n:>7}  {s}x{s}: {e}");
             continue;
         }

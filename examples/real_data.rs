@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::DMatrix;
 use propid::ingest::csv_file::{read_csv, CsvFileOptions};
 use propid::ingest::steps::find_steps;
-use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::workspace::IdentOptions;

@@ -19,9 +19,10 @@ mod summary;
 use std::path::PathBuf;
 
 use super::CliError;
-use propid_numerics::okid::select::{identify_any_sized, AnyInput, HankelSize};
+use propid_numerics::identify::{identify_any_sized, AnyInput};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
+use propid_numerics::order::HankelSize;
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
 

@@ -15,7 +15,7 @@ use crate::daemon::source::SourceError;
 use crate::daemon::{ConfigError, DaemonError};
 use crate::diagnose::DiagnoseError;
 use load::{LoadError, NoSteps};
-use propid_numerics::okid::select::AnyError;
+use propid_numerics::identify::AnyError;
 use propid_sim::SimError;
 use walkthrough::WalkthroughError;
 

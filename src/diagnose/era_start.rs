@@ -1,13 +1,13 @@
 //! The identification core's own 2nd-order model of the estimation part (ERA on pulse-averaged
 //! Markov parameters for a clean pulse experiment, OKID + ERA otherwise:
-//! [`propid_numerics::okid::select::identify_any`]). It is what `propid identify` and the daemon
+//! [`propid_numerics::identify::identify_any`]). It is what `propid identify` and the daemon
 //! publish; `diagnose` reports its validation fit beside the baseline and uses it as one more
 //! starting point of the baseline's output-error fit.
 
 use serde::Serialize;
 
 use super::model::{ix, Params, Spec};
-use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::{IdentOptions, ModelReport};
 

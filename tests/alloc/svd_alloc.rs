@@ -5,7 +5,9 @@
 use crate::counting_alloc;
 
 use counting_alloc::allocations;
+use propid_numerics::hankel::{Hankel, HankelDims};
 use propid_numerics::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::Triplets;
 
 /// Damped two-output response with a little deterministic "noise".
 fn markov(q: usize, len: usize) -> Vec<f64> {
@@ -34,29 +36,54 @@ fn compute_and_products_allocate_nothing() {
     let (n, error_path_refused) = allocations(|| {
         for &(r, c) in &[(120, 140), (50, 60), (120, 140), (7, 9)] {
             let k = k.min(r * q).min(c * p);
-            svd.compute(&data, q, p, r, c, 0, k, &mut sigma, &mut u, &mut v)
-                .unwrap();
-            svd.compute_at_least(&data, q, p, r, c, 0, k, 1, &mut sigma, &mut u, &mut v)
-                .unwrap();
-            svd.project(&data, q, p, r, c, 1, k, &u, &v, &mut out)
-                .unwrap();
-            svd.apply(&data, q, p, r, c, 1, &v[..c * p], &mut y)
-                .unwrap();
-            svd.apply_t(&data, q, p, r, c, 0, &u[..r * q], &mut z)
-                .unwrap();
+            svd.compute(
+                Hankel::new(&data, HankelDims { q, p, r, c }, 0),
+                k,
+                Triplets::new(&mut sigma, &mut u, &mut v),
+            )
+            .unwrap();
+            svd.compute_at_least(
+                Hankel::new(&data, HankelDims { q, p, r, c }, 0),
+                k,
+                1,
+                Triplets::new(&mut sigma, &mut u, &mut v),
+            )
+            .unwrap();
+            svd.project(
+                Hankel::new(&data, HankelDims { q, p, r, c }, 1),
+                k,
+                &u,
+                &v,
+                &mut out,
+            )
+            .unwrap();
+            svd.apply(
+                Hankel::new(&data, HankelDims { q, p, r, c }, 1),
+                &v[..c * p],
+                &mut y,
+            )
+            .unwrap();
+            svd.apply_t(
+                Hankel::new(&data, HankelDims { q, p, r, c }, 0),
+                &u[..r * q],
+                &mut z,
+            )
+            .unwrap();
         }
         // Error paths allocate nothing either.
         svd.compute(
-            &data,
-            q,
-            p,
-            rmax + 1,
-            cmax,
-            0,
+            Hankel::new(
+                &data,
+                HankelDims {
+                    q,
+                    p,
+                    r: rmax + 1,
+                    c: cmax,
+                },
+                0,
+            ),
             k,
-            &mut sigma,
-            &mut u,
-            &mut v,
+            Triplets::new(&mut sigma, &mut u, &mut v),
         )
         .is_err()
     });

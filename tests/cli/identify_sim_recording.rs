@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use propid_numerics::okid::select::{check_finite, identify_any, AnyError, AnyInput, PathTaken};
+use propid_numerics::identify::{check_finite, identify_any, AnyError, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::IdentOptions;
 use serde_json::Value;

@@ -226,21 +226,30 @@ fn response(
     }
 }
 
-/// `B` (`n × 1`) from the group input matrices `B̃` (`n × G`, column-major) by the weighted
-/// normal equations `(Σ W_g S_gᵀ S_g) B = Σ W_g S_gᵀ B̃_g`. Scratch `s`, `t`, `nrm` need `n*n`.
-/// Returns false when the system is singular.
-#[allow(clippy::too_many_arguments)]
+/// Scratch of [`input_matrix`]: three `n × n` matrices.
+#[derive(Debug)]
+pub struct InputScratch<'a> {
+    /// `S_g = Σ_{i<w} A^i`.
+    pub s: &'a mut [f64],
+    /// Product scratch.
+    pub t: &'a mut [f64],
+    /// The normal-equation matrix.
+    pub nrm: &'a mut [f64],
+}
+
+/// `B` (`n × 1`) from the group input matrices `B̃` (`n × G`, column-major) of the groups
+/// `(widths, weights)` by the weighted normal equations
+/// `(Σ W_g S_gᵀ S_g) B = Σ W_g S_gᵀ B̃_g`, `S_g = Σ_{i<w_g} A^i`. Returns false when the system
+/// is singular.
 pub fn input_matrix(
     a: &[f64],
     n: usize,
     btilde: &[f64],
-    widths: &[usize],
-    weights: &[f64],
-    s: &mut [f64],
-    t: &mut [f64],
-    nrm: &mut [f64],
+    (widths, weights): (&[usize], &[f64]),
+    scratch: InputScratch<'_>,
     b_out: &mut [f64],
 ) -> bool {
+    let InputScratch { s, t, nrm } = scratch;
     nrm[..n * n].fill(0.0);
     b_out[..n].fill(0.0);
     for (g, (&w, &wt)) in widths.iter().zip(weights).enumerate() {
@@ -295,17 +304,13 @@ mod tests {
         let aab = [a[0] * ab[0] + a[2] * ab[1], a[1] * ab[0] + a[3] * ab[1]];
         let bt = [b[0] + ab[0] + aab[0], b[1] + ab[1] + aab[1], b[0], b[1]];
         let (mut s, mut t, mut nrm, mut out) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 2]);
-        assert!(input_matrix(
-            &a,
-            2,
-            &bt,
-            &[3, 1],
-            &[1.0, 0.5],
-            &mut s,
-            &mut t,
-            &mut nrm,
-            &mut out
-        ));
+        let scratch = InputScratch {
+            s: &mut s,
+            t: &mut t,
+            nrm: &mut nrm,
+        };
+        let groups = (&[3, 1][..], &[1.0, 0.5][..]);
+        assert!(input_matrix(&a, 2, &bt, groups, scratch, &mut out));
         assert!(
             (out[0] - 1.0).abs() < 1e-13 && (out[1] - 2.0).abs() < 1e-13,
             "{out:?}"

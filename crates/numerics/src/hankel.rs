@@ -19,6 +19,30 @@ pub struct HankelDims {
     pub c: usize,
 }
 
+/// The block Hankel matrix `H(shift)` of the Markov parameters `markov` (flat, layout of
+/// [`crate::markov`]) with shape `dims`: what the SVDs and the Hankel products take, never
+/// formed unless asked ([`HankelDims::fill`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hankel<'a> {
+    /// Markov blocks `Y_0 ..`, at least `dims.blocks_needed(shift)` of them.
+    pub markov: &'a [f64],
+    /// Block shape.
+    pub dims: HankelDims,
+    /// `s` of `H(s)`: block (a, b) is `Y_{a+b+1+s}`.
+    pub shift: usize,
+}
+
+impl<'a> Hankel<'a> {
+    /// `H(shift)` of `markov` with shape `dims`.
+    pub fn new(markov: &'a [f64], dims: HankelDims, shift: usize) -> Self {
+        Self {
+            markov,
+            dims,
+            shift,
+        }
+    }
+}
+
 impl HankelDims {
     /// Scalar rows `r*q`.
     pub fn rows(&self) -> usize {

@@ -12,11 +12,13 @@
 //!    pulse width, whose tails are Markov sequences of the same `(A, C)` with input matrix
 //!    `B̃_w = Σ_{i<w} A^i B` (identical to `Y` for one-sample pulses; no deconvolution noise
 //!    for wider ones). `B` then follows by least squares, `D = P_0`.
-//! 3. [`sizing`]: noise floor, Hankel size (near-square, up to where the response sinks into
+//! 3. [`order`]: noise floor, Hankel size (near-square, up to where the response sinks into
 //!    the noise), order from the singular values against the noise floor.
-//! 4. [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is `Y_{a+b+1+s}`).
-//! 5. [`era`]: `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` = first q rows
-//!    of `U Σ^½`, `D = Y_0`.
+//! 4. [`era`] on [`hankel`] + [`svd`]: `H(0) = U Σ Vᵀ` (block (a, b) of `H(s)` is
+//!    `Y_{a+b+1+s}`), `A = Σ^-½ Uᵀ H(1) V Σ^-½`, `B` = first p columns of `Σ^½ Vᵀ`, `C` =
+//!    first q rows of `U Σ^½`, `D = Y_0`.
+//! 5. [`okid`]: Markov parameters from any other excitation (Juang, Phan, Horta & Longman
+//!    1993); [`identify`] chooses the pulse path or OKID + ERA for a record.
 //! 6. [`modal`], [`indicators`], [`uncertainty`]: poles, fn, ζ, DC gain, m-d-k; MSV, MAC,
 //!    EMAC, MPC, CMI; jackknife over pulses.
 //! 7. [`workspace`] runs it all on preallocated buffers ([`model::Model`] holds the result);
@@ -33,6 +35,7 @@ pub mod era;
 pub mod error;
 pub mod grouped;
 pub mod hankel;
+pub mod identify;
 pub mod indicators;
 pub mod linalg;
 pub mod markov;
@@ -41,10 +44,10 @@ pub mod model;
 pub mod nullable;
 pub mod okid;
 pub mod operating_points;
+pub mod order;
 pub mod pulses;
 pub mod report;
 pub mod segment;
-pub mod sizing;
 pub mod statespace;
 pub mod svd;
 pub mod uncertainty;

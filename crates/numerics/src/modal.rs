@@ -14,6 +14,7 @@
 use nalgebra::Complex;
 
 use super::linalg::solve_real;
+use super::statespace::Abcd;
 
 /// `s = ln(z)/dt`.
 pub fn continuous(z: Complex<f64>, dt: f64) -> Complex<f64> {
@@ -33,21 +34,18 @@ pub fn fn_zeta(s1: Complex<f64>, s2: Complex<f64>) -> (f64, f64) {
     )
 }
 
-/// DC gain `D + C (I − A)^-1 B` into `out` (`q × p`, column-major). `m` needs `n*n`, `x`
-/// needs `n*p`. Returns false when `I − A` is singular (a pole at z = 1).
-#[allow(clippy::too_many_arguments)]
-pub fn dc_gain(
-    a: &[f64],
-    b: &[f64],
-    c: &[f64],
-    d: &[f64],
-    n: usize,
-    q: usize,
-    p: usize,
-    m: &mut [f64],
-    x: &mut [f64],
-    out: &mut [f64],
-) -> bool {
+/// DC gain `D + C (I − A)^-1 B` of `sys` into `out` (`q × p`, column-major). Scratch `m`
+/// needs `n*n`, `x` needs `n*p`. Returns false when `I − A` is singular (a pole at z = 1).
+pub fn dc_gain(sys: Abcd<'_>, m: &mut [f64], x: &mut [f64], out: &mut [f64]) -> bool {
+    let Abcd {
+        a,
+        b,
+        c,
+        d,
+        n,
+        q,
+        p,
+    } = sys;
     for j in 0..n {
         for i in 0..n {
             m[i + j * n] = if i == j { 1.0 } else { 0.0 } - a[i + j * n];
@@ -105,30 +103,17 @@ mod tests {
     fn dc_gain_first_order() {
         // x+ = 0.5x + u, y = 2x + 0.1u → G(1) = 0.1 + 2/(1-0.5) = 4.1.
         let (mut m, mut x, mut out) = ([0.0; 1], [0.0; 1], [0.0; 1]);
-        assert!(dc_gain(
-            &[0.5],
-            &[1.0],
-            &[2.0],
-            &[0.1],
-            1,
-            1,
-            1,
-            &mut m,
-            &mut x,
-            &mut out
-        ));
+        let sys = |a: &'static [f64]| Abcd {
+            a,
+            b: &[1.0],
+            c: &[2.0],
+            d: &[0.1],
+            n: 1,
+            q: 1,
+            p: 1,
+        };
+        assert!(dc_gain(sys(&[0.5]), &mut m, &mut x, &mut out));
         assert!((out[0] - 4.1).abs() < 1e-14);
-        assert!(!dc_gain(
-            &[1.0],
-            &[1.0],
-            &[2.0],
-            &[0.1],
-            1,
-            1,
-            1,
-            &mut m,
-            &mut x,
-            &mut out
-        ));
+        assert!(!dc_gain(sys(&[1.0]), &mut m, &mut x, &mut out));
     }
 }

@@ -9,6 +9,7 @@ use super::indicators::{self, Indicators, ModalInputs};
 use super::linalg::solve_complex;
 use super::modal::{self, continuous, fn_zeta, is_real};
 use super::report::{Gain, MassSpringDamper, ModeIndicators, ModelReport, Uncertainty};
+use super::statespace::Abcd;
 use super::svd::SvdPath;
 use super::{IdentError, StateSpace};
 
@@ -218,18 +219,16 @@ impl Model {
     /// DC gain `D + C (I − A)^-1 B`.
     pub(crate) fn finish_gain(&mut self) -> Result<(), IdentError> {
         let (n, q, p) = (self.n, self.q, self.p);
-        let ok = modal::dc_gain(
-            &self.a,
-            &self.b,
-            &self.c,
-            &self.d,
+        let sys = Abcd {
+            a: &self.a,
+            b: &self.b,
+            c: &self.c,
+            d: &self.d,
             n,
             q,
             p,
-            &mut self.rscratch,
-            &mut self.xscratch,
-            &mut self.dc,
-        );
+        };
+        let ok = modal::dc_gain(sys, &mut self.rscratch, &mut self.xscratch, &mut self.dc);
         if ok {
             Ok(())
         } else {

@@ -22,7 +22,7 @@
 
 use serde::Serialize;
 
-use super::okid::select::{identify_any, identify_okid, AnyInput, AnyModel, PathTaken};
+use super::identify::{identify_any, identify_okid, AnyInput, AnyModel, PathTaken};
 use super::okid::OkidOptions;
 use super::report::Gain;
 use super::segment::{self, Command, Level, PulseRun, SegmentRules};
@@ -191,7 +191,7 @@ fn identify_range(
     r: std::ops::Range<usize>,
     ident: &IdentOptions,
     okid_only: bool,
-) -> Result<AnyModel, super::okid::select::AnyError> {
+) -> Result<AnyModel, super::identify::AnyError> {
     let u = [&input.u[0][r.clone()]];
     let y: Vec<&[f64]> = input.y.iter().map(|c| &c[r.clone()]).collect();
     let starts: Option<Vec<usize>> = input.pulse_starts.map(|s| {

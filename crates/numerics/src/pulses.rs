@@ -34,7 +34,7 @@
 //! rounding and noise do not grow exponentially but accumulate like a random walk over `k/w`
 //! steps, because a `w`-sample pulse carries no energy at multiples of `fs/w`. That is why
 //! one-sample pulses are preferred and why the Hankel matrix only uses the response up to where
-//! it sinks into the noise ([`crate::sizing`]). For `w = 1`, `Y_k = P_k`.
+//! it sinks into the noise ([`crate::order`]). For `w = 1`, `Y_k = P_k`.
 //!
 //! **No `1/dt`.** `Y_k` is the response to a unit input held for one sample; a unit-area
 //! impulse would be `1/dt` high and make DC gains off by the sample rate.

@@ -27,6 +27,39 @@ pub struct StateSpace {
     pub dt_s: f64,
 }
 
+/// A state-space model `(A, B, C, D)` in flat column-major storage, borrowed (the
+/// workspace's preallocated buffers): `a` `n × n`, `b` `n × p`, `c` `q × n`, `d` `q × p`.
+#[derive(Debug, Clone, Copy)]
+pub struct Abcd<'a> {
+    /// State matrix.
+    pub a: &'a [f64],
+    /// Input matrix.
+    pub b: &'a [f64],
+    /// Output matrix.
+    pub c: &'a [f64],
+    /// Feed-through.
+    pub d: &'a [f64],
+    /// Order `n`.
+    pub n: usize,
+    /// Outputs `q`.
+    pub q: usize,
+    /// Inputs `p`.
+    pub p: usize,
+}
+
+/// Where a realisation writes `(A, B, C, D)` (flat, column-major, as [`Abcd`]).
+#[derive(Debug)]
+pub struct AbcdMut<'a> {
+    /// State matrix.
+    pub a: &'a mut [f64],
+    /// Input matrix.
+    pub b: &'a mut [f64],
+    /// Output matrix.
+    pub c: &'a mut [f64],
+    /// Feed-through.
+    pub d: &'a mut [f64],
+}
+
 impl StateSpace {
     /// Checks the shapes: `A` square, `B` with `A`'s rows, `C` with `A`'s columns, `D` `q × p`.
     pub fn new(

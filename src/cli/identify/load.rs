@@ -56,7 +56,7 @@ pub struct Source {
     pub steps: Option<Vec<StepOut>>,
     /// The OKID regression (when that path was taken).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub okid: Option<propid_numerics::okid::select::OkidSummary>,
+    pub okid: Option<propid_numerics::identify::OkidSummary>,
 }
 
 /// A step found from the response, with its time.

@@ -5,7 +5,7 @@ use std::fmt::Write;
 use serde::Serialize;
 
 use super::load::{Loaded, Source};
-use propid_numerics::okid::select::{AnyModel, PathTaken};
+use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::report::Gain;
 use propid_numerics::ModelReport;

@@ -23,7 +23,7 @@ use rand_distr::{Distribution, Normal};
 
 use propid_numerics::markov::MarkovSeq;
 use propid_numerics::svd::dense::DenseSvd;
-use propid_numerics::svd::SvdChoice;
+use propid_numerics::svd::{SvdChoice, Triplets};
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
 use propid_numerics::ModelReport;
 
@@ -134,8 +134,14 @@ impl Derivation {
         let mut svd = DenseSvd::new(n, n);
         let mut sigma = vec![0.0; n];
         let (mut p, mut q) = (vec![0.0; n * r], vec![0.0; n * r]);
-        svd.compute(h1.as_slice(), n, n, r, &mut sigma, &mut p, &mut q)
-            .map_err(WalkthroughError::Svd)?;
+        svd.compute(
+            h1.as_slice(),
+            n,
+            n,
+            r,
+            Triplets::new(&mut sigma, &mut p, &mut q),
+        )
+        .map_err(WalkthroughError::Svd)?;
         let p = DMatrix::from_column_slice(n, r, &p);
         let q = DMatrix::from_column_slice(n, r, &q);
         let d_inv = DMatrix::from_diagonal(&DVector::from_iterator(

@@ -17,7 +17,7 @@
 //! matrix to 1e-10 and better. No heap allocation after [`DenseSvd::new`]. Cost per sweep is
 //! about `3 m n²` flops; 6–12 sweeps are typical.
 
-use super::SvdError;
+use super::{SvdError, Triplets};
 
 /// Most sweeps before [`SvdError::NotConverged`].
 const MAX_SWEEPS: usize = 60;
@@ -52,19 +52,17 @@ impl DenseSvd {
     }
 
     /// SVD of `m` (`rows × cols`, column-major). Writes all `min(rows, cols)` singular values
-    /// (descending) into `sigma`, the leading `k` left singular vectors into `u`
-    /// (`rows × k`, column-major) and right ones into `v` (`cols × k`).
-    #[allow(clippy::too_many_arguments)]
+    /// (descending) into `out.sigma`, the leading `k` left singular vectors into `out.u`
+    /// (`rows × k`, column-major) and right ones into `out.v` (`cols × k`).
     pub fn compute(
         &mut self,
         m: &[f64],
         rows: usize,
         cols: usize,
         k: usize,
-        sigma: &mut [f64],
-        u: &mut [f64],
-        v: &mut [f64],
+        out: Triplets<'_>,
     ) -> Result<(), SvdError> {
+        let Triplets { sigma, u, v } = out;
         let (tall, wide) = (rows.max(cols), rows.min(cols));
         if rows > self.max_rows || cols > self.max_cols {
             return Err(SvdError::Dimensions(
@@ -208,7 +206,7 @@ mod tests {
         let mut s = vec![0.0; wide];
         let mut u = vec![0.0; rows * wide];
         let mut v = vec![0.0; cols * wide];
-        svd.compute(m, rows, cols, wide, &mut s, &mut u, &mut v)
+        svd.compute(m, rows, cols, wide, Triplets::new(&mut s, &mut u, &mut v))
             .unwrap();
         let scale = s[0].max(1e-300);
         // Reconstruction M = U Σ Vᵀ.
@@ -266,6 +264,7 @@ mod tests {
         let mut u = [0.0; 9];
         let mut v = [0.0; 9];
         let m = [0.0; 9];
-        assert!(svd.compute(&m, 3, 3, 3, &mut s, &mut u, &mut v).is_err());
+        let out = Triplets::new(&mut s, &mut u, &mut v);
+        assert!(svd.compute(&m, 3, 3, 3, out).is_err());
     }
 }

@@ -32,6 +32,7 @@ use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
 use super::truncated::TruncatedError;
+use crate::hankel::{Hankel, HankelDims};
 
 /// Smallest FFT length for which a plan is made.
 const MIN_FFT_LEN: usize = 16;
@@ -142,19 +143,15 @@ impl HankelOp {
         self.max_cols
     }
 
-    /// Loads `H(shift)` with `r × c` blocks of `q × p` from `markov`: computes and keeps the
+    /// Loads `H(shift)` (`r × c` blocks of `q × p` from `markov`, [`Hankel`]): computes and keeps the
     /// spectra of the `q p` sequences `h_ij` (one real FFT each). Checks every Markov value
     /// used for finiteness.
-    #[allow(clippy::too_many_arguments)]
-    pub fn prepare(
-        &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
-    ) -> Result<(), TruncatedError> {
+    pub fn prepare(&mut self, h: Hankel<'_>) -> Result<(), TruncatedError> {
+        let Hankel {
+            markov,
+            dims: HankelDims { q, p, r, c },
+            shift,
+        } = h;
         self.shape = None;
         check_dim("q", q, self.max_q)?;
         check_dim("p", p, self.max_p)?;
@@ -223,36 +220,19 @@ impl HankelOp {
 
     /// `y = H(shift) x` in one call ([`prepare`](Self::prepare) then
     /// [`apply_prepared`](Self::apply_prepared)).
-    #[allow(clippy::too_many_arguments)]
-    pub fn apply(
-        &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
-        x: &[f64],
-        y: &mut [f64],
-    ) -> Result<(), TruncatedError> {
-        self.prepare(markov, q, p, r, c, shift)?;
+    pub fn apply(&mut self, h: Hankel<'_>, x: &[f64], y: &mut [f64]) -> Result<(), TruncatedError> {
+        self.prepare(h)?;
         self.apply_prepared(x, y)
     }
 
     /// `y = H(shift)ᵀ x` in one call.
-    #[allow(clippy::too_many_arguments)]
     pub fn apply_t(
         &mut self,
-        markov: &[f64],
-        q: usize,
-        p: usize,
-        r: usize,
-        c: usize,
-        shift: usize,
+        h: Hankel<'_>,
         x: &[f64],
         y: &mut [f64],
     ) -> Result<(), TruncatedError> {
-        self.prepare(markov, q, p, r, c, shift)?;
+        self.prepare(h)?;
         self.apply_t_prepared(x, y)
     }
 
@@ -400,8 +380,9 @@ mod tests {
         let mut op = HankelOp::new(r + 3, c + 2, q, p);
         let mut y = vec![0.0; rows];
         let mut z = vec![0.0; cols];
-        op.apply(&markov, q, p, r, c, s, &x, &mut y).unwrap();
-        op.apply_t(&markov, q, p, r, c, s, &xt, &mut z).unwrap();
+        let hk = Hankel::new(&markov, HankelDims { q, p, r, c }, s);
+        op.apply(hk, &x, &mut y).unwrap();
+        op.apply_t(hk, &xt, &mut z).unwrap();
         for (row, yv) in y.iter().enumerate() {
             let want: f64 = (0..cols).map(|k| h[row * cols + k] * x[k]).sum();
             assert!((yv - want).abs() < 1e-12, "H x row {row}: {yv} vs {want}");
@@ -440,13 +421,14 @@ mod tests {
         let mut op = HankelOp::new(4, 4, 1, 1);
         let markov = vec![1.0; 20];
         let mut y = vec![0.0; 4];
-        let e = op.apply(&markov, 1, 1, 5, 4, 0, &[0.0; 4], &mut y);
+        let dims = |r, c| HankelDims { q: 1, p: 1, r, c };
+        let e = op.apply(Hankel::new(&markov, dims(5, 4), 0), &[0.0; 4], &mut y);
         assert!(matches!(e, Err(TruncatedError::Dimension { .. })));
-        let e = op.apply(&markov[..5], 1, 1, 4, 4, 0, &[0.0; 4], &mut y);
+        let e = op.apply(Hankel::new(&markov[..5], dims(4, 4), 0), &[0.0; 4], &mut y);
         assert!(matches!(e, Err(TruncatedError::MarkovTooShort { .. })));
         let mut bad = markov.clone();
         bad[3] = f64::NAN;
-        let e = op.apply(&bad, 1, 1, 4, 4, 0, &[0.0; 4], &mut y);
+        let e = op.apply(Hankel::new(&bad, dims(4, 4), 0), &[0.0; 4], &mut y);
         assert_eq!(
             e,
             Err(TruncatedError::NonFinite {
@@ -454,7 +436,7 @@ mod tests {
                 index: 3
             })
         );
-        let e = op.apply(&markov, 1, 1, 4, 4, 0, &[0.0; 3], &mut y);
+        let e = op.apply(Hankel::new(&markov, dims(4, 4), 0), &[0.0; 3], &mut y);
         assert!(matches!(
             e,
             Err(TruncatedError::SliceLength { what: "x", .. })

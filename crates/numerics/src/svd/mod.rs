@@ -14,6 +14,25 @@ pub mod truncated;
 
 use thiserror::Error;
 
+/// Where an SVD writes its leading triplets: `sigma` (descending), `u` (`rows × k`) and `v`
+/// (`cols × k`), column-major.
+#[derive(Debug)]
+pub struct Triplets<'a> {
+    /// Singular values.
+    pub sigma: &'a mut [f64],
+    /// Left singular vectors.
+    pub u: &'a mut [f64],
+    /// Right singular vectors.
+    pub v: &'a mut [f64],
+}
+
+impl<'a> Triplets<'a> {
+    /// The three output buffers.
+    pub fn new(sigma: &'a mut [f64], u: &'a mut [f64], v: &'a mut [f64]) -> Self {
+        Self { sigma, u, v }
+    }
+}
+
 /// Which SVD to use for the Hankel matrix.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]

@@ -9,7 +9,7 @@
 //! No allocation after [`SubspaceSvd::new`].
 
 use super::dense::DenseSvd;
-use super::SvdError;
+use super::{SvdError, Triplets};
 use crate::hankel::HankelDims;
 
 /// Preallocated subspace iteration for blocks of up to `max_b` vectors.
@@ -41,8 +41,7 @@ impl SubspaceSvd {
     }
 
     /// Leading `b` triplets of `H(0)` of `markov`, starting from `v0` (`cols × b`, orthonormal).
-    /// Writes `sigma[..b]`, `u` (`rows × b`) and `v` (`cols × b`).
-    #[allow(clippy::too_many_arguments)]
+    /// Writes `sigma[..b]`, `u` (`rows × b`) and `v` (`cols × b`) of `out`.
     pub fn compute(
         &mut self,
         markov: &[f64],
@@ -50,10 +49,9 @@ impl SubspaceSvd {
         b: usize,
         iters: usize,
         v0: &[f64],
-        sigma: &mut [f64],
-        u: &mut [f64],
-        v: &mut [f64],
+        out: Triplets<'_>,
     ) -> Result<(), SvdError> {
+        let Triplets { sigma, u, v } = out;
         let (rows, cols) = (dims.rows(), dims.cols());
         if b == 0 || b > self.max_b || b > rows.min(cols) {
             return Err(SvdError::Dimensions("subspace block size out of range"));
@@ -94,15 +92,8 @@ impl SubspaceSvd {
         }
         mgs(&mut self.z, rows, b, &mut self.r);
         // R (b × b, column-major, upper triangular) = U_R Σ V_Rᵀ.
-        self.small.compute(
-            &self.r[..b * b],
-            b,
-            b,
-            b,
-            &mut self.sr,
-            &mut self.ur,
-            &mut self.vr,
-        )?;
+        let small = Triplets::new(&mut self.sr, &mut self.ur, &mut self.vr);
+        self.small.compute(&self.r[..b * b], b, b, b, small)?;
         sigma[..b].copy_from_slice(&self.sr[..b]);
         matmul(&self.z, rows, b, &self.ur, b, u);
         matmul(&self.w, cols, b, &self.vr, b, v);
@@ -183,7 +174,7 @@ mod tests {
         let mut dense = DenseSvd::new(12, 12);
         let (mut s, mut u, mut v) = (vec![0.0; 12], vec![0.0; 144], vec![0.0; 144]);
         dense
-            .compute(&h, 12, 12, 12, &mut s, &mut u, &mut v)
+            .compute(&h, 12, 12, 12, Triplets::new(&mut s, &mut u, &mut v))
             .unwrap();
         // Start from V with a perturbation, re-orthonormalised.
         let b = 4;
@@ -196,8 +187,8 @@ mod tests {
         mgs(&mut v0, 12, b, &mut r);
         let mut sub = SubspaceSvd::new(12, 12, b);
         let (mut s2, mut u2, mut v2) = (vec![0.0; b], vec![0.0; 12 * b], vec![0.0; 12 * b]);
-        sub.compute(&markov, dims, b, 6, &v0, &mut s2, &mut u2, &mut v2)
-            .unwrap();
+        let out = Triplets::new(&mut s2, &mut u2, &mut v2);
+        sub.compute(&markov, dims, b, 6, &v0, out).unwrap();
         for l in 0..3 {
             assert!(
                 (s2[l] - s[l]).abs() < 1e-9 * s[0],

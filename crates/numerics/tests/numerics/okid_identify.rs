@@ -4,7 +4,7 @@
 use propid_testkit as core_support;
 
 use core_support::Plant;
-use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::pulses::PulseInput;
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
@@ -15,11 +15,7 @@ fn rel(a: f64, b: f64) -> f64 {
     ((a - b) / b).abs()
 }
 
-fn identify(
-    plant: &Plant,
-    u: &[f64],
-    order: Option<usize>,
-) -> propid_numerics::okid::select::AnyModel {
+fn identify(plant: &Plant, u: &[f64], order: Option<usize>) -> propid_numerics::identify::AnyModel {
     let y = plant.simulate(u, 2.0);
     let ys: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
     let us = [u];
@@ -48,7 +44,7 @@ fn random(n: usize, seed: u64) -> Vec<f64> {
         .collect()
 }
 
-fn assert_exact(plant: &Plant, m: &propid_numerics::okid::select::AnyModel) {
+fn assert_exact(plant: &Plant, m: &propid_numerics::identify::AnyModel) {
     assert_eq!(m.path, PathTaken::Okid);
     assert_eq!(m.report.order, 2, "{:?}", m.report.singular_values);
     assert!(

@@ -22,7 +22,7 @@
 use propid_testkit as core_support;
 
 use core_support::Plant;
-use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::workspace::IdentOptions;
 use rand::{Rng, SeedableRng};

@@ -6,8 +6,10 @@
 //! residuals ‖Hv − σu‖ and ‖Hᵀu − σv‖ below 1e-10 σ₁.
 
 use nalgebra::DMatrix;
+use propid_numerics::hankel::{Hankel, HankelDims};
 use propid_numerics::svd::truncated::TruncatedError;
 use propid_numerics::svd::truncated::TruncatedSvd;
+use propid_numerics::svd::Triplets;
 
 /// Markov blocks (q × p, column-major) of a sum of damped modes plus seeded uniform noise.
 fn markov(q: usize, p: usize, len: usize, modes: &[(f64, f64)], noise: f64, seed: u64) -> Vec<f64> {
@@ -33,6 +35,11 @@ fn markov(q: usize, p: usize, len: usize, modes: &[(f64, f64)], noise: f64, seed
     out
 }
 
+/// `H(s)` of `m` with `(q, p, r, c)`.
+fn hankel(m: &[f64], (q, p, r, c): (usize, usize, usize, usize), s: usize) -> Hankel<'_> {
+    Hankel::new(m, HankelDims { q, p, r, c }, s)
+}
+
 fn dense_hankel(m: &[f64], q: usize, p: usize, r: usize, c: usize, s: usize) -> DMatrix<f64> {
     DMatrix::from_fn(r * q, c * p, |row, col| {
         let (a, i, b, j) = (row / q, row % q, col / p, col % p);
@@ -46,21 +53,14 @@ struct Result3 {
     v: DMatrix<f64>,
 }
 
-#[allow(clippy::too_many_arguments)]
-fn truncated(
-    m: &[f64],
-    q: usize,
-    p: usize,
-    r: usize,
-    c: usize,
-    s: usize,
-    k: usize,
-) -> Result<Result3, TruncatedError> {
+/// The leading `k` triplets of `h` by the truncated SVD.
+fn truncated(h: Hankel<'_>, k: usize) -> Result<Result3, TruncatedError> {
+    let HankelDims { q, p, r, c } = h.dims;
     let mut svd = TruncatedSvd::new(r, c, q, p, k);
     let mut sigma = vec![0.0; k];
     let mut u = vec![0.0; r * q * k];
     let mut v = vec![0.0; c * p * k];
-    svd.compute(m, q, p, r, c, s, k, &mut sigma, &mut u, &mut v)?;
+    svd.compute(h, k, Triplets::new(&mut sigma, &mut u, &mut v))?;
     Ok(Result3 {
         sigma,
         u: DMatrix::from_column_slice(r * q, k, &u),
@@ -125,7 +125,7 @@ fn siso_square_noisy_top_k_matches_dense() {
     let m = markov(1, 1, r + c + 1, &MODES, 1e-3, 1);
     let h = dense_hankel(&m, 1, 1, r, c, 0);
     for k in [2, 4, 10] {
-        let t = truncated(&m, 1, 1, r, c, 0, k).unwrap();
+        let t = truncated(hankel(&m, (1, 1, r, c), 0), k).unwrap();
         let (es, ev, er) = compare(&h, &t);
         assert!(es < 1e-11, "k = {k}: sigma error {es:e}");
         assert!(ev < 1e-8, "k = {k}: vector error {ev:e}");
@@ -142,7 +142,7 @@ fn block_rectangular_shifted_matches_dense() {
     ] {
         let m = markov(q, p, r + c + s + 1, &MODES[..4], 1e-4, 2);
         let h = dense_hankel(&m, q, p, r, c, s);
-        let t = truncated(&m, q, p, r, c, s, k).unwrap();
+        let t = truncated(hankel(&m, (q, p, r, c), s), k).unwrap();
         let (es, ev, er) = compare(&h, &t);
         assert!(es < 1e-11, "{q}x{p} {r}x{c}: sigma error {es:e}");
         assert!(ev < 1e-8, "{q}x{p} {r}x{c}: vector error {ev:e}");
@@ -156,13 +156,13 @@ fn noise_free_low_rank_is_exact_and_pads_with_zeros() {
     let (r, c) = (50, 50);
     let m = markov(1, 1, r + c + 1, &[(0.95, 0.3)], 0.0, 3);
     let h = dense_hankel(&m, 1, 1, r, c, 0);
-    let t = truncated(&m, 1, 1, r, c, 0, 2).unwrap();
+    let t = truncated(hankel(&m, (1, 1, r, c), 0), 2).unwrap();
     let (es, ev, er) = compare(&h, &t);
     assert!(
         es < 1e-12 && ev < 1e-9 && er < 1e-12,
         "{es:e} {ev:e} {er:e}"
     );
-    let t4 = truncated(&m, 1, 1, r, c, 0, 4).unwrap();
+    let t4 = truncated(hankel(&m, (1, 1, r, c), 0), 4).unwrap();
     assert!(t4.sigma[2] < 1e-12 * t4.sigma[0], "{:?}", t4.sigma);
     // The padding vectors are still orthonormal.
     let gram = t4.u.transpose() * &t4.u;
@@ -173,16 +173,11 @@ fn noise_free_low_rank_is_exact_and_pads_with_zeros() {
 fn project_gives_u_t_h1_v() {
     let (q, p, r, c, k) = (2, 1, 30, 40, 4);
     let m = markov(q, p, r + c + 2, &MODES[..3], 1e-4, 4);
-    let t = truncated(&m, q, p, r, c, 0, k).unwrap();
+    let t = truncated(hankel(&m, (q, p, r, c), 0), k).unwrap();
     let mut svd = TruncatedSvd::new(r, c, q, p, k);
     let mut out = vec![0.0; k * k];
     svd.project(
-        &m,
-        q,
-        p,
-        r,
-        c,
-        1,
+        hankel(&m, (q, p, r, c), 1),
         k,
         t.u.as_slice(),
         t.v.as_slice(),
@@ -200,7 +195,11 @@ fn white_noise_into_cluster_reports_not_converged() {
     let m = markov(1, 1, r + c + 1, &[], 1.0, 5);
     let mut svd = TruncatedSvd::with_max_steps(r, c, 1, 1, 10, 14);
     let (mut s, mut u, mut v) = (vec![0.0; 10], vec![0.0; r * 10], vec![0.0; c * 10]);
-    let e = svd.compute(&m, 1, 1, r, c, 0, 10, &mut s, &mut u, &mut v);
+    let e = svd.compute(
+        hankel(&m, (1, 1, r, c), 0),
+        10,
+        Triplets::new(&mut s, &mut u, &mut v),
+    );
     match e {
         Err(TruncatedError::NotConverged {
             k: 10,
@@ -223,29 +222,53 @@ fn bad_input_is_a_typed_error() {
     let (mut s, mut u, mut v) = (vec![0.0; 3], vec![0.0; 30], vec![0.0; 30]);
     let zero = vec![0.0; 30];
     assert_eq!(
-        svd.compute(&zero, 1, 1, r, c, 0, 2, &mut s, &mut u, &mut v),
+        svd.compute(
+            hankel(&zero, (1, 1, r, c), 0),
+            2,
+            Triplets::new(&mut s, &mut u, &mut v)
+        ),
         Err(TruncatedError::ZeroMatrix)
     );
     let mut m = markov(1, 1, 30, &MODES[..1], 0.0, 6);
     assert!(matches!(
-        svd.compute(&m, 1, 1, r, c, 0, 4, &mut s, &mut u, &mut v),
+        svd.compute(
+            hankel(&m, (1, 1, r, c), 0),
+            4,
+            Triplets::new(&mut s, &mut u, &mut v)
+        ),
         Err(TruncatedError::Dimension { what: "k", .. })
     ));
     assert!(matches!(
-        svd.compute(&m, 1, 1, r, c, 0, 2, &mut s[..1], &mut u, &mut v),
+        svd.compute(
+            hankel(&m, (1, 1, r, c), 0),
+            2,
+            Triplets::new(&mut s[..1], &mut u, &mut v)
+        ),
         Err(TruncatedError::SliceLength { what: "sigma", .. })
     ));
     assert!(matches!(
-        svd.compute(&m, 1, 1, r + 1, c, 0, 2, &mut s, &mut u, &mut v),
+        svd.compute(
+            hankel(&m, (1, 1, r + 1, c), 0),
+            2,
+            Triplets::new(&mut s, &mut u, &mut v)
+        ),
         Err(TruncatedError::Dimension { .. })
     ));
     assert!(matches!(
-        svd.compute(&m[..15], 1, 1, r, c, 0, 2, &mut s, &mut u, &mut v),
+        svd.compute(
+            hankel(&m[..15], (1, 1, r, c), 0),
+            2,
+            Triplets::new(&mut s, &mut u, &mut v)
+        ),
         Err(TruncatedError::MarkovTooShort { .. })
     ));
     m[5] = f64::INFINITY;
     assert!(matches!(
-        svd.compute(&m, 1, 1, r, c, 0, 2, &mut s, &mut u, &mut v),
+        svd.compute(
+            hankel(&m, (1, 1, r, c), 0),
+            2,
+            Triplets::new(&mut s, &mut u, &mut v)
+        ),
         Err(TruncatedError::NonFinite {
             what: "markov",
             index: 5
@@ -254,7 +277,11 @@ fn bad_input_is_a_typed_error() {
     let mut small = TruncatedSvd::new(2, 2, 1, 1, 2);
     let m2 = markov(1, 1, 6, &MODES[..2], 0.0, 7);
     assert!(matches!(
-        small.compute(&m2, 1, 1, 1, 2, 0, 2, &mut s, &mut u, &mut v),
+        small.compute(
+            hankel(&m2, (1, 1, 1, 2), 0),
+            2,
+            Triplets::new(&mut s, &mut u, &mut v)
+        ),
         Err(TruncatedError::TooManyTriplets { .. })
     ));
 }
@@ -270,11 +297,20 @@ fn at_least_gives_converged_leading_triplets_and_ritz_estimates() {
     let mut svd = TruncatedSvd::with_max_steps(r, c, 1, 1, k, 16);
     let (mut s, mut u, mut v) = (vec![0.0; k], vec![0.0; r * k], vec![0.0; c * k]);
     assert!(matches!(
-        svd.compute(&m, 1, 1, r, c, 0, k, &mut s, &mut u, &mut v),
+        svd.compute(
+            hankel(&m, (1, 1, r, c), 0),
+            k,
+            Triplets::new(&mut s, &mut u, &mut v)
+        ),
         Err(TruncatedError::NotConverged { .. })
     ));
     let got = svd
-        .compute_at_least(&m, 1, 1, r, c, 0, k, 4, &mut s, &mut u, &mut v)
+        .compute_at_least(
+            hankel(&m, (1, 1, r, c), 0),
+            k,
+            4,
+            Triplets::new(&mut s, &mut u, &mut v),
+        )
         .unwrap();
     assert!((4..k).contains(&got), "converged {got}");
     assert!(svd.residuals()[..got].iter().all(|&x| x <= svd.tolerance()));

@@ -1,6 +1,7 @@
 //! Property test: the FFT block-Hankel products equal the dense products for arbitrary block
 //! sizes, channel counts, shifts and data (relative to the size of the terms summed).
 
+use propid_numerics::hankel::{Hankel, HankelDims};
 use propid_numerics::svd::hankel_op::HankelOp;
 use proptest::prelude::*;
 
@@ -65,8 +66,8 @@ proptest! {
         let mut op = HankelOp::new(r, c, q, p);
         let mut y = vec![0.0; r * q];
         let mut z = vec![0.0; c * p];
-        op.apply(&m, q, p, r, c, s, &x, &mut y).unwrap();
-        op.apply_t(&m, q, p, r, c, s, &xt, &mut z).unwrap();
+        op.apply(Hankel::new(&m, HankelDims { q, p, r, c }, s), &x, &mut y).unwrap();
+        op.apply_t(Hankel::new(&m, HankelDims { q, p, r, c }, s), &xt, &mut z).unwrap();
         // Each entry sums at most c p (or r q) terms of size <= 1/4.
         let tol = 1e-13 * (r + c) as f64 * (q * p) as f64;
         for (a, b) in y.iter().zip(dense_apply(&m, q, p, r, c, s, &x)) {

@@ -1,4 +1,4 @@
-//! The Eigensystem Realization Algorithm (Juang & Pappa 1985, J. Guidance 8(5), eqs. 29–36).
+//! The realisation step of ERA (Juang & Pappa 1985, J. Guidance 8(5), eqs. 29–36).
 //!
 //! With `H(0) = U Σ Vᵀ` truncated to the order `n` (`U_n`: `rq × n`, `V_n`: `cp × n`),
 //! `P = U_n Σ_n^½` is the realised observability matrix and `Q = Σ_n^½ V_nᵀ` the realised
@@ -15,7 +15,8 @@
 //! truncated path), `H(1)` is never formed.
 //! Storage: `a` (`n × n`), `b` (`n × p`), `c` (`q × n`), `d` (`q × p`), all column-major.
 
-use super::hankel::HankelDims;
+use crate::hankel::HankelDims;
+use crate::statespace::AbcdMut;
 
 /// `T = H(1) V_n` (`rows × n`, column-major) by direct products with the Markov parameters,
 /// `O(rows · cols · n)`; the truncated path uses FFT products instead.
@@ -31,22 +32,30 @@ pub fn h1_times_v(markov: &[f64], dims: &HankelDims, n: usize, v: &[f64], t: &mu
     }
 }
 
-/// Realises `(A, B, C, D)` of order `n` from the leading triplets (`u`: `rows × k`,
-/// `v`: `cols × k`, column-major, `k >= n`) and `t = H(1) V_n` (`rows × n`).
-#[allow(clippy::too_many_arguments)]
+/// The leading singular triplets of `H(0)` (`sigma`, `u`: `rows × k`, `v`: `cols × k`,
+/// column-major, `k >= n`), borrowed.
+#[derive(Debug, Clone, Copy)]
+pub struct Factors<'a> {
+    /// Singular values, descending.
+    pub sigma: &'a [f64],
+    /// Left singular vectors.
+    pub u: &'a [f64],
+    /// Right singular vectors.
+    pub v: &'a [f64],
+}
+
+/// Realises `(A, B, C, D)` of order `n` into `out` from the leading triplets `f` of `H(0)` and
+/// `t = H(1) V_n` (`rows × n`).
 pub fn realize(
     markov: &[f64],
     dims: &HankelDims,
     n: usize,
-    sigma: &[f64],
-    u: &[f64],
-    v: &[f64],
+    f: Factors<'_>,
     t: &[f64],
-    a: &mut [f64],
-    b: &mut [f64],
-    c: &mut [f64],
-    d: &mut [f64],
+    out: AbcdMut<'_>,
 ) {
+    let Factors { sigma, u, v } = f;
+    let AbcdMut { a, b, c, d } = out;
     let (rows, cols, q, p) = (dims.rows(), dims.cols(), dims.q, dims.p);
     for i in 0..n {
         let ui = &u[i * rows..(i + 1) * rows];

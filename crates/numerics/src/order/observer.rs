@@ -1,4 +1,5 @@
-//! Choosing the number `ℓ` of observer Markov parameters by output (simulation) error.
+//! Choosing the number `ℓ` of observer Markov parameters of OKID ([`crate::okid`]) by output
+//! (simulation) error: the order of OKID's regression, not the model order ([`super`]).
 //!
 //! The one-step residual of the observer regression keeps falling as `ℓ` grows (a longer ARX
 //! whitens output noise better), so a criterion on it (AIC, BIC) picks large `ℓ` on noisy data.
@@ -16,18 +17,17 @@
 //!
 //! and scored by `Σ_outputs ‖y − ŷ‖² / var(y)`. Noise is not predictable by simulation, so this
 //! score does not reward fitting it; an unstable fit diverges and is never chosen. The smallest
-//! `ℓ` whose score is within [`TIE`] of the best wins (noise-free data: the deadbeat order
-//! `⌈n/q⌉`, where the score drops to rounding). Cost `O(N ℓ q (p+q))` per candidate.
+//! `ℓ` whose score is within `observer_tie` ([`THRESHOLDS`]) of the best wins (noise-free
+//! data: the deadbeat order `⌈n/q⌉`, where the score drops to rounding). Cost
+//! `O(N ℓ q (p+q))` per candidate.
 
-/// Candidate `ℓ` values (those up to `ℓ_max` are tried).
-pub const CANDIDATES: [usize; 16] = [1, 2, 3, 4, 5, 6, 8, 10, 12, 14, 16, 20, 24, 28, 32, 40];
+use super::THRESHOLDS;
 
-/// Relative tolerance for ties (a smaller `ℓ` within 2 % of the best score wins).
-pub const TIE: f64 = 0.02;
-
-/// The candidates up to `ell_max` (always including `ell_max` itself).
+/// The candidates (`observer_candidates` of [`THRESHOLDS`]) below `ell_max`, then `ell_max`
+/// itself.
 pub fn candidates(ell_max: usize) -> Vec<usize> {
-    let mut c: Vec<usize> = CANDIDATES
+    let mut c: Vec<usize> = THRESHOLDS
+        .observer_candidates
         .iter()
         .copied()
         .filter(|&l| l < ell_max)
@@ -37,7 +37,7 @@ pub fn candidates(ell_max: usize) -> Vec<usize> {
 }
 
 /// Output-error score of the observer model `(mu, my)` (blocks `M_i^u`, `q × p`, `i = 0..ℓ`
-/// and `M_i^y`, `q × q`, `i = 1..ℓ`, column-major, as [`super::okid`] packs them). Missing
+/// and `M_i^y`, `q × q`, `i = 1..ℓ`, column-major, as [`crate::okid`] packs them). Missing
 /// inputs hold their last value; missing outputs are not scored; a diverging simulation scores
 /// NaN.
 pub fn output_error(
@@ -88,7 +88,8 @@ pub fn output_error(
     total
 }
 
-/// The smallest candidate within [`TIE`] of the best score (NaN scores never win).
+/// The smallest candidate within `observer_tie` ([`THRESHOLDS`]) of the best score (NaN scores
+/// never win).
 pub fn pick(scores: &[(usize, f64)]) -> Option<usize> {
     let best = scores
         .iter()
@@ -97,7 +98,7 @@ pub fn pick(scores: &[(usize, f64)]) -> Option<usize> {
         .fold(f64::INFINITY, f64::min);
     scores
         .iter()
-        .find(|s| s.1.is_finite() && s.1 <= best * (1.0 + TIE) + 1e-24)
+        .find(|s| s.1.is_finite() && s.1 <= best * (1.0 + THRESHOLDS.observer_tie) + 1e-24)
         .map(|s| s.0)
 }
 
