@@ -15,9 +15,9 @@
 //! ```
 //!
 //! The states start in steady state for the first input sample. The same exact discretisation
-//! as the simulated plant is used ([`propid_sim::plant::discretise_second_order`]).
+//! as the simulated plant is used ([`propid_numerics::discretise::discretise_second_order`]).
 
-use propid_sim::plant::discretise_second_order;
+use propid_numerics::discretise::discretise_second_order;
 
 /// Index of each parameter in [`Params::v`].
 pub mod ix {

@@ -10,7 +10,7 @@ use propid_numerics::modal::mass_spring_damper;
 use propid_numerics::report::{
     Gain as ReportGain, MassSpringDamper, ModeIndicators, ModelReport, Uncertainty,
 };
-use propid_sim::plant::discretise_second_order;
+use propid_numerics::discretise::discretise_second_order;
 
 /// A fitted model, published with every field of `propid identify --json`'s `"model"`
 /// ([`ModelReport`], flattened: same names, same types) plus the terms of the extension
