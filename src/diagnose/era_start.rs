@@ -6,12 +6,11 @@
 
 use serde::Serialize;
 
-use super::model::{ix, Params, Spec};
+use super::ctx::Ctx;
+use super::model::{simulate, Core, Model};
 use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::{IdentOptions, ModelReport};
-
-use super::catalogue::Ctx;
 
 /// The core's model and how well it predicts the validation part.
 #[derive(Debug, Clone, Serialize)]
@@ -31,8 +30,8 @@ pub struct EraBaseline {
 /// The core's order-2 model of the estimation part.
 #[derive(Debug, Clone)]
 pub struct EraStart {
-    /// `fn`, `ζ`, `K` as output-error parameters (offset 0).
-    pub params: Params,
+    /// `fn`, `ζ`, `K` as the output-error model's core (offset 0).
+    pub core: Core,
     /// Which path the core took.
     pub path: PathTaken,
     /// The core's published model (what `propid identify --json` prints for this data).
@@ -66,22 +65,24 @@ pub fn era_start(ctx: &Ctx) -> Option<EraStart> {
     if !(ok(r.fn_hz) && ok(r.zeta) && k.is_finite()) {
         return None;
     }
-    let mut p = Params::default();
-    p.v[ix::FN] = r.fn_hz;
-    p.v[ix::ZETA] = r.zeta;
-    p.v[ix::GAIN] = k;
+    let core = Core {
+        fn_hz: r.fn_hz,
+        zeta: r.zeta,
+        gain: k,
+        ..Core::default()
+    };
     Some(EraStart {
-        params: p,
+        core,
         path: m.path,
         report: m.report,
     })
 }
 
 /// The core's model with only the output offset fitted (least squares on the estimation part).
-pub fn with_offset(ctx: &Ctx, p: &Params) -> Params {
-    let mut q = *p;
+pub fn with_offset(ctx: &Ctx, core: &Core) -> Core {
+    let mut q = *core;
     let mut buf = vec![0.0; ctx.sig.u.len()];
-    super::model::simulate(&Spec::default(), &q, &ctx.sig, &mut buf);
+    simulate(&Model::new(q), &ctx.sig, &mut buf);
     let (mut s, mut n) = (0.0, 0usize);
     for k in ctx.est.clone() {
         let e = ctx.sig.y[k] - buf[k];
@@ -90,17 +91,17 @@ pub fn with_offset(ctx: &Ctx, p: &Params) -> Params {
             n += 1;
         }
     }
-    q.v[ix::OFFSET] = if n > 0 { s / n as f64 } else { 0.0 };
+    q.offset = if n > 0 { s / n as f64 } else { 0.0 };
     q
 }
 
 /// The published summary of the core's model given its validation fit.
-pub fn summary(p: &Params, path: PathTaken, fit_percent: f64) -> EraBaseline {
+pub fn summary(core: &Core, path: PathTaken, fit_percent: f64) -> EraBaseline {
     EraBaseline {
         path,
-        fn_hz: p.v[ix::FN],
-        zeta: p.v[ix::ZETA],
-        dc_gain: p.v[ix::GAIN],
+        fn_hz: core.fn_hz,
+        zeta: core.zeta,
+        dc_gain: core.gain,
         fit_percent,
     }
 }
