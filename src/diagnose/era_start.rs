@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::ctx::Ctx;
 use super::model::{simulate, Core, Model};
-use propid_numerics::okid::select::{identify_any, AnyInput, PathTaken};
+use propid_numerics::okid::select::{identify_any, AnyError, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::{IdentOptions, ModelReport};
 
@@ -27,6 +27,25 @@ pub struct EraBaseline {
     pub fit_percent: f64,
 }
 
+/// Why the core's model is not a start for the baseline.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CoreRefusal {
+    /// The identification core (ERA on pulse averages, or OKID + ERA) refused the estimation
+    /// part.
+    #[error("the identification core refused the estimation part")]
+    Refused(#[from] AnyError),
+    /// The core returned a model that is not a 2nd-order low-pass with a finite gain.
+    #[error("the identification core's model (fn {fn_hz} Hz, zeta {zeta}, gain {gain}) is not a usable start")]
+    Unusable {
+        /// Natural frequency, Hz.
+        fn_hz: f64,
+        /// Damping ratio.
+        zeta: f64,
+        /// DC gain.
+        gain: f64,
+    },
+}
+
 /// The core's order-2 model of the estimation part.
 #[derive(Debug, Clone)]
 pub struct EraStart {
@@ -38,8 +57,9 @@ pub struct EraStart {
     pub report: ModelReport,
 }
 
-/// Runs the core on the estimation part with order 2; `None` when it refuses the data.
-pub fn era_start(ctx: &Ctx) -> Option<EraStart> {
+/// Runs the core on the estimation part with order 2; an error when it refuses the data or its
+/// model is not usable as a start.
+pub fn era_start(ctx: &Ctx) -> Result<EraStart, CoreRefusal> {
     let est = ctx.est.clone();
     let u = &ctx.sig.u[est.clone()];
     let y = &ctx.sig.y[est];
@@ -58,12 +78,16 @@ pub fn era_start(ctx: &Ctx) -> Option<EraStart> {
         jackknife: false,
         ..IdentOptions::default()
     };
-    let m = identify_any(&input, &opts, &OkidOptions::default()).ok()?;
+    let m = identify_any(&input, &opts, &OkidOptions::default())?;
     let r = &m.report;
     let k = r.dc_gain.get(0);
     let ok = |v: f64| v.is_finite() && v > 0.0;
     if !(ok(r.fn_hz) && ok(r.zeta) && k.is_finite()) {
-        return None;
+        return Err(CoreRefusal::Unusable {
+            fn_hz: r.fn_hz,
+            zeta: r.zeta,
+            gain: k,
+        });
     }
     let core = Core {
         fn_hz: r.fn_hz,
@@ -71,7 +95,7 @@ pub fn era_start(ctx: &Ctx) -> Option<EraStart> {
         gain: k,
         ..Core::default()
     };
-    Some(EraStart {
+    Ok(EraStart {
         core,
         path: m.path,
         report: m.report,
@@ -103,5 +127,34 @@ pub fn summary(core: &Core, path: PathTaken, fit_percent: f64) -> EraBaseline {
         zeta: core.zeta,
         dc_gain: core.gain,
         fit_percent,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::model::Signals;
+
+    #[test]
+    fn a_refusal_of_the_core_is_a_typed_cause() {
+        let u: Vec<f64> = (0..400)
+            .map(|k| if k % 40 < 3 { 0.6 } else { 0.5 })
+            .collect();
+        let y = vec![f64::NAN; 400];
+        let ctx = Ctx {
+            sig: Signals {
+                dt_s: 0.01,
+                u: &u,
+                y: &y,
+                voltage: None,
+                u_ref: 0.5,
+                v_ref: 0.0,
+            },
+            est: 0..280,
+            val: 280..400,
+        };
+        let e = era_start(&ctx).unwrap_err();
+        assert!(matches!(e, CoreRefusal::Refused(_)), "{e:?}");
+        assert!(std::error::Error::source(&e).is_some());
     }
 }

@@ -1,5 +1,7 @@
 //! Why a diagnosis could not be made.
 
+use super::era_start::CoreRefusal;
+
 /// Why a diagnosis could not be made.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DiagnoseError {
@@ -32,5 +34,9 @@ pub enum DiagnoseError {
     Constant(&'static str),
     /// The baseline fit failed (non-finite residuals).
     #[error("the 2nd-order baseline could not be fitted to this data")]
-    FitFailed,
+    FitFailed {
+        /// Why the identification core gave no start either, when it gave none.
+        #[source]
+        core: Option<CoreRefusal>,
+    },
 }

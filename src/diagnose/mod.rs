@@ -177,9 +177,12 @@ pub fn diagnose(
     let ctx = Ctx { sig, est, val };
     let era = era_start::era_start(&ctx);
     let starts: Vec<Core> = era.iter().map(|e| e.core).collect();
-    let searched =
-        search::search(&ctx, &starts, opts.max_effects).ok_or(DiagnoseError::FitFailed)?;
-    Ok(assemble::assemble(&ctx, searched, era.as_ref()))
+    let searched = search::search(&ctx, &starts, opts.max_effects).ok_or_else(|| {
+        DiagnoseError::FitFailed {
+            core: era.as_ref().err().cloned(),
+        }
+    })?;
+    Ok(assemble::assemble(&ctx, searched, era.as_ref().ok()))
 }
 
 fn check_varies(x: &[f64], what: &'static str) -> Result<(), DiagnoseError> {
@@ -260,5 +263,25 @@ mod tests {
         assert_eq!(keys_in_order(&text), want, "{text}");
         assert!(text.contains(r#"{"effect":"dead_time","score":"#), "{text}");
         assert!(text.contains(r#""extended":{"effects":["dead_time"],"model":{"order":2,"#));
+    }
+
+    #[test]
+    fn a_baseline_that_cannot_be_fitted_carries_the_cores_refusal() {
+        use std::error::Error as _;
+        let refusal = era_start::CoreRefusal::Unusable {
+            fn_hz: f64::NAN,
+            zeta: 0.5,
+            gain: 1.0,
+        };
+        let e = DiagnoseError::FitFailed {
+            core: Some(refusal.clone()),
+        };
+        assert_eq!(
+            e.to_string(),
+            "the 2nd-order baseline could not be fitted to this data"
+        );
+        let source = e.source().expect("the core's refusal is the source");
+        assert_eq!(source.to_string(), refusal.to_string());
+        assert!(DiagnoseError::FitFailed { core: None }.source().is_none());
     }
 }
