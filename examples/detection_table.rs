@@ -343,7 +343,7 @@ fn main() {
     println!("### Synthetic cases ({cases} per effect, seeded)\n");
     println!("| effect | cases | named | other effect named | parameter error, median (max) | fit gain, median pp | rms ratio, median |");
     println!("|---|---|---|---|---|---|---|");
-    for name in diagnose::catalogue::EFFECTS {
+    for name in diagnose::effects::names() {
         let (mut named, mut other) = (0, 0);
         let mut errs = Vec::new();
         let mut gains = Vec::new();

@@ -6,12 +6,11 @@
 
 use serde::Serialize;
 
-use super::model::{ix, Params, Spec};
-use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
+use super::ctx::Ctx;
+use super::model::{simulate, Core, Model};
+use propid_numerics::identify::{identify_any, AnyError, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::{IdentOptions, ModelReport};
-
-use super::catalogue::Ctx;
 
 /// The core's model and how well it predicts the validation part.
 #[derive(Debug, Clone, Serialize)]
@@ -28,19 +27,39 @@ pub struct EraBaseline {
     pub fit_percent: f64,
 }
 
+/// Why the core's model is not a start for the baseline.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CoreRefusal {
+    /// The identification core (ERA on pulse averages, or OKID + ERA) refused the estimation
+    /// part.
+    #[error("the identification core refused the estimation part")]
+    Refused(#[from] AnyError),
+    /// The core returned a model that is not a 2nd-order low-pass with a finite gain.
+    #[error("the identification core's model (fn {fn_hz} Hz, zeta {zeta}, gain {gain}) is not a usable start")]
+    Unusable {
+        /// Natural frequency, Hz.
+        fn_hz: f64,
+        /// Damping ratio.
+        zeta: f64,
+        /// DC gain.
+        gain: f64,
+    },
+}
+
 /// The core's order-2 model of the estimation part.
 #[derive(Debug, Clone)]
 pub struct EraStart {
-    /// `fn`, `ζ`, `K` as output-error parameters (offset 0).
-    pub params: Params,
+    /// `fn`, `ζ`, `K` as the output-error model's core (offset 0).
+    pub core: Core,
     /// Which path the core took.
     pub path: PathTaken,
     /// The core's published model (what `propid identify --json` prints for this data).
     pub report: ModelReport,
 }
 
-/// Runs the core on the estimation part with order 2; `None` when it refuses the data.
-pub fn era_start(ctx: &Ctx) -> Option<EraStart> {
+/// Runs the core on the estimation part with order 2; an error when it refuses the data or its
+/// model is not usable as a start.
+pub fn era_start(ctx: &Ctx) -> Result<EraStart, CoreRefusal> {
     let est = ctx.est.clone();
     let u = &ctx.sig.u[est.clone()];
     let y = &ctx.sig.y[est];
@@ -59,29 +78,35 @@ pub fn era_start(ctx: &Ctx) -> Option<EraStart> {
         jackknife: false,
         ..IdentOptions::default()
     };
-    let m = identify_any(&input, &opts, &OkidOptions::default()).ok()?;
+    let m = identify_any(&input, &opts, &OkidOptions::default())?;
     let r = &m.report;
     let k = r.dc_gain.get(0);
     let ok = |v: f64| v.is_finite() && v > 0.0;
     if !(ok(r.fn_hz) && ok(r.zeta) && k.is_finite()) {
-        return None;
+        return Err(CoreRefusal::Unusable {
+            fn_hz: r.fn_hz,
+            zeta: r.zeta,
+            gain: k,
+        });
     }
-    let mut p = Params::default();
-    p.v[ix::FN] = r.fn_hz;
-    p.v[ix::ZETA] = r.zeta;
-    p.v[ix::GAIN] = k;
-    Some(EraStart {
-        params: p,
+    let core = Core {
+        fn_hz: r.fn_hz,
+        zeta: r.zeta,
+        gain: k,
+        ..Core::default()
+    };
+    Ok(EraStart {
+        core,
         path: m.path,
         report: m.report,
     })
 }
 
 /// The core's model with only the output offset fitted (least squares on the estimation part).
-pub fn with_offset(ctx: &Ctx, p: &Params) -> Params {
-    let mut q = *p;
+pub fn with_offset(ctx: &Ctx, core: &Core) -> Core {
+    let mut q = *core;
     let mut buf = vec![0.0; ctx.sig.u.len()];
-    super::model::simulate(&Spec::default(), &q, &ctx.sig, &mut buf);
+    simulate(&Model::new(q), &ctx.sig, &mut buf);
     let (mut s, mut n) = (0.0, 0usize);
     for k in ctx.est.clone() {
         let e = ctx.sig.y[k] - buf[k];
@@ -90,17 +115,46 @@ pub fn with_offset(ctx: &Ctx, p: &Params) -> Params {
             n += 1;
         }
     }
-    q.v[ix::OFFSET] = if n > 0 { s / n as f64 } else { 0.0 };
+    q.offset = if n > 0 { s / n as f64 } else { 0.0 };
     q
 }
 
 /// The published summary of the core's model given its validation fit.
-pub fn summary(p: &Params, path: PathTaken, fit_percent: f64) -> EraBaseline {
+pub fn summary(core: &Core, path: PathTaken, fit_percent: f64) -> EraBaseline {
     EraBaseline {
         path,
-        fn_hz: p.v[ix::FN],
-        zeta: p.v[ix::ZETA],
-        dc_gain: p.v[ix::GAIN],
+        fn_hz: core.fn_hz,
+        zeta: core.zeta,
+        dc_gain: core.gain,
         fit_percent,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::model::Signals;
+
+    #[test]
+    fn a_refusal_of_the_core_is_a_typed_cause() {
+        let u: Vec<f64> = (0..400)
+            .map(|k| if k % 40 < 3 { 0.6 } else { 0.5 })
+            .collect();
+        let y = vec![f64::NAN; 400];
+        let ctx = Ctx {
+            sig: Signals {
+                dt_s: 0.01,
+                u: &u,
+                y: &y,
+                voltage: None,
+                u_ref: 0.5,
+                v_ref: 0.0,
+            },
+            est: 0..280,
+            val: 280..400,
+        };
+        let e = era_start(&ctx).unwrap_err();
+        assert!(matches!(e, CoreRefusal::Refused(_)), "{e:?}");
+        assert!(std::error::Error::source(&e).is_some());
     }
 }

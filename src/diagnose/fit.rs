@@ -1,8 +1,8 @@
 //! Fitting the output-error model of [`super::model`] to measured data.
 //!
-//! - [`linear_refit`]: the parameters that enter linearly (gain `K`, offset `c`, drift `r`, the
-//!   sine/cosine coefficients `a, b`) by least squares, with the others held — used to score
-//!   grid points of the nonlinear parameters cheaply.
+//! - [`linear_refit`]: the parameters that enter linearly (gain `K`, offset `c`, and each
+//!   term's linear coefficients, e.g. a drift rate or sine/cosine amplitudes) by least squares,
+//!   with the others held — used to score grid points of the nonlinear parameters cheaply.
 //! - [`levenberg_marquardt`]: all free parameters by Levenberg–Marquardt (Marquardt 1963) on the
 //!   simulation error `r = y − ŷ(θ)` over the estimation samples, with a forward-difference
 //!   Jacobian and Marquardt's diagonal scaling, `(JᵀJ + λ diag JᵀJ) δ = Jᵀ r`. Frequencies and
@@ -12,15 +12,14 @@ use std::ops::Range;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::model::{ix, simulate, Params, Signals, Spec};
+use super::effect::Scale;
+use super::model::{simulate, simulate_places, Model, Signals};
 
 /// A fitted model and its residual sum of squares on the estimation samples.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Fit {
-    /// Which parts are switched on.
-    pub spec: Spec,
-    /// Fitted values.
-    pub params: Params,
+    /// The fitted model.
+    pub model: Model,
     /// Sum of squared simulation errors over the estimation samples.
     pub sse: f64,
     /// Number of estimation samples counted in `sse`.
@@ -28,15 +27,9 @@ pub struct Fit {
 }
 
 /// Sum of squared simulation errors of `p` over `range` (missing outputs skipped).
-pub fn sse(
-    spec: &Spec,
-    p: &Params,
-    sig: &Signals,
-    range: Range<usize>,
-    buf: &mut Vec<f64>,
-) -> (f64, usize) {
+pub fn sse(m: &Model, sig: &Signals, range: Range<usize>, buf: &mut Vec<f64>) -> (f64, usize) {
     buf.resize(sig.u.len(), 0.0);
-    simulate(spec, p, sig, buf);
+    simulate(m, sig, buf);
     let mut s = 0.0;
     let mut n = 0;
     for k in range {
@@ -53,29 +46,20 @@ pub fn sse(
     }
 }
 
-/// Least squares for the linearly entering parameters with the others held (see module doc).
-/// Returns the updated parameters and their SSE.
-pub fn linear_refit(spec: &Spec, p: &Params, sig: &Signals, range: Range<usize>) -> (Params, f64) {
-    let mut unit = *p;
-    unit.v[ix::GAIN] = 1.0;
-    unit.v[ix::OFFSET] = 0.0;
-    unit.v[ix::DRIFT] = 0.0;
-    unit.v[ix::SIN_A] = 0.0;
-    unit.v[ix::SIN_B] = 0.0;
-    let lin_spec = Spec {
-        clip_sensor: None,
-        ..*spec
-    };
+/// Least squares for the linearly entering parameters with the others held (see module doc):
+/// the output without limits is `ŷ = K s₁ + c + Σ θ_j φ_j(t)` with `s₁` the simulation at
+/// `K = 1`, `c = 0`, `θ = 0`. Returns the updated model and its SSE (limits included).
+pub fn linear_refit(m: &Model, sig: &Signals, range: Range<usize>) -> (Model, f64) {
+    let mut unit = m.clone();
+    unit.core.gain = 1.0;
+    unit.core.offset = 0.0;
+    for t in unit.terms_mut() {
+        let zeros = vec![0.0; t.linear_count()];
+        t.set_linear(&zeros);
+    }
     let mut s1 = vec![0.0; sig.u.len()];
-    simulate(&lin_spec, &unit, sig, &mut s1);
-    let w = 2.0 * std::f64::consts::PI * p.v[ix::SIN_FREQ];
-    let mut cols = 2;
-    if spec.drift {
-        cols += 1;
-    }
-    if spec.periodic {
-        cols += 2;
-    }
+    simulate_places(&unit, sig, &mut s1, false);
+    let cols = 2 + m.terms().map(|t| t.linear_count()).sum::<usize>();
     let mut ata = DMatrix::<f64>::zeros(cols, cols);
     let mut aty = DVector::<f64>::zeros(cols);
     let mut row = vec![0.0; cols];
@@ -88,13 +72,10 @@ pub fn linear_refit(spec: &Spec, p: &Params, sig: &Signals, range: Range<usize>)
         row[0] = s1[k];
         row[1] = 1.0;
         let mut c = 2;
-        if spec.drift {
-            row[c] = t;
-            c += 1;
-        }
-        if spec.periodic {
-            row[c] = (w * t).sin();
-            row[c + 1] = (w * t).cos();
+        for term in m.terms() {
+            let l = term.linear_count();
+            term.linear_row(t, &mut row[c..c + l]);
+            c += l;
         }
         for i in 0..cols {
             aty[i] += row[i] * yk;
@@ -103,7 +84,7 @@ pub fn linear_refit(spec: &Spec, p: &Params, sig: &Signals, range: Range<usize>)
             }
         }
     }
-    let mut out = *p;
+    let mut out = m.clone();
     let reg = 1e-12
         * (0..cols)
             .map(|i| ata[(i, i)])
@@ -114,63 +95,50 @@ pub fn linear_refit(spec: &Spec, p: &Params, sig: &Signals, range: Range<usize>)
     }
     if let Some(sol) = ata.cholesky().map(|c| c.solve(&aty)) {
         if sol.iter().all(|v| v.is_finite()) {
-            out.v[ix::GAIN] = sol[0];
-            out.v[ix::OFFSET] = sol[1];
+            out.core.gain = sol[0];
+            out.core.offset = sol[1];
             let mut c = 2;
-            if spec.drift {
-                out.v[ix::DRIFT] = sol[c];
-                c += 1;
-            }
-            if spec.periodic {
-                out.v[ix::SIN_A] = sol[c];
-                out.v[ix::SIN_B] = sol[c + 1];
+            for term in out.terms_mut() {
+                let l = term.linear_count();
+                term.set_linear(&sol.as_slice()[c..c + l]);
+                c += l;
             }
         }
     }
     let mut buf = Vec::new();
-    let (s, _) = sse(spec, &out, sig, range, &mut buf);
+    let (s, _) = sse(&out, sig, range, &mut buf);
     (out, s)
 }
 
-/// True for parameters adjusted in logarithm.
-fn is_log(i: usize) -> bool {
-    matches!(
-        i,
-        ix::FN | ix::ZETA | ix::MODE_FN | ix::MODE_ZETA | ix::SIN_FREQ
-    )
-}
-
-fn to_z(p: &Params, free: &[usize]) -> Vec<f64> {
+/// The free parameters in the coordinates the fit moves (logarithm where [`Scale::Log`]).
+fn to_z(free: &[(f64, Scale)]) -> Vec<f64> {
     free.iter()
-        .map(|&i| {
-            if is_log(i) {
-                p.v[i].max(1e-9).ln()
-            } else {
-                p.v[i]
-            }
+        .map(|&(v, scale)| match scale {
+            Scale::Log => v.max(1e-9).ln(),
+            Scale::Linear => v,
         })
         .collect()
 }
 
-fn from_z(base: &Params, free: &[usize], z: &[f64]) -> Params {
-    let mut p = *base;
-    for (&i, &zi) in free.iter().zip(z) {
-        p.v[i] = if is_log(i) { zi.exp() } else { zi };
-    }
-    p
+/// `base` with its free parameters set from the fit's coordinates `z`.
+fn from_z(base: &Model, scales: &[Scale], z: &[f64]) -> Model {
+    let values: Vec<f64> = scales
+        .iter()
+        .zip(z)
+        .map(|(scale, &zi)| match scale {
+            Scale::Log => zi.exp(),
+            Scale::Linear => zi,
+        })
+        .collect();
+    let mut m = base.clone();
+    m.set_free(&values);
+    m
 }
 
 /// Residuals `y − ŷ` over the finite estimation samples.
-fn residuals(
-    spec: &Spec,
-    p: &Params,
-    sig: &Signals,
-    range: &Range<usize>,
-    buf: &mut Vec<f64>,
-    r: &mut Vec<f64>,
-) {
+fn residuals(m: &Model, sig: &Signals, range: &Range<usize>, buf: &mut Vec<f64>, r: &mut Vec<f64>) {
     buf.resize(sig.u.len(), 0.0);
-    simulate(spec, p, sig, buf);
+    simulate(m, sig, buf);
     r.clear();
     for k in range.clone() {
         if sig.y[k].is_finite() {
@@ -179,22 +147,17 @@ fn residuals(
     }
 }
 
-/// Levenberg–Marquardt on the free parameters of `spec` from `p0` (see module doc); at most
-/// `max_iter` accepted or rejected steps. Never returns a worse fit than `p0`.
-pub fn levenberg_marquardt(
-    spec: &Spec,
-    p0: &Params,
-    sig: &Signals,
-    range: Range<usize>,
-    max_iter: usize,
-) -> Fit {
-    let free = spec.free();
+/// Levenberg–Marquardt on the free parameters of `p0` (see module doc); at most `max_iter`
+/// accepted or rejected steps. Never returns a worse fit than `p0`.
+pub fn levenberg_marquardt(p0: &Model, sig: &Signals, range: Range<usize>, max_iter: usize) -> Fit {
+    let free = p0.free();
+    let scales: Vec<Scale> = free.iter().map(|f| f.1).collect();
     let m = free.len();
     let mut buf = Vec::new();
     let mut r = Vec::new();
-    let mut z = to_z(p0, &free);
-    let mut p = *p0;
-    residuals(spec, &p, sig, &range, &mut buf, &mut r);
+    let mut z = to_z(&free);
+    let mut p = p0.clone();
+    residuals(&p, sig, &range, &mut buf, &mut r);
     let n = r.len();
     let mut cost: f64 = r.iter().map(|e| e * e).sum();
     if !cost.is_finite() {
@@ -209,17 +172,14 @@ pub fn levenberg_marquardt(
         }
         // Forward-difference Jacobian of the residuals.
         for j in 0..m {
-            let h = 1e-6 * z[j].abs().max(if is_log(free[j]) { 1.0 } else { 1e-3 });
+            let floor = match scales[j] {
+                Scale::Log => 1.0,
+                Scale::Linear => 1e-3,
+            };
+            let h = 1e-6 * z[j].abs().max(floor);
             let mut zj = z.clone();
             zj[j] += h;
-            residuals(
-                spec,
-                &from_z(p0, &free, &zj),
-                sig,
-                &range,
-                &mut buf,
-                &mut rj,
-            );
+            residuals(&from_z(p0, &scales, &zj), sig, &range, &mut buf, &mut rj);
             cols[j].clear();
             cols[j].extend(rj.iter().zip(&r).map(|(a, b)| (b - a) / h));
         }
@@ -244,8 +204,8 @@ pub fn levenberg_marquardt(
                 continue;
             };
             let zt: Vec<f64> = z.iter().zip(delta.iter()).map(|(a, d)| a + d).collect();
-            let pt = from_z(p0, &free, &zt);
-            residuals(spec, &pt, sig, &range, &mut buf, &mut rj);
+            let pt = from_z(p0, &scales, &zt);
+            residuals(&pt, sig, &range, &mut buf, &mut rj);
             let ct: f64 = rj.iter().map(|e| e * e).sum();
             if ct.is_finite() && ct < cost {
                 let rel = (cost - ct) / cost.max(1e-300);
@@ -264,8 +224,7 @@ pub fn levenberg_marquardt(
         }
     }
     Fit {
-        spec: *spec,
-        params: p,
+        model: p,
         sse: cost,
         n,
     }

@@ -1,131 +1,152 @@
-//! The parametric model that `diagnose` fits: the 2nd-order linear core, optionally extended by
-//! the catalogue's effects, simulated from the input alone (an output-error model: no measured
+//! The parametric model that `diagnose` fits: the 2nd-order linear core, extended by the terms
+//! of the effects found, simulated from the input alone (an output-error model: no measured
 //! output is fed back, so the simulation on the validation part is a true prediction).
 //!
 //! ```text
-//!   v_k  = u_{k−d}                                   dead_time (d whole samples)
-//!   v_k ← min(v_k, L)                                saturation of the throttle
-//!   v_k ← u_r · (max(v_k, 0) / u_r)^p                static_nonlinearity (u_r: mean throttle)
-//!   v_k ← v_k · (1 + g_V · (V_k − V_r))               supply_sag (V_r: mean voltage)
-//!   x_{k+1} = A x_k + B K v_k,  T_k = x_k[0]         2nd-order core, exact ZOH of
-//!                                                    T'' + 2ζωn T' + ωn² T = ωn² K v
-//!   s_k = (1 − g) T_k + g m_k,  m'' + 2ζm ωm m' + ωm² m = ωm² T     extra_mode (series)
-//!   ŷ_k = c + s_k + r t_k + a sin(2π f t_k) + b cos(2π f t_k)       baseline_drift, periodic
-//!   ŷ_k ← min(ŷ_k, Y)                                 saturation of the sensor
+//!   v_k  = u_k, then the input terms in place order    e.g. v_k = u_{k−d} (dead_time),
+//!                                                      min(v_k, L), u_r (v_k/u_r)^p, ...
+//!   x_{k+1} = A x_k + B K v_k,  T_k = x_k[0]           2nd-order core, exact ZOH of
+//!                                                      T'' + 2ζωn T' + ωn² T = ωn² K v
+//!   s_k = T_k, then the series terms                   e.g. an extra mode (4th order)
+//!   ŷ_k = c + s_k, then the output terms               e.g. drift r t_k, a sinusoid, a clip
 //! ```
 //!
-//! The states start in steady state for the first input sample. The same exact discretisation
-//! as the simulated plant is used ([`propid_sim::plant::discretise_second_order`]).
+//! Each effect's term and its formula are in its file under [`super::effects`]; where it acts
+//! is its [`Place`]. The states start in steady state for the first input sample. The core is
+//! discretised by [`propid_numerics::discretise::discretise_second_order`], the function the
+//! simulated plant uses.
 
-use propid_sim::plant::discretise_second_order;
+use nalgebra::Vector2;
+use propid_numerics::discretise::discretise_second_order;
 
-/// Index of each parameter in [`Params::v`].
-pub mod ix {
-    /// Natural frequency of the core, Hz.
-    pub const FN: usize = 0;
-    /// Damping ratio of the core.
-    pub const ZETA: usize = 1;
-    /// Static gain of the core, output units per unit throttle.
-    pub const GAIN: usize = 2;
-    /// Output offset, output units.
-    pub const OFFSET: usize = 3;
-    /// Exponent of the static map.
-    pub const EXPONENT: usize = 4;
-    /// Natural frequency of the extra mode, Hz.
-    pub const MODE_FN: usize = 5;
-    /// Damping ratio of the extra mode.
-    pub const MODE_ZETA: usize = 6;
-    /// Share of the output through the extra mode.
-    pub const MODE_GAIN: usize = 7;
-    /// Drift rate, output units per second.
-    pub const DRIFT: usize = 8;
-    /// Sine coefficient of the periodic term.
-    pub const SIN_A: usize = 9;
-    /// Cosine coefficient of the periodic term.
-    pub const SIN_B: usize = 10;
-    /// Frequency of the periodic term, Hz.
-    pub const SIN_FREQ: usize = 11;
-    /// Relative gain change per volt.
-    pub const GAIN_PER_VOLT: usize = 12;
-    /// Throttle clip level.
-    pub const CLIP: usize = 13;
-    /// Number of parameters.
-    pub const COUNT: usize = 14;
+use super::effect::{Place, Scale, Term};
+use super::effects;
+
+/// The 2nd-order core `T'' + 2ζωn T' + ωn² T = ωn² K v` and the output offset `c`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Core {
+    /// Natural frequency `fn = ωn / 2π`, Hz.
+    pub fn_hz: f64,
+    /// Damping ratio `ζ`.
+    pub zeta: f64,
+    /// Static gain `K`, output units per unit throttle.
+    pub gain: f64,
+    /// Output offset `c`, output units.
+    pub offset: f64,
 }
 
-/// Which parts of the model are switched on.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Spec {
-    /// Input delay, whole samples.
-    pub delay: usize,
-    /// Power-law static map.
-    pub static_map: bool,
-    /// Extra series mode.
-    pub extra_mode: bool,
-    /// Linear drift term.
-    pub drift: bool,
-    /// Sinusoid term.
-    pub periodic: bool,
-    /// Voltage-scaled input.
-    pub supply: bool,
-    /// Throttle clip at [`ix::CLIP`].
-    pub clip_throttle: bool,
-    /// Sensor clip level (fixed, from the data).
-    pub clip_sensor: Option<f64>,
+impl Default for Core {
+    fn default() -> Self {
+        Core {
+            fn_hz: 1.0,
+            zeta: 0.7,
+            gain: 1.0,
+            offset: 0.0,
+        }
+    }
 }
 
-impl Spec {
-    /// Model order (states of the linear part).
-    pub fn order(&self) -> usize {
-        if self.extra_mode {
-            4
-        } else {
-            2
+impl Core {
+    /// The parameters the fit adjusts: `fn`, `ζ` (in logarithm), `K`, `c`.
+    fn free(&self) -> [(f64, Scale); 4] {
+        [
+            (self.fn_hz, Scale::Log),
+            (self.zeta, Scale::Log),
+            (self.gain, Scale::Linear),
+            (self.offset, Scale::Linear),
+        ]
+    }
+}
+
+/// A model: the core and the terms of the effects it includes (kept in registry order, the
+/// order of the free parameters and of the linear regressors).
+#[derive(Debug, Clone, Default)]
+pub struct Model {
+    /// The 2nd-order core and offset.
+    pub core: Core,
+    terms: Vec<Box<dyn Term>>,
+}
+
+impl Model {
+    /// The baseline model with core `core`.
+    pub fn new(core: Core) -> Model {
+        Model {
+            core,
+            terms: Vec::new(),
         }
     }
 
-    /// The parameters the fit adjusts (the delay and the throttle clip are searched on a grid).
-    pub fn free(&self) -> Vec<usize> {
-        let mut f = vec![ix::FN, ix::ZETA, ix::GAIN, ix::OFFSET];
-        if self.static_map {
-            f.push(ix::EXPONENT);
+    /// This model with `term` added (replacing a term of the same effect).
+    pub fn with(&self, term: impl Term + 'static) -> Model {
+        self.with_boxed(Box::new(term))
+    }
+
+    /// This model with the boxed `term` added (replacing a term of the same effect).
+    pub fn with_boxed(&self, term: Box<dyn Term>) -> Model {
+        let mut m = self.clone();
+        m.terms.retain(|t| t.name() != term.name());
+        let at = effects::position(term.name());
+        let i = m
+            .terms
+            .partition_point(|t| effects::position(t.name()) <= at);
+        m.terms.insert(i, term);
+        m
+    }
+
+    /// This model with core `core`.
+    pub fn with_core(&self, core: Core) -> Model {
+        Model {
+            core,
+            terms: self.terms.clone(),
         }
-        if self.extra_mode {
-            f.extend([ix::MODE_FN, ix::MODE_ZETA, ix::MODE_GAIN]);
-        }
-        if self.drift {
-            f.push(ix::DRIFT);
-        }
-        if self.periodic {
-            f.extend([ix::SIN_A, ix::SIN_B, ix::SIN_FREQ]);
-        }
-        if self.supply {
-            f.push(ix::GAIN_PER_VOLT);
+    }
+
+    /// The terms, in registry order.
+    pub fn terms(&self) -> impl Iterator<Item = &dyn Term> {
+        self.terms.iter().map(|t| t.as_ref())
+    }
+
+    /// The terms, mutable, in registry order.
+    pub fn terms_mut(&mut self) -> impl Iterator<Item = &mut Box<dyn Term>> {
+        self.terms.iter_mut()
+    }
+
+    /// The term of effect `name`, if the model has it.
+    pub fn term(&self, name: &str) -> Option<&dyn Term> {
+        self.terms().find(|t| t.name() == name)
+    }
+
+    /// The terms at `place`, in registry order.
+    fn at(&self, place: Place) -> impl Iterator<Item = &dyn Term> {
+        self.terms().filter(move |t| t.place() == place)
+    }
+
+    /// The free parameters: the core's, then each term's in registry order.
+    pub fn free(&self) -> Vec<(f64, Scale)> {
+        let mut f = self.core.free().to_vec();
+        for t in self.terms() {
+            f.extend(t.free());
         }
         f
     }
-}
 
-/// Parameter values (natural units), indexed by [`ix`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Params {
-    /// The values.
-    pub v: [f64; ix::COUNT],
-}
+    /// Sets the free parameters (natural values, in the order of [`Model::free`]).
+    pub fn set_free(&mut self, values: &[f64]) {
+        self.core.fn_hz = values[0];
+        self.core.zeta = values[1];
+        self.core.gain = values[2];
+        self.core.offset = values[3];
+        let mut i = 4;
+        for t in self.terms.iter_mut() {
+            let k = t.free().len();
+            t.set_free(&values[i..i + k]);
+            i += k;
+        }
+    }
 
-impl Default for Params {
-    fn default() -> Self {
-        let mut v = [0.0; ix::COUNT];
-        v[ix::FN] = 1.0;
-        v[ix::ZETA] = 0.7;
-        v[ix::GAIN] = 1.0;
-        v[ix::EXPONENT] = 1.0;
-        v[ix::MODE_FN] = 10.0;
-        v[ix::MODE_ZETA] = 0.05;
-        v[ix::MODE_GAIN] = 1.0;
-        v[ix::SIN_FREQ] = 1.0;
-        v[ix::CLIP] = f64::INFINITY;
-        Params { v }
+    /// True when a free parameter is NaN.
+    pub fn has_nan(&self) -> bool {
+        self.free().iter().any(|(v, _)| v.is_nan())
     }
 }
 
@@ -152,74 +173,135 @@ pub fn max_freq_hz(dt_s: f64) -> f64 {
 }
 
 /// Simulates the model on the whole record into `out` (same length as `sig.u`).
-pub fn simulate(spec: &Spec, p: &Params, sig: &Signals, out: &mut [f64]) {
-    let v = &p.v;
+pub fn simulate(m: &Model, sig: &Signals, out: &mut [f64]) {
+    simulate_places(m, sig, out, true);
+}
+
+/// Simulates the model; with `limits` false the output limits ([`Place::OutputLimit`]) are
+/// left out, so that the output is affine in the core's gain, its offset and the linear terms.
+pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) {
     let n = sig.u.len().min(out.len());
     if n == 0 {
         return;
     }
+    let out = &mut out[..n];
     let fmax = max_freq_hz(sig.dt_s);
     let (a, b) = discretise_second_order(
-        v[ix::FN].clamp(1e-6, fmax),
-        v[ix::ZETA].clamp(1e-4, 50.0),
+        m.core.fn_hz.clamp(1e-6, fmax),
+        m.core.zeta.clamp(1e-4, 50.0),
         1.0,
         sig.dt_s,
     );
-    let mode = spec.extra_mode.then(|| {
-        discretise_second_order(
-            v[ix::MODE_FN].clamp(1e-6, fmax),
-            v[ix::MODE_ZETA].clamp(1e-4, 50.0),
-            1.0,
-            sig.dt_s,
-        )
-    });
-    let input = |k: usize| -> f64 {
-        let mut x = sig.u[k.saturating_sub(spec.delay)];
-        if spec.clip_throttle {
-            x = x.min(v[ix::CLIP]);
+    let mut v = sig.u[..n].to_vec();
+    for place in Place::ALL.into_iter().filter(|p| p.is_input()) {
+        for t in m.at(place) {
+            t.shape_input(&mut v, sig);
         }
-        if spec.static_map {
-            x = sig.u_ref * (x.max(0.0) / sig.u_ref).powf(v[ix::EXPONENT]);
+    }
+    for x in v.iter_mut() {
+        *x *= m.core.gain;
+    }
+    let mut x = Vector2::new(v[0], 0.0);
+    for (o, &vk) in out.iter_mut().zip(&v) {
+        *o = x[0];
+        x = a * x + b * vk;
+    }
+    for t in m.at(Place::Series) {
+        t.filter(out, sig.dt_s);
+    }
+    for o in out.iter_mut() {
+        *o += m.core.offset;
+    }
+    for t in m.at(Place::OutputAdd) {
+        t.shape_output(out, sig);
+    }
+    if limits {
+        for t in m.at(Place::OutputLimit) {
+            t.shape_output(out, sig);
         }
-        if spec.supply {
-            if let Some(volt) = sig.voltage {
-                x *= 1.0 + v[ix::GAIN_PER_VOLT] * (volt[k] - sig.v_ref);
-            }
-        }
-        x * v[ix::GAIN]
-    };
-    let t0 = input(0);
-    let mut x = nalgebra::Vector2::new(t0, 0.0);
-    let mut m = nalgebra::Vector2::new(t0, 0.0);
-    let w = 2.0 * std::f64::consts::PI * v[ix::SIN_FREQ];
-    let g = v[ix::MODE_GAIN];
-    for (k, o) in out.iter_mut().enumerate().take(n) {
-        let t = k as f64 * sig.dt_s;
-        let thrust = x[0];
-        let mut s = thrust;
-        if let Some((am, bm)) = &mode {
-            s = (1.0 - g) * thrust + g * m[0];
-            m = am * m + bm * thrust;
-        }
-        let mut yk = v[ix::OFFSET] + s;
-        if spec.drift {
-            yk += v[ix::DRIFT] * t;
-        }
-        if spec.periodic {
-            yk += v[ix::SIN_A] * (w * t).sin() + v[ix::SIN_B] * (w * t).cos();
-        }
-        if let Some(level) = spec.clip_sensor {
-            yk = yk.min(level);
-        }
-        *o = yk;
-        x = a * x + b * input(k);
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::effects::saturation::{Clipped, SaturationParams};
+    use crate::diagnose::effects::static_nonlinearity::StaticNonlinearityParams;
+    use crate::diagnose::effects::supply_sag::SupplySagParams;
     use propid_sim::plant::{Plant, PlantConfig};
+
+    fn signals<'a>(u: &'a [f64], y: &'a [f64]) -> Signals<'a> {
+        Signals {
+            dt_s: 1e-3,
+            u,
+            y,
+            voltage: None,
+            u_ref: 0.5,
+            v_ref: 0.0,
+        }
+    }
+
+    #[test]
+    fn terms_act_in_place_order_whatever_order_they_were_added_in() {
+        // Clip at 0.6 before the square law around 0.5: 0.5 (0.6/0.5)² = 0.72. The other way
+        // round it would be min(0.5 (0.8/0.5)², 0.6) = 0.6.
+        let u = vec![0.8; 50];
+        let y = vec![0.0; 50];
+        let clip = SaturationParams {
+            level: 0.6,
+            clipped: Clipped::Throttle,
+        };
+        let map = StaticNonlinearityParams { exponent: 2.0 };
+        let core = Core {
+            fn_hz: 5.0,
+            gain: 1.0,
+            ..Core::default()
+        };
+        for m in [
+            Model::new(core).with(map).with(clip),
+            Model::new(core).with(clip).with(map),
+        ] {
+            let mut out = vec![0.0; 50];
+            simulate(&m, &signals(&u, &y), &mut out);
+            assert!(out.iter().all(|v| (v - 0.72).abs() < 1e-12), "{out:?}");
+        }
+    }
+
+    #[test]
+    fn free_parameters_follow_the_registry_and_a_term_is_replaced_not_doubled() {
+        let m = Model::default()
+            .with(SupplySagParams { gain_per_volt: 0.1 })
+            .with(StaticNonlinearityParams { exponent: 2.0 })
+            .with(SupplySagParams { gain_per_volt: 0.2 });
+        let names: Vec<&str> = m.terms().map(|t| t.name()).collect();
+        assert_eq!(names, ["static_nonlinearity", "supply_sag"]);
+        let values: Vec<f64> = m.free().iter().map(|f| f.0).collect();
+        assert_eq!(values, [1.0, 0.7, 1.0, 0.0, 2.0, 0.2]);
+        let mut m2 = m.clone();
+        m2.set_free(&[2.0, 0.5, 3.0, 0.1, 1.5, -0.05]);
+        assert_eq!(m2.core.gain, 3.0);
+        assert_eq!(m2.free()[4].0, 1.5);
+        assert_eq!(m2.free()[5].0, -0.05);
+    }
+
+    #[test]
+    fn a_sensor_clip_is_left_out_when_limits_are_off() {
+        let u = vec![1.0; 20];
+        let y = vec![0.0; 20];
+        let m = Model::new(Core {
+            gain: 2.0,
+            ..Core::default()
+        })
+        .with(SaturationParams {
+            level: 1.5,
+            clipped: Clipped::Sensor { samples: 20 },
+        });
+        let (mut with, mut without) = (vec![0.0; 20], vec![0.0; 20]);
+        simulate_places(&m, &signals(&u, &y), &mut with, true);
+        simulate_places(&m, &signals(&u, &y), &mut without, false);
+        assert!(with.iter().all(|&v| v == 1.5));
+        assert!(without.iter().all(|&v| (v - 2.0).abs() < 1e-12));
+    }
 
     #[test]
     fn baseline_model_reproduces_the_clean_plant_exactly() {
@@ -234,10 +316,12 @@ mod tests {
             .collect();
         plant.settle(u[0]);
         let y: Vec<f64> = u.iter().map(|&x| plant.step(x).thrust_n).collect();
-        let mut p = Params::default();
-        p.v[ix::FN] = cfg.fn_hz;
-        p.v[ix::ZETA] = cfg.zeta;
-        p.v[ix::GAIN] = cfg.gain_n_per_throttle;
+        let m = Model::new(Core {
+            fn_hz: cfg.fn_hz,
+            zeta: cfg.zeta,
+            gain: cfg.gain_n_per_throttle,
+            offset: 0.0,
+        });
         let sig = Signals {
             dt_s: 2e-3,
             u: &u,
@@ -247,7 +331,7 @@ mod tests {
             v_ref: 0.0,
         };
         let mut out = vec![0.0; u.len()];
-        simulate(&Spec::default(), &p, &sig, &mut out);
+        simulate(&m, &sig, &mut out);
         for (a, b) in out.iter().zip(&y) {
             assert!((a - b).abs() < 1e-9);
         }

@@ -30,6 +30,7 @@
 // several matrices at once would hide them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod discretise;
 pub mod eig;
 pub mod era;
 pub mod error;

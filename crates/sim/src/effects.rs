@@ -20,7 +20,8 @@ use std::collections::VecDeque;
 use nalgebra::{Matrix2, Vector2};
 use serde::Deserialize;
 
-use super::plant::{check, discretise_second_order, PlantConfig, PlantError};
+use super::plant::{check, PlantConfig, PlantError};
+use propid_numerics::discretise::discretise_second_order;
 
 /// `dead_time`: a transport delay of the throttle (ESC update, filtering, logging).
 #[derive(Debug, Clone, PartialEq, Deserialize)]

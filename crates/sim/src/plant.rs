@@ -14,7 +14,8 @@
 //! so the static map of the clean plant is `T = K u` and its small-signal gain is `K` N per unit
 //! throttle everywhere. With the state `x = [T, T']` the system is discretised *exactly* for a
 //! zero-order-held input: `A = e^{Ac dt}`, `B = ∫₀^dt e^{Ac s} ds · Bc`, both read off the
-//! matrix exponential of the augmented matrix `[[Ac, Bc], [0, 0]] dt` (Van Loan 1978). The
+//! matrix exponential of the augmented matrix `[[Ac, Bc], [0, 0]] dt` (Van Loan 1978;
+//! [`propid_numerics::discretise::discretise_second_order`]). The
 //! measurement at step `k` is `y_k = C x_k` (no feed-through, `D = 0`), then
 //! `x_{k+1} = A x_k + B u_k`: the throttle held during sample `k` shows in the thrust from sample
 //! `k + 1` on, as the Markov convention of `core::markov` expects (`Y_0 = D = 0`, `Y_1 = C B`).
@@ -33,7 +34,8 @@
 //! the load cell's converter saturates at `±adc_full_scale_n` (flagged in
 //! [`Measurement::adc_saturated`]).
 
-use nalgebra::{Matrix2, Matrix3, Vector2};
+use nalgebra::{Matrix2, Vector2};
+use propid_numerics::discretise::discretise_second_order;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -204,32 +206,6 @@ pub struct Measurement {
     pub current_a: f64,
     /// True when the load cell's converter (or a `saturation` effect on the sensor) clipped.
     pub adc_saturated: bool,
-}
-
-/// Exact zero-order-hold discretisation of `T'' + 2ζωn T' + ωn² T = ωn² k u` with state
-/// `[T, T']`; returns `(A, B)` (see the module doc, Van Loan 1978).
-pub fn discretise_second_order(
-    fn_hz: f64,
-    zeta: f64,
-    k: f64,
-    dt_s: f64,
-) -> (Matrix2<f64>, Vector2<f64>) {
-    let wn = 2.0 * std::f64::consts::PI * fn_hz;
-    let m = Matrix3::new(
-        0.0,
-        1.0,
-        0.0,
-        -wn * wn,
-        -2.0 * zeta * wn,
-        wn * wn * k,
-        0.0,
-        0.0,
-        0.0,
-    ) * dt_s;
-    let e = m.exp();
-    let a = Matrix2::new(e[(0, 0)], e[(0, 1)], e[(1, 0)], e[(1, 1)]);
-    let b = Vector2::new(e[(0, 2)], e[(1, 2)]);
-    (a, b)
 }
 
 /// The simulated plant. Create it with [`Plant::new`], drive it with [`Plant::step`].

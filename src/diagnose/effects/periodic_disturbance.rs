@@ -1,0 +1,181 @@
+//! `periodic_disturbance`: a steady sinusoid in the output, unrelated to the input (an
+//! imbalance, mains pickup): `ŷ ← ŷ + a sin(2π f t) + b cos(2π f t)`.
+
+use serde::Serialize;
+use serde_json::{json, Map, Value};
+
+use crate::diagnose::ctx::Ctx;
+use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
+use crate::diagnose::fit::Fit;
+use crate::diagnose::model::{max_freq_hz, Core, Model, Signals};
+use crate::diagnose::spectrum::peaks;
+
+/// The published name.
+pub const NAME: &str = "periodic_disturbance";
+
+/// The catalogue entry.
+#[derive(Debug, Clone, Copy)]
+pub struct PeriodicDisturbance;
+
+/// The fitted sinusoid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PeriodicDisturbanceParams {
+    /// Frequency `f`, Hz.
+    pub freq_hz: f64,
+    /// Sine coefficient `a`, output units.
+    pub sin_coef: f64,
+    /// Cosine coefficient `b`, output units.
+    pub cos_coef: f64,
+}
+
+/// The finding's published parameters.
+#[derive(Serialize)]
+struct Published {
+    /// Amplitude `√(a² + b²)`, output units.
+    amplitude: f64,
+    /// Frequency, Hz.
+    freq_hz: f64,
+}
+
+impl Effect for PeriodicDisturbance {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    /// Starts at the three strongest peaks of the residual spectrum between 3 periods per
+    /// estimation part and 0.95 Nyquist (none: not applicable); Levenberg–Marquardt from the
+    /// best.
+    fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
+        let dt = ctx.sig.dt_s;
+        let fmax = max_freq_hz(dt);
+        let n = ctx.est.len() as f64;
+        let starts: Vec<_> = peaks(&ctx.residual(cur), dt, 3.0 / (n * dt), 0.95 * fmax, 3)
+            .into_iter()
+            .map(|(freq_hz, _)| {
+                cur.model.with(PeriodicDisturbanceParams {
+                    freq_hz,
+                    sin_coef: 0.0,
+                    cos_coef: 0.0,
+                })
+            })
+            .collect();
+        if starts.is_empty() {
+            return None;
+        }
+        Some(ctx.best_of(starts, 1))
+    }
+}
+
+impl PeriodicDisturbanceParams {
+    /// `2π f`, rad/s.
+    fn omega(&self) -> f64 {
+        2.0 * std::f64::consts::PI * self.freq_hz
+    }
+}
+
+impl Term for PeriodicDisturbanceParams {
+    fn name(&self) -> &'static str {
+        NAME
+    }
+
+    fn place(&self) -> Place {
+        Place::OutputAdd
+    }
+
+    fn clone_box(&self) -> Box<dyn Term> {
+        Box::new(*self)
+    }
+
+    /// At least 5 periods in the estimation part, below Nyquist.
+    fn plausible(&self, ctx: &Ctx, _model: &Model) -> bool {
+        let fmax = max_freq_hz(ctx.sig.dt_s);
+        let span_s = ctx.est.len() as f64 * ctx.sig.dt_s;
+        self.freq_hz >= 5.0 / span_s && self.freq_hz < fmax
+    }
+
+    fn shape_output(&self, y: &mut [f64], sig: &Signals) {
+        let w = self.omega();
+        for (k, yk) in y.iter_mut().enumerate() {
+            let t = k as f64 * sig.dt_s;
+            *yk += self.sin_coef * (w * t).sin() + self.cos_coef * (w * t).cos();
+        }
+    }
+
+    fn free(&self) -> Vec<(f64, Scale)> {
+        vec![
+            (self.sin_coef, Scale::Linear),
+            (self.cos_coef, Scale::Linear),
+            (self.freq_hz, Scale::Log),
+        ]
+    }
+
+    fn set_free(&mut self, values: &[f64]) {
+        self.sin_coef = values[0];
+        self.cos_coef = values[1];
+        self.freq_hz = values[2];
+    }
+
+    fn linear_count(&self) -> usize {
+        2
+    }
+
+    fn linear_row(&self, t_s: f64, row: &mut [f64]) {
+        let w = self.omega();
+        row[0] = (w * t_s).sin();
+        row[1] = (w * t_s).cos();
+    }
+
+    fn set_linear(&mut self, theta: &[f64]) {
+        self.sin_coef = theta[0];
+        self.cos_coef = theta[1];
+    }
+
+    fn terms(&self, _dt_s: f64, terms: &mut Map<String, Value>) {
+        terms.insert("periodic_freq_hz".into(), json!(self.freq_hz));
+        terms.insert(
+            "periodic_amplitude".into(),
+            json!(self.sin_coef.hypot(self.cos_coef)),
+        );
+    }
+
+    fn finding_params(&self, _dt_s: f64) -> Map<String, Value> {
+        to_map(Published {
+            amplitude: self.sin_coef.hypot(self.cos_coef),
+            freq_hz: self.freq_hz,
+        })
+    }
+
+    fn evidence(&self, _core: &Core, _ctx: &Ctx, drop: &str) -> String {
+        let a = self.sin_coef.hypot(self.cos_coef);
+        format!(
+            "a steady {:.3} Hz oscillation of amplitude {a:.4} runs through the residual, \
+             unrelated to the input (a line in the residual spectrum); with a sinusoid term {drop}",
+            self.freq_hz
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_published_parameters_keep_their_names() {
+        let p = PeriodicDisturbanceParams {
+            freq_hz: 50.0,
+            sin_coef: 0.03,
+            cos_coef: 0.04,
+        };
+        let text = |m: &Map<String, Value>| serde_json::to_string(m).unwrap();
+        assert_eq!(
+            text(&p.finding_params(0.002)),
+            r#"{"amplitude":0.05,"freq_hz":50.0}"#
+        );
+        let mut terms = Map::new();
+        p.terms(0.002, &mut terms);
+        assert_eq!(
+            text(&terms),
+            r#"{"periodic_amplitude":0.05,"periodic_freq_hz":50.0}"#
+        );
+    }
+}
