@@ -11,7 +11,7 @@
 //! |                                       | flags from the throttle ([`pulse_flags`]), VALID    |
 //! |                                       | flags from the columns present                      |
 //! | `#ACK <CMD> OK <t_us>` / `ERR <code>` | ACK of the last command of that kind sent ([`CsvLink::command_sent`]) — CSV lines carry no seq |
-//! | `# HELLO … boot_id H rate_hz R`       | HELLO ([`comments`]); a changed boot id only once two lines agree ([`boot`]) |
+//! | `# HELLO … boot_id H rate_hz R`       | HELLO ([`parse_comment`]); a changed boot id only once two lines agree ([`boot`]) |
 //! | `#EVENT NAME arg t_us index`          | EVENT                                               |
 //! | first `#ACK PING OK` without a HELLO  | a HELLO with boot id 0 and the measured rate, so the plan's handshake completes with a bench that never says HELLO |
 //!
@@ -24,17 +24,17 @@
 //! kind ([`CsvLinkStats::dropped`]).
 
 pub mod boot;
-pub mod comments;
 pub mod placer;
 pub mod pulse_flags;
 
 use boot::{BootTracker, HelloVerdict};
-use comments::{parse_comment, CommentFact};
 use placer::{IndexPlacer, Placement};
-use propid_wire::protocol::csv::{CsvAck, CsvDecoder, CsvItem, CsvOptions, CsvRow};
-use propid_wire::protocol::csv_command::{encode_csv_command, CsvCommandError, CsvCommandKind};
+use propid_wire::protocol::csv::{
+    encode_csv_command, parse_comment, CommentFact, CsvAck, CsvCommandError, CsvCommandKind,
+    CsvDecoder, CsvItem, CsvOptions, CsvRow,
+};
 use propid_wire::protocol::message::{
-    msg_type, Ack, AckResult, EscProtocol, Frame, Hello, Message, Sample, SampleFlags,
+    Ack, AckResult, EscProtocol, Frame, Hello, Message, Sample, SampleFlags,
 };
 use pulse_flags::PulseFlagger;
 
@@ -146,7 +146,8 @@ impl CsvLink {
         out: &mut [u8],
     ) -> Result<usize, CsvCommandError> {
         let n = encode_csv_command(msg, out)?;
-        if let Some(k) = kind_of(msg) {
+        let k = CsvCommandKind::of(msg);
+        if k != CsvCommandKind::Other {
             self.state.sent[k as usize] = Some((seq, msg.msg_type()));
         }
         Ok(n)
@@ -322,35 +323,10 @@ fn to_sample(row: &CsvRow) -> Sample {
     }
 }
 
-/// The command kind a message is written as (HELLO_REQ and HEARTBEAT are both `PING`).
-fn kind_of(msg: &Message) -> Option<CsvCommandKind> {
-    Some(match msg {
-        Message::HelloReq | Message::Heartbeat => CsvCommandKind::Ping,
-        Message::Arm(_) => CsvCommandKind::Arm,
-        Message::Disarm => CsvCommandKind::Disarm,
-        Message::SetThrottle(_) => CsvCommandKind::Thr,
-        Message::Impulse(_) => CsvCommandKind::Imp,
-        Message::Stop => CsvCommandKind::Stop,
-        _ => return None,
-    })
-}
-
 /// The ACK a `#ACK` line stands for: that of the last command of its kind sent.
 fn to_ack(ack: &CsvAck, sent: &[Option<(u16, u8)>; 6]) -> Option<Ack> {
-    if ack.command == CsvCommandKind::Other {
-        return None;
-    }
-    let (cmd_seq, cmd_type) = sent[ack.command as usize].unwrap_or((
-        0,
-        match ack.command {
-            CsvCommandKind::Ping => msg_type::HELLO_REQ,
-            CsvCommandKind::Arm => msg_type::ARM,
-            CsvCommandKind::Disarm => msg_type::DISARM,
-            CsvCommandKind::Thr => msg_type::SET_THROTTLE,
-            CsvCommandKind::Imp => msg_type::IMPULSE,
-            _ => msg_type::STOP,
-        },
-    ));
+    let wire_type = ack.command.msg_type()?;
+    let (cmd_seq, cmd_type) = sent[ack.command as usize].unwrap_or((0, wire_type));
     let (result, t_us) = match ack.result {
         Ok(t) => (AckResult::Ok, t.unwrap_or(0) as u32),
         Err(code) => (AckResult::from_u8(code.clamp(0, 255) as u8), 0),

@@ -7,7 +7,8 @@
 //! - [`decoder`]: [`check_block`], the one integrity check of a frame (COBS, length, CRC),
 //!   and [`Decoder`], a fixed-buffer decoder with [`DecodeStats`] (one counter per kind of
 //!   drop), resynchronising at every `0x00`;
-//! - [`csv`]: the text fallback of §6; [`detect`]: binary or CSV from the first bytes.
+//! - [`csv`]: the text fallback of §6, the one CSV dialect (lines, checksum, header names,
+//!   rows, the bench's `#` lines, commands); [`detect`]: binary or CSV from the first bytes.
 //!
 //! Nothing here does I/O: callers push the bytes they read and write the bytes they are given,
 //! so the serial source, the recording replay, the simulated stand and the tests share one code
@@ -17,14 +18,17 @@ pub mod block;
 pub mod cobs;
 pub mod crc;
 pub mod csv;
-pub mod csv_columns;
-pub mod csv_command;
 pub mod decoder;
 pub mod detect;
 pub mod encode;
 pub mod error;
 pub mod message;
 pub mod payload;
+
+/// The alias and unit table of the CSV dialect, under its former path.
+pub use csv::columns as csv_columns;
+/// The CSV commands, under their former path.
+pub use csv::command as csv_command;
 
 #[cfg(test)]
 mod vectors;
