@@ -1,6 +1,7 @@
 //! The CSV link against the simulated stand's CSV dialect and against a plain Arduino bench.
 
 use super::*;
+use propid_wire::stream::csv_stream::made_up_hello;
 use propid_sim::csv::CsvWriter;
 use propid_wire::protocol::message::{msg_type, Event, EventCode};
 

@@ -32,7 +32,7 @@ use serde::Serialize;
 
 use super::clock::{Step, Unwrap32};
 use super::IngestError;
-use crate::protocol::message::{EventCode, Message, Sample, SampleFlags};
+use crate::protocol::message::{Event, EventCode, Hello, Message, Sample, SampleFlags};
 use crate::protocol::Frame;
 use crate::record::{names, Channel, Record, RecordEvent, RecordEventKind};
 
@@ -450,19 +450,28 @@ impl RecordBuilder {
                 }
                 self.push_point(s.sample_index, s.t_us, sample_values(s));
             }
-            Message::Hello(h) => self.asm.hello(h.boot_id, h.sample_rate_hz),
-            Message::Event(e) => {
-                let kind = match e.code {
-                    EventCode::ImpulseStart => RecordEventKind::ImpulseStart,
-                    EventCode::ImpulseEnd => RecordEventKind::ImpulseEnd,
-                    EventCode::WatchdogTrip => RecordEventKind::WatchdogTrip,
-                    _ => return,
-                };
-                let store = &mut self.store;
-                self.asm.event(kind, e.sample_index, &mut |a| store.put(a));
-            }
+            Message::Hello(h) => self.push_hello(h),
+            Message::Event(e) => self.push_event(e),
             _ => {}
         }
+    }
+
+    /// A HELLO met outside a frame (a CSV bench's line): a new `boot_id` ends the segment.
+    pub fn push_hello(&mut self, h: &Hello) {
+        self.asm.hello(h.boot_id, h.sample_rate_hz);
+    }
+
+    /// A device EVENT met outside a frame (a CSV bench's line): impulse edges and watchdog
+    /// trips become record events at the position of their `sample_index`.
+    pub fn push_event(&mut self, e: &Event) {
+        let kind = match e.code {
+            EventCode::ImpulseStart => RecordEventKind::ImpulseStart,
+            EventCode::ImpulseEnd => RecordEventKind::ImpulseEnd,
+            EventCode::WatchdogTrip => RecordEventKind::WatchdogTrip,
+            _ => return,
+        };
+        let store = &mut self.store;
+        self.asm.event(kind, e.sample_index, &mut |a| store.put(a));
     }
 
     /// Feed one point: device index, device clock (µs) and values.
