@@ -13,7 +13,8 @@ mod error;
 pub mod place;
 
 pub use assemble::{
-    AssembleOptions, AssembleStats, Assembled, BuildStats, RecordBuilder, SampleAssembler,
+    AssembleOptions, AssembleStats, Assembled, BuildStats, HelloEffect, RecordBuilder,
+    SampleAssembler, SegmentCause,
 };
 pub use csv_stream::{CsvFact, CsvStream, CsvStreamStats};
 pub use error::IngestError;
