@@ -126,7 +126,9 @@ impl Tracker {
             Assembled::SegmentStart { cause: c, .. } => cause = Some(c),
             Assembled::Duplicate => p.duplicate = true,
             Assembled::ClockWrap => wraps += 1,
-            Assembled::ClockBackwards | Assembled::Event { .. } | Assembled::EventDropped { .. } => {}
+            Assembled::ClockBackwards
+            | Assembled::Event { .. }
+            | Assembled::EventDropped { .. } => {}
         });
         self.wraps += wraps;
         if p.duplicate {

@@ -20,10 +20,10 @@ use super::IngestError;
 use propid_wire::protocol::csv::{
     CsvDecoder, CsvItem, CsvOptions, CsvRow, CsvStats, UnresolvedColumn,
 };
-use propid_wire::stream::{CsvFact, CsvStream};
 use propid_wire::protocol::detect::{detect, Detection, WireFormat};
 use propid_wire::protocol::{DecodeStats, Decoder};
 use propid_wire::record::Record;
+use propid_wire::stream::{CsvFact, CsvStream};
 
 /// Options of [`read_record_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -143,7 +143,11 @@ fn replay_and_identify_place_every_csv_row_at_the_same_index() {
     let recorded = &record.channel(names::THRUST).expect("thrust").data;
     let mut covered = vec![false; record.len()];
     for &(k, y) in &placed {
-        assert!(k < record.len(), "position {k} past the record ({})", record.len());
+        assert!(
+            k < record.len(),
+            "position {k} past the record ({})",
+            record.len()
+        );
         assert!(!record.missing[k], "position {k} is missing in the record");
         assert_eq!(recorded[k] as f32, y, "position {k}");
         covered[k] = true;
@@ -156,7 +160,12 @@ fn replay_and_identify_place_every_csv_row_at_the_same_index() {
     let a = &ingest.assemble;
     assert_eq!(a.samples, placed.len() as u64);
     assert_eq!(
-        (a.samples_lost, a.gaps + a.large_gaps, a.duplicates, a.segments),
+        (
+            a.samples_lost,
+            a.gaps + a.large_gaps,
+            a.duplicates,
+            a.segments
+        ),
         (
             tracker.samples_lost,
             tracker.gaps,

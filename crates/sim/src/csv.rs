@@ -71,7 +71,10 @@ impl CsvReader {
                 continue;
             }
             // up to and including the next newline (after which `!` may start a line)
-            let n = rest.iter().position(|&b| b == b'\n').map_or(rest.len(), |i| i + 1);
+            let n = rest
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(rest.len(), |i| i + 1);
             lines.push(&rest[..n], &mut line);
             rest = &rest[n..];
         }
@@ -184,7 +187,13 @@ mod tests {
         r.push(text.as_bytes(), |i| v.push(i));
         r.push(b"!", |i| v.push(i));
         assert_eq!(v[0], Incoming::Garbage);
-        assert!(matches!(v[1], Incoming::Command { msg: Message::Stop, .. }));
+        assert!(matches!(
+            v[1],
+            Incoming::Command {
+                msg: Message::Stop,
+                ..
+            }
+        ));
         assert_eq!((r.stats().garbage, r.stats().commands), (1, 1));
     }
 }

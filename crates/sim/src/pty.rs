@@ -28,7 +28,6 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-
 use super::config::SimConfig;
 use super::dynamics::PlantDynamics;
 use super::faults::{FaultInjector, FaultStats};
@@ -38,8 +37,8 @@ use super::SimError;
 
 mod link;
 
-use link::{open_link, read_master, wait_master, write_master, Link, Ready};
 pub use link::point_link;
+use link::{open_link, read_master, wait_master, write_master, Link, Ready};
 
 /// Output kept for a host that does not read, bytes; beyond it output is dropped and counted.
 pub const MAX_BACKLOG: usize = 1 << 20;

@@ -1,9 +1,9 @@
 //! The CSV link against the simulated stand's CSV dialect and against a plain Arduino bench.
 
 use super::*;
-use propid_wire::stream::csv_stream::made_up_hello;
 use propid_sim::csv::CsvWriter;
 use propid_wire::protocol::message::{msg_type, Event, EventCode};
+use propid_wire::stream::csv_stream::made_up_hello;
 
 fn sample(k: u32, throttle: u16, thrust: f32) -> Sample {
     Sample {

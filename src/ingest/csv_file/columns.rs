@@ -129,7 +129,12 @@ pub(super) fn channel(col: &Column, data: Vec<f64>) -> Channel {
 }
 
 /// The columns of the file: the header's names, else the names given, else §6's order.
-pub(super) fn header_columns(lines: &[&str], sep: char, header: bool, opts: &CsvFileOptions) -> Vec<Column> {
+pub(super) fn header_columns(
+    lines: &[&str],
+    sep: char,
+    header: bool,
+    opts: &CsvFileOptions,
+) -> Vec<Column> {
     let named = |name: &str| Column {
         name: name.to_string(),
         spec: csv_columns::lookup(name),

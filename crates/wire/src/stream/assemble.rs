@@ -414,6 +414,5 @@ mod builder;
 
 pub use builder::{sample_values, BuildStats, RecordBuilder, Values, CHANNELS};
 
-
 #[cfg(test)]
 mod tests;

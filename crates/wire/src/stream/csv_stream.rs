@@ -226,12 +226,18 @@ mod tests {
             CsvFact::Hello(h) => Some(*h),
             _ => None,
         });
-        assert_eq!(made_up.map(|h| (h.boot_id, h.sample_rate_hz)), Some((0, 500)));
+        assert_eq!(
+            made_up.map(|h| (h.boot_id, h.sample_rate_hz)),
+            Some((0, 500))
+        );
         let ev = f.iter().find_map(|f| match f {
             CsvFact::Event(e) => Some(*e),
             _ => None,
         });
-        assert_eq!(ev.map(|e| (e.code, e.sample_index)), Some((EventCode::ImpulseStart, 15)));
+        assert_eq!(
+            ev.map(|e| (e.code, e.sample_index)),
+            Some((EventCode::ImpulseStart, 15))
+        );
         assert_eq!((st.rows, st.acks, st.out_of_order), (20, 1, 1));
     }
 }

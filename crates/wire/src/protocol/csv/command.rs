@@ -250,13 +250,41 @@ mod tests {
     fn bad_lines_have_a_reason_a_bench_can_acknowledge() {
         use CsvCommandKind::*;
         let cases = [
-            ("THR", CsvCommandError::MissingArgument(Thr), AckResult::BadLength),
-            ("IMP 4000", CsvCommandError::MissingArgument(Imp), AckResult::BadLength),
-            ("IMP x", CsvCommandError::MissingArgument(Imp), AckResult::BadLength),
-            ("THR 70000", CsvCommandError::BadArgument(Thr), AckResult::OutOfRange),
-            ("THR abc", CsvCommandError::BadArgument(Thr), AckResult::OutOfRange),
-            ("IMP 5 x", CsvCommandError::BadArgument(Imp), AckResult::OutOfRange),
-            ("ARM -1", CsvCommandError::BadArgument(Arm), AckResult::OutOfRange),
+            (
+                "THR",
+                CsvCommandError::MissingArgument(Thr),
+                AckResult::BadLength,
+            ),
+            (
+                "IMP 4000",
+                CsvCommandError::MissingArgument(Imp),
+                AckResult::BadLength,
+            ),
+            (
+                "IMP x",
+                CsvCommandError::MissingArgument(Imp),
+                AckResult::BadLength,
+            ),
+            (
+                "THR 70000",
+                CsvCommandError::BadArgument(Thr),
+                AckResult::OutOfRange,
+            ),
+            (
+                "THR abc",
+                CsvCommandError::BadArgument(Thr),
+                AckResult::OutOfRange,
+            ),
+            (
+                "IMP 5 x",
+                CsvCommandError::BadArgument(Imp),
+                AckResult::OutOfRange,
+            ),
+            (
+                "ARM -1",
+                CsvCommandError::BadArgument(Arm),
+                AckResult::OutOfRange,
+            ),
             ("FLY", CsvCommandError::Unknown, AckResult::UnknownType),
             ("", CsvCommandError::Unknown, AckResult::UnknownType),
         ];
@@ -264,7 +292,10 @@ mod tests {
             assert_eq!(parse_csv_command(text), Err(err), "{text}");
             assert_eq!(err.ack_result(), ack, "{text}");
         }
-        assert_eq!(CsvCommandError::BadArgument(Imp).kind().msg_type(), Some(msg_type::IMPULSE));
+        assert_eq!(
+            CsvCommandError::BadArgument(Imp).kind().msg_type(),
+            Some(msg_type::IMPULSE)
+        );
     }
 
     #[test]
@@ -281,8 +312,14 @@ mod tests {
             assert_eq!(k.msg_type(), Some(t));
             assert_eq!(CsvCommandKind::from_keyword(k.keyword().unwrap()), k);
         }
-        assert_eq!(CsvCommandKind::of_type(msg_type::HEARTBEAT), CsvCommandKind::Ping);
-        assert_eq!(CsvCommandKind::of_type(msg_type::TARE), CsvCommandKind::Other);
+        assert_eq!(
+            CsvCommandKind::of_type(msg_type::HEARTBEAT),
+            CsvCommandKind::Ping
+        );
+        assert_eq!(
+            CsvCommandKind::of_type(msg_type::TARE),
+            CsvCommandKind::Other
+        );
         assert_eq!(CsvCommandKind::Other.keyword(), None);
     }
 }

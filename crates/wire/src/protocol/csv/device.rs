@@ -207,7 +207,10 @@ mod tests {
         h.boot_id = 0xDEAD_BEEF;
         h.sample_rate_hz = 2000;
         let line = device_line(&Message::Hello(h)).unwrap();
-        assert_eq!(line, "# HELLO propid-sim fw 3 boot_id deadbeef rate_hz 2000\n");
+        assert_eq!(
+            line,
+            "# HELLO propid-sim fw 3 boot_id deadbeef rate_hz 2000\n"
+        );
         assert_eq!(parse_comment(comment(&line)), Some(CommentFact::Hello(h)));
         for (code, _) in EVENT_NAMES {
             let e = Event {

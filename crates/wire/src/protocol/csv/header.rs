@@ -179,4 +179,3 @@ impl CsvRow {
         *slot = Some(v);
     }
 }
-

@@ -238,13 +238,25 @@ mod tests {
     fn checksums_comments_and_data() {
         let mut row = "1000,3500,1.25".to_string();
         append_checksum(&mut row);
-        assert_eq!(row, format!("1000,3500,1.25*{:02X}", checksum(b"1000,3500,1.25")));
+        assert_eq!(
+            row,
+            format!("1000,3500,1.25*{:02X}", checksum(b"1000,3500,1.25"))
+        );
         assert_eq!(classify(row.as_bytes()), LineKind::Data("1000,3500,1.25"));
-        assert_eq!(classify(format!("{row}  ").as_bytes()), LineKind::Data("1000,3500,1.25"));
+        assert_eq!(
+            classify(format!("{row}  ").as_bytes()),
+            LineKind::Data("1000,3500,1.25")
+        );
         let bad = format!("{}0", &row[..row.len() - 1]);
         assert_eq!(classify(bad.as_bytes()), LineKind::BadChecksum);
-        assert_eq!(classify(b"#ACK PING OK 1"), LineKind::Comment("ACK PING OK 1"));
-        assert_eq!(classify_str("\u{feff} t_s,thrust_N "), LineKind::Data("t_s,thrust_N"));
+        assert_eq!(
+            classify(b"#ACK PING OK 1"),
+            LineKind::Comment("ACK PING OK 1")
+        );
+        assert_eq!(
+            classify_str("\u{feff} t_s,thrust_N "),
+            LineKind::Data("t_s,thrust_N")
+        );
         assert_eq!(classify(b"  "), LineKind::Empty);
         assert_eq!(classify(&[0xff, 0x31]), LineKind::NotText);
         // not hex: no checksum, the text stays

@@ -14,9 +14,7 @@ mod sample;
 pub use command::{Arm, Impulse, SetRate, SetThrottle, ARM_KEY};
 pub use hello::{caps, EscProtocol, Hello};
 pub use reply::{Ack, AckResult, Event, EventCode, Log, ACK_DUPLICATE, LOG_TEXT_MAX};
-pub use sample::{
-    throttle_fraction, throttle_level, Sample, SampleFlags, THROTTLE_FULL_SCALE,
-};
+pub use sample::{throttle_fraction, throttle_level, Sample, SampleFlags, THROTTLE_FULL_SCALE};
 
 /// Message type codes (`type` byte of the frame body).
 pub mod msg_type {
@@ -171,4 +169,3 @@ fn floor_char_boundary(s: &str, max: usize) -> usize {
         .find(|&i| s.is_char_boundary(i))
         .unwrap_or(0)
 }
-

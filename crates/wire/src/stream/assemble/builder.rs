@@ -226,7 +226,10 @@ impl Store {
                 self.missing.resize(self.missing.len() + count, true);
             }
             // the first segment starts at 0 implicitly
-            Assembled::SegmentStart { cause: SegmentCause::First, .. } => {}
+            Assembled::SegmentStart {
+                cause: SegmentCause::First,
+                ..
+            } => {}
             Assembled::SegmentStart { k, .. } => self.events.push(RecordEvent {
                 sample: k,
                 kind: RecordEventKind::SegmentStart,
@@ -239,4 +242,3 @@ impl Store {
         }
     }
 }
-

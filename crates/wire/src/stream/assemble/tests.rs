@@ -1,9 +1,9 @@
 use super::*;
 use crate::protocol::message::{Event, EventCode, Hello, Message, Sample, SampleFlags};
+use crate::protocol::EscProtocol;
 use crate::protocol::Frame;
 use crate::record::{Record, RecordEvent, RecordEventKind};
 use crate::stream::IngestError;
-use crate::protocol::EscProtocol;
 
 const ALL: SampleFlags = SampleFlags(0x3F | 1 << 10);
 
@@ -307,7 +307,11 @@ fn every_sample_says_what_happened_as_typed_items() {
     push(&mut a, 14, 2500); // a gap of 2 and the clock wraps
     push(&mut a, 500, 3500); // a gap too long to fill
     push(&mut a, 3, 4500); // the index goes back
-    assert_eq!(a.hello(8, 1000), HelloEffect::Adopted, "the reset was seen already");
+    assert_eq!(
+        a.hello(8, 1000),
+        HelloEffect::Adopted,
+        "the reset was seen already"
+    );
     assert_eq!(a.hello(8, 1000), HelloEffect::SameBoot);
     assert_eq!(a.hello(9, 1000), HelloEffect::NewBoot);
     push(&mut a, 0, 0);
@@ -321,15 +325,29 @@ fn every_sample_says_what_happened_as_typed_items() {
             vec![start(0, SegmentCause::First), sample(0, t0 - 1500)],
             vec![sample(1, t0 - 500)],
             vec![A::Duplicate],
-            vec![A::ClockWrap, A::Missing { k: 2, count: 2 }, sample(4, t0 + 2501)],
-            vec![start(5, SegmentCause::GapTooLong { lost: 485 }), sample(5, 3500)],
+            vec![
+                A::ClockWrap,
+                A::Missing { k: 2, count: 2 },
+                sample(4, t0 + 2501)
+            ],
+            vec![
+                start(5, SegmentCause::GapTooLong { lost: 485 }),
+                sample(5, 3500)
+            ],
             vec![start(6, SegmentCause::IndexBackwards), sample(6, 4500)],
             vec![start(7, SegmentCause::NewBoot), sample(7, 0)],
         ]
     );
     let s = a.stats();
     assert_eq!(
-        (s.samples_lost, s.gaps, s.large_gaps, s.duplicates, s.segments, s.clock_wraps),
+        (
+            s.samples_lost,
+            s.gaps,
+            s.large_gaps,
+            s.duplicates,
+            s.segments,
+            s.clock_wraps
+        ),
         (487, 1, 1, 1, 4, 1)
     );
 }
