@@ -25,12 +25,16 @@
 //!   device reset: disarmed, counters restarted); the next sample starts the new one. The host
 //!   never re-arms by itself; the experiment plan is told and decides.
 //!
-//! What the tracker adds is the sampler's view: the unwrapped *device* index of each sample
-//! (the assembler counts record positions instead), and the unwrapped index and time of
-//! device EVENTs in the current segment's numbering.
+//! The tracker does not diff the assembler's counters: the assembler says, per sample, what
+//! happened as typed items ([`Assembled`]: a gap, a duplicate, a segment start and its
+//! [`SegmentCause`], a clock wrap), and the tracker translates those. What it adds is the
+//! sampler's view: the unwrapped *device* index of each sample (the assembler counts record
+//! positions instead), and the unwrapped index and time of device EVENTs in the current
+//! segment's numbering.
 
 use crate::ingest::assemble::{AssembleOptions, AssembleStats, Assembled, SampleAssembler};
 use crate::ingest::clock::Unwrap32;
+use propid_wire::stream::SegmentCause;
 
 /// What the tracker says about one SAMPLE.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,9 +61,6 @@ pub struct Tracker {
     index: Unwrap32,
     /// Device clock of the current segment, for placing events.
     clock: Unwrap32,
-    boot_id: Option<u32>,
-    /// The segment began at an inferred reset after the last HELLO (as in the assembler).
-    reset_since_hello: bool,
     /// Samples lost to index gaps (large gaps included).
     pub samples_lost: u64,
     /// Gaps seen (large gaps included).
@@ -72,6 +73,8 @@ pub struct Tracker {
     pub duplicates: u64,
     /// Backward index jumps without a new HELLO (inferred device resets).
     pub resets: u64,
+    /// Device clock wraps seen.
+    wraps: u64,
 }
 
 impl Default for Tracker {
@@ -87,14 +90,13 @@ impl Tracker {
             asm: SampleAssembler::new(opts),
             index: Unwrap32::default(),
             clock: Unwrap32::default(),
-            boot_id: None,
-            reset_since_hello: false,
             samples_lost: 0,
             gaps: 0,
             large_gaps: 0,
             segments: 0,
             duplicates: 0,
             resets: 0,
+            wraps: 0,
         }
     }
 
@@ -102,61 +104,72 @@ impl Tracker {
     /// before any sample, or a new boot). The first HELLO of a stream joined mid-segment, and
     /// the HELLO of a reset already inferred from the index, are adopted without a split.
     pub fn hello(&mut self, boot_id: u32) -> bool {
-        let starts = match self.boot_id {
-            Some(b) if b == boot_id => false,
-            Some(_) => !self.reset_since_hello,
-            None => self.asm.is_empty(),
-        };
         // The nominal rate only serves the assembler's `dt_s`, which the daemon does not use.
-        self.asm.hello(boot_id, 0);
-        self.boot_id = Some(boot_id);
-        self.reset_since_hello = false;
-        starts
+        self.asm.hello(boot_id, 0).starts_segment()
     }
 
     /// Places one SAMPLE (`sample_index`, `t_us` as sent).
     pub fn sample(&mut self, raw_index: u32, raw_t_us: u32) -> Placed {
-        let before = *self.asm.stats();
-        let mut t_us = None;
-        self.asm.sample(raw_index, raw_t_us, (), &mut |a| {
-            if let Assembled::Sample { t_us: t, .. } = a {
-                t_us = Some(t);
-            }
-        });
-        let after = *self.asm.stats();
-        self.sync(&after);
-        if after.duplicates > before.duplicates {
-            return Placed {
-                index: self.index.value(),
-                t_us: self.event_time(raw_t_us),
-                lost_before: 0,
-                new_segment: false,
-                duplicate: true,
-            };
-        }
-        if after.resets_inferred > before.resets_inferred {
-            self.reset_since_hello = true;
-        }
-        let new_segment = after.segments > before.segments;
-        if new_segment {
-            self.index = Unwrap32::start(raw_index);
-            self.clock = Unwrap32::start(raw_t_us);
-        } else {
-            self.index.step(raw_index);
-            self.clock.step(raw_t_us);
-        }
-        Placed {
-            index: self.index.value(),
-            t_us: t_us.unwrap_or_else(|| self.clock.value()),
-            lost_before: after.samples_lost - before.samples_lost,
-            new_segment,
+        let mut p = Placed {
+            index: 0,
+            t_us: 0,
+            lost_before: 0,
+            new_segment: false,
             duplicate: false,
+        };
+        let mut t_us = None;
+        let mut wraps = 0;
+        let mut cause = None;
+        self.asm.sample(raw_index, raw_t_us, (), &mut |a| match a {
+            Assembled::Sample { t_us: t, .. } => t_us = Some(t),
+            Assembled::Missing { count, .. } => p.lost_before += count as u64,
+            Assembled::SegmentStart { cause: c, .. } => cause = Some(c),
+            Assembled::Duplicate => p.duplicate = true,
+            Assembled::ClockWrap => wraps += 1,
+            Assembled::ClockBackwards
+            | Assembled::Event { .. }
+            | Assembled::EventDropped { .. } => {}
+        });
+        self.wraps += wraps;
+        if p.duplicate {
+            self.duplicates += 1;
+            p.index = self.index.value();
+            p.t_us = self.event_time(raw_t_us);
+            return p;
         }
+        if p.lost_before > 0 {
+            self.gaps += 1;
+        }
+        match cause {
+            Some(c) => {
+                p.new_segment = true;
+                self.segments += 1;
+                match c {
+                    SegmentCause::GapTooLong { lost } => {
+                        p.lost_before = lost;
+                        self.gaps += 1;
+                        self.large_gaps += 1;
+                    }
+                    SegmentCause::IndexBackwards => self.resets += 1,
+                    SegmentCause::First | SegmentCause::NewBoot => {}
+                }
+                self.index = Unwrap32::start(raw_index);
+                self.clock = Unwrap32::start(raw_t_us);
+            }
+            None => {
+                self.index.step(raw_index);
+                self.clock.step(raw_t_us);
+            }
+        }
+        self.samples_lost += p.lost_before;
+        p.index = self.index.value();
+        p.t_us = t_us.unwrap_or_else(|| self.clock.value());
+        p
     }
 
     /// Device clock wraps seen.
     pub fn clock_wraps(&self) -> u64 {
-        self.asm.stats().clock_wraps
+        self.wraps
     }
 
     /// The assembler's counters (the same as `propid identify` reports for a recording).
@@ -173,15 +186,6 @@ impl Tracker {
     /// Unwraps an event's device time in the current segment's numbering.
     pub fn event_time(&self, raw_t_us: u32) -> u64 {
         project(&self.clock, raw_t_us)
-    }
-
-    fn sync(&mut self, s: &AssembleStats) {
-        self.samples_lost = s.samples_lost;
-        self.gaps = s.gaps + s.large_gaps;
-        self.large_gaps = s.large_gaps;
-        self.segments = s.segments;
-        self.duplicates = s.duplicates;
-        self.resets = s.resets_inferred;
     }
 }
 

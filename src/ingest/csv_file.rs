@@ -1,13 +1,14 @@
 //! CSV files into a [`Record`]: TSP/1 CSV (PROTOCOL.md §6), exported logs of commercial stands,
 //! benchmark archives.
 //!
-//! Line rules follow §6 (comments `#…`, optional `*HH` checksum verified with
-//! [`protocol::csv::checksum`](propid_wire::protocol::csv::checksum), separator `,` else tab else `;`),
-//! with what files need on top: no line-length limit (exports have 400-character headers), a
-//! UTF-8 byte-order mark, quoted names, trailing empty columns, and columns the alias table does
-//! not know (kept under their own names so that `--input`/`--output` can pick them). Known names
-//! are mapped and converted by [`protocol::csv_columns`](propid_wire::protocol::csv_columns) (the one
-//! alias and unit table of the project).
+//! Lines, checksums, comments, separators and fields follow the one CSV dialect of the project
+//! ([`protocol::csv::line`](propid_wire::protocol::csv::line): comments `#…`, optional `*HH`
+//! checksum, separator `,` else tab else `;`, fields trimmed and unquoted, a UTF-8 byte-order
+//! mark ignored), with what files need on top: no line-length limit (exports have
+//! 400-character headers), trailing empty columns, and columns the alias table does not know
+//! (kept under their own names so that `--input`/`--output` can pick them). Known names are
+//! mapped and converted by [`protocol::csv::columns`](propid_wire::protocol::csv::columns) (the
+//! one alias, unit and name table of the project).
 //!
 //! A file without a header follows §6 (`t_us,throttle,thrust_N,…`) unless the caller names the
 //! columns. Bad rows are counted, never fatal: a wrong checksum, text in a column that is used,
@@ -20,10 +21,15 @@
 
 use serde::Serialize;
 
+mod columns;
+
 use super::resample::{to_uniform, Jitter, ResampleError};
-use propid_wire::protocol::csv::checksum;
-use propid_wire::protocol::csv_columns::{self, ColumnSpec, ConvOptions, Quantity};
-use propid_wire::record::{names, Channel, Record};
+use columns::{channel, header_columns, Column, Picks};
+use propid_wire::protocol::csv::columns::{self as csv_columns, ConvOptions};
+use propid_wire::protocol::csv::line::{
+    classify_str, fields, is_numeric, separator, text_lines, LineKind,
+};
+use propid_wire::record::{Channel, Record};
 
 /// Default ESC pulse range for throttle columns in µs, when none is given.
 pub const DEFAULT_ESC_US: (f64, f64) = (1000.0, 2000.0);
@@ -136,38 +142,24 @@ pub struct CsvFile {
     pub source: CsvSource,
 }
 
-/// One column of the file.
-#[derive(Debug, Clone)]
-struct Column {
-    name: String,
-    spec: Option<ColumnSpec>,
-}
-
 /// Reads CSV text (the whole file) into a record.
 pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
     let mut skipped = SkippedRows::default();
     let mut comments = 0;
     let mut lines = Vec::new();
-    for raw in text.split('\n') {
-        let line = raw.trim_end_matches('\r');
-        let line = line.trim_start_matches('\u{feff}').trim();
-        if line.is_empty() {
-            continue;
-        }
-        if line.starts_with('#') {
-            comments += 1;
-            continue;
-        }
-        match strip_checksum(line) {
-            Some(l) => lines.push(l),
-            None => skipped.bad_checksum += 1,
+    for raw in text_lines(text) {
+        match classify_str(raw) {
+            LineKind::Empty => {}
+            LineKind::Comment(_) => comments += 1,
+            LineKind::Data(l) => lines.push(l),
+            LineKind::BadChecksum | LineKind::NotText => skipped.bad_checksum += 1,
         }
     }
     let Some(first) = lines.first() else {
         return Err(CsvFileError::Empty);
     };
     let sep = separator(first);
-    let header = !split(first, sep).all(|f| f.is_empty() || f.parse::<f64>().is_ok());
+    let header = !is_numeric(first, sep);
     let mut columns = header_columns(&lines, sep, header, opts);
     // A header ending in a separator (benchmark files) has an empty, unnamed last column.
     if columns.last().is_some_and(|c| c.name.is_empty()) {
@@ -201,18 +193,18 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         })
         .collect::<Result<_, _>>()?;
     let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(data.len()); used.len()];
-    let mut fields = Vec::new();
+    let mut row = Vec::new();
     for line in data {
-        fields.clear();
-        fields.extend(split(line, sep));
-        if used.iter().any(|&i| i >= fields.len()) {
+        row.clear();
+        row.extend(fields(line, sep));
+        if used.iter().any(|&i| i >= row.len()) {
             skipped.short_row += 1;
             continue;
         }
         let parsed: Option<Vec<f64>> = used
             .iter()
             .zip(&maps)
-            .map(|(&i, m)| parse_field(fields[i]).map(|v| m.apply(v)))
+            .map(|(&i, m)| parse_field(row[i]).map(|v| m.apply(v)))
             .collect();
         match parsed {
             Some(row) => values.iter_mut().zip(row).for_each(|(c, v)| c.push(v)),
@@ -226,100 +218,6 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     build(
         columns, picks, values, header, rows, skipped, comments, opts,
     )
-}
-
-/// The columns used, as indices into the file's columns.
-struct Picks {
-    time: Option<usize>,
-    input: Option<usize>,
-    outputs: Vec<usize>,
-}
-
-impl Picks {
-    fn choose(columns: &[Column], opts: &CsvFileOptions) -> Result<Self, CsvFileError> {
-        let available = || {
-            columns
-                .iter()
-                .map(|c| c.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let by_quantity = |q: Quantity| {
-            columns
-                .iter()
-                .position(|c| c.spec.is_some_and(|s| s.quantity == q))
-        };
-        let time = by_quantity(Quantity::Time).or_else(|| {
-            columns
-                .iter()
-                .position(|c| matches!(csv_columns::normalise(&c.name).as_str(), "t" | "time"))
-        });
-        let input = match &opts.input {
-            Some(name) => Some(
-                find(columns, name).ok_or_else(|| CsvFileError::MissingColumn {
-                    what: "input",
-                    wanted: name.clone(),
-                    available: available(),
-                })?,
-            ),
-            None => by_quantity(Quantity::Throttle),
-        };
-        let outputs = if opts.outputs.is_empty() {
-            vec![
-                by_quantity(Quantity::Thrust).ok_or_else(|| CsvFileError::MissingColumn {
-                    what: "output",
-                    wanted: "thrust (give --output NAME)".into(),
-                    available: available(),
-                })?,
-            ]
-        } else {
-            opts.outputs
-                .iter()
-                .map(|name| {
-                    find(columns, name).ok_or_else(|| CsvFileError::MissingColumn {
-                        what: "output",
-                        wanted: name.clone(),
-                        available: available(),
-                    })
-                })
-                .collect::<Result<_, _>>()?
-        };
-        let time = if opts.fs_hz.is_some() && time.is_none() {
-            None
-        } else {
-            Some(time.ok_or(CsvFileError::NeedRate)?)
-        };
-        Ok(Self {
-            time,
-            input,
-            outputs,
-        })
-    }
-
-    /// Column indices in value order: time, input, outputs.
-    fn all(&self) -> Vec<usize> {
-        self.time
-            .iter()
-            .chain(self.input.iter())
-            .chain(self.outputs.iter())
-            .copied()
-            .collect()
-    }
-}
-
-/// A column by its name as written, its normalised name, or its canonical channel name.
-fn find(columns: &[Column], name: &str) -> Option<usize> {
-    let want = csv_columns::normalise(name);
-    columns
-        .iter()
-        .position(|c| c.name == name || csv_columns::normalise(&c.name) == want)
-        .or_else(|| {
-            columns.iter().position(|c| {
-                c.spec
-                    .and_then(|s| s.quantity.channel_name())
-                    .is_some_and(|n| n.eq_ignore_ascii_case(name))
-            })
-        })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -408,97 +306,10 @@ fn build(
     })
 }
 
-fn channel(col: &Column, data: Vec<f64>) -> Channel {
-    match col
-        .spec
-        .and_then(|s| s.quantity.channel_name().map(|n| (n, s)))
-    {
-        Some((name, spec)) => Channel {
-            name: name.to_string(),
-            unit: spec.quantity.canonical_unit().to_string(),
-            data,
-        },
-        None => Channel {
-            name: col.name.clone(),
-            unit: "?".into(),
-            data,
-        },
-    }
-}
-
-fn header_columns(lines: &[&str], sep: char, header: bool, opts: &CsvFileOptions) -> Vec<Column> {
-    let named = |name: &str| Column {
-        name: name.to_string(),
-        spec: csv_columns::lookup(name),
-    };
-    if header {
-        return split(lines[0], sep).map(named).collect();
-    }
-    let width = split(lines[0], sep).count();
-    if let Some(names) = &opts.columns {
-        let mut cols: Vec<Column> = names.iter().map(|n| named(n)).collect();
-        cols.extend((cols.len()..width).map(|i| named(&format!("col{}", i + 1))));
-        return cols;
-    }
-    (0..width)
-        .map(|i| match csv_columns::DEFAULT_ORDER.get(i) {
-            Some(spec) => Column {
-                name: default_name(spec.quantity).to_string(),
-                spec: Some(*spec),
-            },
-            None => named(&format!("col{}", i + 1)),
-        })
-        .collect()
-}
-
-fn default_name(q: Quantity) -> &'static str {
-    match q {
-        Quantity::Time => "t_us",
-        Quantity::Throttle => names::THROTTLE,
-        Quantity::Thrust => names::THRUST,
-        Quantity::Torque => names::TORQUE,
-        Quantity::Rpm => names::RPM,
-        Quantity::Voltage => names::VOLTAGE,
-        Quantity::Current => names::CURRENT,
-        Quantity::Index => "idx",
-    }
-}
-
-/// Fields of a line, trimmed and unquoted.
-fn split(line: &str, sep: char) -> impl Iterator<Item = &str> {
-    line.split(sep).map(|f| f.trim().trim_matches('"').trim())
-}
-
 /// An empty field is "not measured" (NaN); text is `None`.
 fn parse_field(f: &str) -> Option<f64> {
     if f.is_empty() {
         return Some(f64::NAN);
     }
     f.parse().ok()
-}
-
-/// Field separator: `,`, else tab, else `;`, else runs of spaces are not supported (one field).
-fn separator(line: &str) -> char {
-    if line.contains(',') {
-        ','
-    } else if line.contains('\t') {
-        '\t'
-    } else {
-        ';'
-    }
-}
-
-/// Checks and removes a trailing `*HH` (§6); `None` when present and wrong.
-fn strip_checksum(line: &str) -> Option<&str> {
-    let b = line.as_bytes();
-    let n = b.len();
-    if n >= 3 && b[n - 3] == b'*' {
-        if let Some(want) = line
-            .get(n - 2..)
-            .and_then(|h| u8::from_str_radix(h, 16).ok())
-        {
-            return (checksum(&b[..n - 3]) == want).then(|| &line[..n - 3]);
-        }
-    }
-    Some(line)
 }

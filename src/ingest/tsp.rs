@@ -2,22 +2,28 @@
 //! into a uniform [`Record`]. Binary or CSV is detected ([`detect`]); both go through the same
 //! sans-IO decoders as the live link, then through the [`RecordBuilder`].
 //!
-//! CSV time base: with an `idx` column, the device index places rows exactly as in binary
-//! (gaps become missing samples). Otherwise rows are placed on the grid
-//! `k = round((t − t₀) / dt_med)`, `dt_med` the median of the positive time steps: a row
-//! landing on an occupied position is a duplicate (dropped, counted), a skipped position is a
-//! missing sample. This suits streams with a steady clock; for logs with irregular timestamps
-//! (exported files) resample first (the CSV file reader does). Without a time column,
-//! [`IngestOptions::fs_hz`] gives the rate and rows are consecutive.
+//! CSV time base: rows, `# HELLO` and `#EVENT` lines go through `propid_wire`'s [`CsvStream`]
+//! — the adapter the daemon's CSV link (`replay`) reads the same bytes with — so every row gets
+//! the index the daemon gives it: its `idx` column when it has one, otherwise the index rebuilt
+//! from its time by the one placer ([`RowPlacer`](propid_wire::stream::RowPlacer): period from
+//! the HELLO rate or measured on the first rows, a phase tracker that absorbs jitter, lost rows
+//! left as gaps, a repeated time a duplicate, the 32-bit clock unwrapped, a big step back a new
+//! segment). Gaps become missing samples. This suits streams with a steady clock; for logs with
+//! irregular timestamps (exported files) resample instead (the CSV file reader does). Rows
+//! without a time (or a negative one) are dropped, as on the live link; when fewer than two rows
+//! have a time, [`IngestOptions::fs_hz`] gives the rate and all rows are consecutive.
 
 use serde::Serialize;
 
 use super::assemble::{AssembleOptions, AssembleStats, BuildStats, RecordBuilder, Values};
 use super::IngestError;
-use propid_wire::protocol::csv::{CsvDecoder, CsvItem, CsvOptions, CsvRow, CsvStats};
+use propid_wire::protocol::csv::{
+    CsvDecoder, CsvItem, CsvOptions, CsvRow, CsvStats, UnresolvedColumn,
+};
 use propid_wire::protocol::detect::{detect, Detection, WireFormat};
 use propid_wire::protocol::{DecodeStats, Decoder};
 use propid_wire::record::Record;
+use propid_wire::stream::{CsvFact, CsvStream};
 
 /// Options of [`read_record_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -97,26 +103,42 @@ fn read_binary(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats),
 
 fn read_csv(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats), IngestError> {
     let mut dec = CsvDecoder::new(o.csv);
-    let mut rows = Vec::new();
-    let mut unresolved = None;
-    let mut on = |it: CsvItem<'_>| match it {
-        CsvItem::Row(r) => rows.push(r),
-        CsvItem::Header(h) => {
-            unresolved = h.unresolved.first().cloned();
-        }
-        _ => {}
+    let mut ingest = CsvIngest {
+        stream: CsvStream::new(),
+        builder: RecordBuilder::new(o.assemble),
+        rows: Vec::new(),
+        unresolved: None,
+        t0_s: None,
     };
-    dec.push(bytes, &mut on);
-    dec.finish(&mut on);
+    dec.push(bytes, |it| ingest.item(it));
+    dec.finish(|it| ingest.item(it));
+    let CsvIngest {
+        mut stream,
+        mut builder,
+        rows,
+        unresolved,
+        t0_s,
+    } = ingest;
+    stream.finish(&mut |f| put(&mut builder, f));
     if let Some(u) = unresolved {
         return Err(IngestError::NeedsOption {
             column: u.source_name,
             reason: u.reason,
         });
     }
-    let mut b = RecordBuilder::new(o.assemble);
-    let (t0, dt) = place_rows(&rows, o, &mut b)?;
-    let (mut record, assemble, build) = b.finish()?;
+    if rows.is_empty() {
+        return Err(IngestError::NoSamples);
+    }
+    let timed = stream.stats().rows + stream.stats().out_of_order;
+    let (t0, dt) = if timed >= 2 {
+        (t0_s.unwrap_or(0.0), None)
+    } else {
+        builder = RecordBuilder::new(o.assemble);
+        let dt = consecutive(&rows, o, &mut builder)?;
+        (0.0, Some(dt))
+    };
+    let dt_nominal_s = builder.assembler().nominal_dt_s();
+    let (mut record, assemble, build) = builder.finish()?;
     record.t0_s = t0;
     if let Some(dt) = dt {
         record.dt_s = dt;
@@ -128,9 +150,49 @@ fn read_csv(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats), In
         assemble,
         build,
         dt_s: record.dt_s,
-        dt_nominal_s: None,
+        dt_nominal_s,
     };
     Ok((record, stats))
+}
+
+/// Decoded CSV lines into the record builder, through the daemon's [`CsvStream`].
+struct CsvIngest {
+    stream: CsvStream,
+    builder: RecordBuilder,
+    /// Every data row, for input without a time column.
+    rows: Vec<CsvRow>,
+    /// The first column of the header that needs an option.
+    unresolved: Option<UnresolvedColumn>,
+    /// Time of the first placed row, s.
+    t0_s: Option<f64>,
+}
+
+impl CsvIngest {
+    fn item(&mut self, it: CsvItem<'_>) {
+        match &it {
+            CsvItem::Row(r) => self.rows.push(*r),
+            CsvItem::Header(h) => self.unresolved = h.unresolved.first().cloned(),
+            _ => {}
+        }
+        let (b, t0) = (&mut self.builder, &mut self.t0_s);
+        self.stream.item(it, &mut |f| {
+            if let CsvFact::Row(p) = &f {
+                t0.get_or_insert(p.value.t_s.unwrap_or(0.0));
+            }
+            put(b, f)
+        });
+    }
+}
+
+/// One device fact into the builder: rows at the index the placer gave them (the wire's
+/// 32-bit counters, as the daemon's SAMPLE frames carry them).
+fn put(b: &mut RecordBuilder, f: CsvFact) {
+    match f {
+        CsvFact::Row(p) => b.push_point(p.index as u32, p.t_us as u32, row_values(&p.value)),
+        CsvFact::Hello(h) => b.push_hello(&h),
+        CsvFact::Event(e) => b.push_event(&e),
+        CsvFact::NewBoot | CsvFact::Ack(_) => {}
+    }
 }
 
 fn row_values(r: &CsvRow) -> Values {
@@ -144,41 +206,12 @@ fn row_values(r: &CsvRow) -> Values {
     ]
 }
 
-/// Feed the rows to the builder with device-like indices and clocks (see the module
-/// documentation); returns t₀ in seconds and, for a given rate, the exact sample period.
-fn place_rows(
+/// Rows without times, consecutive at the given rate; returns the exact sample period.
+fn consecutive(
     rows: &[CsvRow],
     o: &IngestOptions,
     b: &mut RecordBuilder,
-) -> Result<(f64, Option<f64>), IngestError> {
-    if rows.is_empty() {
-        return Err(IngestError::NoSamples);
-    }
-    let timed: Vec<(f64, &CsvRow)> = rows
-        .iter()
-        .filter_map(|r| r.t_s.filter(|t| t.is_finite()).map(|t| (t, r)))
-        .collect();
-    let us = |dt_s: f64| (dt_s * 1e6).round() as i64 as u32;
-    if timed.len() >= 2 {
-        let t0 = timed[0].0;
-        let has_idx = timed.iter().all(|(_, r)| r.index.is_some_and(|i| i >= 0.0));
-        if has_idx {
-            for (t, r) in &timed {
-                let idx = r.index.unwrap_or(0.0) as u64 as u32;
-                b.push_point(idx, us(t - t0), row_values(r));
-            }
-        } else {
-            let dt = median_step(&timed).ok_or(IngestError::NoTimebase)?;
-            for (t, r) in &timed {
-                let k = ((t - t0) / dt).round();
-                if k < 0.0 {
-                    continue; // before the first row: out of order, cannot be placed
-                }
-                b.push_point(k as u64 as u32, us(t - t0), row_values(r));
-            }
-        }
-        return Ok((t0, None));
-    }
+) -> Result<f64, IngestError> {
     let fs = o.fs_hz.ok_or(IngestError::NoTimebase)?;
     if !(fs.is_finite() && fs > 0.0) {
         return Err(IngestError::BadOption {
@@ -186,24 +219,11 @@ fn place_rows(
             value: fs,
         });
     }
+    let us = |t_s: f64| (t_s * 1e6).round() as i64 as u32;
     for (k, r) in rows.iter().enumerate() {
         b.push_point(k as u32, us(k as f64 / fs), row_values(r));
     }
-    Ok((0.0, Some(1.0 / fs)))
-}
-
-/// Median of the positive steps between successive times.
-fn median_step(timed: &[(f64, &CsvRow)]) -> Option<f64> {
-    let mut steps: Vec<f64> = timed
-        .windows(2)
-        .map(|w| w[1].0 - w[0].0)
-        .filter(|d| *d > 0.0)
-        .collect();
-    if steps.is_empty() {
-        return None;
-    }
-    steps.sort_by(f64::total_cmp);
-    Some(steps[steps.len() / 2])
+    Ok(1.0 / fs)
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! The daemon end to end: the real binary against the simulated stand on a pty, recordings replayed, faults forced.
 
+mod daemon_csv_placement;
 mod daemon_e2e;
 mod daemon_e2e_gaps;
 mod daemon_live;

@@ -1,37 +1,43 @@
-//! The CSV dialect of the simulated stand (`protocol = "csv"`, PROTOCOL.md §6), for hosts
-//! that speak the text fallback of simple Arduino benches.
+//! The simulated stand speaking the CSV dialect (`protocol = "csv"`, PROTOCOL.md §6), for hosts
+//! that speak the text fallback of simple Arduino benches. The dialect itself — lines, commands,
+//! the bench's rows and `#` lines — is the protocol's
+//! ([`propid_wire::protocol::csv`]); this is the bench's side of it:
 //!
-//! Out: data rows without a header in the default column order
-//! `t_us,throttle,thrust_N,torque_Nm,rpm,voltage_V,current_A`, each with the `*HH` checksum
-//! (XOR of every character before `*`, as NMEA); `#ACK <CMD> OK <t_us>` / `#ACK <CMD> ERR <code>`;
-//! events as `#EVENT <NAME> <arg> <t_us> <sample_index>`, HELLO and LOG as `#` comments.
-//! In: `PING`, `ARM <watchdog_ms>`, `DISARM`, `THR <0..10000> [ramp_ms]`, `IMP <level> <width_us>`,
-//! `STOP` or the single byte `!`, one per line (`\r` ignored, lines over 255 characters dropped).
-//! Lines carry no sequence number, so the reader numbers them itself and duplicates cannot
-//! occur.
-
-use std::fmt::Write as _;
+//! - in: host text split into lines by the dialect's [`LineSplitter`] (`\r` ignored, lines over
+//!   255 characters dropped), each read by [`parse_csv_command`] — plus the single byte `!`,
+//!   which stops the motor at once, without waiting for a newline. Lines carry no sequence
+//!   number, so the reader numbers them itself and duplicates cannot occur; a line that is not
+//!   a command is refused with the reason the dialect gives it;
+//! - out: what the dialect's [`device_line`] writes for each device message (rows with their
+//!   `*HH`, `#ACK`, `#EVENT`, `# HELLO`, `# <log>`).
 
 use super::rx::{Incoming, RxStats};
-use propid_wire::protocol::message::{msg_type, ARM_KEY};
-use propid_wire::protocol::{AckResult, Arm, EventCode, Impulse, Message, SetThrottle};
-
-/// Longest command line, characters.
-pub const MAX_LINE: usize = 255;
+use propid_wire::protocol::csv::line::{Line, LineSplitter, MAX_LINE};
+use propid_wire::protocol::csv::{device_line, parse_csv_command, CsvCommandError};
+use propid_wire::protocol::Message;
 
 /// Splits host text into command lines and parses them.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct CsvReader {
-    line: Vec<u8>,
-    too_long: bool,
+    lines: LineSplitter,
     seq: u16,
     stats: RxStats,
+}
+
+impl Default for CsvReader {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl CsvReader {
     /// An empty reader.
     pub fn new() -> Self {
-        Self::default()
+        Self {
+            lines: LineSplitter::new(MAX_LINE),
+            seq: 0,
+            stats: RxStats::default(),
+        }
     }
 
     /// Counters so far.
@@ -41,105 +47,51 @@ impl CsvReader {
 
     /// Feeds host text; `on` gets every complete line, classified.
     pub fn push(&mut self, bytes: &[u8], mut on: impl FnMut(Incoming)) {
-        for &b in bytes {
-            match b {
-                b'\r' => {}
-                b'!' if self.line.is_empty() => self.finish_with(b"STOP", &mut on),
-                b'\n' => {
-                    let line = std::mem::take(&mut self.line);
-                    if self.too_long {
-                        self.too_long = false;
-                        self.stats.garbage += 1;
-                    } else if !line.is_empty() {
-                        self.finish_with(&line, &mut on);
-                    }
+        let Self { lines, seq, stats } = self;
+        let mut line = |l: Line<'_>| {
+            let inc = match l {
+                Line::TooLong => Incoming::Garbage,
+                Line::Text([]) => return,
+                Line::Text(text) => {
+                    *seq = seq.wrapping_add(1);
+                    parse_line(*seq, &String::from_utf8_lossy(text))
                 }
-                _ if self.line.len() >= MAX_LINE => self.too_long = true,
-                _ => self.line.push(b),
+            };
+            stats.count(&inc);
+            on(inc);
+        };
+        let mut rest = bytes;
+        while !rest.is_empty() {
+            // `!` at the start of a line (`\r` ignored) is STOP, now.
+            if lines.is_empty() && matches!(rest[0], b'!' | b'\r') {
+                if rest[0] == b'!' {
+                    line(Line::Text(b"STOP"));
+                }
+                rest = &rest[1..];
+                continue;
             }
+            // up to and including the next newline (after which `!` may start a line)
+            let n = rest
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(rest.len(), |i| i + 1);
+            lines.push(&rest[..n], &mut line);
+            rest = &rest[n..];
         }
-    }
-
-    fn finish_with(&mut self, line: &[u8], on: &mut impl FnMut(Incoming)) {
-        self.seq = self.seq.wrapping_add(1);
-        let inc = parse_line(self.seq, &String::from_utf8_lossy(line));
-        match inc {
-            Incoming::Command { .. } => self.stats.commands += 1,
-            Incoming::Refused { .. } => self.stats.refused += 1,
-            Incoming::Garbage => self.stats.garbage += 1,
-        }
-        on(inc);
     }
 }
 
-/// Parses one command line (numbered `seq`).
+/// Reads one command line (numbered `seq`): a command, or a refusal with the reason the
+/// dialect gives; a line of only white space is garbage.
 pub fn parse_line(seq: u16, line: &str) -> Incoming {
-    let mut words = line.split_whitespace();
-    let Some(cmd) = words.next() else {
-        return Incoming::Garbage;
-    };
-    let args: Vec<&str> = words.collect();
-    let (t, need) = match cmd.to_ascii_uppercase().as_str() {
-        "PING" => (msg_type::HELLO_REQ, 0),
-        "ARM" => (msg_type::ARM, 1),
-        "DISARM" => (msg_type::DISARM, 0),
-        "THR" => (msg_type::SET_THROTTLE, 1),
-        "IMP" => (msg_type::IMPULSE, 2),
-        "STOP" => (msg_type::STOP, 0),
-        _ => {
-            return Incoming::Refused {
-                seq,
-                msg_type: 0,
-                result: AckResult::UnknownType,
-            }
-        }
-    };
-    let refuse = |result| Incoming::Refused {
-        seq,
-        msg_type: t,
-        result,
-    };
-    if args.len() < need {
-        return refuse(AckResult::BadLength);
-    }
-    let num = |i: usize| -> Option<u64> { args.get(i).map_or(Some(0), |a| a.parse().ok()) };
-    let (Some(a0), Some(a1)) = (num(0), num(1)) else {
-        return refuse(AckResult::OutOfRange);
-    };
-    let u16v = |v: u64| u16::try_from(v).ok();
-    let msg = match t {
-        msg_type::HELLO_REQ => Some(Message::HelloReq),
-        msg_type::ARM => u16v(a0).map(|w| {
-            Message::Arm(Arm {
-                watchdog_ms: w,
-                key: ARM_KEY,
-            })
-        }),
-        msg_type::DISARM => Some(Message::Disarm),
-        msg_type::SET_THROTTLE => u16v(a0)
-            .zip(u16v(a1))
-            .map(|(level, ramp_ms)| Message::SetThrottle(SetThrottle { level, ramp_ms })),
-        msg_type::IMPULSE => u16v(a0)
-            .zip(u32::try_from(a1).ok())
-            .map(|(level, width_us)| Message::Impulse(Impulse { level, width_us })),
-        _ => Some(Message::Stop),
-    };
-    match msg {
-        Some(msg) => Incoming::Command { seq, msg },
-        None => refuse(AckResult::OutOfRange),
-    }
-}
-
-/// The CSV command word of a command type (for `#ACK` lines).
-pub fn command_word(t: u8) -> &'static str {
-    match t {
-        msg_type::HELLO_REQ => "PING",
-        msg_type::ARM => "ARM",
-        msg_type::DISARM => "DISARM",
-        msg_type::SET_THROTTLE => "THR",
-        msg_type::IMPULSE => "IMP",
-        msg_type::STOP => "STOP",
-        _ => "?",
+    match parse_csv_command(line) {
+        Ok(msg) => Incoming::Command { seq, msg },
+        Err(CsvCommandError::Unknown) if line.trim().is_empty() => Incoming::Garbage,
+        Err(e) => Incoming::Refused {
+            seq,
+            msg_type: e.kind().msg_type().unwrap_or(0),
+            result: e.ack_result(),
+        },
     }
 }
 
@@ -155,75 +107,14 @@ impl CsvWriter {
 
     /// The line (with its `\n`) for `msg`, `None` for messages the dialect has no form for.
     pub fn format(&self, msg: &Message) -> Option<String> {
-        let mut s = String::new();
-        match msg {
-            Message::Sample(x) => {
-                let _ = write!(
-                    s,
-                    "{},{},{:.4},{:.5},{:.1},{:.3},{:.3}",
-                    x.t_us, x.throttle, x.thrust_n, x.torque_nm, x.rpm, x.voltage_v, x.current_a
-                );
-                let sum = s.bytes().fold(0u8, |a, b| a ^ b);
-                let _ = write!(s, "*{sum:02X}");
-            }
-            Message::Ack(a) => {
-                let word = command_word(a.cmd_type);
-                if a.result == AckResult::Ok {
-                    let _ = write!(s, "#ACK {word} OK {}", a.t_us);
-                } else {
-                    let _ = write!(s, "#ACK {word} ERR {}", a.result.to_u8());
-                }
-            }
-            Message::Event(e) => {
-                let _ = write!(
-                    s,
-                    "#EVENT {} {} {} {}",
-                    event_name(e.code),
-                    e.arg,
-                    e.t_us,
-                    e.sample_index
-                );
-            }
-            Message::Hello(h) => {
-                let _ = write!(
-                    s,
-                    "# HELLO {} fw {} boot_id {:08x} rate_hz {}",
-                    h.name_str(),
-                    h.fw_version,
-                    h.boot_id,
-                    h.sample_rate_hz
-                );
-            }
-            Message::Log(l) => {
-                let _ = write!(s, "# {}", l.text().replace('\n', " "));
-            }
-            _ => return None,
-        }
-        s.push('\n');
-        Some(s)
-    }
-}
-
-/// Protocol name of an event code.
-pub fn event_name(c: EventCode) -> &'static str {
-    match c {
-        EventCode::ImpulseStart => "IMPULSE_START",
-        EventCode::ImpulseEnd => "IMPULSE_END",
-        EventCode::WatchdogTrip => "WATCHDOG_TRIP",
-        EventCode::LimitCutoff => "LIMIT_CUTOFF",
-        EventCode::Armed => "ARMED",
-        EventCode::Disarmed => "DISARMED",
-        EventCode::TxOverrun => "TX_OVERRUN",
-        EventCode::ResetCause => "RESET_CAUSE",
-        EventCode::TareDone => "TARE_DONE",
-        EventCode::Other(_) => "OTHER",
+        device_line(msg)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use propid_wire::protocol::{Sample, SampleFlags};
+    use propid_wire::protocol::{AckResult, Arm, Impulse, SetThrottle};
 
     fn read(text: &str) -> Vec<Incoming> {
         let mut r = CsvReader::new();
@@ -234,7 +125,7 @@ mod tests {
 
     #[test]
     fn commands_parse() {
-        let got = read("PING\r\nARM 500\nTHR 3500 200\nIMP 4000 1000\n!DISARM\n");
+        let got = read("PING\r\nARM 500\nTHR 3500 200\nIMP 4000 1000\n!DISARM\r\n\r!stop\n");
         let msgs: Vec<Message> = got
             .iter()
             .map(|i| match i {
@@ -257,43 +148,52 @@ mod tests {
                 }),
                 Message::Stop,
                 Message::Disarm,
+                Message::Stop,
+                Message::Stop,
             ]
         );
     }
 
     #[test]
     fn bad_lines_are_refused_with_a_reason() {
-        let got = read("FLY\nIMP 4000\nTHR abc\n");
-        let results: Vec<AckResult> = got
+        let got = read("FLY\nIMP 4000\nTHR abc\n   \n");
+        let results: Vec<Option<(u8, AckResult)>> = got
             .iter()
             .map(|i| match i {
-                Incoming::Refused { result, .. } => *result,
+                Incoming::Refused {
+                    msg_type, result, ..
+                } => Some((*msg_type, *result)),
+                Incoming::Garbage => None,
                 other => panic!("{other:?}"),
             })
             .collect();
         assert_eq!(
             results,
             vec![
-                AckResult::UnknownType,
-                AckResult::BadLength,
-                AckResult::OutOfRange
+                Some((0, AckResult::UnknownType)),
+                Some((0x05, AckResult::BadLength)),
+                Some((0x04, AckResult::OutOfRange)),
+                None,
             ]
         );
     }
 
     #[test]
-    fn sample_row_carries_a_valid_checksum() {
-        let s = Sample {
-            t_us: 1000,
-            throttle: 3000,
-            flags: SampleFlags::ARMED,
-            thrust_n: 3.5,
-            ..Sample::default()
-        };
-        let line = CsvWriter::new().format(&Message::Sample(s)).unwrap();
-        let (body, rest) = line.trim_end().split_once('*').unwrap();
-        assert!(body.starts_with("1000,3000,3.5000,"));
-        let sum = body.bytes().fold(0u8, |a, b| a ^ b);
-        assert_eq!(rest, format!("{sum:02X}"));
+    fn overlong_lines_are_garbage_and_stop_needs_no_newline() {
+        let mut text = "x".repeat(300);
+        text.push('\n');
+        let mut r = CsvReader::new();
+        let mut v = Vec::new();
+        r.push(text.as_bytes(), |i| v.push(i));
+        r.push(b"!", |i| v.push(i));
+        assert_eq!(v[0], Incoming::Garbage);
+        assert!(matches!(
+            v[1],
+            Incoming::Command {
+                msg: Message::Stop,
+                ..
+            }
+        ));
+        assert_eq!((r.stats().garbage, r.stats().commands), (1, 1));
     }
 }

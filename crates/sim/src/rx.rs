@@ -2,17 +2,15 @@
 //!
 //! The host's [`Decoder`](propid_wire::protocol::Decoder) drops a malformed frame without telling the
 //! caller its `seq`, but the device must ACK a command it cannot execute with the reason
-//! (§4: UNKNOWN_TYPE, BAD_LENGTH, VERSION). So this reader splits at `0x00` into a fixed buffer
-//! and checks each block itself with the protocol's own building blocks (COBS, CRC, payload
-//! parser): a block whose CRC holds has a trustworthy `seq` and `type` and is answered; a block
-//! that fails COBS or CRC (or is oversize or shorter than 6 bytes) cannot be attributed and is
-//! only counted.
+//! (§4: UNKNOWN_TYPE, BAD_LENGTH, VERSION). So this reader splits the stream with the
+//! protocol's [`BlockSplitter`] and checks each block with the protocol's
+//! [`check_block`] (COBS, length, CRC — the same check the host's decoder makes): a block whose
+//! CRC holds has a trustworthy `seq` and `type` and is answered; a block that fails it (or is
+//! oversize) cannot be attributed and is only counted.
 
-use propid_wire::protocol::cobs::decode_in_place;
-use propid_wire::protocol::crc::crc16_mcrf4xx;
-use propid_wire::protocol::encode::MAX_ENCODED;
+use propid_wire::protocol::block::{Block, BlockSplitter};
 use propid_wire::protocol::message::is_command_type;
-use propid_wire::protocol::{payload, AckResult, DecodeError, Message, VERSION};
+use propid_wire::protocol::{check_block, AckResult, DecodeError, Message};
 
 /// One block from the host, classified.
 // A `Message` can hold a 200-byte LOG; an `Incoming` is short-lived (one per received command),
@@ -51,30 +49,28 @@ pub struct RxStats {
     pub garbage: u64,
 }
 
-/// Fixed-buffer splitter and classifier for host → device bytes.
-#[derive(Debug, Clone)]
-pub struct CommandReader {
-    buf: [u8; MAX_ENCODED],
-    len: usize,
-    overflow: bool,
-    stats: RxStats,
+impl RxStats {
+    /// Count one classified block or line.
+    pub fn count(&mut self, inc: &Incoming) {
+        match inc {
+            Incoming::Command { .. } => self.commands += 1,
+            Incoming::Refused { .. } => self.refused += 1,
+            Incoming::Garbage => self.garbage += 1,
+        }
+    }
 }
 
-impl Default for CommandReader {
-    fn default() -> Self {
-        Self::new()
-    }
+/// Fixed-buffer splitter and classifier for host → device bytes.
+#[derive(Debug, Clone, Default)]
+pub struct CommandReader {
+    blocks: BlockSplitter,
+    stats: RxStats,
 }
 
 impl CommandReader {
     /// An empty reader.
     pub fn new() -> Self {
-        CommandReader {
-            buf: [0; MAX_ENCODED],
-            len: 0,
-            overflow: false,
-            stats: RxStats::default(),
-        }
+        Self::default()
     }
 
     /// Counters so far.
@@ -85,61 +81,38 @@ impl CommandReader {
     /// Feeds host bytes; `on` gets every complete block, classified, in order. Empty blocks
     /// (two delimiters in a row) are ignored.
     pub fn push(&mut self, bytes: &[u8], mut on: impl FnMut(Incoming)) {
-        for &b in bytes {
-            if b != 0 {
-                if self.len < MAX_ENCODED {
-                    self.buf[self.len] = b;
-                    self.len += 1;
-                } else {
-                    self.overflow = true;
-                }
-                continue;
-            }
-            let block = if self.overflow {
-                Some(Incoming::Garbage)
-            } else if self.len == 0 {
-                None
-            } else {
-                Some(classify(&mut self.buf[..self.len]))
+        let stats = &mut self.stats;
+        self.blocks.push(bytes, |b| {
+            let inc = match b {
+                Block::Empty => return,
+                Block::Oversize => Incoming::Garbage,
+                Block::Data(d) => classify(d),
             };
-            self.len = 0;
-            self.overflow = false;
-            if let Some(inc) = block {
-                match inc {
-                    Incoming::Command { .. } => self.stats.commands += 1,
-                    Incoming::Refused { .. } => self.stats.refused += 1,
-                    Incoming::Garbage => self.stats.garbage += 1,
-                }
-                on(inc);
-            }
-        }
+            stats.count(&inc);
+            on(inc);
+        });
     }
 }
 
-/// Classifies one COBS block (without its delimiter), decoding it in place.
+/// Classifies one COBS block (without its delimiter), decoding it in place: the protocol's
+/// [`check_block`] decides whether it can be attributed, then the device's rules (§4) whether
+/// it is executed or refused, and why.
 pub fn classify(block: &mut [u8]) -> Incoming {
-    let Ok(n) = decode_in_place(block) else {
+    let Ok(raw) = check_block(block) else {
         return Incoming::Garbage;
     };
-    let body = &block[..n];
-    if n < 6 || u16::from_le_bytes([body[n - 2], body[n - 1]]) != crc16_mcrf4xx(&body[..n - 2]) {
-        return Incoming::Garbage;
-    }
-    let (ver, msg_type) = (body[0], body[1]);
-    let seq = u16::from_le_bytes([body[2], body[3]]);
     let refuse = |result| Incoming::Refused {
-        seq,
-        msg_type,
+        seq: raw.seq,
+        msg_type: raw.msg_type,
         result,
     };
-    if ver != VERSION {
-        return refuse(AckResult::Version);
-    }
-    if !is_command_type(msg_type) {
-        return refuse(AckResult::UnknownType);
-    }
-    match payload::parse(msg_type, &body[4..n - 2]) {
-        Ok(msg) => Incoming::Command { seq, msg },
+    match raw.decode() {
+        Err(DecodeError::BadVersion(_)) => refuse(AckResult::Version),
+        _ if !is_command_type(raw.msg_type) => refuse(AckResult::UnknownType),
+        Ok(f) => Incoming::Command {
+            seq: f.seq,
+            msg: f.msg,
+        },
         Err(DecodeError::ShortPayload { .. }) => refuse(AckResult::BadLength),
         Err(_) => refuse(AckResult::UnknownType),
     }

@@ -1,5 +1,7 @@
 //! A CSV bench for the daemon tests: the rows a simple Arduino stand would print
-//! (PROTOCOL.md §6 header `t_us,throttle,thrust_N`) for a known plant..
+//! (PROTOCOL.md §6 header `t_us,throttle,thrust_N`) for a known plant.
+
+use propid_wire::protocol::csv::line::append_checksum;
 
 /// The bench's plant: a discrete 2nd-order thrust response to throttle at 1 kHz.
 #[derive(Debug, Clone, Copy)]
@@ -51,9 +53,11 @@ pub fn rows(p: Plant, n: usize) -> Vec<String> {
 /// The header line.
 pub const HEADER: &str = "t_us,throttle,thrust_N\n";
 
-/// `line` (without its newline) with the NMEA-style `*HH` checksum appended.
+/// `line` (without its newline) with the NMEA-style `*HH` checksum appended (the dialect's
+/// [`append_checksum`]).
 pub fn with_checksum(line: &str) -> String {
-    let body = line.trim_end();
-    let sum = body.bytes().fold(0u8, |a, b| a ^ b);
-    format!("{body}*{sum:02X}\n")
+    let mut body = line.trim_end().to_string();
+    append_checksum(&mut body);
+    body.push('\n');
+    body
 }

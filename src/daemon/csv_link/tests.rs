@@ -2,7 +2,8 @@
 
 use super::*;
 use propid_sim::csv::CsvWriter;
-use propid_wire::protocol::message::{Event, EventCode};
+use propid_wire::protocol::message::{msg_type, Event, EventCode};
+use propid_wire::stream::csv_stream::made_up_hello;
 
 fn sample(k: u32, throttle: u16, thrust: f32) -> Sample {
     Sample {

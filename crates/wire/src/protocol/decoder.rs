@@ -19,6 +19,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::block::{Block, BlockSplitter};
 use super::cobs;
 use super::crc::crc16_mcrf4xx;
 use super::encode::MAX_ENCODED;
@@ -86,9 +87,37 @@ pub struct DecodeStats {
     pub dropped: DropCounts,
 }
 
-/// Decode one COBS block (without its delimiter, at most 254 bytes) in place into a frame.
-/// The checks and their order are those of the [module documentation](self).
-pub fn decode_block(block: &mut [u8]) -> Result<Frame, DecodeError> {
+/// A frame whose integrity holds (valid COBS, at least 6 bytes, CRC correct): its `ver`,
+/// `type` and `seq` can be trusted, its version and payload are not checked yet. The device
+/// side answers such a frame even when it refuses it (PROTOCOL.md §4: VERSION, UNKNOWN_TYPE,
+/// BAD_LENGTH); an unchecked block has nobody to answer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawFrame<'a> {
+    /// Protocol version byte.
+    pub ver: u8,
+    /// Message type byte.
+    pub msg_type: u8,
+    /// Sequence number.
+    pub seq: u16,
+    /// Payload (between `seq` and the CRC).
+    pub payload: &'a [u8],
+}
+
+impl RawFrame<'_> {
+    /// Checks 6–8 of the [module documentation](self): version, type, payload length.
+    pub fn decode(&self) -> Result<Frame, DecodeError> {
+        if self.ver != VERSION {
+            return Err(DecodeError::BadVersion(self.ver));
+        }
+        let msg = payload::parse(self.msg_type, self.payload)?;
+        Ok(Frame { seq: self.seq, msg })
+    }
+}
+
+/// Checks 1 and 3–5 of the [module documentation](self) on one COBS block (without its
+/// delimiter), decoding it in place: size, COBS, length, CRC. The one integrity check of TSP/1
+/// frames, host and device side.
+pub fn check_block(block: &mut [u8]) -> Result<RawFrame<'_>, DecodeError> {
     if block.len() > MAX_ENCODED {
         return Err(DecodeError::Oversize);
     }
@@ -102,12 +131,18 @@ pub fn decode_block(block: &mut [u8]) -> Result<Frame, DecodeError> {
     if received != computed {
         return Err(DecodeError::Crc { received, computed });
     }
-    if body[0] != VERSION {
-        return Err(DecodeError::BadVersion(body[0]));
-    }
-    let seq = u16::from_le_bytes([body[2], body[3]]);
-    let msg = payload::parse(body[1], &body[4..n - 2])?;
-    Ok(Frame { seq, msg })
+    Ok(RawFrame {
+        ver: body[0],
+        msg_type: body[1],
+        seq: u16::from_le_bytes([body[2], body[3]]),
+        payload: &body[4..n - 2],
+    })
+}
+
+/// Decode one COBS block (without its delimiter, at most 254 bytes) in place into a frame.
+/// The checks and their order are those of the [module documentation](self).
+pub fn decode_block(block: &mut [u8]) -> Result<Frame, DecodeError> {
+    check_block(block)?.decode()
 }
 
 /// Fixed-buffer TSP/1 frame decoder (see the [module documentation](self)).
@@ -124,29 +159,16 @@ pub fn decode_block(block: &mut [u8]) -> Result<Frame, DecodeError> {
 /// assert_eq!(got[0].msg, Message::Stop);
 /// assert_eq!(dec.stats().dropped.total(), 1);
 /// ```
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Decoder {
-    buf: [u8; MAX_ENCODED],
-    len: usize,
-    overflow: bool,
+    blocks: BlockSplitter,
     stats: DecodeStats,
-}
-
-impl Default for Decoder {
-    fn default() -> Self {
-        Self::new()
-    }
 }
 
 impl Decoder {
     /// A decoder with an empty buffer and zero counters.
     pub fn new() -> Self {
-        Self {
-            buf: [0; MAX_ENCODED],
-            len: 0,
-            overflow: false,
-            stats: DecodeStats::default(),
-        }
+        Self::default()
     }
 
     /// The counters so far.
@@ -156,13 +178,12 @@ impl Decoder {
 
     /// Bytes of an unfinished frame waiting for their delimiter.
     pub fn pending(&self) -> usize {
-        self.len
+        self.blocks.pending()
     }
 
     /// Forget an unfinished frame (for instance after a reconnect); counters are kept.
     pub fn reset(&mut self) {
-        self.len = 0;
-        self.overflow = false;
+        self.blocks.reset();
     }
 
     /// Feed `bytes`; `on_frame` is called for every valid frame, in order. Drops are counted.
@@ -182,15 +203,12 @@ impl Decoder {
         mut on_result: impl FnMut(Result<Frame, DecodeError>),
     ) {
         self.stats.bytes += bytes.len() as u64;
-        let mut rest = bytes;
-        while let Some(i) = find_zero(rest) {
-            self.append(&rest[..i]);
-            rest = &rest[i + 1..];
-            if let Some(r) = self.finish() {
+        let stats = &mut self.stats;
+        self.blocks.push(bytes, |b| {
+            if let Some(r) = decode(b, stats) {
                 on_result(r);
             }
-        }
-        self.append(rest);
+        });
     }
 
     /// Iterate over the frames in `bytes` (drops counted, not yielded).
@@ -209,61 +227,23 @@ impl Decoder {
             rest: bytes,
         }
     }
-
-    fn append(&mut self, chunk: &[u8]) {
-        if self.overflow || chunk.is_empty() {
-            return;
-        }
-        let end = self.len + chunk.len();
-        if end > MAX_ENCODED {
-            self.overflow = true;
-        } else {
-            self.buf[self.len..end].copy_from_slice(chunk);
-            self.len = end;
-        }
-    }
-
-    /// A delimiter arrived: decode what is buffered and start afresh.
-    fn finish(&mut self) -> Option<Result<Frame, DecodeError>> {
-        let r = if self.overflow {
-            Some(Err(DecodeError::Oversize))
-        } else if self.len == 0 {
-            self.stats.empty_frames += 1;
-            None
-        } else {
-            Some(decode_block(&mut self.buf[..self.len]))
-        };
-        self.reset();
-        match &r {
-            Some(Ok(_)) => self.stats.frames_ok += 1,
-            Some(Err(e)) => self.stats.dropped.count(e),
-            None => {}
-        }
-        r
-    }
 }
 
-/// Position of the first `0x00`, eight bytes at a time: a word `v` holds a zero byte iff
-/// `(v − 0x01…01) & !v & 0x80…80 ≠ 0`, and the lowest set bit of that mask marks the first one
-/// (little-endian; borrows only propagate upwards from a zero byte, so lower bytes are exact).
-fn find_zero(s: &[u8]) -> Option<usize> {
-    const LO: u64 = 0x0101_0101_0101_0101;
-    const HI: u64 = 0x8080_8080_8080_8080;
-    let mut words = s.chunks_exact(8);
-    let mut base = 0;
-    for w in &mut words {
-        let v = u64::from_le_bytes([w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7]]);
-        let m = v.wrapping_sub(LO) & !v & HI;
-        if m != 0 {
-            return Some(base + (m.trailing_zeros() / 8) as usize);
+/// One block decoded and counted (`None` for an empty one).
+fn decode(block: Block<'_>, stats: &mut DecodeStats) -> Option<Result<Frame, DecodeError>> {
+    let r = match block {
+        Block::Empty => {
+            stats.empty_frames += 1;
+            return None;
         }
-        base += 8;
+        Block::Oversize => Err(DecodeError::Oversize),
+        Block::Data(d) => decode_block(d),
+    };
+    match &r {
+        Ok(_) => stats.frames_ok += 1,
+        Err(e) => stats.dropped.count(e),
     }
-    words
-        .remainder()
-        .iter()
-        .position(|&b| b == 0)
-        .map(|i| base + i)
+    Some(r)
 }
 
 /// Iterator over the frames of one chunk, see [`Decoder::frames`].
@@ -277,14 +257,13 @@ impl Iterator for Frames<'_> {
     type Item = Frame;
 
     fn next(&mut self) -> Option<Frame> {
-        while let Some(i) = find_zero(self.rest) {
-            self.dec.append(&self.rest[..i]);
-            self.rest = &self.rest[i + 1..];
-            if let Some(Ok(f)) = self.dec.finish() {
+        let Decoder { blocks, stats } = &mut *self.dec;
+        while let Some((block, rest)) = blocks.push_until_block(self.rest) {
+            self.rest = rest;
+            if let Some(Ok(f)) = decode(block, stats) {
                 return Some(f);
             }
         }
-        self.dec.append(self.rest);
         self.rest = &[];
         None
     }
@@ -296,33 +275,5 @@ impl Drop for Frames<'_> {
     /// end (or use [`Decoder::push`]) to get them all.
     fn drop(&mut self) {
         for _ in self.by_ref() {}
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::find_zero;
-
-    #[test]
-    fn find_zero_matches_a_plain_search() {
-        let mut v: Vec<u8> = (0..64).map(|i| 1 + (i * 37 % 255) as u8).collect();
-        v[5] = 0x80; // high bits and 0x01 bytes around a zero must not confuse the word test
-        v[6] = 0x01;
-        assert_eq!(find_zero(&v), None);
-        for z in 0..v.len() {
-            let mut w = v.clone();
-            w[z] = 0;
-            if z + 3 < w.len() {
-                w[z + 3] = 0;
-            }
-            for start in 0..4.min(w.len()) {
-                let s = &w[start..];
-                assert_eq!(
-                    find_zero(s),
-                    s.iter().position(|&b| b == 0),
-                    "z={z} start={start}"
-                );
-            }
-        }
     }
 }

@@ -2,15 +2,17 @@
 //!
 //! The rule (over the first [`DETECT_WINDOW`] bytes, after an optional UTF-8 BOM):
 //! 1. A valid TSP/1 frame (COBS, CRC, version, known type) ends in the window → **binary**.
-//! 2. No `0x00` in the window and a complete line that is CSV — numeric fields (at least two)
-//!    or a header naming a known column — → **CSV**. Text never holds `0x00`, while a binary
+//! 2. No `0x00` in the window and a complete line that is CSV data by the dialect's line rules
+//!    ([`classify`]: `*HH` checked, comments skipped) — numeric fields (at least two) or a
+//!    header naming a known column — → **CSV**. Text never holds `0x00`, while a binary
 //!    stream has a delimiter at least every 255 bytes; boot banners are text but neither
 //!    numeric rows nor headers, so a banner before binary frames does not decide.
 //! 3. The window is full (or the input has ended): a `0x00` seen → binary (a damaged binary
 //!    stream; its decoder counts the drops), none → CSV.
 //! 4. Otherwise: undecided, read more.
 
-use super::csv_columns;
+use super::csv::columns;
+use super::csv::line::{classify, fields, separator, LineKind};
 use super::decoder::Decoder;
 
 /// Bytes examined at most.
@@ -62,19 +64,17 @@ pub fn detect(prefix: &[u8], at_end: bool) -> Detection {
 
 /// A complete line that is a CSV data row or header.
 fn is_csv_line(line: &[u8]) -> bool {
-    let Ok(text) = std::str::from_utf8(line) else {
+    let LineKind::Data(text) = classify(line) else {
         return false;
     };
-    let text = text.trim();
-    if text.starts_with('#') || text.is_empty() {
-        return false;
+    let (mut numeric, mut blank, mut known, mut n) = (0, 0, false, 0);
+    for f in fields(text, separator(text)) {
+        n += 1;
+        numeric += usize::from(f.parse::<f64>().is_ok());
+        blank += usize::from(f.is_empty());
+        known |= columns::lookup(f).is_some();
     }
-    let sep = if text.contains(',') { ',' } else { '\t' };
-    let fields: Vec<&str> = text.split(sep).map(str::trim).collect();
-    let numeric = fields.iter().filter(|f| f.parse::<f64>().is_ok()).count();
-    let blank = fields.iter().filter(|f| f.is_empty()).count();
-    (numeric >= 2 && numeric + blank == fields.len())
-        || fields.iter().any(|f| csv_columns::lookup(f).is_some())
+    (numeric >= 2 && numeric + blank == n) || known
 }
 
 #[cfg(test)]
@@ -102,6 +102,8 @@ mod tests {
     #[test]
     fn csv_rows_and_headers() {
         assert_eq!(detect(b"1000,3500,1.25\n", false), CSV);
+        assert_eq!(detect(b"1000,3500,1.25*1F\n", false), CSV);
+        assert_eq!(detect(b"1;3500;1.25\n", false), CSV);
         assert_eq!(detect(b"\xEF\xBB\xBFTime (s),Thrust (N)\n", false), CSV);
         assert_eq!(detect(b"# banner\n1000,35", false), Detection::Undecided);
         assert_eq!(detect(b"# banner only", true), CSV);

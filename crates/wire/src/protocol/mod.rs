@@ -3,19 +3,21 @@
 //! - [`crc`]: CRC-16/MCRF4XX; [`cobs`]: byte stuffing;
 //! - [`message`]: every message of both directions as typed `Copy` structs, [`Frame`];
 //! - [`encode`]: [`encode_frame`] into a caller buffer (no allocation);
-//! - [`decoder`]: [`Decoder`], a fixed-buffer decoder with [`DecodeStats`] (one counter per
-//!   kind of drop), resynchronising at every `0x00`;
-//! - [`csv`]: the text fallback of §6; [`detect`]: binary or CSV from the first bytes.
+//! - [`block`]: the stream split at every `0x00` into COBS blocks (one fixed buffer);
+//! - [`decoder`]: [`check_block`], the one integrity check of a frame (COBS, length, CRC),
+//!   and [`Decoder`], a fixed-buffer decoder with [`DecodeStats`] (one counter per kind of
+//!   drop), resynchronising at every `0x00`;
+//! - [`csv`]: the text fallback of §6, the one CSV dialect (lines, checksum, header names,
+//!   rows, the bench's `#` lines, commands); [`detect`]: binary or CSV from the first bytes.
 //!
 //! Nothing here does I/O: callers push the bytes they read and write the bytes they are given,
 //! so the serial source, the recording replay, the simulated stand and the tests share one code
 //! path.
 
+pub mod block;
 pub mod cobs;
 pub mod crc;
 pub mod csv;
-pub mod csv_columns;
-pub mod csv_command;
 pub mod decoder;
 pub mod detect;
 pub mod encode;
@@ -23,10 +25,15 @@ pub mod error;
 pub mod message;
 pub mod payload;
 
+/// The alias and unit table of the CSV dialect, under its former path.
+pub use csv::columns as csv_columns;
+/// The CSV commands, under their former path.
+pub use csv::command as csv_command;
+
 #[cfg(test)]
 mod vectors;
 
-pub use decoder::{decode_block, DecodeStats, Decoder, DropCounts, Frames};
+pub use decoder::{check_block, decode_block, DecodeStats, Decoder, DropCounts, Frames, RawFrame};
 pub use encode::{encode_frame, encode_raw, try_encode_frame, EncodeError, MAX_FRAME_LEN};
 pub use error::DecodeError;
 pub use message::{

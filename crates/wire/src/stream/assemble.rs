@@ -3,10 +3,12 @@
 //!
 //! Two layers:
 //! - [`SampleAssembler`] turns (sample_index, t_us) pairs and device events into record
-//!   positions `k` — [`Assembled`] items: a sample at `k`, `count` missing samples from `k`, a
-//!   new segment at `k`, an event at `k`. It stores nothing per sample, so the daemon's worker can
-//!   use it on a live stream.
-//! - [`RecordBuilder`] stores the channels and produces the [`Record`].
+//!   positions `k` and says what happened, as typed [`Assembled`] items: a sample at `k`,
+//!   `count` missing samples from `k` (a gap), a new segment at `k` and why ([`SegmentCause`]:
+//!   the first, a new boot, the index going back, a gap too long to fill), a duplicate dropped,
+//!   a clock wrap or step back, an event at `k` (or dropped). It stores nothing per sample, so
+//!   the daemon's sampler uses it on a live stream and reads what it says from these items.
+//! - [`RecordBuilder`] stores the channels and produces the [`Record`](crate::record::Record).
 //!
 //! Rules (PROTOCOL.md §3, issue 3 item 2):
 //! - The 32-bit `sample_index` and `t_us` are unwrapped ([`Unwrap32`]).
@@ -31,10 +33,7 @@
 use serde::Serialize;
 
 use super::clock::{Step, Unwrap32};
-use super::IngestError;
-use crate::protocol::message::{EventCode, Message, Sample, SampleFlags};
-use crate::protocol::Frame;
-use crate::record::{names, Channel, Record, RecordEvent, RecordEventKind};
+use crate::record::RecordEventKind;
 
 /// Assembly limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -79,7 +78,7 @@ pub struct AssembleStats {
     pub events_dropped: u64,
 }
 
-/// What the assembler says about the record.
+/// What the assembler says happened, item by item, in order.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Assembled<T> {
     /// The sample `value` goes to record position `k`; `t_us` is the unwrapped device clock.
@@ -91,18 +90,26 @@ pub enum Assembled<T> {
         /// The payload.
         value: T,
     },
-    /// `count` samples from position `k` are missing.
+    /// A gap: `count` samples from position `k` are missing (filled, never bridged).
     Missing {
         /// First missing position.
         k: usize,
         /// How many.
         count: usize,
     },
-    /// A new segment (device boot) starts at `k`.
+    /// A segment starts at `k` with the sample that follows.
     SegmentStart {
         /// Position.
         k: usize,
+        /// Why.
+        cause: SegmentCause,
     },
+    /// The sample repeated the last index: dropped.
+    Duplicate,
+    /// The device clock wrapped (2³² µs) at the sample that follows.
+    ClockWrap,
+    /// The device clock went back while the index went forward (at the sample that follows).
+    ClockBackwards,
     /// A device event at position `k`.
     Event {
         /// Position.
@@ -110,6 +117,48 @@ pub enum Assembled<T> {
         /// Which.
         kind: RecordEventKind,
     },
+    /// A device event that could not be placed (before its segment, or too many pending).
+    EventDropped {
+        /// Which.
+        kind: RecordEventKind,
+    },
+}
+
+/// Why a segment starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SegmentCause {
+    /// The first sample of the stream.
+    First,
+    /// The first sample after a HELLO with a new `boot_id`.
+    NewBoot,
+    /// The index went back without a new HELLO: a device reset whose HELLO was not seen.
+    IndexBackwards,
+    /// A gap too long to fill: `lost` samples are counted as lost, not filled.
+    GapTooLong {
+        /// Samples lost in the gap.
+        lost: u64,
+    },
+}
+
+/// What a HELLO did to the stream.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HelloEffect {
+    /// The first HELLO, before any sample: the first segment will be this boot's.
+    FirstBoot,
+    /// The boot already known.
+    SameBoot,
+    /// Adopted without a split: the first HELLO of a stream joined mid-segment, or the HELLO
+    /// of a reset already inferred from the index going back.
+    Adopted,
+    /// A new boot: the segment ended; the next sample starts a new one.
+    NewBoot,
+}
+
+impl HelloEffect {
+    /// True when the HELLO starts a segment (the first boot, or a new one).
+    pub fn starts_segment(self) -> bool {
+        matches!(self, Self::FirstBoot | Self::NewBoot)
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -188,14 +237,22 @@ impl SampleAssembler {
             .map(|r| 1.0 / r as f64)
     }
 
-    /// A HELLO: a new `boot_id` ends the current segment.
-    pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) {
+    /// A HELLO: a new `boot_id` ends the current segment (see [`HelloEffect`]).
+    pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) -> HelloEffect {
         self.nominal_rate_hz = Some(sample_rate_hz);
-        if self.boot_id.is_some_and(|b| b != boot_id) && !self.reset_since_hello {
-            self.end_segment();
-        }
+        let effect = match self.boot_id {
+            Some(b) if b == boot_id => HelloEffect::SameBoot,
+            Some(_) if self.reset_since_hello => HelloEffect::Adopted,
+            Some(_) => {
+                self.end_segment();
+                HelloEffect::NewBoot
+            }
+            None if self.is_empty() => HelloEffect::FirstBoot,
+            None => HelloEffect::Adopted,
+        };
         self.boot_id = Some(boot_id);
         self.reset_since_hello = false;
+        effect
     }
 
     /// A device event referring to `sample_index`.
@@ -210,7 +267,10 @@ impl SampleAssembler {
             None if self.pending.len() < MAX_PENDING_EVENTS => {
                 self.pending.push((sample_index, kind))
             }
-            None => self.stats.events_dropped += 1,
+            None => {
+                self.stats.events_dropped += 1;
+                on(Assembled::EventDropped { kind });
+            }
         }
     }
 
@@ -230,7 +290,10 @@ impl SampleAssembler {
                     kind,
                 });
             }
-            _ => self.stats.events_dropped += 1,
+            _ => {
+                self.stats.events_dropped += 1;
+                on(Assembled::EventDropped { kind });
+            }
         }
     }
 
@@ -243,7 +306,12 @@ impl SampleAssembler {
         on: &mut impl FnMut(Assembled<T>),
     ) {
         let Some(seg) = self.seg.as_mut() else {
-            return self.start_segment(sample_index, t_us, value, on);
+            let cause = if self.is_empty() {
+                SegmentCause::First
+            } else {
+                SegmentCause::NewBoot
+            };
+            return self.start_segment(cause, sample_index, t_us, value, on);
         };
         let before = *seg;
         let d = match seg.idx.step(sample_index) {
@@ -251,11 +319,12 @@ impl SampleAssembler {
                 self.stats.resets_inferred += 1;
                 self.reset_since_hello = true;
                 self.end_segment();
-                return self.start_segment(sample_index, t_us, value, on);
+                let cause = SegmentCause::IndexBackwards;
+                return self.start_segment(cause, sample_index, t_us, value, on);
             }
             Step::Forward(0) => {
                 self.stats.duplicates += 1;
-                return;
+                return on(Assembled::Duplicate);
             }
             Step::Forward(d) => d,
         };
@@ -267,13 +336,19 @@ impl SampleAssembler {
             // The segment ends at its last sample, not at the far side of the gap.
             self.seg = Some(before);
             self.end_segment();
-            return self.start_segment(sample_index, t_us, value, on);
+            let cause = SegmentCause::GapTooLong { lost };
+            return self.start_segment(cause, sample_index, t_us, value, on);
         }
         let wraps = seg.clock.wraps();
         if seg.clock.step(t_us) == Step::Backward {
             self.stats.clock_backwards += 1;
+            on(Assembled::ClockBackwards);
         }
-        self.stats.clock_wraps += seg.clock.wraps() - wraps;
+        let wrapped = seg.clock.wraps() - wraps;
+        self.stats.clock_wraps += wrapped;
+        if wrapped > 0 {
+            on(Assembled::ClockWrap);
+        }
         let t = seg.clock.value();
         if lost > 0 {
             self.filled += lost;
@@ -300,6 +375,7 @@ impl SampleAssembler {
 
     fn start_segment<T>(
         &mut self,
+        cause: SegmentCause,
         sample_index: u32,
         t_us: u32,
         value: T,
@@ -316,9 +392,10 @@ impl SampleAssembler {
         };
         self.seg = Some(s);
         self.stats.segments += 1;
-        if self.next_k > 0 {
-            on(Assembled::SegmentStart { k: self.next_k });
-        }
+        on(Assembled::SegmentStart {
+            k: self.next_k,
+            cause,
+        });
         for (i, kind) in std::mem::take(&mut self.pending) {
             self.place_event(s, kind, i, on);
         }
@@ -333,214 +410,9 @@ impl SampleAssembler {
     }
 }
 
-/// Record channels in order: throttle, then the measured channels with their SAMPLE flag.
-pub const CHANNELS: [(&str, &str, SampleFlags); 6] = [
-    (names::THROTTLE, "1", SampleFlags(0)),
-    (names::THRUST, "N", SampleFlags::THRUST_VALID),
-    (names::TORQUE, "N·m", SampleFlags::TORQUE_VALID),
-    (names::RPM, "rev/min", SampleFlags::RPM_VALID),
-    (names::VOLTAGE, "V", SampleFlags::VOLTAGE_VALID),
-    (names::CURRENT, "A", SampleFlags::CURRENT_VALID),
-];
+mod builder;
 
-/// One sample's values in [`CHANNELS`] order; `None` = not measured.
-pub type Values = [Option<f64>; 6];
-
-/// The values of a SAMPLE, per its `*_VALID` flags (throttle is always valid).
-pub fn sample_values(s: &Sample) -> Values {
-    [
-        Some(s.throttle_fraction()),
-        s.thrust().map(f64::from),
-        s.torque().map(f64::from),
-        s.rotor_rpm().map(f64::from),
-        s.voltage().map(f64::from),
-        s.current().map(f64::from),
-    ]
-}
-
-/// Counters of the record building.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
-pub struct BuildStats {
-    /// Samples whose recorded channels were not all valid and finite: marked missing.
-    pub invalid_samples: u64,
-    /// SAMPLEs without THRUST_FRESH: the load cell's value was held, not newly converted.
-    pub thrust_held: u64,
-    /// Device frames lost on the link, from jumps of the 16-bit `seq` between successive
-    /// device frames (restarted by a HELLO with a new `boot_id`). Sample-index gaps without a
-    /// `seq` jump were dropped by the device itself.
-    pub link_frames_lost: u64,
-}
-
-/// Builds a [`Record`] from frames (or generic points), streaming.
-///
-/// The channel set is fixed by the first sample: throttle plus every channel valid in it.
-/// A later sample where one of these is not valid (or not finite) is marked missing as a
-/// whole (the record allows NaN only at missing samples) and counted in `invalid_samples`.
-#[derive(Debug, Clone, Default)]
-pub struct RecordBuilder {
-    asm: SampleAssembler,
-    store: Store,
-    last_seq: Option<u16>,
-    boot_id: Option<u32>,
-}
-
-/// The growing record columns.
-#[derive(Debug, Clone, Default)]
-struct Store {
-    present: Option<[bool; 6]>,
-    data: [Vec<f64>; 6],
-    missing: Vec<bool>,
-    events: Vec<RecordEvent>,
-    t0_us: Option<u64>,
-    stats: BuildStats,
-}
-
-impl RecordBuilder {
-    /// A new builder.
-    pub fn new(opts: AssembleOptions) -> Self {
-        Self {
-            asm: SampleAssembler::new(opts),
-            ..Self::default()
-        }
-    }
-
-    /// The assembler (for its counters and `dt_s`).
-    pub fn assembler(&self) -> &SampleAssembler {
-        &self.asm
-    }
-
-    /// Record-building counters.
-    pub fn stats(&self) -> &BuildStats {
-        &self.store.stats
-    }
-
-    /// Samples so far (missing ones included).
-    pub fn len(&self) -> usize {
-        self.store.missing.len()
-    }
-
-    /// True before the first sample.
-    pub fn is_empty(&self) -> bool {
-        self.store.missing.is_empty()
-    }
-
-    /// Feed one decoded frame (SAMPLE, HELLO and EVENT matter; others are ignored).
-    pub fn push_frame(&mut self, f: &Frame) {
-        if f.msg.is_command() {
-            return; // a host frame (an echo, a loopback): not part of the device's stream
-        }
-        if let Message::Hello(h) = &f.msg {
-            if self.boot_id.is_some_and(|b| b != h.boot_id) {
-                self.last_seq = None;
-            }
-            self.boot_id = Some(h.boot_id);
-        }
-        if let Some(last) = self.last_seq {
-            let jump = f.seq.wrapping_sub(last);
-            // A jump of half the range or more is a restart, not a loss.
-            if (2..0x8000).contains(&jump) {
-                self.store.stats.link_frames_lost += (jump - 1) as u64;
-            }
-        }
-        self.last_seq = Some(f.seq);
-        match &f.msg {
-            Message::Sample(s) => {
-                if !s.flags.contains(SampleFlags::THRUST_FRESH) {
-                    self.store.stats.thrust_held += 1;
-                }
-                self.push_point(s.sample_index, s.t_us, sample_values(s));
-            }
-            Message::Hello(h) => self.asm.hello(h.boot_id, h.sample_rate_hz),
-            Message::Event(e) => {
-                let kind = match e.code {
-                    EventCode::ImpulseStart => RecordEventKind::ImpulseStart,
-                    EventCode::ImpulseEnd => RecordEventKind::ImpulseEnd,
-                    EventCode::WatchdogTrip => RecordEventKind::WatchdogTrip,
-                    _ => return,
-                };
-                let store = &mut self.store;
-                self.asm.event(kind, e.sample_index, &mut |a| store.put(a));
-            }
-            _ => {}
-        }
-    }
-
-    /// Feed one point: device index, device clock (µs) and values.
-    pub fn push_point(&mut self, sample_index: u32, t_us: u32, values: Values) {
-        let store = &mut self.store;
-        self.asm
-            .sample(sample_index, t_us, values, &mut |a| store.put(a));
-    }
-
-    /// The record so far. Errors: no sample, or no sample period known.
-    pub fn finish(self) -> Result<(Record, AssembleStats, BuildStats), IngestError> {
-        let mut st = self.store;
-        let present = st.present.ok_or(IngestError::NoSamples)?;
-        let dt_s = self.asm.dt_s().ok_or(IngestError::NoTimebase)?;
-        if !(dt_s.is_finite() && dt_s > 0.0) {
-            return Err(IngestError::BadSamplePeriod(dt_s));
-        }
-        let len = st.missing.len();
-        // Events may point past the last sample received (an edge announced, then the stream
-        // ended): those cannot be placed.
-        let before = st.events.len();
-        st.events.retain(|e| e.sample < len);
-        let unplaced = (before - st.events.len()) as u64;
-        let mut stats = *self.asm.stats();
-        stats.events -= unplaced;
-        stats.events_dropped += unplaced;
-        st.events.sort_by_key(|e| e.sample);
-        let channels = CHANNELS
-            .iter()
-            .zip(st.data)
-            .zip(present)
-            .filter(|(_, p)| *p)
-            .map(|(((name, unit, _), data), _)| Channel {
-                name: name.to_string(),
-                unit: unit.to_string(),
-                data,
-            })
-            .collect();
-        let record = Record {
-            dt_s,
-            t0_s: st.t0_us.unwrap_or(0) as f64 * 1e-6,
-            channels,
-            missing: st.missing,
-            events: st.events,
-        };
-        Ok((record, stats, st.stats))
-    }
-}
-
-impl Store {
-    fn put(&mut self, a: Assembled<Values>) {
-        match a {
-            Assembled::Sample { t_us, value, .. } => {
-                self.t0_us.get_or_insert(t_us);
-                let present = *self.present.get_or_insert(value.map(|v| v.is_some()));
-                let ok = (0..6).all(|c| !present[c] || value[c].is_some_and(f64::is_finite));
-                if !ok {
-                    self.stats.invalid_samples += 1;
-                }
-                for (d, v) in self.data.iter_mut().zip(value) {
-                    d.push(if ok { v.unwrap_or(f64::NAN) } else { f64::NAN });
-                }
-                self.missing.push(!ok);
-            }
-            Assembled::Missing { count, .. } => {
-                for d in &mut self.data {
-                    d.resize(d.len() + count, f64::NAN);
-                }
-                self.missing.resize(self.missing.len() + count, true);
-            }
-            Assembled::SegmentStart { k } => self.events.push(RecordEvent {
-                sample: k,
-                kind: RecordEventKind::SegmentStart,
-            }),
-            Assembled::Event { k, kind } => self.events.push(RecordEvent { sample: k, kind }),
-        }
-    }
-}
+pub use builder::{sample_values, BuildStats, RecordBuilder, Values, CHANNELS};
 
 #[cfg(test)]
 mod tests;

@@ -1,6 +1,6 @@
 //! Why bytes could not become a record.
 
-use crate::protocol::csv_columns::ConvError;
+use crate::protocol::csv::columns::ConvError;
 
 /// Why bytes could not become a record.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

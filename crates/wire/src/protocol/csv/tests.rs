@@ -1,3 +1,4 @@
+use super::columns::{ConvOptions, Quantity};
 use super::*;
 
 fn run(opts: CsvOptions, input: &[u8]) -> (Vec<String>, Vec<CsvRow>, CsvDecoder) {

@@ -1,6 +1,9 @@
 use super::*;
-use crate::protocol::message::{Event, Hello};
+use crate::protocol::message::{Event, EventCode, Hello, Message, Sample, SampleFlags};
 use crate::protocol::EscProtocol;
+use crate::protocol::Frame;
+use crate::record::{Record, RecordEvent, RecordEventKind};
+use crate::stream::IngestError;
 
 const ALL: SampleFlags = SampleFlags(0x3F | 1 << 10);
 
@@ -284,4 +287,67 @@ fn absurd_indices_cannot_blow_up_the_record() {
     assert!(a.large_gaps > 0);
     assert_eq!(a.samples, 100);
     assert_eq!(a.samples_lost, 50 * 998);
+}
+
+#[test]
+fn every_sample_says_what_happened_as_typed_items() {
+    let mut a = SampleAssembler::new(AssembleOptions {
+        max_gap_samples: 100,
+    });
+    let mut said = Vec::new();
+    let mut push = |a: &mut SampleAssembler, i: u32, t: u32| {
+        let mut items = Vec::new();
+        a.sample(i, t, (), &mut |x| items.push(x));
+        said.push(items);
+    };
+    assert_eq!(a.hello(7, 1000), HelloEffect::FirstBoot);
+    push(&mut a, 10, u32::MAX - 1500);
+    push(&mut a, 11, u32::MAX - 500);
+    push(&mut a, 11, u32::MAX - 500); // duplicate
+    push(&mut a, 14, 2500); // a gap of 2 and the clock wraps
+    push(&mut a, 500, 3500); // a gap too long to fill
+    push(&mut a, 3, 4500); // the index goes back
+    assert_eq!(
+        a.hello(8, 1000),
+        HelloEffect::Adopted,
+        "the reset was seen already"
+    );
+    assert_eq!(a.hello(8, 1000), HelloEffect::SameBoot);
+    assert_eq!(a.hello(9, 1000), HelloEffect::NewBoot);
+    push(&mut a, 0, 0);
+    use Assembled as A;
+    let sample = |k: usize, t_us: u64| A::Sample { k, t_us, value: () };
+    let start = |k: usize, cause: SegmentCause| A::SegmentStart { k, cause };
+    let t0 = u64::from(u32::MAX);
+    assert_eq!(
+        said,
+        vec![
+            vec![start(0, SegmentCause::First), sample(0, t0 - 1500)],
+            vec![sample(1, t0 - 500)],
+            vec![A::Duplicate],
+            vec![
+                A::ClockWrap,
+                A::Missing { k: 2, count: 2 },
+                sample(4, t0 + 2501)
+            ],
+            vec![
+                start(5, SegmentCause::GapTooLong { lost: 485 }),
+                sample(5, 3500)
+            ],
+            vec![start(6, SegmentCause::IndexBackwards), sample(6, 4500)],
+            vec![start(7, SegmentCause::NewBoot), sample(7, 0)],
+        ]
+    );
+    let s = a.stats();
+    assert_eq!(
+        (
+            s.samples_lost,
+            s.gaps,
+            s.large_gaps,
+            s.duplicates,
+            s.segments,
+            s.clock_wraps
+        ),
+        (487, 1, 1, 1, 4, 1)
+    );
 }

@@ -1,8 +1,11 @@
-//! Sample indices for CSV rows, which carry none (PROTOCOL.md §6 rows are `t_us,throttle,…`).
+//! Sample indices for CSV rows, which carry none (PROTOCOL.md §6 rows are `t_us,throttle,…`):
+//! the one placer of the project, used by the daemon's CSV link (live and `replay`) and by
+//! recording ingest (`identify`, through [`CsvStream`](super::csv_stream::CsvStream)), so that a
+//! recording replayed and the same recording identified place every row at the same index.
 //!
-//! The binary SAMPLE frame counts samples (`sample_index`, +1 per sample taken), so the daemon
-//! finds lost samples from index jumps. A CSV row has only its time, so the index is rebuilt
-//! from the time, relative to the previous row:
+//! The binary SAMPLE frame counts samples (`sample_index`, +1 per sample taken), so lost
+//! samples show as index jumps. A CSV row has only its time, so the index is rebuilt from the
+//! time, relative to the previous row:
 //!
 //! ```text
 //! index_0 = 0,   e_0 = t_0
@@ -31,8 +34,7 @@
 //! again; the index going back tells the tracker a new segment starts); a smaller step back is
 //! a row out of order, dropped and counted.
 
-use crate::ingest::clock::{Step, Unwrap32};
-use propid_wire::protocol::message::Sample;
+use super::clock::{Step, Unwrap32};
 
 /// Row intervals whose median gives the sample period when no HELLO announced the rate.
 pub const WARMUP_INTERVALS: usize = 16;
@@ -43,12 +45,23 @@ pub const RESET_BACKWARDS_US: i64 = 1_000_000;
 /// The phase tracker's correction is 1 / this of the residual per row.
 const PHASE_GAIN_INV: f64 = 16.0;
 
-/// A row waiting for its index: its unwrapped time, its own index if it had one, the sample.
+/// A row waiting for its index: its unwrapped time, its own index if it had one, its value.
 #[derive(Debug, Clone, Copy)]
-struct Held {
+struct Held<T> {
     t_us: u64,
     own_index: Option<u64>,
-    sample: Sample,
+    value: T,
+}
+
+/// A row with its place: what the placer hands on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placed<T> {
+    /// Sample index in the current numbering (as a device's `sample_index`, unwrapped).
+    pub index: u64,
+    /// The row's time, µs, unwrapped (its low 32 bits are what a device's `t_us` would be).
+    pub t_us: u64,
+    /// The row's value, as pushed.
+    pub value: T,
 }
 
 /// What happened to a row pushed into the placer.
@@ -64,21 +77,21 @@ pub enum Placement {
 
 /// Gives CSV rows sample indices (see the module documentation). Allocation-free after `new`.
 #[derive(Debug, Clone)]
-pub struct IndexPlacer {
+pub struct RowPlacer<T> {
     period_us: Option<f64>,
     clock: Unwrap32,
     /// The last placed row: its unwrapped time, its index, the smoothed time of that index.
     last: Option<(u64, u64, f64)>,
-    held: Vec<Held>,
+    held: Vec<Held<T>>,
 }
 
-impl Default for IndexPlacer {
+impl<T: Copy> Default for RowPlacer<T> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-impl IndexPlacer {
+impl<T: Copy> RowPlacer<T> {
     /// A placer with room for the warm-up rows.
     pub fn new() -> Self {
         Self {
@@ -105,7 +118,7 @@ impl IndexPlacer {
 
     /// The nominal rate announced by the bench (a HELLO line). Ignored once a period is in use,
     /// so every row of a numbering is placed with one period.
-    pub fn announce_rate(&mut self, rate_hz: u16, emit: &mut impl FnMut(Sample)) {
+    pub fn announce_rate(&mut self, rate_hz: u16, emit: &mut impl FnMut(Placed<T>)) {
         if self.period_us.is_none() && rate_hz > 0 {
             self.period_us = Some(1e6 / f64::from(rate_hz));
             self.release(emit);
@@ -113,7 +126,7 @@ impl IndexPlacer {
     }
 
     /// A new boot announced by the bench: the numbering starts again (after the held rows).
-    pub fn restart(&mut self, emit: &mut impl FnMut(Sample)) {
+    pub fn restart(&mut self, emit: &mut impl FnMut(Placed<T>)) {
         self.flush(emit);
         self.clock = Unwrap32::default();
         self.last = None;
@@ -122,13 +135,13 @@ impl IndexPlacer {
 
     /// Places one row: `t_us` its time (µs, as read; wrapped to 32 bits here), `own_index` an
     /// `idx` column if the row had one. Placed rows go to `emit` with their index and
-    /// unwrapped time (low 32 bits, as the wire carries them).
+    /// unwrapped time, in the order they were pushed.
     pub fn push(
         &mut self,
         t_us: u64,
         own_index: Option<u64>,
-        sample: Sample,
-        emit: &mut impl FnMut(Sample),
+        value: T,
+        emit: &mut impl FnMut(Placed<T>),
     ) -> Placement {
         let raw = t_us as u32;
         let mut placement = Placement::Accepted;
@@ -150,7 +163,7 @@ impl IndexPlacer {
         let held = Held {
             t_us: self.clock.value(),
             own_index,
-            sample,
+            value,
         };
         if self.period_us.is_some() {
             self.place(held, emit);
@@ -165,7 +178,7 @@ impl IndexPlacer {
     }
 
     /// End of input: rows still held are placed with the period their intervals give.
-    pub fn flush(&mut self, emit: &mut impl FnMut(Sample)) {
+    pub fn flush(&mut self, emit: &mut impl FnMut(Placed<T>)) {
         if self.period_us.is_none() && !self.held.is_empty() {
             self.period_us = measured_period(&self.held);
             if self.period_us.is_none() {
@@ -179,7 +192,7 @@ impl IndexPlacer {
         self.release(emit);
     }
 
-    fn release(&mut self, emit: &mut impl FnMut(Sample)) {
+    fn release(&mut self, emit: &mut impl FnMut(Placed<T>)) {
         for i in 0..self.held.len() {
             let h = self.held[i];
             self.place(h, emit);
@@ -187,7 +200,7 @@ impl IndexPlacer {
         self.held.clear();
     }
 
-    fn place(&mut self, h: Held, emit: &mut impl FnMut(Sample)) {
+    fn place(&mut self, h: Held<T>, emit: &mut impl FnMut(Placed<T>)) {
         let period = self.period_us.unwrap_or(f64::INFINITY);
         let t = h.t_us as f64;
         let (index, e) = match (h.own_index, self.last) {
@@ -205,16 +218,17 @@ impl IndexPlacer {
             }
         };
         self.last = Some((h.t_us, index, e));
-        let mut s = h.sample;
-        s.sample_index = index as u32;
-        s.t_us = h.t_us as u32;
-        emit(s);
+        emit(Placed {
+            index,
+            t_us: h.t_us,
+            value: h.value,
+        });
     }
 }
 
 /// The sample period measured on the held rows, µs (see the module documentation; `None`
 /// below two rows or when every interval is zero). The rows keep their order.
-fn measured_period(held: &[Held]) -> Option<f64> {
+fn measured_period<T>(held: &[Held<T>]) -> Option<f64> {
     let mut d = [0u64; WARMUP_INTERVALS];
     let n = held.len().saturating_sub(1).min(WARMUP_INTERVALS);
     for (k, w) in held.windows(2).take(n).enumerate() {
@@ -245,15 +259,15 @@ mod tests {
     use super::*;
 
     fn run(times: &[u64]) -> (Vec<(u32, u32)>, Vec<Placement>) {
-        let mut p = IndexPlacer::new();
+        let mut p = RowPlacer::new();
         let mut out = Vec::new();
         let mut how = Vec::new();
         for &t in times {
-            how.push(p.push(t, None, Sample::default(), &mut |s| {
-                out.push((s.sample_index, s.t_us))
+            how.push(p.push(t, None, (), &mut |s| {
+                out.push((s.index as u32, s.t_us as u32))
             }));
         }
-        p.flush(&mut |s| out.push((s.sample_index, s.t_us)));
+        p.flush(&mut |s| out.push((s.index as u32, s.t_us as u32)));
         (out, how)
     }
 
@@ -293,16 +307,13 @@ mod tests {
     #[test]
     fn a_slow_clock_does_not_drift_into_false_gaps() {
         // the bench's clock runs 0.3 % slow against the nominal 1 kHz announced in HELLO
-        let mut p = IndexPlacer::new();
+        let mut p = RowPlacer::new();
         let mut out = Vec::new();
         p.announce_rate(1000, &mut |s| out.push(s));
         for k in 0..5000u64 {
-            p.push(k * 997, None, Sample::default(), &mut |s| out.push(s));
+            p.push(k * 997, None, (), &mut |s| out.push(s));
         }
-        assert!(out
-            .iter()
-            .enumerate()
-            .all(|(k, s)| s.sample_index as usize == k));
+        assert!(out.iter().enumerate().all(|(k, s)| s.index as usize == k));
     }
 
     #[test]
@@ -332,13 +343,13 @@ mod tests {
 
     #[test]
     fn own_index_wins_and_short_inputs_are_placed_at_the_end() {
-        let mut p = IndexPlacer::new();
+        let mut p = RowPlacer::new();
         let mut out = Vec::new();
-        p.push(0, Some(7), Sample::default(), &mut |s| out.push(s));
-        p.push(2000, Some(9), Sample::default(), &mut |s| out.push(s));
+        p.push(0, Some(7), (), &mut |s| out.push(s));
+        p.push(2000, Some(9), (), &mut |s| out.push(s));
         assert!(out.is_empty(), "held during the warm-up");
         p.flush(&mut |s| out.push(s));
-        let idx: Vec<u32> = out.iter().map(|s| s.sample_index).collect();
+        let idx: Vec<u64> = out.iter().map(|s| s.index).collect();
         assert_eq!(idx, vec![7, 9]);
         let (one, _) = run(&[123]);
         assert_eq!(one, vec![(0, 123)]);

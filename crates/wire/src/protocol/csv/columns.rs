@@ -1,5 +1,6 @@
 //! CSV column names → canonical quantities and units (PROTOCOL.md §6), shared by the live
-//! CSV decoder and by file readers (exported logs of commercial stands).
+//! CSV decoder and by file readers (exported logs of commercial stands): the one alias table
+//! and the one quantity → name table ([`Quantity::name`]) of the project.
 //!
 //! A header name is normalised before lookup (see [`normalise`]): a UTF-8 BOM and surrounding
 //! space are dropped, letters lower-cased, `µ`/`μ` written `u`, `[`/`]` written `(`/`)`, and
@@ -37,17 +38,28 @@ pub enum Quantity {
 }
 
 impl Quantity {
-    /// Canonical channel name of the record (`None` for time and index, which are the time base).
-    pub fn channel_name(self) -> Option<&'static str> {
-        Some(match self {
+    /// The one name table of the dialect: the §6 name of the quantity's column in the
+    /// header-less order (`t_us,throttle,thrust_N,…`, plus `idx`), which for a channel is also
+    /// its canonical record name ([`names`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Time => "t_us",
+            Quantity::Index => "idx",
             Quantity::Throttle => names::THROTTLE,
             Quantity::Thrust => names::THRUST,
             Quantity::Torque => names::TORQUE,
             Quantity::Rpm => names::RPM,
             Quantity::Voltage => names::VOLTAGE,
             Quantity::Current => names::CURRENT,
-            Quantity::Time | Quantity::Index => return None,
-        })
+        }
+    }
+
+    /// Canonical channel name of the record (`None` for time and index, which are the time base).
+    pub fn channel_name(self) -> Option<&'static str> {
+        match self {
+            Quantity::Time | Quantity::Index => None,
+            q => Some(q.name()),
+        }
     }
 
     /// Canonical unit text.

@@ -1,0 +1,170 @@
+//! The operating-system side of the pty runner: opening a master/slave pair (close-on-exec,
+//! non-blocking), pointing `--link` at the slave, and waiting, reading and writing on the
+//! master without blocking.
+
+use std::os::fd::AsRawFd;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use serialport::{SerialPort, TTYPort};
+
+use crate::SimError;
+
+/// One pty pair: the master we keep, the slave path the host opens.
+pub(super) struct Link {
+    pub(super) master: TTYPort,
+    pub(super) path: PathBuf,
+}
+
+pub(super) fn open_link(link: Option<&Path>) -> Result<Link, SimError> {
+    let (master, slave) = TTYPort::pair().map_err(|e| SimError::Pty(e.to_string()))?;
+    let path = slave
+        .name()
+        .map(PathBuf::from)
+        .ok_or_else(|| SimError::Pty("the pty slave has no name".into()))?;
+    drop(slave);
+    set_cloexec(master.as_raw_fd())?;
+    set_nonblocking(master.as_raw_fd())?;
+    if let Some(l) = link {
+        point_link(l, &path)?;
+    }
+    Ok(Link { master, path })
+}
+
+/// Marks the master close-on-exec: `TTYPort::pair` opens it without, so every child process
+/// (a daemon started by the same process, a test's `propid run`) would inherit it, hold the
+/// pty open and never see the hang-up when the simulator closes its end.
+fn set_cloexec(fd: i32) -> Result<(), SimError> {
+    add_fcntl_flag(
+        fd,
+        (libc::F_GETFD, libc::F_SETFD),
+        libc::FD_CLOEXEC,
+        "making the pty master close-on-exec",
+    )
+}
+
+fn set_nonblocking(fd: i32) -> Result<(), SimError> {
+    add_fcntl_flag(
+        fd,
+        (libc::F_GETFL, libc::F_SETFL),
+        libc::O_NONBLOCK,
+        "making the pty master non-blocking",
+    )
+}
+
+/// Adds `flag` to the flags of `fd` that the fcntl commands `(get, set)` read and write
+/// (descriptor flags `F_GETFD`/`F_SETFD`, status flags `F_GETFL`/`F_SETFL`); `what` names the
+/// step in the error.
+fn add_fcntl_flag(
+    fd: i32,
+    (get, set): (libc::c_int, libc::c_int),
+    flag: libc::c_int,
+    what: &str,
+) -> Result<(), SimError> {
+    // SAFETY: fcntl on a descriptor we own; no memory is passed.
+    let flags = unsafe { libc::fcntl(fd, get) };
+    // SAFETY: as above.
+    if flags < 0 || unsafe { libc::fcntl(fd, set, flags | flag) } < 0 {
+        return Err(SimError::io(what, std::io::Error::last_os_error()));
+    }
+    Ok(())
+}
+
+/// Creates (or atomically replaces) the symlink `link -> target`. An existing file at `link`
+/// that is not a symlink is left alone and refused.
+pub fn point_link(link: &Path, target: &Path) -> Result<(), SimError> {
+    if let Ok(meta) = std::fs::symlink_metadata(link) {
+        if !meta.file_type().is_symlink() {
+            return Err(SimError::Pty(format!(
+                "--link {}: exists and is not a symlink",
+                link.display()
+            )));
+        }
+    }
+    let tmp = link.with_extension(format!("tmp{}", std::process::id()));
+    let _ = std::fs::remove_file(&tmp);
+    std::os::unix::fs::symlink(target, &tmp)
+        .map_err(|e| SimError::io(format!("creating symlink {}", tmp.display()), e))?;
+    std::fs::rename(&tmp, link)
+        .map_err(|e| SimError::io(format!("creating symlink {}", link.display()), e))
+}
+
+/// What `ppoll` said about the master.
+pub(super) enum Ready {
+    /// Nothing to read (or the wait timed out).
+    Nothing,
+    /// Host bytes are waiting.
+    Input,
+    /// Nobody has the slave open.
+    NoReader,
+}
+
+/// Waits up to `timeout` for the master to be readable (or hung up).
+pub(super) fn wait_master(fd: i32, timeout: Duration) -> Ready {
+    let mut pfd = libc::pollfd {
+        fd,
+        events: libc::POLLIN,
+        revents: 0,
+    };
+    let ts = libc::timespec {
+        tv_sec: timeout.as_secs() as libc::time_t,
+        tv_nsec: timeout.subsec_nanos() as libc::c_long,
+    };
+    // SAFETY: one valid pollfd, a valid timespec, no signal mask.
+    let n = unsafe { libc::ppoll(&mut pfd, 1, &ts, std::ptr::null()) };
+    if n <= 0 {
+        Ready::Nothing
+    } else if pfd.revents & libc::POLLIN != 0 {
+        Ready::Input
+    } else if pfd.revents & (libc::POLLHUP | libc::POLLERR) != 0 {
+        Ready::NoReader
+    } else {
+        Ready::Nothing
+    }
+}
+
+/// Non-blocking read; `Ok(0)` when nothing is there.
+pub(super) fn read_master(fd: i32, buf: &mut [u8]) -> std::io::Result<usize> {
+    // SAFETY: `buf` is valid for `buf.len()` bytes.
+    let n = unsafe { libc::read(fd, buf.as_mut_ptr().cast(), buf.len()) };
+    if n >= 0 {
+        return Ok(n as usize);
+    }
+    let e = std::io::Error::last_os_error();
+    match e.kind() {
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::Interrupted => Ok(0),
+        _ => Err(e),
+    }
+}
+
+/// Non-blocking write; `Ok(0)` when the pty buffer is full.
+pub(super) fn write_master(fd: i32, buf: &[u8]) -> std::io::Result<usize> {
+    // SAFETY: `buf` is valid for `buf.len()` bytes.
+    let n = unsafe { libc::write(fd, buf.as_ptr().cast(), buf.len()) };
+    if n >= 0 {
+        return Ok(n as usize);
+    }
+    let e = std::io::Error::last_os_error();
+    match e.kind() {
+        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::Interrupted => Ok(0),
+        _ => Err(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pty_master_is_close_on_exec() {
+        let link = open_link(None).unwrap();
+        // SAFETY: F_GETFD on a descriptor we own; no memory is passed.
+        let flags = unsafe { libc::fcntl(link.master.as_raw_fd(), libc::F_GETFD) };
+        assert!(flags >= 0);
+        assert_ne!(
+            flags & libc::FD_CLOEXEC,
+            0,
+            "children must not inherit the master"
+        );
+    }
+}
