@@ -203,3 +203,46 @@ fn replay_and_identify_place_every_csv_row_at_the_same_index() {
     assert_eq!(impulse_at, 250);
     assert_eq!(record.impulse_starts().collect::<Vec<_>>(), [250]);
 }
+
+/// `propid identify` and `propid diagnose` read files through the one loader: a CSV-stream
+/// recording goes to the same stream placer as above (not to the exported-log reader, which
+/// resamples by its time column), so the record they identify is the record `replay` places.
+#[test]
+fn the_file_loader_reads_a_csv_stream_recording_through_the_stream_placer() {
+    use propid::cli::load::{load, Origin, Request};
+    let bytes = recording();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bench.csv");
+    std::fs::write(&path, &bytes).unwrap();
+    let loaded = load(&path, &Request::default()).expect("the loader reads it");
+    assert!(matches!(loaded.origin, Origin::Tsp1(_)), "read as a stream");
+    let (record, _) = read_record(&bytes).unwrap();
+    assert_eq!(loaded.record.len(), record.len());
+    assert_eq!(loaded.record.missing, record.missing);
+    let a = &loaded.record.channel(names::THRUST).unwrap().data;
+    let b = &record.channel(names::THRUST).unwrap().data;
+    for (k, (x, y)) in a.iter().zip(b).enumerate() {
+        assert!(
+            x == y || (x.is_nan() && y.is_nan()),
+            "position {k}: {x} vs {y}"
+        );
+    }
+    // An exported log (a header, no checksums, no bench comments) stays with its time column.
+    let log = dir.path().join("export.csv");
+    let rows: String = (0..200)
+        .map(|k| {
+            format!(
+                "{},{},{}\n",
+                k as f64 * 0.01,
+                0.3,
+                1.0 + (k % 7) as f64 * 0.01
+            )
+        })
+        .collect();
+    std::fs::write(&log, format!("Time (s),throttle,thrust_N\n{rows}")).unwrap();
+    let loaded = load(&log, &Request::default()).expect("the log reads");
+    assert!(
+        matches!(loaded.origin, Origin::Csv(_)),
+        "read as an exported log"
+    );
+}

@@ -8,6 +8,7 @@ use crate::cli::CliError;
 use crate::ingest::csv_file::CsvSource;
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
+use propid_wire::protocol::detect::WireFormat;
 
 /// What `identify` works on.
 #[derive(Debug, Clone)]
@@ -112,7 +113,14 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
             (f.input, label, Some(steps.collect()))
         }
     };
-    let starts: Vec<usize> = rec.impulse_starts().collect();
+    // A CSV stream's pulses come from its throttle column, as on the live CSV link (its
+    // IMPULSE_START lines carry a time, not the sample the excursion shows in).
+    let csv_stream = matches!(&file.origin, Origin::Tsp1(s) if s.format == WireFormat::Csv);
+    let starts: Vec<usize> = if csv_stream {
+        Vec::new()
+    } else {
+        rec.impulse_starts().collect()
+    };
     let (format, output_names, rate_hz, tsp1, csv) = match file.origin {
         Origin::Tsp1(stats) => (
             "tsp1",
