@@ -45,6 +45,8 @@ pub mod pulses;
 pub mod report;
 pub mod sizing;
 pub mod statespace;
+pub mod static_map;
+pub mod step_response;
 pub mod svd;
 pub mod uncertainty;
 pub mod workspace;
