@@ -5,17 +5,19 @@
 //! seconds — handshake, arm, three operating points, one-sample pulses of alternating sign,
 //! identification after every K pulses — and prints each published model beside the
 //! simulator's true parameters, then the gain schedule. `--json` prints the daemon's JSON lines
-//! instead.
+//! instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
+//! they are published, and their bytes; nothing is parsed back.
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::run::daemon_error;
 use super::CliError;
 use crate::daemon::identify::CoreIdentifier;
+use crate::daemon::line::{Line, ScheduleRow, WindowModel};
 use crate::daemon::plan;
+use crate::daemon::publish::Tap;
 use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::SerialSource;
 use crate::daemon::{Config, Publisher, Shutdown};
@@ -67,41 +69,46 @@ fn demo_config(sim: &SimConfig) -> Config {
 /// Runs `propid demo`.
 pub fn run(args: Args) -> Result<(), CliError> {
     let sim = match &args.sim_config {
-        Some(p) => SimConfig::load(p).map_err(|e| CliError::Config(e.to_string()))?,
+        Some(p) => SimConfig::load(p)?,
         None => demo_sim(),
     };
     let cfg = demo_config(&sim);
-    let shutdown = Shutdown::install().map_err(daemon_error)?;
-    let handle = SimHandle::spawn(sim.clone(), RunOptions::default())
-        .map_err(|e| CliError::Device(format!("simulated stand: {e}")))?;
+    let shutdown = Shutdown::install()?;
+    let handle =
+        SimHandle::spawn(sim.clone(), RunOptions::default()).map_err(CliError::SimulatedStand)?;
     let port = handle.path().display().to_string();
     eprintln!(
         "propid demo: simulated stand on {port} ({} Hz); daemon running ~10 s ...",
         sim.stand.sample_rate_hz
     );
     let source = SerialSource::open(&port, cfg.device.baud, cfg.device.read_timeout)
-        .map_err(|e| CliError::Device(e.to_string()))?;
-    let (publisher, lines) = Publisher::open(&cfg.publish)
-        .map_err(daemon_error)?
-        .with_capture();
-    let printer = spawn_printer(lines.clone(), args.json, sim.plant.clone());
+        .map_err(CliError::Serial)?;
+    let publisher = Publisher::open(&cfg.publish)?;
+    if !args.json {
+        println!(
+            "{:>6} {:>8} {:>22} {:>20} {:>22}",
+            "t_s", "throttle", "fn_hz (true)", "zeta (true)", "dc_gain N (true)"
+        );
+    }
+    let schedule = Arc::new(Mutex::new(None));
+    let publisher = publisher.with_tap(printer(args.json, sim.plant.clone(), schedule.clone()));
     let parts = RunParts {
         source: Box::new(source),
-        plan: Some(plan::from_experiment(sim.experiment.clone()).map_err(daemon_error)?),
-        identifier: CoreIdentifier::new(&cfg).map_err(daemon_error)?,
+        plan: Some(plan::from_experiment(sim.experiment.clone())?),
+        identifier: CoreIdentifier::new(&cfg)?,
         publisher,
         record: None,
         shutdown,
     };
     let result = runner::run(&cfg, parts);
     let _ = handle.stop();
-    let _ = printer.join();
-    let summary = result.map_err(daemon_error)?;
-    let lines = lines.lock().map(|l| l.clone()).unwrap_or_default();
+    let summary = result?;
     if args.json {
         return Ok(());
     }
-    print_schedule(&lines, &sim.plant);
+    if let Some(rows) = schedule.lock().ok().and_then(|mut s| s.take()) {
+        print_schedule(&rows, &sim.plant);
+    }
     println!(
         "\n{} samples, {} lost, {} frames dropped, {} models in {:.1} s",
         summary.link.samples,
@@ -113,81 +120,56 @@ pub fn run(args: Args) -> Result<(), CliError> {
     Ok(())
 }
 
-/// Prints each line as it is published (models as table rows, or JSON with `--json`).
-fn spawn_printer(
-    lines: Arc<Mutex<Vec<String>>>,
-    json: bool,
-    plant: PlantConfig,
-) -> std::thread::JoinHandle<()> {
-    std::thread::spawn(move || {
-        let mut shown = 0;
-        if !json {
-            println!(
-                "{:>6} {:>8} {:>22} {:>20} {:>22}",
-                "t_s", "throttle", "fn_hz (true)", "zeta (true)", "dc_gain N (true)"
-            );
+/// Prints each line as it is published (models as table rows, or every line's JSON with
+/// `--json`) and keeps the gain schedule for the end.
+fn printer(json: bool, plant: PlantConfig, schedule: Arc<Mutex<Option<Vec<ScheduleRow>>>>) -> Tap {
+    Box::new(move |line: &Line<'_>, text: &str| {
+        let mut out = std::io::stdout().lock();
+        if json {
+            let _ = writeln!(out, "{text}");
         }
-        loop {
-            let (new, done) = match lines.lock() {
-                Ok(l) => (
-                    l[shown..].to_vec(),
-                    l.last().is_some_and(|x| x.contains("\"type\":\"stats\"")),
-                ),
-                Err(_) => return,
-            };
-            shown += new.len();
-            let mut out = std::io::stdout().lock();
-            for l in &new {
-                if json {
-                    let _ = writeln!(out, "{l}");
-                } else if let Ok(v) = serde_json::from_str::<serde_json::Value>(l) {
-                    if v["type"] == "model" {
-                        let _ = writeln!(out, "{}", model_row(&v, &plant));
-                    }
+        match line {
+            Line::Model(m) if !json => {
+                let _ = writeln!(out, "{}", model_row(m, &plant));
+            }
+            Line::Schedule(rows) => {
+                if let Ok(mut s) = schedule.lock() {
+                    *s = Some(rows.to_vec());
                 }
             }
-            let _ = out.flush();
-            if done {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(100));
+            _ => {}
         }
+        let _ = out.flush();
     })
 }
 
-/// `value ± sd` of a model field.
-fn with_sd(v: &serde_json::Value, key: &str) -> String {
-    let x = v[key].as_f64().unwrap_or(f64::NAN);
-    match v["uncertainty"][key].as_f64() {
-        Some(sd) => format!("{x:.3} ± {sd:.3}"),
-        None => format!("{x:.3}"),
+/// `value ± sd`, the sd when it is known.
+fn with_sd(x: f64, sd: f64) -> String {
+    if sd.is_finite() {
+        format!("{x:.3} ± {sd:.3}")
+    } else {
+        format!("{x:.3}")
     }
 }
 
 /// One table row: identified values beside the true ones.
-fn model_row(v: &serde_json::Value, p: &PlantConfig) -> String {
+fn model_row(m: &WindowModel, p: &PlantConfig) -> String {
+    let (r, u) = (&m.report, &m.report.uncertainty);
     format!(
         "{:>6.2} {:>8.3} {:>14} ({:>5.2}) {:>12} ({:>5.3}) {:>14} ({:>5.2})",
-        v["t_s"].as_f64().unwrap_or(f64::NAN),
-        v["operating_point"].as_f64().unwrap_or(f64::NAN),
-        with_sd(v, "fn_hz"),
+        m.window.t_s,
+        m.window.operating_point,
+        with_sd(r.fn_hz, u.fn_hz),
         p.fn_hz,
-        with_sd(v, "zeta"),
+        with_sd(r.zeta, u.zeta),
         p.zeta,
-        with_sd(v, "dc_gain"),
+        with_sd(r.dc_gain.get(0), u.dc_gain.get(0)),
         p.gain_n_per_throttle,
     )
 }
 
 /// The gain schedule (the last model per operating point).
-fn print_schedule(lines: &[String], p: &PlantConfig) {
-    let Some(sched) = lines
-        .iter()
-        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-        .find(|v| v["type"] == "schedule")
-    else {
-        return;
-    };
+fn print_schedule(rows: &[ScheduleRow], p: &PlantConfig) {
     println!(
         "\ngain schedule (true plant: fn {} Hz, zeta {}, gain {} N per unit throttle):",
         p.fn_hz, p.zeta, p.gain_n_per_throttle
@@ -196,14 +178,13 @@ fn print_schedule(lines: &[String], p: &PlantConfig) {
         "{:>8} {:>8} {:>8} {:>10}",
         "throttle", "fn_hz", "zeta", "dc_gain"
     );
-    for m in sched["models"].as_array().into_iter().flatten() {
-        let f = |k: &str| m[k].as_f64().unwrap_or(f64::NAN);
+    for m in rows {
         println!(
             "{:>8.3} {:>8.3} {:>8.3} {:>10.3}",
-            f("operating_point"),
-            f("fn_hz"),
-            f("zeta"),
-            f("dc_gain")
+            m.operating_point,
+            m.fn_hz,
+            m.zeta,
+            m.dc_gain.get(0)
         );
     }
 }

@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 
 use super::load::{self as shared, steps_from_response, LoadedFile, Request};
-use super::CliError;
+use super::{CliError, UsageError};
 use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
 use propid_wire::record::names;
 
@@ -61,25 +61,21 @@ pub struct Signals {
 /// Runs `propid diagnose`.
 pub fn run(args: Args) -> Result<(), CliError> {
     if !(0.3..=0.9).contains(&args.estimation_fraction) {
-        return Err(CliError::Usage(format!(
-            "--estimation-fraction {} is outside 0.3..0.9",
-            args.estimation_fraction
-        )));
+        return Err(UsageError::EstimationFraction(args.estimation_fraction).into());
     }
     let s = load(&args)?;
     let opts = diagnose::Options {
         estimation_fraction: args.estimation_fraction,
         ..Default::default()
     };
-    let d =
-        diagnose::diagnose(s.dt_s, &s.u, &s.y, s.voltage.as_deref(), &opts).map_err(diag_error)?;
+    let d = diagnose::diagnose(s.dt_s, &s.u, &s.y, s.voltage.as_deref(), &opts)?;
     if let Some(dir) = &args.report {
         let title = args.file.display().to_string();
         report::write(dir, &title, &s.output_name, &d)
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
     }
     if args.json {
-        let text = serde_json::to_string(&d).map_err(|e| CliError::Input(format!("JSON: {e}")))?;
+        let text = serde_json::to_string(&d).map_err(CliError::DiagnosisJson)?;
         println!("{text}");
     } else {
         print_summary(&args, &s, &d);
@@ -87,13 +83,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
     Ok(())
 }
 
-fn diag_error(e: DiagnoseError) -> CliError {
-    match e {
+/// Whether a diagnosis error is the input's fault (exit 3) rather than the data not supporting
+/// an identification (exit 4).
+pub(crate) fn is_input_error(e: &DiagnoseError) -> bool {
+    matches!(
+        e,
         DiagnoseError::MissingChannel(_)
-        | DiagnoseError::NonFinite { .. }
-        | DiagnoseError::BadSamplePeriod(_) => CliError::Input(e.to_string()),
-        _ => CliError::Identification(e.to_string()),
-    }
+            | DiagnoseError::NonFinite { .. }
+            | DiagnoseError::BadSamplePeriod(_)
+    )
 }
 
 fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
@@ -174,11 +172,10 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
     let (u, input_name) = match &file.input {
         Some(n) => (file.data(n), n.clone()),
         None => {
-            let f = steps_from_response(&y).map_err(|_| {
-                CliError::Identification(format!(
-                    "{}: no input column and no step found in the response (give --input NAME)",
-                    file.name
-                ))
+            let f = steps_from_response(&y).map_err(|cause| CliError::NoInput {
+                file: file.name.clone(),
+                cause,
+                hint: "give --input NAME",
             })?;
             (f.input, "steps found from the response".to_string())
         }

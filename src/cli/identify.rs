@@ -19,7 +19,7 @@ mod summary;
 use std::path::PathBuf;
 
 use super::CliError;
-use propid_numerics::okid::select::{identify_any_sized, AnyError, AnyInput, HankelSize};
+use propid_numerics::okid::select::{identify_any_sized, AnyInput, HankelSize};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::svd::SvdChoice;
@@ -104,23 +104,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
         missing: &loaded.missing,
         pulse_starts: loaded.pulse_starts.as_deref(),
     };
-    let model = identify_any_sized(&input, &ident, &OkidOptions::default(), args.hankel)
-        .map_err(ident_error)?;
+    let model = identify_any_sized(&input, &ident, &OkidOptions::default(), args.hankel)?;
     let ops = operating_points(&input, &ident, &OpOptions::default());
     let out = summary::Output::new(&loaded, &model, &ops);
     if args.json {
-        println!(
-            "{}",
-            out.json().map_err(|e| CliError::Input(e.to_string()))?
-        );
+        println!("{}", out.json().map_err(CliError::Json)?);
     } else {
         print!("{}", out.human());
     }
     Ok(())
-}
-
-fn ident_error(e: AnyError) -> CliError {
-    CliError::Identification(e.to_string())
 }
 
 #[cfg(test)]

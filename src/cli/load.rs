@@ -15,12 +15,49 @@
 
 use std::path::Path;
 
-use super::CliError;
-use crate::ingest::csv_file::{read_csv, CsvFileOptions, CsvSource};
+use super::{CliError, UsageError};
+use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource};
 use crate::ingest::steps::{find_steps, StepFinding};
-use crate::ingest::{read_record_with, IngestOptions, IngestStats};
+use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
 use propid_wire::protocol::detect::{detect, Detection, WireFormat};
 use propid_wire::record::{names, Record};
+
+/// Why a readable file could not be read as asked (exit 3); every message starts with the file.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// The file has no byte.
+    #[error("{file}: the file is empty")]
+    Empty {
+        /// The file as given.
+        file: String,
+    },
+    /// A binary TSP/1 recording that does not decode into a record.
+    #[error("{file}: {source}")]
+    Recording {
+        /// The file as given.
+        file: String,
+        /// The ingest error.
+        source: IngestError,
+    },
+    /// A channel asked for is not in the recording.
+    #[error("{file}: no channel {want}; the recording has {}", .have.join(", "))]
+    NoChannel {
+        /// The file as given.
+        file: String,
+        /// The channel asked for.
+        want: String,
+        /// The channels the recording has.
+        have: Vec<String>,
+    },
+    /// A CSV file that does not read as asked.
+    #[error("{file}: {source}")]
+    Csv {
+        /// The file as given.
+        file: String,
+        /// The CSV reader's error.
+        source: CsvFileError,
+    },
+}
 
 /// What to read from a file (the options `identify` and `diagnose` share).
 #[derive(Debug, Clone, Default)]
@@ -83,7 +120,7 @@ pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
     let name = file.display().to_string();
     let bytes = std::fs::read(file).map_err(|e| CliError::io(format!("reading {name}"), e))?;
     if bytes.is_empty() {
-        return Err(CliError::Input(format!("{name}: the file is empty")));
+        return Err(LoadError::Empty { file: name }.into());
     }
     match detect(&bytes, true) {
         Detection::Format(WireFormat::Binary) => load_tsp(req, name, &bytes),
@@ -98,18 +135,19 @@ fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
         fs_hz: req.fs_hz,
         ..IngestOptions::default()
     };
-    let (record, stats) =
-        read_record_with(bytes, &opts).map_err(|e| CliError::Input(format!("{name}: {e}")))?;
+    let (record, stats) = match read_record_with(bytes, &opts) {
+        Ok(r) => r,
+        Err(source) => return Err(LoadError::Recording { file: name, source }.into()),
+    };
     let present = |want: &str| -> Result<String, CliError> {
         match record.channel(want) {
             Some(_) => Ok(want.to_string()),
-            None => {
-                let have: Vec<&str> = record.channels.iter().map(|c| c.name.as_str()).collect();
-                Err(CliError::Input(format!(
-                    "{name}: no channel {want}; the recording has {}",
-                    have.join(", ")
-                )))
+            None => Err(LoadError::NoChannel {
+                file: name.clone(),
+                want: want.to_string(),
+                have: record.channels.iter().map(|c| c.name.clone()).collect(),
             }
+            .into()),
         }
     };
     let input = present(req.input.unwrap_or(names::THROTTLE))?;
@@ -137,7 +175,7 @@ fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
     let text = String::from_utf8_lossy(bytes);
     let esc_us = match req.esc_us {
         Some([lo, hi]) => Some((*lo, *hi)),
-        Some(_) => return Err(CliError::Usage("--esc-us takes MIN,MAX".into())),
+        Some(_) => return Err(UsageError::EscUs.into()),
         None => None,
     };
     let read = |outputs: Vec<String>| {
@@ -166,10 +204,10 @@ fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
             let extra = f.outputs.pop();
             (f, extra)
         }
-        None => (
-            read(req.outputs.to_vec()).map_err(|e| CliError::Input(format!("{name}: {e}")))?,
-            None,
-        ),
+        None => match read(req.outputs.to_vec()) {
+            Ok(f) => (f, None),
+            Err(source) => return Err(LoadError::Csv { file: name, source }.into()),
+        },
     };
     Ok(LoadedFile {
         name,
@@ -182,11 +220,13 @@ fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
 }
 
 /// Why no input could be found from the response.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum NoSteps {
     /// Fewer finite samples than [`find_steps`] needs.
+    #[error("too short to find steps in")]
     TooShort,
     /// The response has no step.
+    #[error("no step found in the response")]
     NoneFound,
 }
 
@@ -253,9 +293,11 @@ mod tests {
         let empty = write(dir.path(), "e.csv", "");
         let e = load(&empty, &Request::default()).unwrap_err();
         assert!(
-            matches!(&e, CliError::Input(m) if m.ends_with("the file is empty")),
+            matches!(&e, CliError::Load(LoadError::Empty { file }) if file.ends_with("e.csv")),
             "{e}"
         );
+        assert!(e.to_string().ends_with("e.csv: the file is empty"), "{e}");
+        assert_eq!(e.exit_code(), 3);
         let good = write(dir.path(), "g.csv", &csv(false));
         let bad_esc = [1000.0];
         let req = Request {
@@ -263,14 +305,18 @@ mod tests {
             ..Request::default()
         };
         let e = load(&good, &req).unwrap_err();
-        assert!(matches!(e, CliError::Usage(_)), "{e}");
+        assert!(matches!(e, CliError::Usage(UsageError::EscUs)), "{e}");
+        assert_eq!(e.exit_code(), 2);
         let outputs = ["rpm".to_string()];
         let req = Request {
             outputs: &outputs,
             ..Request::default()
         };
         let e = load(&good, &req).unwrap_err();
-        assert!(matches!(&e, CliError::Input(m) if m.contains("g.csv") && m.contains("rpm")));
+        assert!(matches!(&e, CliError::Load(LoadError::Csv { .. })), "{e}");
+        let m = e.to_string();
+        assert!(m.contains("g.csv") && m.contains("rpm"), "{m}");
+        assert_eq!(e.exit_code(), 3);
         let e = load(&dir.path().join("absent.csv"), &Request::default()).unwrap_err();
         assert_eq!(e.exit_code(), 7, "{e}");
     }

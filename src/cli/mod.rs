@@ -1,6 +1,6 @@
 //! The subcommands of the `propid` binary. Each module holds its clap `Args` and a `run`
-//! function; errors from every layer are mapped to a [`CliError`], which `main` turns into a
-//! message on stderr and an exit code.
+//! function; errors from every layer arrive as a [`CliError`] holding the layer's typed error,
+//! which `main` turns into a message on stderr and an exit code ([`CliError::exit_code`]).
 
 pub mod demo;
 pub mod diagnose;
@@ -11,26 +11,78 @@ pub mod run;
 pub mod sim;
 pub mod walkthrough;
 
-/// What went wrong, by the class of cause the user has to act on. Each class has its own exit
-/// code (see [`CliError::exit_code`]).
+use crate::daemon::source::SourceError;
+use crate::daemon::{ConfigError, DaemonError};
+use crate::diagnose::DiagnoseError;
+use load::{LoadError, NoSteps};
+use propid_numerics::okid::select::AnyError;
+use propid_sim::SimError;
+use walkthrough::WalkthroughError;
+
+/// What went wrong: one variant per typed cause, each in the class of cause the user has to act
+/// on ([`ExitClass`]), which gives the exit code. The messages are the layers' own, with the
+/// context the command adds.
 #[derive(Debug, thiserror::Error)]
 pub enum CliError {
-    /// The command line is wrong (exit 2).
-    #[error("{0}")]
-    Usage(String),
-    /// An input file or stream is unreadable or has bad content (exit 3).
-    #[error("{0}")]
-    Input(String),
-    /// The data does not support an identification (exit 4).
-    #[error("{0}")]
-    Identification(String),
-    /// The configuration is refused (exit 5).
-    #[error("{0}")]
-    Config(String),
-    /// The stand (serial link, device) failed (exit 6).
-    #[error("{0}")]
-    Device(String),
-    /// Reading or writing a file failed (exit 7).
+    /// The command line is wrong.
+    #[error(transparent)]
+    Usage(#[from] UsageError),
+    /// A file could not be read as the command asked (unreadable: [`CliError::Io`]).
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    /// A recording to replay could not be opened.
+    #[error(transparent)]
+    Recording(SourceError),
+    /// A result could not be written as JSON.
+    #[error(transparent)]
+    Json(serde_json::Error),
+    /// The diagnosis could not be written as JSON.
+    #[error("JSON: {0}")]
+    DiagnosisJson(#[source] serde_json::Error),
+    /// The identification refused the data.
+    #[error(transparent)]
+    Identify(#[from] AnyError),
+    /// A file without an input column is too short to find steps in.
+    #[error("{file}: too short to find steps in")]
+    StepsTooShort {
+        /// The file as given.
+        file: String,
+    },
+    /// A file without an input column has no step to build the input from.
+    #[error("{file}: no input column and no step found in the response ({hint})")]
+    NoInput {
+        /// The file as given.
+        file: String,
+        /// Why no step was found.
+        cause: NoSteps,
+        /// What the user can do.
+        hint: &'static str,
+    },
+    /// The diagnosis refused the data (bad input, or no identification).
+    #[error(transparent)]
+    Diagnose(#[from] DiagnoseError),
+    /// The walkthrough could not be derived or drawn.
+    #[error(transparent)]
+    Walkthrough(#[from] WalkthroughError),
+    /// The daemon's configuration was refused.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// The simulated stand's configuration was refused.
+    #[error(transparent)]
+    SimConfig(#[from] propid_sim::ConfigError),
+    /// The simulated stand failed (configuration, pseudo-terminal or I/O).
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    /// The in-process simulated stand of `propid demo` could not start.
+    #[error("simulated stand: {0}")]
+    SimulatedStand(#[source] SimError),
+    /// The stand's serial port could not be opened.
+    #[error(transparent)]
+    Serial(SourceError),
+    /// The daemon stopped with an error.
+    #[error("{}", daemon_message(.0))]
+    Daemon(#[from] DaemonError),
+    /// Reading or writing a file failed.
     #[error("{context}: {source}")]
     Io {
         /// What was being done.
@@ -40,17 +92,80 @@ pub enum CliError {
     },
 }
 
+/// The class of a cause: what the user has to act on, and the exit code (README).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ExitClass {
+    /// The command line is wrong (exit 2).
+    Usage = 2,
+    /// An input file or stream is unreadable or has bad content (exit 3).
+    Input = 3,
+    /// The data does not support an identification (exit 4).
+    Identification = 4,
+    /// The configuration is refused (exit 5).
+    Config = 5,
+    /// The stand (serial link, device) failed (exit 6).
+    Device = 6,
+    /// Reading or writing a file failed (exit 7).
+    Io = 7,
+}
+
+/// A wrong command line, by option.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum UsageError {
+    /// `--estimation-fraction` outside 0.3..0.9.
+    #[error("--estimation-fraction {0} is outside 0.3..0.9")]
+    EstimationFraction(f64),
+    /// `--seconds` not a positive number.
+    #[error("--seconds {0}: must be > 0")]
+    Seconds(f64),
+    /// `--record` without `--seconds`.
+    #[error("--record needs --seconds S")]
+    RecordNeedsSeconds,
+    /// `--esc-us` without exactly two values.
+    #[error("--esc-us takes MIN,MAX")]
+    EscUs,
+}
+
 impl CliError {
+    /// The class of the cause.
+    pub fn class(&self) -> ExitClass {
+        match self {
+            CliError::Usage(_) => ExitClass::Usage,
+            CliError::Load(_)
+            | CliError::Recording(_)
+            | CliError::Json(_)
+            | CliError::DiagnosisJson(_) => ExitClass::Input,
+            CliError::Diagnose(e) if diagnose::is_input_error(e) => ExitClass::Input,
+            CliError::Identify(_)
+            | CliError::StepsTooShort { .. }
+            | CliError::NoInput { .. }
+            | CliError::Diagnose(_)
+            | CliError::Walkthrough(_) => ExitClass::Identification,
+            CliError::Config(_) | CliError::SimConfig(_) => ExitClass::Config,
+            CliError::Sim(e) => match e {
+                SimError::Config(_) | SimError::Plant(_) | SimError::Experiment(_) => {
+                    ExitClass::Config
+                }
+                SimError::Pty(_) => ExitClass::Device,
+                SimError::Io { .. } => ExitClass::Io,
+            },
+            CliError::SimulatedStand(_) | CliError::Serial(_) => ExitClass::Device,
+            CliError::Daemon(e) => match e {
+                DaemonError::Config(_) => ExitClass::Config,
+                DaemonError::Source(_) | DaemonError::LinkFailed { .. } => ExitClass::Device,
+                DaemonError::Identify(_) => ExitClass::Identification,
+                DaemonError::Io { .. }
+                | DaemonError::Serialize(_)
+                | DaemonError::Signal(_)
+                | DaemonError::ThreadPanicked { .. } => ExitClass::Io,
+            },
+            CliError::Io { .. } => ExitClass::Io,
+        }
+    }
+
     /// The process exit code for this error.
     pub fn exit_code(&self) -> i32 {
-        match self {
-            CliError::Usage(_) => 2,
-            CliError::Input(_) => 3,
-            CliError::Identification(_) => 4,
-            CliError::Config(_) => 5,
-            CliError::Device(_) => 6,
-            CliError::Io { .. } => 7,
-        }
+        self.class() as i32
     }
 
     /// An I/O error with what was being done.
@@ -58,6 +173,94 @@ impl CliError {
         CliError::Io {
             context: context.into(),
             source,
+        }
+    }
+}
+
+/// A daemon error as `propid` reports it: a failed identification set-up by the core's message,
+/// a bug (serialisation, signal handler, panicked thread) prefixed with `propid: `, the rest by
+/// the daemon's own message.
+fn daemon_message(e: &DaemonError) -> String {
+    match e {
+        DaemonError::Identify(e) => e.to_string(),
+        DaemonError::Serialize(_) | DaemonError::Signal(_) | DaemonError::ThreadPanicked { .. } => {
+            format!("propid: {e}")
+        }
+        _ => e.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Messages and exit codes as they were when the causes were strings.
+    #[test]
+    fn messages_and_exit_codes_are_kept() {
+        let cases: Vec<(CliError, &str, i32)> = vec![
+            (
+                UsageError::Seconds(-1.0).into(),
+                "--seconds -1: must be > 0",
+                2,
+            ),
+            (
+                LoadError::Empty {
+                    file: "a.csv".into(),
+                }
+                .into(),
+                "a.csv: the file is empty",
+                3,
+            ),
+            (
+                CliError::NoInput {
+                    file: "a.csv".into(),
+                    cause: NoSteps::TooShort,
+                    hint: "give --input NAME",
+                },
+                "a.csv: no input column and no step found in the response (give --input NAME)",
+                4,
+            ),
+            (
+                DaemonError::Identify(propid_numerics::IdentError::NoPulse).into(),
+                "no pulse found in the input (need short throttle pulses on top of a constant level)",
+                4,
+            ),
+            (
+                DaemonError::LinkFailed {
+                    link: "/dev/ttyACM0".into(),
+                }
+                .into(),
+                "link failed: /dev/ttyACM0 stopped acknowledging commands",
+                6,
+            ),
+            (
+                DaemonError::ThreadPanicked { thread: "worker" }.into(),
+                "propid: internal error: the worker thread panicked",
+                7,
+            ),
+            (
+                DaemonError::io("bind socket /tmp/s", std::io::Error::other("busy")).into(),
+                "bind socket /tmp/s: busy",
+                7,
+            ),
+            (
+                SimError::Pty("no pty".into()).into(),
+                "pseudo-terminal: no pty",
+                6,
+            ),
+            (
+                SimError::Plant("fn_hz".into()).into(),
+                "plant model: fn_hz",
+                5,
+            ),
+            (
+                CliError::SimulatedStand(SimError::Pty("no pty".into())),
+                "simulated stand: pseudo-terminal: no pty",
+                6,
+            ),
+        ];
+        for (e, message, code) in cases {
+            assert_eq!((e.to_string().as_str(), e.exit_code()), (message, code));
         }
     }
 }

@@ -8,7 +8,7 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use super::run::{daemon_error, load_config};
+use super::run::load_config;
 use super::CliError;
 use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::{RecordingSource, Source, SourceError};
@@ -30,16 +30,16 @@ pub struct Args {
 /// Runs `propid replay`.
 pub fn run(args: Args) -> Result<(), CliError> {
     let cfg = load_config(args.config.as_ref())?;
-    let shutdown = Shutdown::install().map_err(daemon_error)?;
-    let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg).map_err(daemon_error)?;
-    let source = RecordingSource::open(&args.file, args.chunk as usize)
-        .map_err(|e| CliError::Input(e.to_string()))?;
+    let shutdown = Shutdown::install()?;
+    let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
+    let source =
+        RecordingSource::open(&args.file, args.chunk as usize).map_err(CliError::Recording)?;
     let source: Box<dyn Source> = if std::io::stderr().is_terminal() {
         Box::new(Progress::new(source))
     } else {
         Box::new(source)
     };
-    let publisher = Publisher::open(&cfg.publish).map_err(daemon_error)?;
+    let publisher = Publisher::open(&cfg.publish)?;
     let parts = RunParts {
         source,
         plan: None,
@@ -48,7 +48,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         record: None,
         shutdown,
     };
-    runner::run(&cfg, parts).map_err(daemon_error)?;
+    runner::run(&cfg, parts)?;
     Ok(())
 }
 

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use super::CliError;
 use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::SerialSource;
-use crate::daemon::{Config, DaemonError, Publisher, Shutdown};
+use crate::daemon::{Config, Publisher, Shutdown};
 
 /// Arguments of `propid run`.
 #[derive(Debug, clap::Args)]
@@ -26,27 +26,10 @@ pub struct Args {
     pub record: Option<PathBuf>,
 }
 
-/// Maps a daemon error to the CLI's error classes and exit codes.
-pub fn daemon_error(e: DaemonError) -> CliError {
-    match e {
-        DaemonError::Config(e) => CliError::Config(e.to_string()),
-        DaemonError::Source(e) => CliError::Device(e.to_string()),
-        DaemonError::LinkFailed(m) => CliError::Device(format!("link failed: {m}")),
-        DaemonError::Io { context, source } => CliError::Io { context, source },
-        e @ (DaemonError::Publish(_) | DaemonError::Signal(_) | DaemonError::Internal(_)) => {
-            CliError::Io {
-                context: "propid".into(),
-                source: std::io::Error::other(e.to_string()),
-            }
-        }
-        DaemonError::Identify(m) => CliError::Identification(m),
-    }
-}
-
 /// Loads the configuration (defaults without a file).
 pub fn load_config(path: Option<&PathBuf>) -> Result<Config, CliError> {
     match path {
-        Some(p) => Config::load(p).map_err(|e| CliError::Config(e.to_string())),
+        Some(p) => Ok(Config::load(p)?),
         None => Ok(Config::default()),
     }
 }
@@ -60,11 +43,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(r) = args.record {
         cfg.daemon.record = Some(r);
     }
-    let shutdown = Shutdown::install().map_err(daemon_error)?;
-    let plan = crate::daemon::plan::from_config(&cfg).map_err(daemon_error)?;
-    let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg).map_err(daemon_error)?;
+    let shutdown = Shutdown::install()?;
+    let plan = crate::daemon::plan::from_config(&cfg)?;
+    let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
     let source = SerialSource::open(&cfg.device.port, cfg.device.baud, cfg.device.read_timeout)
-        .map_err(|e| CliError::Device(e.to_string()))?;
+        .map_err(CliError::Serial)?;
     let record = match &cfg.daemon.record {
         Some(p) => Some(
             std::fs::File::create(p)
@@ -72,7 +55,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ),
         None => None,
     };
-    let publisher = Publisher::open(&cfg.publish).map_err(daemon_error)?;
+    let publisher = Publisher::open(&cfg.publish)?;
     let parts = RunParts {
         source: Box::new(source),
         plan: Some(plan),
@@ -81,6 +64,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
         record,
         shutdown,
     };
-    runner::run(&cfg, parts).map_err(daemon_error)?;
+    runner::run(&cfg, parts)?;
     Ok(())
 }

@@ -12,10 +12,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use super::CliError;
+use super::{CliError, UsageError};
 use propid_sim::config::WireProtocol;
 use propid_sim::pty::{self, RunOptions};
-use propid_sim::{record, SimConfig, SimError};
+use propid_sim::{record, SimConfig};
 
 /// Arguments of `propid sim`.
 #[derive(Debug, clap::Args)]
@@ -85,7 +85,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let cfg = load_config(&args)?;
     if let Some(s) = args.seconds {
         if !(s.is_finite() && s > 0.0) {
-            return Err(CliError::Usage(format!("--seconds {s}: must be > 0")));
+            return Err(UsageError::Seconds(s).into());
         }
     }
     match &args.record {
@@ -98,8 +98,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
 pub fn load_config(args: &Args) -> Result<SimConfig, CliError> {
     let default = Path::new("config/sim.toml");
     let mut cfg = match &args.config {
-        Some(p) => SimConfig::load(p).map_err(|e| map_err(e.into()))?,
-        None if default.exists() => SimConfig::load(default).map_err(|e| map_err(e.into()))?,
+        Some(p) => SimConfig::load(p)?,
+        None if default.exists() => SimConfig::load(default)?,
         None => SimConfig::default(),
     };
     let o = &args.set;
@@ -123,7 +123,7 @@ pub fn load_config(args: &Args) -> Result<SimConfig, CliError> {
     set(&mut f.stall_ms, o.stall_ms);
     set(&mut f.hangup_after_s, o.hangup_after);
     set(&mut f.reopen_after_ms, o.reopen_after);
-    cfg.validate().map_err(|e| map_err(e.into()))?;
+    cfg.validate()?;
     Ok(cfg)
 }
 
@@ -134,13 +134,11 @@ fn set<T>(slot: &mut T, v: Option<T>) {
 }
 
 fn run_record(cfg: &SimConfig, file: &Path, args: &Args) -> Result<(), CliError> {
-    let seconds = args
-        .seconds
-        .ok_or_else(|| CliError::Usage("--record needs --seconds S".into()))?;
+    let seconds = args.seconds.ok_or(UsageError::RecordNeedsSeconds)?;
     let f = std::fs::File::create(file)
         .map_err(|e| CliError::io(format!("creating {}", file.display()), e))?;
     let mut w = std::io::BufWriter::new(f);
-    let summary = record::record(cfg, seconds, &mut w).map_err(map_err)?;
+    let summary = record::record(cfg, seconds, &mut w)?;
     let mut line = serde_json::json!({ "type": "sim_record", "file": file.display().to_string() });
     if let (Some(obj), Ok(serde_json::Value::Object(s))) =
         (line.as_object_mut(), serde_json::to_value(&summary))
@@ -179,8 +177,7 @@ fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
             cfg.stand.sample_rate_hz,
             cfg.stand.protocol
         );
-    })
-    .map_err(map_err)?;
+    })?;
     if let Some(l) = &args.link {
         let _ = std::fs::remove_file(l);
     }
@@ -204,16 +201,5 @@ fn print_line(s: &str) -> Result<(), CliError> {
             Err(CliError::io("writing to stdout", e))
         }
         _ => Ok(()),
-    }
-}
-
-/// Maps a simulator error to the CLI's classes.
-pub fn map_err(e: SimError) -> CliError {
-    match e {
-        SimError::Config(c) => CliError::Config(c.to_string()),
-        SimError::Plant(m) => CliError::Config(format!("plant model: {m}")),
-        SimError::Experiment(m) => CliError::Config(format!("experiment: {m}")),
-        SimError::Pty(m) => CliError::Device(format!("pseudo-terminal: {m}")),
-        SimError::Io { context, source } => CliError::Io { context, source },
     }
 }

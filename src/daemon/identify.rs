@@ -14,18 +14,40 @@
 //! start-up, and the hand-over is a mutex and a condition variable: still no heap allocation.
 //! Other configurations (automatic order, the dense path) run the jackknife after the model.
 
-use serde_json::{Map, Value};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
 use super::config::Config;
 use super::window::WindowView;
-use super::worker::Identifier;
 use super::DaemonError;
 use propid_numerics::pulses::PulseInput;
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
-use propid_numerics::IdentError;
+use propid_numerics::{IdentError, ModelReport};
+
+/// Identifies one window: the worker's seam to the identification core.
+///
+/// Two calls, so that the hot one can be allocation-free: [`Identifier::identify`] inside the
+/// window's callback (the window's buffers are borrowed), then [`Identifier::report`] for the
+/// published model, after the window has moved on.
+pub trait Identifier: Send {
+    /// The hot call: identifies the window; must not allocate on success.
+    fn identify(&mut self, view: &WindowView<'_>) -> Result<(), IdentifyError>;
+    /// The model of the last successful [`Identifier::identify`] (allocates).
+    fn report(&self) -> Result<ModelReport, IdentifyError>;
+}
+
+/// Why a complete window gave no model (published as an `identification_failed` warning whose
+/// `message` is this error's text).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IdentifyError {
+    /// The identification core refused the window.
+    #[error(transparent)]
+    Core(#[from] IdentError),
+    /// [`Identifier::report`] without a successful identification before it.
+    #[error("no model identified")]
+    NoModel,
+}
 
 /// The core's workspace behind the daemon's [`Identifier`] trait.
 pub struct CoreIdentifier {
@@ -91,14 +113,14 @@ impl CoreIdentifier {
             max_pulses: cfg.identify.pulses_per_model as usize + 2,
             ..Limits::default()
         };
-        let ws = Workspace::new(&limits).map_err(|e| DaemonError::Identify(e.to_string()))?;
+        let ws = Workspace::new(&limits).map_err(DaemonError::Identify)?;
         let opts = IdentOptions {
             order: cfg.identify.order,
             jackknife: cfg.identify.jackknife,
             ..IdentOptions::default()
         };
         let helper = if opts.jackknife && opts.order == Some(2) {
-            let twin = Workspace::new(&limits).map_err(|e| DaemonError::Identify(e.to_string()))?;
+            let twin = Workspace::new(&limits).map_err(DaemonError::Identify)?;
             let cap = cfg.identify.max_window_samples.max(4);
             Helper::spawn(twin, cap, limits.max_pulses + 1, opts)
         } else {
@@ -261,7 +283,7 @@ fn helper_loop(shared: &Shared, ws: &mut Workspace) {
 }
 
 impl Identifier for CoreIdentifier {
-    fn identify(&mut self, v: &WindowView<'_>) -> Result<(), String> {
+    fn identify(&mut self, v: &WindowView<'_>) -> Result<(), IdentifyError> {
         self.ok = false;
         let y = [v.output];
         let input = PulseInput {
@@ -271,34 +293,27 @@ impl Identifier for CoreIdentifier {
             missing: v.missing,
             pulse_starts: Some(v.pulse_starts),
         };
-        match self.identify_beside(&input, v) {
-            Ok(Some((f, z, d))) => self.ws.set_uncertainty(f, z, &[d]),
-            Ok(None) if self.helper.is_some() => {
+        match self.identify_beside(&input, v)? {
+            Some((f, z, d)) => self.ws.set_uncertainty(f, z, &[d]),
+            None if self.helper.is_some() => {
                 // The helper did not apply (the dense path): the jackknife after the model.
                 if self.opts.jackknife {
-                    self.ws.jackknife_model(&input).map_err(|e| e.to_string())?;
+                    self.ws.jackknife_model(&input)?;
                 }
             }
-            Ok(None) => {
-                self.ws
-                    .identify(&input, &self.opts)
-                    .map_err(|e| e.to_string())?;
+            None => {
+                self.ws.identify(&input, &self.opts)?;
             }
-            Err(e) => return Err(e.to_string()),
         }
         self.ok = true;
         Ok(())
     }
 
-    fn report(&self) -> Result<Map<String, Value>, String> {
+    fn report(&self) -> Result<ModelReport, IdentifyError> {
         if !self.ok {
-            return Err("no model identified".into());
+            return Err(IdentifyError::NoModel);
         }
-        match serde_json::to_value(self.ws.to_report()) {
-            Ok(Value::Object(m)) => Ok(m),
-            Ok(_) => Err("the model report is not a JSON object".into()),
-            Err(e) => Err(format!("cannot serialise the model: {e}")),
-        }
+        Ok(self.ws.to_report())
     }
 }
 
@@ -381,12 +396,11 @@ mod tests {
                     pulse_starts: Some(&starts[..4 - round]),
                 };
                 ws.identify(&input, &opts).unwrap();
-                let (a, b) = (
-                    id.report().unwrap(),
-                    serde_json::to_value(ws.to_report()).unwrap(),
-                );
-                assert_eq!(Value::Object(a), b, "{svd:?} round {round}");
-                assert!(b["uncertainty"]["fn_hz"].as_f64().is_some_and(|s| s > 0.0));
+                let (a, b) = (id.report().unwrap(), ws.to_report());
+                // compared as published (NaN fields as null)
+                let json = |r: &ModelReport| serde_json::to_value(r).unwrap();
+                assert_eq!(json(&a), json(&b), "{svd:?} round {round}");
+                assert!(b.uncertainty.fn_hz > 0.0);
             }
         }
     }
@@ -409,8 +423,8 @@ mod tests {
             missing: &missing,
             pulse_starts: Some(&[100]),
         };
-        let want = ws.identify(&input, &id.opts).unwrap_err().to_string();
-        assert_eq!(err, want);
-        assert!(id.report().is_err());
+        let want = ws.identify(&input, &id.opts).unwrap_err();
+        assert_eq!(err, IdentifyError::Core(want));
+        assert_eq!(id.report(), Err(IdentifyError::NoModel));
     }
 }

@@ -64,7 +64,8 @@ pub struct EventItem {
     pub sample_index: u64,
 }
 
-/// A fact about the link, published as an `"event"` or `"warning"` line.
+/// A fact about the link, published as an `"event"` or `"warning"` line
+/// ([`super::line::Line::notice`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Notice {
     /// The link dropped.
@@ -81,32 +82,6 @@ pub enum Notice {
     PassiveBench,
     /// Nothing heard from a live link for [`super::sampler::SILENCE_TIMEOUT`] after it opened.
     NoData,
-}
-
-impl Notice {
-    /// Name used in the published line.
-    pub fn name(self) -> &'static str {
-        match self {
-            Notice::Disconnected => "disconnected",
-            Notice::Reconnected => "reconnected",
-            Notice::Stopped => "shutdown_stop_acknowledged",
-            Notice::StopUnacknowledged => "shutdown_stop_unacknowledged",
-            Notice::CsvLink => "csv_link",
-            Notice::PassiveBench => "passive_bench",
-            Notice::NoData => "no_data",
-        }
-    }
-
-    /// Whether it is published as a warning rather than an event.
-    pub fn is_warning(self) -> bool {
-        matches!(
-            self,
-            Notice::Disconnected
-                | Notice::StopUnacknowledged
-                | Notice::PassiveBench
-                | Notice::NoData
-        )
-    }
 }
 
 /// What the experiment plan reported, published as an `"event"` or `"warning"` line.

@@ -16,8 +16,11 @@
 
 pub mod config;
 pub mod csv_link;
+#[cfg(test)]
+mod fixtures;
 pub mod identify;
 pub mod item;
+pub mod line;
 pub mod plan;
 pub mod publish;
 pub mod quality;
@@ -53,21 +56,27 @@ pub enum DaemonError {
         /// The OS error.
         source: std::io::Error,
     },
-    /// A line could not be published.
-    #[error("publish: {0}")]
-    Publish(String),
+    /// A line could not be serialised (a bug: every published type serialises).
+    #[error("publish: cannot serialise a line: {0}")]
+    Serialize(#[source] serde_json::Error),
     /// The signal handler could not be installed.
     #[error("cannot install the signal handler: {0}")]
-    Signal(String),
+    Signal(#[source] ctrlc::Error),
     /// The device stopped answering commands.
-    #[error("link failed: {0}")]
-    LinkFailed(String),
+    #[error("link failed: {link} stopped acknowledging commands")]
+    LinkFailed {
+        /// The link, as its source describes itself.
+        link: String,
+    },
     /// The identification workspace could not be set up.
     #[error("identification: {0}")]
-    Identify(String),
+    Identify(#[source] propid_numerics::IdentError),
     /// A thread of the daemon panicked (a bug).
-    #[error("internal error: {0}")]
-    Internal(String),
+    #[error("internal error: the {thread} thread panicked")]
+    ThreadPanicked {
+        /// Which thread: `sampler` or `worker`.
+        thread: &'static str,
+    },
 }
 
 impl DaemonError {
@@ -77,5 +86,47 @@ impl DaemonError {
             context: context.into(),
             source,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The messages a user sees stay what they were when the causes were strings.
+    #[test]
+    fn errors_keep_their_messages_and_their_causes() {
+        let e = DaemonError::LinkFailed {
+            link: "/dev/ttyACM0".into(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "link failed: /dev/ttyACM0 stopped acknowledging commands"
+        );
+        let e = DaemonError::ThreadPanicked { thread: "worker" };
+        assert_eq!(e.to_string(), "internal error: the worker thread panicked");
+        let mut cfg = Config {
+            experiment: toml::from_str("levels = []").unwrap(),
+            ..Config::default()
+        };
+        let e = plan::from_config(&cfg).err().unwrap();
+        assert!(matches!(e, DaemonError::Config(ConfigError::Experiment(_))));
+        assert_eq!(
+            e.to_string(),
+            "config [experiment]: experiment key `levels.len()` = 0: an integer in 1..=32"
+        );
+        cfg.experiment = toml::from_str("levels = \"x\"").unwrap();
+        let e = plan::from_config(&cfg).err().unwrap();
+        assert!(
+            matches!(&e, DaemonError::Config(ConfigError::Parse { origin, .. }) if origin == "[experiment]")
+        );
+        assert!(std::error::Error::source(&e).is_some());
+        let e = source::RecordingSource::open(std::path::Path::new("/nonexistent/rec.tsp"), 64)
+            .err()
+            .unwrap();
+        assert_eq!(
+            e.to_string(),
+            "cannot open /nonexistent/rec.tsp: No such file or directory (os error 2)"
+        );
     }
 }

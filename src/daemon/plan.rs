@@ -9,7 +9,7 @@
 use propid_wire::experiment::{Experiment, ExperimentConfig, Notice, Output};
 use propid_wire::protocol::message::{Frame, Message};
 
-use super::config::Config;
+use super::config::{Config, ConfigError};
 use super::item::PlanNote;
 use super::sampler::{Plan, PlanStatus};
 use super::DaemonError;
@@ -23,10 +23,10 @@ pub struct ExperimentPlan {
 
 /// Builds the plan from the config's `[experiment]` table (its keys are the plan's own).
 pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
-    let ecfg: ExperimentConfig = cfg.experiment.clone().try_into().map_err(|e| {
-        DaemonError::Config(super::ConfigError::Parse {
+    let ecfg: ExperimentConfig = cfg.experiment.clone().try_into().map_err(|source| {
+        DaemonError::Config(ConfigError::Parse {
             origin: "[experiment]".into(),
-            message: format!("{e}"),
+            source,
         })
     })?;
     from_experiment(ecfg)
@@ -34,12 +34,8 @@ pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
 
 /// Builds the plan from an experiment configuration (validated here).
 pub fn from_experiment(ecfg: ExperimentConfig) -> Result<Box<dyn Plan>, DaemonError> {
-    let exp = Experiment::new(ecfg, 1).map_err(|e| {
-        DaemonError::Config(super::ConfigError::Parse {
-            origin: "[experiment]".into(),
-            message: e.to_string(),
-        })
-    })?;
+    let exp =
+        Experiment::new(ecfg, 1).map_err(|e| DaemonError::Config(ConfigError::Experiment(e)))?;
     Ok(Box::new(ExperimentPlan {
         exp,
         started: false,

@@ -9,6 +9,10 @@
 //!   lines and a writer thread. [`Publisher::publish`] only does `try_send` on every queue: a
 //!   client whose queue is full is dropped (its connection closed), so a slow subscriber never
 //!   blocks the worker.
+//!
+//! Lines come in typed ([`Line`]) and are serialised here, once ([`Line::to_json`]). A *tap*
+//! ([`Publisher::with_tap`]) sees every typed line beside its bytes, in order, on the publishing
+//! thread: how `propid demo` prints models without re-parsing the JSON.
 
 use crossbeam_channel::{bounded, Sender, TrySendError};
 use std::fs::{File, OpenOptions};
@@ -21,7 +25,11 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use super::config::PublishConfig;
+use super::line::Line;
 use super::DaemonError;
+
+/// Sees every published line, typed and as published (without the newline).
+pub type Tap = Box<dyn FnMut(&Line<'_>, &str) + Send>;
 
 /// A connected socket subscriber: the sending end of its queue.
 struct Client {
@@ -49,6 +57,7 @@ pub struct Publisher {
     file: Option<File>,
     socket: Option<SocketSink>,
     capture: Option<Arc<Mutex<Vec<String>>>>,
+    tap: Option<Tap>,
     lines: u64,
 }
 
@@ -76,11 +85,12 @@ impl Publisher {
             file,
             socket,
             capture: None,
+            tap: None,
             lines: 0,
         })
     }
 
-    /// A publisher with no sinks that keeps every line in memory (tests, `propid demo`).
+    /// A publisher with no sinks that keeps every line in memory (tests).
     pub fn capture() -> (Publisher, Arc<Mutex<Vec<String>>>) {
         let lines = Arc::new(Mutex::new(Vec::new()));
         let p = Publisher {
@@ -88,27 +98,29 @@ impl Publisher {
             file: None,
             socket: None,
             capture: Some(lines.clone()),
+            tap: None,
             lines: 0,
         };
         (p, lines)
     }
 
-    /// Also keep every line in memory (in addition to the configured sinks).
-    pub fn with_capture(mut self) -> (Publisher, Arc<Mutex<Vec<String>>>) {
-        let lines = Arc::new(Mutex::new(Vec::new()));
-        self.capture = Some(lines.clone());
-        (self, lines)
+    /// Also hands every line to `tap` (in addition to the configured sinks).
+    pub fn with_tap(mut self, tap: Tap) -> Publisher {
+        self.tap = Some(tap);
+        self
     }
 
-    /// Serialises `value` as one line and publishes it.
-    pub fn publish_json<T: serde::Serialize>(&mut self, value: &T) -> Result<(), DaemonError> {
-        let line = serde_json::to_string(value)
-            .map_err(|e| DaemonError::Publish(format!("cannot serialise a line: {e}")))?;
-        self.publish(&line)
+    /// Serialises `line` (the one place a line becomes bytes) and publishes it.
+    pub fn publish_line(&mut self, line: &Line<'_>) -> Result<(), DaemonError> {
+        let text = line.to_json().map_err(DaemonError::Serialize)?;
+        if let Some(tap) = self.tap.as_mut() {
+            tap(line, &text);
+        }
+        self.publish(&text)
     }
 
-    /// Publishes one line (without its newline) to every sink.
-    pub fn publish(&mut self, line: &str) -> Result<(), DaemonError> {
+    /// Publishes one line of text (without its newline) to every sink.
+    fn publish(&mut self, line: &str) -> Result<(), DaemonError> {
         self.lines += 1;
         if self.stdout {
             let mut out = std::io::stdout().lock();
@@ -275,6 +287,7 @@ fn add_client(stream: UnixStream, shared: &SocketShared) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::daemon::line::Event;
     use std::io::{BufRead, BufReader};
 
     fn cfg(file: Option<PathBuf>, socket: Option<PathBuf>, q: usize) -> PublishConfig {
@@ -292,14 +305,14 @@ mod tests {
         let path = dir.path().join("out.jsonl");
         std::fs::write(&path, "old\n").unwrap();
         let mut p = Publisher::open(&cfg(Some(path.clone()), None, 4)).unwrap();
-        p.publish_json(&serde_json::json!({"type": "event", "n": 1}))
+        p.publish_line(&Line::Event(Event::Segment { boot_id: 1 }))
             .unwrap();
         p.publish("{\"type\":\"stats\"}").unwrap();
         // flushed per line: visible before close
         let text = std::fs::read_to_string(&path).unwrap();
         assert_eq!(
             text,
-            "old\n{\"n\":1,\"type\":\"event\"}\n{\"type\":\"stats\"}\n"
+            "old\n{\"boot_id\":1,\"kind\":\"segment\",\"type\":\"event\"}\n{\"type\":\"stats\"}\n"
         );
         assert_eq!(p.lines(), 2);
     }
@@ -358,6 +371,27 @@ mod tests {
                 .unwrap()
                 .len(),
             0
+        );
+    }
+
+    #[test]
+    fn the_tap_sees_every_typed_line_with_its_bytes() {
+        let seen = Arc::new(Mutex::new(Vec::new()));
+        let s2 = seen.clone();
+        let (p, lines) = Publisher::capture();
+        let mut p = p.with_tap(Box::new(move |line, text| {
+            let kind = matches!(line, Line::Event(Event::Reconnected));
+            s2.lock().unwrap().push((kind, text.to_string()));
+        }));
+        p.publish_line(&Line::Event(Event::Reconnected)).unwrap();
+        p.publish_line(&Line::Event(Event::CsvLink)).unwrap();
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen.len(), 2);
+        assert!(seen[0].0 && !seen[1].0);
+        assert_eq!(seen[0].1, r#"{"kind":"reconnected","type":"event"}"#);
+        assert_eq!(
+            *lines.lock().unwrap(),
+            seen.iter().map(|s| s.1.clone()).collect::<Vec<_>>()
         );
     }
 

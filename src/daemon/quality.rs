@@ -20,7 +20,9 @@
 //! The checks are deliberately coarse: a model that passes may still be imprecise, and its
 //! `uncertainty` says by how much; a model that fails is certainly not the plant.
 
-use serde_json::{Map, Value};
+use propid_numerics::report::Gain;
+use propid_numerics::ModelReport;
+use serde::Serialize;
 
 /// Relative jackknife standard deviation above which a value is unknown.
 pub const MAX_RELATIVE_SD: f64 = 1.0;
@@ -30,49 +32,46 @@ pub const HINT: &str = "the pulse responses are not resolved above the noise: us
     ([experiment] pulse_width_samples, e.g. 1 ms worth of samples), larger pulse_amplitudes, \
     or more pulses per model ([identify] pulses_per_model)";
 
-/// The reasons a model report fails the checks (empty: publish it as a model).
-pub fn judge(model: &Map<String, Value>) -> Vec<&'static str> {
-    let mut reasons = Vec::new();
-    let unstable = model
-        .get("poles_s")
-        .and_then(Value::as_array)
-        .is_some_and(|poles| {
-            poles.iter().any(|p| {
-                // [re, im]; a null (non-finite) real part is not a settled pole either
-                p.get(0)
-                    .is_some_and(|re| !matches!(re.as_f64(), Some(r) if r < 0.0))
-            })
-        });
-    if unstable {
-        reasons.push("unstable_pole");
+/// Why a model is not the plant's (published in the warning's `reasons`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Flaw {
+    /// A continuous pole with `Re(s) >= 0`, or one that is not a finite number.
+    UnstablePole,
+    /// The jackknife standard deviation of the DC gain exceeds the DC gain.
+    DcGainUncertain,
+}
+
+/// The flaws of a model (empty: publish it as a model).
+pub fn judge(model: &ModelReport) -> Vec<Flaw> {
+    let mut flaws = Vec::new();
+    // a non-finite real part (published as null) is not a settled pole either
+    if model
+        .poles_s
+        .iter()
+        .any(|&[re, _]| !(re.is_finite() && re < 0.0))
+    {
+        flaws.push(Flaw::UnstablePole);
     }
-    let u = model.get("uncertainty");
-    let value = model.get("dc_gain").and_then(Value::as_f64);
-    let sd = u.and_then(|u| u.get("dc_gain")).and_then(Value::as_f64);
-    if let (Some(v), Some(sd)) = (value, sd) {
-        if sd > MAX_RELATIVE_SD * v.abs() {
-            reasons.push("dc_gain_uncertain");
+    // judged for one output (a scalar gain) with both numbers finite
+    if let (Gain::Scalar(v), Gain::Scalar(sd)) = (&model.dc_gain, &model.uncertainty.dc_gain) {
+        if v.is_finite() && sd.is_finite() && *sd > MAX_RELATIVE_SD * v.abs() {
+            flaws.push(Flaw::DcGainUncertain);
         }
     }
-    reasons
+    flaws
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::daemon::fixtures::report;
     use serde_json::json;
-
-    fn map(v: Value) -> Map<String, Value> {
-        match v {
-            Value::Object(m) => m,
-            _ => unreachable!(),
-        }
-    }
 
     #[test]
     fn a_good_estimate_with_a_wide_fn_scatter_passes() {
         // measured at 1 kHz: one leave-one-out model flipped to real poles
-        let m = map(json!({
+        let m = report(json!({
             "fn_hz": 12.78, "zeta": 0.80, "dc_gain": 11.89,
             "poles_s": [[-64.0, 48.5], [-64.0, -48.5]],
             "uncertainty": {"fn_hz": 14.4, "zeta": 1.54, "dc_gain": 2.89}
@@ -83,14 +82,14 @@ mod tests {
     #[test]
     fn a_resolved_model_passes() {
         // 1 kHz, one-sample pulses, 0.01 N noise: a typical daemon model
-        let m = map(json!({
+        let m = report(json!({
             "fn_hz": 12.4, "zeta": 0.78, "dc_gain": 12.2,
             "poles_s": [[-61.0, 48.5], [-61.0, -48.5]],
             "uncertainty": {"fn_hz": 0.56, "zeta": 0.26, "dc_gain": 2.6}
         }));
         assert!(judge(&m).is_empty());
         // without jackknife only the poles are judged
-        let m = map(
+        let m = report(
             json!({"fn_hz": 12.4, "dc_gain": 12.2, "poles_s": [[-30.0, 0.0], [-900.0, 0.0]],
             "uncertainty": {"fn_hz": null, "zeta": null, "dc_gain": null}}),
         );
@@ -100,22 +99,31 @@ mod tests {
     #[test]
     fn noise_fitted_models_fail_with_their_reasons() {
         // measured: 10 kHz, one-sample pulses, 0.01 N noise (the default sim plant)
-        let m = map(json!({
+        let m = report(json!({
             "fn_hz": null, "zeta": null, "dc_gain": -565.8,
             "poles_s": [[0.632, 0.0], [-2709.3, 31415.9]],
             "uncertainty": {"dc_gain": 211.5, "fn_hz": null, "zeta": null}
         }));
-        assert_eq!(judge(&m), vec!["unstable_pole"]);
-        let m = map(json!({
+        assert_eq!(judge(&m), vec![Flaw::UnstablePole]);
+        let m = report(json!({
             "fn_hz": 61.4, "zeta": 22.2, "dc_gain": 45.3,
             "poles_s": [[-8.69, 0.0], [-17110.8, 0.0]],
             "uncertainty": {"dc_gain": 472.1, "fn_hz": null, "zeta": null}
         }));
-        assert_eq!(judge(&m), vec!["dc_gain_uncertain"]);
-        let m = map(json!({
-            "fn_hz": 3.0, "dc_gain": 1.0, "poles_s": [[null, 0.0]],
-            "uncertainty": {"fn_hz": 3.5, "dc_gain": 1.5}
+        assert_eq!(judge(&m), vec![Flaw::DcGainUncertain]);
+        let m = report(json!({
+            "fn_hz": 3.0, "dc_gain": 1.0, "poles_s": [[null, 0.0], [-0.0, 0.0]],
+            "uncertainty": {"fn_hz": 3.5, "zeta": null, "dc_gain": 1.5}
         }));
-        assert_eq!(judge(&m), vec!["unstable_pole", "dc_gain_uncertain"]);
+        assert_eq!(judge(&m), vec![Flaw::UnstablePole, Flaw::DcGainUncertain]);
+        // a pole at the origin is not settled
+        let m = report(json!({"poles_s": [[-0.0, 0.0], [-5.0, 0.0]]}));
+        assert_eq!(judge(&m), vec![Flaw::UnstablePole]);
+    }
+
+    #[test]
+    fn flaws_are_published_by_their_names() {
+        let v = serde_json::to_value([Flaw::UnstablePole, Flaw::DcGainUncertain]).unwrap();
+        assert_eq!(v, json!(["unstable_pole", "dc_gain_uncertain"]));
     }
 }

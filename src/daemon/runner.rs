@@ -7,11 +7,12 @@ use std::time::Instant;
 
 use super::config::Config;
 use super::csv_link::CsvLinkOptions;
+use super::line::Line;
 use super::publish::Publisher;
 use super::sampler::{Plan, Sampler, SamplerConfig};
 use super::shutdown::Shutdown;
 use super::source::Source;
-use super::stats::{LinkStats, StatsLine, WorkStats};
+use super::stats::{quantile, LinkStats, StatsLine, WorkStats};
 use super::window::{OutputChannel, Window};
 use super::worker::{Identifier, Worker};
 use super::DaemonError;
@@ -36,15 +37,6 @@ impl RunSummary {
     pub fn latency_quantile(&self, q: f64) -> f64 {
         quantile(&self.latencies_s, q)
     }
-}
-
-/// The `q`-quantile of sorted values (nearest rank), NaN when empty.
-pub fn quantile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let i = ((sorted.len() as f64 - 1.0) * q.clamp(0.0, 1.0)).round() as usize;
-    sorted[i]
 }
 
 /// How the CSV link reads a bench, from `[csv]` and `identify.level_tolerance`.
@@ -122,25 +114,20 @@ pub fn run<I: Identifier + 'static>(
     // The sampler drops its sender when it ends, which ends the worker.
     let sampled = sampler
         .join()
-        .map_err(|_| DaemonError::Internal("the sampler thread panicked".into()))?;
+        .map_err(|_| DaemonError::ThreadPanicked { thread: "sampler" })?;
     let worked = worker
         .join()
-        .map_err(|_| DaemonError::Internal("the worker thread panicked".into()))?;
+        .map_err(|_| DaemonError::ThreadPanicked { thread: "worker" })?;
     let mut publisher = worked.publisher;
     let elapsed_s = start.elapsed().as_secs_f64();
-    let line = StatsLine::new(
+    let stats = StatsLine::new(
         &sampled.stats,
         &worked.stats,
         publisher.dropped_clients(),
         elapsed_s,
+        &worked.latencies_s,
     );
-    let mut value = serde_json::to_value(&line)
-        .map_err(|e| DaemonError::Publish(format!("stats line: {e}")))?;
-    value["latency_s"] = serde_json::json!({
-        "p50": nan_null(quantile(&worked.latencies_s, 0.5)),
-        "p99": nan_null(quantile(&worked.latencies_s, 0.99)),
-    });
-    publisher.publish_json(&value)?;
+    publisher.publish_line(&Line::Stats(&stats))?;
     publisher.close();
     if let Some(e) = sampled.error.or(worked.error) {
         return Err(e);
@@ -151,27 +138,6 @@ pub fn run<I: Identifier + 'static>(
         latencies_s: worked.latencies_s,
         elapsed_s,
     })
-}
-
-fn nan_null(x: f64) -> serde_json::Value {
-    if x.is_finite() {
-        serde_json::json!(x)
-    } else {
-        serde_json::Value::Null
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn quantiles_by_nearest_rank() {
-        let v: Vec<f64> = (1..=100).map(f64::from).collect();
-        assert_eq!(quantile(&v, 0.5), 51.0);
-        assert_eq!(quantile(&v, 0.99), 99.0);
-        assert!(quantile(&[], 0.5).is_nan());
-    }
 }
 
 #[cfg(test)]

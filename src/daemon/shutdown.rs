@@ -46,7 +46,7 @@ impl Shutdown {
             }
             for_handler.request();
         })
-        .map_err(|e| DaemonError::Signal(e.to_string()))?;
+        .map_err(DaemonError::Signal)?;
         Ok(GLOBAL.get_or_init(|| s).clone())
     }
 

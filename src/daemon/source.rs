@@ -23,20 +23,20 @@ use std::time::Duration;
 #[derive(Debug, thiserror::Error)]
 pub enum SourceError {
     /// The link is gone; reconnecting may help.
-    #[error("disconnected from {what}: {reason}")]
+    #[error("disconnected from {what}: {source}")]
     Disconnected {
         /// The source.
         what: String,
         /// What the OS said.
-        reason: String,
+        source: std::io::Error,
     },
     /// Opening the device failed.
-    #[error("cannot open {what}: {reason}")]
+    #[error("cannot open {what}: {source}")]
     Open {
         /// The source.
         what: String,
-        /// What the OS said.
-        reason: String,
+        /// What the OS (or the serial port library) said.
+        source: std::io::Error,
     },
     /// The source is exhausted (end of a recording).
     #[error("end of {what}")]
@@ -60,15 +60,18 @@ pub trait Source: Send {
     fn describe(&self) -> String;
 }
 
-/// Classifies an I/O error from a port read: a timeout is "no data", the rest disconnects.
-fn classify(what: &str, e: &std::io::Error) -> Result<usize, SourceError> {
-    match e.kind() {
-        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted => Ok(0),
-        _ => Err(SourceError::Disconnected {
-            what: what.to_string(),
-            reason: e.to_string(),
-        }),
-    }
+/// The error of a link used while it is closed.
+fn not_connected() -> std::io::Error {
+    std::io::Error::new(ErrorKind::NotConnected, "not connected")
+}
+
+/// Whether an I/O error from a port read only means "no data yet" (a timeout); the rest
+/// disconnects.
+fn no_data(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+    )
 }
 
 /// A serial port (or pty slave) opened by path. Reconnects by reopening the same path, so a
@@ -98,11 +101,11 @@ impl SerialSource {
         &self.path
     }
 
-    fn disconnected(&mut self, reason: String) -> SourceError {
+    fn disconnected(&mut self, source: std::io::Error) -> SourceError {
         self.port = None;
         SourceError::Disconnected {
             what: self.path.clone(),
-            reason,
+            source,
         }
     }
 }
@@ -110,26 +113,27 @@ impl SerialSource {
 impl Source for SerialSource {
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
         let Some(port) = self.port.as_mut() else {
-            return Err(self.disconnected("not connected".into()));
+            return Err(self.disconnected(not_connected()));
         };
         match port.read(buf) {
             // EOF on a port is an unplug, never "no data".
-            Ok(0) if !buf.is_empty() => Err(self.disconnected("end of file".into())),
+            Ok(0) if !buf.is_empty() => {
+                let eof = std::io::Error::new(ErrorKind::UnexpectedEof, "end of file");
+                Err(self.disconnected(eof))
+            }
             Ok(n) => Ok(n),
-            Err(e) => match classify(&self.path, &e) {
-                Ok(n) => Ok(n),
-                Err(_) => Err(self.disconnected(e.to_string())),
-            },
+            Err(e) if no_data(&e) => Ok(0),
+            Err(e) => Err(self.disconnected(e)),
         }
     }
 
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), SourceError> {
         let Some(port) = self.port.as_mut() else {
-            return Err(self.disconnected("not connected".into()));
+            return Err(self.disconnected(not_connected()));
         };
         match port.write_all(bytes) {
             Ok(()) => Ok(()),
-            Err(e) => Err(self.disconnected(e.to_string())),
+            Err(e) => Err(self.disconnected(e)),
         }
     }
 
@@ -140,7 +144,7 @@ impl Source for SerialSource {
             .open()
             .map_err(|e| SourceError::Open {
                 what: self.path.clone(),
-                reason: e.to_string(),
+                source: e.into(),
             })?;
         self.port = Some(port);
         Ok(())
@@ -166,9 +170,9 @@ pub struct RecordingSource {
 impl RecordingSource {
     /// Reads the whole recording into memory.
     pub fn open(path: &Path, chunk: usize) -> Result<RecordingSource, SourceError> {
-        let bytes = std::fs::read(path).map_err(|e| SourceError::Open {
+        let bytes = std::fs::read(path).map_err(|source| SourceError::Open {
             what: path.display().to_string(),
-            reason: e.to_string(),
+            source,
         })?;
         Ok(RecordingSource::from_bytes(path, bytes, chunk))
     }
@@ -263,7 +267,7 @@ impl Source for ScriptedSource {
         if !self.connected {
             return Err(SourceError::Disconnected {
                 what: "script".into(),
-                reason: "not connected".into(),
+                source: not_connected(),
             });
         }
         match self.steps.pop_front() {
@@ -275,7 +279,7 @@ impl Source for ScriptedSource {
                 self.connected = false;
                 Err(SourceError::Disconnected {
                     what: "script".into(),
-                    reason: "hang-up".into(),
+                    source: std::io::Error::other("hang-up"),
                 })
             }
             Some(Step::Data(mut d)) => {
@@ -293,7 +297,7 @@ impl Source for ScriptedSource {
         if !self.connected {
             return Err(SourceError::Disconnected {
                 what: "script".into(),
-                reason: "not connected".into(),
+                source: not_connected(),
             });
         }
         self.written.extend_from_slice(bytes);
@@ -305,7 +309,7 @@ impl Source for ScriptedSource {
             self.refuse_reconnects -= 1;
             return Err(SourceError::Open {
                 what: "script".into(),
-                reason: "no such device".into(),
+                source: std::io::Error::new(ErrorKind::NotFound, "no such device"),
             });
         }
         self.connected = true;

@@ -53,12 +53,9 @@ pub struct WorkStats {
     pub pulses: u64,
 }
 
-/// The final `"stats"` line.
+/// The final `"stats"` line (its `"type"` is written by [`super::line::Line::Stats`]).
 #[derive(Debug, Clone, Serialize)]
 pub struct StatsLine<'a> {
-    /// Always `"stats"`.
-    #[serde(rename = "type")]
-    pub kind: &'static str,
     /// Link counters, flattened into the line.
     #[serde(flatten)]
     pub link: &'a LinkStats,
@@ -69,29 +66,56 @@ pub struct StatsLine<'a> {
     pub dropped_clients: u64,
     /// Wall-clock duration of the run, seconds.
     pub elapsed_s: f64,
+    /// Latency from a window's last sample to its published model line.
+    pub latency_s: Latency,
+}
+
+/// Quantiles of the latencies, s (`null` without models).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Latency {
+    /// Median.
+    #[serde(with = "propid_numerics::nullable::num")]
+    pub p50: f64,
+    /// 99th percentile.
+    #[serde(with = "propid_numerics::nullable::num")]
+    pub p99: f64,
 }
 
 impl<'a> StatsLine<'a> {
-    /// The line for these counters.
+    /// The line for these counters and the sorted latencies.
     pub fn new(
         link: &'a LinkStats,
         work: &'a WorkStats,
         dropped_clients: u64,
         elapsed_s: f64,
+        sorted_latencies_s: &[f64],
     ) -> Self {
         StatsLine {
-            kind: "stats",
             link,
             work,
             dropped_clients,
             elapsed_s,
+            latency_s: Latency {
+                p50: quantile(sorted_latencies_s, 0.5),
+                p99: quantile(sorted_latencies_s, 0.99),
+            },
         }
     }
+}
+
+/// The `q`-quantile of sorted values (nearest rank), NaN when empty.
+pub fn quantile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let i = ((sorted.len() as f64 - 1.0) * q.clamp(0.0, 1.0)).round() as usize;
+    sorted[i]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::daemon::line::Line;
 
     #[test]
     fn stats_line_has_the_public_fields() {
@@ -106,8 +130,9 @@ mod tests {
         };
         link.frames_dropped.insert("crc_error".into(), 4);
         let work = WorkStats::default();
+        let line = StatsLine::new(&link, &work, 0, 1.5, &[]);
         let v: serde_json::Value =
-            serde_json::to_value(StatsLine::new(&link, &work, 0, 1.5)).unwrap();
+            serde_json::from_str(&Line::Stats(&line).to_json().unwrap()).unwrap();
         assert_eq!(v["type"], "stats");
         assert_eq!(v["frames_ok"], 10);
         assert_eq!(v["frames_dropped"]["crc_error"], 4);
@@ -116,5 +141,42 @@ mod tests {
         assert_eq!(v["overflows"], 1);
         assert_eq!(v["reconnects"], 3);
         assert_eq!(v["large_gaps"], 1);
+    }
+
+    /// The bytes of the stats line as the daemon has always published them (keys sorted).
+    #[test]
+    fn stats_line_bytes_are_pinned() {
+        let mut link = LinkStats {
+            wire: "tsp".into(),
+            frames_ok: 10,
+            bytes: 300,
+            samples: 8,
+            ..Default::default()
+        };
+        link.frames_dropped.insert("crc_error".into(), 4);
+        let work = WorkStats {
+            models: 2,
+            pulses: 4,
+            ..Default::default()
+        };
+        let line = StatsLine::new(&link, &work, 1, 1.5, &[0.25, 0.5, 0.75]);
+        assert_eq!(
+            Line::Stats(&line).to_json().unwrap(),
+            r#"{"bytes":300,"clock_wraps":0,"dropped_clients":1,"duplicates":0,"elapsed_s":1.5,"frames_dropped":{"crc_error":4},"frames_ok":10,"gaps":0,"identify_errors":0,"large_gaps":0,"latency_s":{"p50":0.5,"p99":0.75},"models":2,"models_unreliable":0,"overflows":0,"pulses":4,"reconnects":0,"samples":8,"samples_lost":0,"segments":0,"type":"stats","wire":"tsp"}"#
+        );
+        let none = StatsLine::new(&link, &work, 1, 1.5, &[]);
+        let text = Line::Stats(&none).to_json().unwrap();
+        assert!(
+            text.contains(r#""latency_s":{"p50":null,"p99":null}"#),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn quantiles_by_nearest_rank() {
+        let v: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(quantile(&v, 0.5), 51.0);
+        assert_eq!(quantile(&v, 0.99), 99.0);
+        assert!(quantile(&[], 0.5).is_nan());
     }
 }

@@ -12,6 +12,7 @@ use plotters::prelude::*;
 use super::result::{Diagnosis, Traces};
 use super::spectrum::periodogram;
 use propid_numerics::okid::{okid, OkidOptions};
+use propid_numerics::segment::{self, Command, SegmentRules};
 
 type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
 
@@ -111,25 +112,12 @@ fn time_series(t: &Traces, v: &[f64], range: std::ops::Range<usize>) -> Vec<(f64
     range.map(|k| (k as f64 * t.dt_s, v[k])).collect()
 }
 
-/// Pulses in the input: a departure from a level that returns to it within 32 samples.
+/// Pulses in the input ([`segment::pulses`] under [`SegmentRules::DEFAULT`]).
 /// Returns `(start, amplitude)`.
 pub fn find_pulses(u: &[f64]) -> Vec<(usize, f64)> {
-    let mut out = Vec::new();
-    let mut k = 1;
-    while k < u.len() {
-        let level = u[k - 1];
-        let a = u[k] - level;
-        if a.abs() > 1e-9 {
-            let back = (k + 1..(k + 33).min(u.len())).find(|&j| (u[j] - level).abs() < 1e-9);
-            if let Some(j) = back {
-                out.push((k, a));
-                k = j;
-                continue;
-            }
-        }
-        k += 1;
-    }
-    out
+    segment::pulses(Command::new(u), &SegmentRules::DEFAULT)
+        .map(|p| (p.start, p.amplitude))
+        .collect()
 }
 
 /// Peak signed deviation of `y` from its mean over the 10 samples before `start`, within

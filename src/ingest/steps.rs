@@ -5,20 +5,26 @@
 //! OKID has an input to work with.
 //!
 //! Method:
-//! 1. `s` = centred moving average over [`SMOOTH_WINDOW`] samples of a 3-sample running median
-//!    of the response (the median removes spikes; an even-length mean removes rotor ripple
-//!    aliased to the Nyquist frequency exactly and attenuates slower ripple).
+//! The thresholds are [`ResponseStepRules`], part of the one set of segmentation rules
+//! ([`propid_numerics::segment::SegmentRules::response`]); their defaults are quoted here.
+//!
+//! 1. `s` = centred moving average over `smooth_samples` (6) samples of a `median_samples` (3)
+//!    running median of the response (the median removes spikes; an even-length mean removes
+//!    rotor ripple aliased to the Nyquist frequency exactly and attenuates slower ripple).
 //! 2. Noise `σ` of `s` = 1.4826 · MAD of `(s_k − 2 s_{k−M} + s_{k−2M})/√6` (`M` the smoothing
 //!    window: on a plateau or a ramp these second differences are noise only, edges are a few
-//!    outliers that the median ignores); range `R` = 99th − 1st percentile of `s`; threshold `thr = max(6σ, 0.05 R)`.
+//!    outliers that the median ignores); range `R` = 99th − 1st percentile of `s`; threshold
+//!    `thr = max(noise_sigmas·σ, range_fraction·R)` (`max(6σ, 0.05 R)`).
 //! 3. From the current level `L` (median of the first settled window), the first sample with
 //!    `|s_k − L| > thr` is a step. Its **onset** is found by walking back while `s` is still more
-//!    than `max(3σ, thr/4)` away from `L`, then moved by `M/2 − 1` samples to undo the lead of
+//!    than `max(onset_sigmas·σ, onset_fraction·thr)` (`max(3σ, thr/4)`) away from `L`, then
+//!    moved by `M/2 − 1` samples to undo the lead of
 //!    the centred mean; the command is taken to have changed one sample before the response
 //!    moves (a measurement is taken at the end of the period in which the command was applied,
 //!    PROTOCOL.md §3). Expect ±1–2 samples of uncertainty on small steps.
-//! 4. The new level is the median of the first window of [`SETTLE_WINDOW`] samples whose
-//!    smoothed range is below `thr/2` (the response has settled); scanning resumes there.
+//! 4. The new level is the median of the first window of `settle_samples` (10) samples whose
+//!    smoothed range is below `settle_fraction·thr` (`thr/2`: the response has settled);
+//!    scanning resumes there.
 //!    A record that never settles (a ramp) yields no further steps.
 //!
 //! The synthetic input for identification is the *level* sequence: before the first step the
@@ -26,12 +32,8 @@
 //! a DC gain of about 1 (output per output), and what it carries is the dynamics: time constants,
 //! natural frequency and damping.
 
+use propid_numerics::segment::{ResponseStepRules, SegmentRules};
 use serde::Serialize;
-
-/// Samples of the moving average (even).
-pub const SMOOTH_WINDOW: usize = 6;
-/// Samples that must stay within `thr/2` for a level to count as settled.
-pub const SETTLE_WINDOW: usize = 10;
 
 /// One step found in a response.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -57,14 +59,23 @@ pub struct StepFinding {
     pub threshold: f64,
 }
 
-/// Finds the steps of `y` (missing samples are NaN and are bridged by the running median).
-/// Returns `None` when `y` has fewer than `2·SETTLE_WINDOW` finite samples.
+/// Finds the steps of `y` under [`SegmentRules::DEFAULT`] (see [`find_steps_with`]).
 pub fn find_steps(y: &[f64]) -> Option<StepFinding> {
-    if y.iter().filter(|v| v.is_finite()).count() < 2 * SETTLE_WINDOW {
+    find_steps_with(y, &SegmentRules::DEFAULT.response)
+}
+
+/// Finds the steps of `y` (missing samples are NaN and are bridged by the running median).
+/// Returns `None` when `y` has fewer than `2·settle_samples` finite samples.
+pub fn find_steps_with(y: &[f64], rules: &ResponseStepRules) -> Option<StepFinding> {
+    let settle = Settle {
+        samples: rules.settle_samples.max(1),
+        fraction: rules.settle_fraction,
+    };
+    if y.iter().filter(|v| v.is_finite()).count() < 2 * settle.samples {
         return None;
     }
-    let m = SMOOTH_WINDOW;
-    let s = moving_mean(&running_median(y, 3), m);
+    let m = rules.smooth_samples.max(1);
+    let s = moving_mean(&running_median(y, rules.median_samples), m);
     let mut diffs: Vec<f64> = s
         .windows(2 * m + 1)
         .map(|w| (w[2 * m] - 2.0 * w[m] + w[0]).abs() / 6f64.sqrt())
@@ -73,14 +84,14 @@ pub fn find_steps(y: &[f64]) -> Option<StepFinding> {
     let noise = 1.4826 * quantile(&mut diffs, 0.5);
     let mut finite: Vec<f64> = s.iter().copied().filter(|v| v.is_finite()).collect();
     let range = quantile(&mut finite, 0.99) - quantile(&mut finite, 0.01);
-    let thr = (6.0 * noise).max(0.05 * range);
+    let thr = (rules.noise_sigmas * noise).max(rules.range_fraction * range);
     let mut steps = Vec::new();
-    let Some((mut start, mut level)) = settle_from(&s, 0, thr) else {
+    let Some((mut start, mut level)) = settle.from(&s, 0, thr) else {
         return Some(finish(y.len(), steps, noise, thr, s[0]));
     };
     let initial = level;
-    let back = (3.0 * noise).max(thr / 4.0);
-    let mut k = start + SETTLE_WINDOW;
+    let back = (rules.onset_sigmas * noise).max(rules.onset_fraction * thr);
+    let mut k = start + settle.samples;
     while k < s.len() {
         if !(s[k].is_finite() && (s[k] - level).abs() > thr) {
             k += 1;
@@ -90,7 +101,7 @@ pub fn find_steps(y: &[f64]) -> Option<StepFinding> {
         while onset > start + 1 && s[onset - 1].is_finite() && (s[onset - 1] - level).abs() > back {
             onset -= 1;
         }
-        let Some((next, new_level)) = settle_from(&s, k, thr) else {
+        let Some((next, new_level)) = settle.from(&s, k, thr) else {
             break;
         };
         let moved = (onset + m / 2 - 1).min(s.len() - 1);
@@ -100,7 +111,7 @@ pub fn find_steps(y: &[f64]) -> Option<StepFinding> {
             to: new_level,
         });
         (start, level) = (next, new_level);
-        k = next + SETTLE_WINDOW;
+        k = next + settle.samples;
     }
     Some(finish(y.len(), steps, noise, thr, initial))
 }
@@ -126,18 +137,26 @@ fn finish(
     }
 }
 
-/// First index `i ≥ from` where `s[i .. i+SETTLE_WINDOW]` is finite with range below `thr/2`,
-/// and the median level there.
-fn settle_from(s: &[f64], from: usize, thr: f64) -> Option<(usize, f64)> {
-    (from..s.len().saturating_sub(SETTLE_WINDOW - 1)).find_map(|i| {
-        let w = &s[i..i + SETTLE_WINDOW];
-        if w.iter().any(|v| !v.is_finite()) {
-            return None;
-        }
-        let lo = w.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        (hi - lo < thr / 2.0).then(|| (i, quantile(&mut w.to_vec(), 0.5)))
-    })
+/// When a response has settled: `samples` in a row within `fraction·thr`.
+struct Settle {
+    samples: usize,
+    fraction: f64,
+}
+
+impl Settle {
+    /// First index `i ≥ from` where `s[i .. i+samples]` is finite with range below
+    /// `fraction·thr`, and the median level there.
+    fn from(&self, s: &[f64], from: usize, thr: f64) -> Option<(usize, f64)> {
+        (from..s.len().saturating_sub(self.samples - 1)).find_map(|i| {
+            let w = &s[i..i + self.samples];
+            if w.iter().any(|v| !v.is_finite()) {
+                return None;
+            }
+            let lo = w.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = w.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            (hi - lo < self.fraction * thr).then(|| (i, quantile(&mut w.to_vec(), 0.5)))
+        })
+    }
 }
 
 /// Centred running median over `w` samples (NaNs left out; NaN when the window has none).

@@ -43,6 +43,7 @@ pub mod okid;
 pub mod operating_points;
 pub mod pulses;
 pub mod report;
+pub mod segment;
 pub mod sizing;
 pub mod statespace;
 pub mod static_map;

@@ -1,17 +1,18 @@
 //! Operating points: one model per level of a staircase (or per stretch of a ramp), published as
 //! a table — the gain schedule a flight-controller designer needs.
 //!
-//! Segmentation (one input):
-//! - **Piecewise-constant input** (a staircase with or without pulses): a *level* is a run of
-//!   constant input longer than `max_pulse_width` samples (shorter runs are pulses, or the ramp
-//!   into the next level, and belong to the level before them). A level is identified from its
+//! Segmentation (one input; the levels, pulses and ramps are those of [`crate::segment`], under
+//! [`OpOptions::segment`]):
+//! - **Piecewise-constant input** (a staircase with or without pulses): one segment per
+//!   [level](crate::segment::levels) (the shorter runs after a level, its pulses or the ramp
+//!   into the next one, belong to it). A level is identified from its
 //!   own samples when they hold pulses (pulse path); otherwise by OKID over the segment from the
 //!   second half of level `i−1` (so the step into level `i` is in it, with the system at rest
 //!   before it) to the end of level `i`. The first level has no step into it and is only
 //!   identified when it holds pulses. In a pulse experiment (some level holds pulses), levels
 //!   without pulses are listed in `skipped` and not identified.
-//! - **Ramp** (the input is strongly correlated with time, |r| > 0.9): [`RAMP_WINDOWS`] windows
-//!   of equal length, each at the mean input over it.
+//! - **Ramp** (the input follows time, [`crate::segment::is_ramp`]): the windows of equal length
+//!   of [`crate::segment::ramp_windows`], each at the mean input over it.
 //! - Anything else is one operating point: the model of the whole record says it all, the
 //!   table stays empty.
 //!
@@ -24,25 +25,23 @@ use serde::Serialize;
 use super::okid::select::{identify_any, identify_okid, AnyInput, AnyModel, PathTaken};
 use super::okid::OkidOptions;
 use super::report::Gain;
+use super::segment::{self, Command, Level, PulseRun, SegmentRules};
 use super::workspace::IdentOptions;
-
-/// Windows a ramp is cut into.
-pub const RAMP_WINDOWS: usize = 4;
 
 /// Options of [`operating_points`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OpOptions {
     /// Shortest segment identified, samples.
     pub min_samples: usize,
-    /// Widest pulse, samples (longer runs are levels).
-    pub max_pulse_width: usize,
+    /// Where the levels, pulses and ramps are.
+    pub segment: SegmentRules,
 }
 
 impl Default for OpOptions {
     fn default() -> Self {
         Self {
             min_samples: 40,
-            max_pulse_width: 32,
+            segment: SegmentRules::DEFAULT,
         }
     }
 }
@@ -106,10 +105,12 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
     let Some(u) = input.u.first().filter(|_| input.u.len() == 1) else {
         return OpTable::single();
     };
-    let (kind, segments) = if super::okid::select::is_piecewise_constant(u) {
-        ("staircase", staircase(u, opts.max_pulse_width))
-    } else if is_ramp(u) {
-        ("ramp", ramp(u))
+    let cmd = Command::with_missing(u, input.missing);
+    let rules = &opts.segment;
+    let (kind, segments) = if segment::is_piecewise_constant(cmd, rules) {
+        ("staircase", staircase(&segment::levels(cmd, rules)))
+    } else if segment::is_ramp(cmd, rules) {
+        ("ramp", ramp(&segment::ramp_windows(cmd, rules)))
     } else {
         ("single", Vec::new())
     };
@@ -127,9 +128,10 @@ pub fn operating_points(input: &AnyInput<'_>, ident: &IdentOptions, opts: &OpOpt
     // A pulse experiment (some level holds pulses): a level without pulses (rest before the
     // first ramp, after the last) is not an operating point of it, whatever OKID would make of
     // the ramp into it.
+    let pulses: Vec<PulseRun> = segment::pulses(cmd, rules).collect();
     let with_pulses: Vec<bool> = segments
         .iter()
-        .map(|seg| has_pulses(input, seg, opts.max_pulse_width))
+        .map(|seg| has_pulses(input, seg, &pulses, rules))
         .collect();
     let pulse_experiment = with_pulses.iter().any(|&b| b);
     for (seg, pulses) in segments.iter().zip(with_pulses) {
@@ -231,115 +233,54 @@ fn point(seg: &Segment, from: usize, m: AnyModel, dt_s: f64) -> OperatingPoint {
     }
 }
 
-/// Levels of a piecewise-constant input: runs longer than `max_pulse`.
-fn staircase(u: &[f64], max_pulse: usize) -> Vec<Segment> {
-    let mut runs: Vec<(usize, usize, f64)> = Vec::new();
-    let mut start = 0;
-    for k in 1..=u.len() {
-        let end = k == u.len() || (u[k] - u[start]).abs() > 1e-9 && u[k].is_finite();
-        if end {
-            if k - start > max_pulse {
-                match runs.last_mut() {
-                    Some(last) if (last.2 - u[start]).abs() <= 1e-9 => last.1 = k,
-                    _ => runs.push((start, k, u[start])),
-                }
-            } else if let Some(last) = runs.last_mut() {
-                last.1 = k;
-            }
-            start = k;
-        }
-    }
-    let mut segs = Vec::with_capacity(runs.len());
-    for (i, &(own, to, level)) in runs.iter().enumerate() {
-        let from = if i == 0 {
-            own
-        } else {
-            let prev = runs[i - 1];
-            prev.0 + (prev.1 - prev.0) / 2
-        };
-        segs.push(Segment {
-            from,
-            own,
-            to,
-            level,
-        });
-    }
-    segs
+/// One segment per level: the level's own samples, from the second half of the level before
+/// (so the step into it is in the segment, with the system at rest before it).
+fn staircase(levels: &[Level]) -> Vec<Segment> {
+    levels
+        .iter()
+        .enumerate()
+        .map(|(i, l)| Segment {
+            from: match i {
+                0 => l.start,
+                _ => levels[i - 1].start + (levels[i - 1].end - levels[i - 1].start) / 2,
+            },
+            own: l.start,
+            to: l.end,
+            level: l.value,
+        })
+        .collect()
 }
 
 /// True when the level's own samples (`seg.own .. seg.to`) hold pulses: device pulse starts
-/// there with the level just before them, or (without device events) a run of at most
-/// `max_pulse` samples with the level on both sides.
-fn has_pulses(input: &AnyInput<'_>, seg: &Segment, max_pulse: usize) -> bool {
-    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9;
+/// there with the level just before them, or (without device events) a pulse of
+/// [`segment::pulses`] inside them, on the level.
+fn has_pulses(
+    input: &AnyInput<'_>,
+    seg: &Segment,
+    pulses: &[PulseRun],
+    rules: &SegmentRules,
+) -> bool {
     let r = seg.own..seg.to;
-    let u = input.u[0];
     if let Some(starts) = input.pulse_starts.filter(|s| !s.is_empty()) {
+        let u = input.u[0];
         return starts
             .iter()
-            .any(|&k| k > 0 && r.contains(&k) && same(u[k - 1], seg.level));
+            .any(|&k| k > 0 && r.contains(&k) && rules.same(u[k - 1], seg.level));
     }
-    let u = &u[r];
-    let mut k = 1;
-    while k < u.len() {
-        if same(u[k - 1], seg.level) && !same(u[k], seg.level) {
-            let w = u[k..].iter().take_while(|v| !same(**v, seg.level)).count();
-            if w <= max_pulse && k + w < u.len() && u[k..k + w].iter().all(|v| same(*v, u[k])) {
-                return true;
-            }
-            k += w.max(1);
-        } else {
-            k += 1;
-        }
-    }
-    false
+    pulses
+        .iter()
+        .any(|p| p.start > seg.own && p.start + p.width < seg.to && rules.same(p.level, seg.level))
 }
 
-/// True when the input follows time closely (|Pearson r| > 0.9).
-fn is_ramp(u: &[f64]) -> bool {
-    let pts: Vec<(f64, f64)> = u
+/// One segment per ramp window, at its mean input.
+fn ramp(windows: &[Level]) -> Vec<Segment> {
+    windows
         .iter()
-        .enumerate()
-        .filter(|(_, v)| v.is_finite())
-        .map(|(k, v)| (k as f64, *v))
-        .collect();
-    let n = pts.len() as f64;
-    if n < 8.0 {
-        return false;
-    }
-    let (mt, mu) = pts
-        .iter()
-        .fold((0.0, 0.0), |a, p| (a.0 + p.0 / n, a.1 + p.1 / n));
-    let (mut stt, mut suu, mut stu) = (0.0, 0.0, 0.0);
-    for (t, v) in &pts {
-        stt += (t - mt) * (t - mt);
-        suu += (v - mu) * (v - mu);
-        stu += (t - mt) * (v - mu);
-    }
-    suu > 0.0 && (stu / (stt * suu).sqrt()).abs() > 0.9
-}
-
-/// [`RAMP_WINDOWS`] equal windows at their mean input.
-fn ramp(u: &[f64]) -> Vec<Segment> {
-    let w = u.len() / RAMP_WINDOWS;
-    (0..RAMP_WINDOWS)
-        .map(|i| {
-            let (from, to) = (
-                i * w,
-                if i + 1 == RAMP_WINDOWS {
-                    u.len()
-                } else {
-                    (i + 1) * w
-                },
-            );
-            let vals = u[from..to].iter().filter(|v| v.is_finite());
-            let (s, c) = vals.fold((0.0, 0usize), |a, v| (a.0 + v, a.1 + 1));
-            Segment {
-                from,
-                own: from,
-                to,
-                level: s / c.max(1) as f64,
-            }
+        .map(|w| Segment {
+            from: w.start,
+            own: w.start,
+            to: w.end,
+            level: w.value,
         })
         .collect()
 }

@@ -1,10 +1,11 @@
 //! Markov parameters from pulse experiments: segmentation, baselines, amplitude scaling,
 //! ensemble average and pulse-width deconvolution.
 //!
-//! **Segmentation.** The throttle `u` is piecewise constant. A *pulse* is a run of `w` samples
-//! (`1 <= w <= max_width`) at level `L0 + a` between two runs at the same level `L0`; any other
-//! level change is an operating-point step. With device events (EVENT IMPULSE_START) the pulse
-//! starts are taken from the events and only the width and level are read from `u`. A pulse's
+//! **Segmentation.** The pulses are those of [`crate::segment`] (a run of `w` samples,
+//! `1 <= w <= max_width`, at level `L0 + a` between two samples at the same level `L0`; any
+//! other level change is an operating-point step), under [`SegmentRules::DEFAULT`] with
+//! `max_pulse_samples = max_width`. With device events (EVENT IMPULSE_START) the pulse starts
+//! are taken from the events and checked by [`segment::pulse_at`]. A pulse's
 //! *window* runs from its first sample to the next level change of `u` (the next pulse or
 //! step), so each pulse is referenced to its own level: several operating points in one record
 //! are fine. Its *baseline* is the mean of each output over the last half (at most
@@ -38,14 +39,11 @@
 //! **No `1/dt`.** `Y_k` is the response to a unit input held for one sample; a unit-area
 //! impulse would be `1/dt` high and make DC gains off by the sample rate.
 
+use super::segment::{self, Command, PulseRun, SegmentRules};
 use super::{IdentError, MarkovSeq};
 
 /// Most samples of a baseline window.
 pub const MAX_BASELINE: usize = 64;
-
-/// Throttle levels closer than this are the same level (throttle is a fraction 0..1; TSP/1
-/// carries it in steps of 1e-4).
-const LEVEL_TOL: f64 = 1e-9;
 
 /// One record of a pulse experiment, borrowed.
 #[derive(Debug, Clone, Copy)]
@@ -242,71 +240,31 @@ impl PulseEnsemble {
     }
 
     fn find(&mut self, input: &PulseInput<'_>, max_width: usize) -> Result<(), IdentError> {
-        let n = input.u.len();
+        let rules = SegmentRules {
+            max_pulse_samples: max_width,
+            ..SegmentRules::DEFAULT
+        };
+        let cmd = Command::with_missing(input.u, input.missing);
         match input.pulse_starts {
             Some(starts) if !starts.is_empty() => {
                 for &s in starts {
-                    if !self.try_pulse(input, s, max_width)? {
+                    match segment::pulse_at(&cmd, s, &rules) {
+                        Some(p) => self.push(pulse(&cmd, &p, &rules))?,
                         // A device pulse we cannot use is still a pulse: count it.
-                        self.push(Pulse {
+                        None => self.push(Pulse {
                             start: s,
                             ..Pulse::default()
-                        })?;
+                        })?,
                     }
                 }
             }
             _ => {
-                let mut k = 1;
-                while k < n {
-                    let prev = level_at(input, k - 1);
-                    if !missing(input, k)
-                        && !same(input.u[k], prev)
-                        && self.try_pulse(input, k, max_width)?
-                    {
-                        let p = self.pulses[self.count - 1];
-                        k = p.start + p.width + 1;
-                        continue;
-                    }
-                    k += 1;
+                for p in segment::pulses(cmd, &rules) {
+                    self.push(pulse(&cmd, &p, &rules))?;
                 }
             }
         }
         Ok(())
-    }
-
-    /// Records a pulse starting at `s` if `u` has one there; returns whether it did.
-    fn try_pulse(
-        &mut self,
-        input: &PulseInput<'_>,
-        s: usize,
-        max_width: usize,
-    ) -> Result<bool, IdentError> {
-        let n = input.u.len();
-        if s == 0 || s >= n {
-            return Ok(false);
-        }
-        let l0 = level_at(input, s - 1);
-        let lp = level_at(input, s);
-        if !l0.is_finite() || same(l0, lp) {
-            return Ok(false);
-        }
-        let e1 = run_end(input, s);
-        let width = e1 - s;
-        if width > max_width || e1 >= n || !same(level_at(input, e1), l0) {
-            return Ok(false);
-        }
-        let window = run_end(input, e1) - s;
-        let base_len = s - run_start(input, s - 1);
-        let nb = base_len.div_ceil(2).clamp(1, MAX_BASELINE);
-        self.push(Pulse {
-            start: s,
-            width,
-            amplitude: lp - l0,
-            base_start: s - nb,
-            window,
-            kept: true,
-        })?;
-        Ok(true)
     }
 
     fn push(&mut self, p: Pulse) -> Result<(), IdentError> {
@@ -521,36 +479,21 @@ fn missing(input: &PulseInput<'_>, k: usize) -> bool {
     input.missing.get(k).copied().unwrap_or(false)
 }
 
-fn same(a: f64, b: f64) -> bool {
-    (a - b).abs() <= LEVEL_TOL
-}
-
-/// Throttle level at `k`, carrying the last measured level over missing samples.
-fn level_at(input: &PulseInput<'_>, k: usize) -> f64 {
-    (0..=k)
-        .rev()
-        .find(|&j| !missing(input, j))
-        .map_or(f64::NAN, |j| input.u[j])
-}
-
-/// First sample after `from` whose level differs from the level at `from`.
-fn run_end(input: &PulseInput<'_>, from: usize) -> usize {
-    let lv = level_at(input, from);
-    let mut k = from + 1;
-    while k < input.u.len() && (missing(input, k) || same(input.u[k], lv)) {
-        k += 1;
+/// A pulse of the segmentation with its response window (to the end of the run it returns
+/// into) and its baseline window (the last half, at most [`MAX_BASELINE`] samples, of the run
+/// before it).
+fn pulse(cmd: &Command<'_>, p: &PulseRun, rules: &SegmentRules) -> Pulse {
+    let back = p.start + p.width;
+    let base_len = p.start - p.before_start;
+    let nb = base_len.div_ceil(2).clamp(1, MAX_BASELINE);
+    Pulse {
+        start: p.start,
+        width: p.width,
+        amplitude: p.amplitude,
+        base_start: p.start - nb,
+        window: segment::run_end(cmd, back, rules) - p.start,
+        kept: true,
     }
-    k
-}
-
-/// First sample of the run that contains `at`.
-fn run_start(input: &PulseInput<'_>, at: usize) -> usize {
-    let lv = level_at(input, at);
-    let mut k = at;
-    while k > 0 && (missing(input, k - 1) || same(input.u[k - 1], lv)) {
-        k -= 1;
-    }
-    k
 }
 
 #[cfg(test)]

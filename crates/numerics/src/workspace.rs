@@ -82,7 +82,8 @@ pub struct IdentOptions {
     pub svd: SvdChoice,
     /// Hankel block rows and columns `(r, c)`; `None` sizes them automatically.
     pub hankel_blocks: Option<(usize, usize)>,
-    /// Widest throttle pulse (samples); wider level changes are operating-point steps.
+    /// Widest throttle pulse (samples); wider level changes are operating-point steps
+    /// ([`crate::segment::SegmentRules::max_pulse_samples`]).
     pub max_pulse_width: usize,
     /// Compute the jackknife uncertainty (one re-identification per pulse).
     pub jackknife: bool,
@@ -94,7 +95,7 @@ impl Default for IdentOptions {
             order: None,
             svd: SvdChoice::Auto,
             hankel_blocks: None,
-            max_pulse_width: 32,
+            max_pulse_width: crate::segment::SegmentRules::DEFAULT.max_pulse_samples,
             jackknife: true,
         }
     }

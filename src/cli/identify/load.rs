@@ -97,15 +97,15 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         }
         None => {
             let y = outputs.first().map_or(&[][..], Vec::as_slice);
-            let f = steps_from_response(y).map_err(|e| {
-                CliError::Identification(match e {
-                    NoSteps::TooShort => format!("{}: too short to find steps in", file.name),
-                    NoSteps::NoneFound => format!(
-                        "{}: no input column and no step found in the response \
-                         (give --input NAME, or a record with steps)",
-                        file.name
-                    ),
-                })
+            let f = steps_from_response(y).map_err(|cause| match cause {
+                NoSteps::TooShort => CliError::StepsTooShort {
+                    file: file.name.clone(),
+                },
+                NoSteps::NoneFound => CliError::NoInput {
+                    file: file.name.clone(),
+                    cause,
+                    hint: "give --input NAME, or a record with steps",
+                },
             })?;
             let steps = f.steps.iter().map(|s| step_out(s, rec.t0_s, rec.dt_s));
             let label = "steps found from the response".to_string();

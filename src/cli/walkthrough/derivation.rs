@@ -27,6 +27,8 @@ use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
 use propid_numerics::ModelReport;
 
+use super::WalkthroughError;
+
 /// What the walkthrough simulates.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Setup {
@@ -101,8 +103,8 @@ pub struct Derivation {
 }
 
 impl Derivation {
-    /// Runs the derivation. Errors are messages for the CLI.
-    pub fn run(setup: Setup) -> Result<Self, String> {
+    /// Runs the derivation.
+    pub fn run(setup: Setup) -> Result<Self, WalkthroughError> {
         check_setup(&setup)?;
         let (ad, bd) = discretise(&setup);
         let truth = responses_ss(&ad, &bd, &DVector::from_vec(vec![1.0, 0.0]), setup.horizon);
@@ -116,7 +118,7 @@ impl Derivation {
             .transpose()
             .lu()
             .solve(&h2.transpose())
-            .ok_or("H_1 is singular: no exact full-order model")?
+            .ok_or(WalkthroughError::SingularH1)?
             .transpose();
         let b_exact = h1.column(0).into_owned();
         let c_exact = unit(n);
@@ -133,7 +135,7 @@ impl Derivation {
         let mut sigma = vec![0.0; n];
         let (mut p, mut q) = (vec![0.0; n * r], vec![0.0; n * r]);
         svd.compute(h1.as_slice(), n, n, r, &mut sigma, &mut p, &mut q)
-            .map_err(|e| format!("SVD of H_1: {e}"))?;
+            .map_err(WalkthroughError::Svd)?;
         let p = DMatrix::from_column_slice(n, r, &p);
         let q = DMatrix::from_column_slice(n, r, &q);
         let d_inv = DMatrix::from_diagonal(&DVector::from_iterator(
@@ -170,19 +172,27 @@ impl Derivation {
     }
 }
 
-fn check_setup(s: &Setup) -> Result<(), String> {
+fn check_setup(s: &Setup) -> Result<(), WalkthroughError> {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     if !(positive(s.m) && positive(s.k) && s.d.is_finite() && s.d >= 0.0) {
-        return Err("m and k must be finite and > 0, d finite and >= 0".into());
+        return Err(WalkthroughError::Setup(
+            "m and k must be finite and > 0, d finite and >= 0",
+        ));
     }
     if !(positive(s.dt_s) && s.noise.is_finite() && s.noise >= 0.0) {
-        return Err("dt must be finite and > 0, noise finite and >= 0".into());
+        return Err(WalkthroughError::Setup(
+            "dt must be finite and > 0, noise finite and >= 0",
+        ));
     }
     if s.order == 0 || s.hankel < s.order + 2 || s.hankel > 1000 {
-        return Err("need order >= 1 and order + 2 <= Hankel size <= 1000".into());
+        return Err(WalkthroughError::Setup(
+            "need order >= 1 and order + 2 <= Hankel size <= 1000",
+        ));
     }
     if s.horizon < 2 * s.hankel + 1 {
-        return Err("the plot horizon must cover the measurement (2n + 1 samples)".into());
+        return Err(WalkthroughError::Setup(
+            "the plot horizon must cover the measurement (2n + 1 samples)",
+        ));
     }
     Ok(())
 }
@@ -235,9 +245,9 @@ fn cumulative(impulse: &[f64]) -> Vec<f64> {
 }
 
 /// Adds seeded white Gaussian noise to the samples after `y_0` (which stays the known `D = 0`).
-fn measure(clean: &[f64], sigma: f64, seed: u64) -> Result<Vec<f64>, String> {
+fn measure(clean: &[f64], sigma: f64, seed: u64) -> Result<Vec<f64>, WalkthroughError> {
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let normal = Normal::new(0.0, sigma).map_err(|e| format!("noise: {e}"))?;
+    let normal = Normal::new(0.0, sigma).map_err(WalkthroughError::Noise)?;
     Ok(clean
         .iter()
         .enumerate()
@@ -257,7 +267,7 @@ fn hankel(y: &[f64], n: usize, first: usize) -> DMatrix<f64> {
 }
 
 /// The core's ERA at the walkthrough's order on its Hankel size.
-fn era(s: &Setup, measured: &[f64]) -> Result<ModelReport, String> {
+fn era(s: &Setup, measured: &[f64]) -> Result<ModelReport, WalkthroughError> {
     let n = s.hankel;
     let limits = Limits {
         max_samples: measured.len(),
@@ -268,8 +278,8 @@ fn era(s: &Setup, measured: &[f64]) -> Result<ModelReport, String> {
         max_block_cols: n,
         max_pulses: 1,
     };
-    let mut ws = Workspace::new(&limits).map_err(|e| e.to_string())?;
-    let markov = MarkovSeq::from_data(1, 1, measured.to_vec()).map_err(|e| e.to_string())?;
+    let mut ws = Workspace::new(&limits).map_err(WalkthroughError::Core)?;
+    let markov = MarkovSeq::from_data(1, 1, measured.to_vec()).map_err(WalkthroughError::Core)?;
     let opts = IdentOptions {
         order: Some(s.order),
         svd: SvdChoice::Dense,
@@ -278,14 +288,14 @@ fn era(s: &Setup, measured: &[f64]) -> Result<ModelReport, String> {
         ..IdentOptions::default()
     };
     ws.identify_markov(&markov, s.dt_s, &opts)
-        .map_err(|e| format!("ERA: {e}"))?;
+        .map_err(WalkthroughError::Era)?;
     Ok(ws.to_report())
 }
 
 /// Responses of the reported `(A, B, C, D)` (single input, first output).
-fn responses_report(r: &ModelReport, len: usize) -> Result<Responses, String> {
+fn responses_report(r: &ModelReport, len: usize) -> Result<Responses, WalkthroughError> {
     let n = r.order;
-    let bad = || "the ERA report has inconsistent matrix sizes".to_string();
+    let bad = || WalkthroughError::InconsistentReport;
     if r.a.len() != n || r.b.len() != n || r.c.is_empty() || r.d.is_empty() {
         return Err(bad());
     }

@@ -7,6 +7,7 @@ use plotters::style::RGBColor;
 
 use super::derivation::{Derivation, Responses};
 use super::plot::{self, Series};
+use super::WalkthroughError;
 use crate::cli::CliError;
 
 const TRUTH: RGBColor = RGBColor(0, 0, 0);
@@ -14,7 +15,7 @@ const MEASURED: RGBColor = RGBColor(150, 150, 150);
 const MODEL: RGBColor = RGBColor(220, 40, 40);
 
 /// Writes every plot into `out`; returns the file names in page order.
-pub fn plots(d: &Derivation, out: &Path) -> Result<Vec<&'static str>, String> {
+pub fn plots(d: &Derivation, out: &Path) -> Result<Vec<&'static str>, WalkthroughError> {
     let dt = d.setup.dt_s;
     let truth = &d.truth;
     let mut files = vec!["measurement.svg"];
@@ -61,7 +62,7 @@ fn response_pair(
     model: &Responses,
     imp: &str,
     step: &str,
-) -> Result<(), String> {
+) -> Result<(), WalkthroughError> {
     let dt = d.setup.dt_s;
     plot::lines(
         &out.join(imp),
@@ -146,7 +147,7 @@ pub fn write(d: &Derivation, out: &Path, files: &[&str]) -> Result<(), CliError>
         "files": files,
     });
     let path = out.join("walkthrough.json");
-    let text = serde_json::to_string_pretty(&json).map_err(|e| CliError::Input(e.to_string()))?;
+    let text = serde_json::to_string_pretty(&json).map_err(CliError::Json)?;
     std::fs::write(&path, text).map_err(|e| CliError::io(format!("writing {}", path.display()), e))
 }
 

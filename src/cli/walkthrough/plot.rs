@@ -2,7 +2,10 @@
 
 use std::path::Path;
 
+use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;
+
+use super::WalkthroughError;
 
 /// One curve of a line chart.
 pub struct Series<'a> {
@@ -26,7 +29,7 @@ pub fn lines(
     dt_s: f64,
     fit: &[&[f64]],
     series: &[Series<'_>],
-) -> Result<(), String> {
+) -> Result<(), WalkthroughError> {
     let len = series.iter().map(|s| s.y.len()).max().unwrap_or(0);
     let (lo, hi) = range(fit);
     let t_end = (len.max(2) - 1) as f64 * dt_s;
@@ -77,10 +80,15 @@ pub fn lines(
 
 /// Pareto chart: the first `shown` singular values as bars (share of the sum of all, %) and
 /// the cumulative share (%) as a line with dots.
-pub fn pareto(path: &Path, title: &str, sigma: &[f64], shown: usize) -> Result<(), String> {
+pub fn pareto(
+    path: &Path,
+    title: &str,
+    sigma: &[f64],
+    shown: usize,
+) -> Result<(), WalkthroughError> {
     let total: f64 = sigma.iter().sum();
     if !(total.is_finite() && total > 0.0) {
-        return Err("no singular values to plot".into());
+        return Err(WalkthroughError::NoSingularValues);
     }
     let shown = shown.min(sigma.len()).max(1);
     let root = SVGBackend::new(path, (900, 480)).into_drawing_area();
@@ -164,6 +172,6 @@ fn clip(y: f64, lo: f64, hi: f64) -> f64 {
     }
 }
 
-fn err<E: std::fmt::Display>(e: E) -> String {
-    format!("plot: {e}")
+fn err(e: DrawingAreaErrorKind<std::io::Error>) -> WalkthroughError {
+    WalkthroughError::Plot(e)
 }

@@ -31,6 +31,7 @@ pub mod pulse_flags;
 use boot::{BootTracker, HelloVerdict};
 use comments::{parse_comment, CommentFact};
 use placer::{IndexPlacer, Placement};
+use propid_numerics::segment::SegmentRules;
 use propid_wire::protocol::csv::{CsvAck, CsvDecoder, CsvItem, CsvOptions, CsvRow};
 use propid_wire::protocol::csv_command::{encode_csv_command, CsvCommandError, CsvCommandKind};
 use propid_wire::protocol::message::{
@@ -43,9 +44,9 @@ use pulse_flags::PulseFlagger;
 pub struct CsvLinkOptions {
     /// Line decoder options (ESC µs range, motor poles, longest line).
     pub csv: CsvOptions,
-    /// A throttle change larger than this (fraction) is an excursion from the level.
+    /// Level tolerance of the pulse rule, fraction ([`SegmentRules::level_tolerance`]).
     pub level_tolerance: f64,
-    /// An excursion that returns within this many samples is a pulse.
+    /// Longest pulse, samples ([`SegmentRules::max_pulse_samples`]).
     pub max_pulse_samples: usize,
 }
 
@@ -53,8 +54,8 @@ impl Default for CsvLinkOptions {
     fn default() -> Self {
         Self {
             csv: CsvOptions::default(),
-            level_tolerance: 0.005,
-            max_pulse_samples: 64,
+            level_tolerance: SegmentRules::CSV_BENCH.level_tolerance,
+            max_pulse_samples: SegmentRules::CSV_BENCH.max_pulse_samples,
         }
     }
 }
@@ -101,7 +102,11 @@ impl CsvLink {
             decoder: CsvDecoder::new(opts.csv),
             state: LinkState {
                 placer: IndexPlacer::new(),
-                flagger: PulseFlagger::new(opts.level_tolerance, opts.max_pulse_samples),
+                flagger: PulseFlagger::new(SegmentRules {
+                    level_tolerance: opts.level_tolerance,
+                    max_pulse_samples: opts.max_pulse_samples,
+                    ..SegmentRules::CSV_BENCH
+                }),
                 sent: [None; 6],
                 boot_id: BootTracker::default(),
                 stats: CsvLinkStats::default(),

@@ -2,44 +2,48 @@
 //!
 //! A binary SAMPLE says which samples a device-timed pulse covered (IMPULSE_ACTIVE); the worker
 //! takes rising edges of that flag as pulse starts. A CSV bench only shows the throttle it
-//! applied, so the same facts are read off the throttle column with one rule:
-//!
-//! > An **excursion** is a run of samples whose throttle differs from the held level by more
-//! > than the level tolerance. If the throttle comes back to the level within
-//! > `max_pulse_samples` samples, the excursion was a **pulse**: its samples get IMPULSE_ACTIVE.
-//! > Otherwise it was a **level change** (a step or a ramp): its samples pass unflagged and the
-//! > last of them is the new held level.
+//! applied, so the same facts are read off the throttle column by the pulse rule of
+//! [`propid_numerics::segment`]: a run of at most `max_pulse_samples` samples that leaves the
+//! level by more than the level tolerance and comes back to it is a **pulse**, and its samples
+//! get IMPULSE_ACTIVE; anything else (a step, a ramp) passes unflagged. It is the rule a
+//! recorded file is segmented by, fed one sample at a time
+//! ([`PulseClassifier`]), so a record and the stream it came from answer the same.
 //!
 //! This needs a look-ahead of at most `max_pulse_samples`, so samples are held in a delay line
-//! of that fixed capacity while an excursion is open (a pulse of one sample period — the
+//! of that fixed capacity while a run may still be a pulse (a pulse of one sample period — the
 //! Kronecker delta of the ERA derivation — delays its own sample by one row). A delay line is
 //! the price of the missing flag: the worker's windows then see exactly what a binary stand
 //! would have flagged, so a CSV bench is identified by the same code path.
 //!
-//! Within the tolerance the held level follows the throttle (slow drift is not an excursion).
+//! The rule runs on the wire's throttle steps (`1/THROTTLE_FULL_SCALE`), the tolerance rounded
+//! to whole steps, so that a value is compared exactly as the wire carries it.
 
-use propid_wire::protocol::message::{Sample, SampleFlags};
+use propid_numerics::segment::{Decision, PulseClassifier, SegmentRules};
+use propid_wire::protocol::message::{Sample, SampleFlags, THROTTLE_FULL_SCALE};
 
 /// Flags pulses in a stream of samples (see the module documentation). Allocation-free after
 /// [`PulseFlagger::new`].
 #[derive(Debug, Clone)]
 pub struct PulseFlagger {
-    tolerance_raw: u16,
-    level: Option<u16>,
+    classifier: PulseClassifier,
     open: Vec<Sample>,
-    cap: usize,
     pulses: u64,
 }
 
 impl PulseFlagger {
-    /// `tolerance` as a throttle fraction (0..1), `max_pulse_samples` the longest pulse (≥ 1).
-    pub fn new(tolerance: f64, max_pulse_samples: usize) -> Self {
-        let cap = max_pulse_samples.max(1);
+    /// `rules` with the level tolerance as a throttle fraction (0..1) and the longest pulse
+    /// (at least 1) in samples.
+    pub fn new(rules: SegmentRules) -> Self {
+        let scale = f64::from(THROTTLE_FULL_SCALE);
+        let steps = (rules.level_tolerance * scale).round().clamp(0.0, scale) as u16;
+        let rules = SegmentRules {
+            level_tolerance: f64::from(steps),
+            max_pulse_samples: rules.max_pulse_samples.max(1),
+            ..rules
+        };
         Self {
-            tolerance_raw: (tolerance * 10_000.0).round().clamp(0.0, 10_000.0) as u16,
-            level: None,
-            open: Vec::with_capacity(cap),
-            cap,
+            classifier: PulseClassifier::new(rules),
+            open: Vec::with_capacity(rules.max_pulse_samples),
             pulses: 0,
         }
     }
@@ -49,50 +53,45 @@ impl PulseFlagger {
         self.pulses
     }
 
-    fn near(&self, a: u16, b: u16) -> bool {
-        a.abs_diff(b) <= self.tolerance_raw
-    }
-
-    /// One sample in; samples out in order, once their excursion (if any) is decided.
+    /// One sample in; samples out in order, once their run (if it may be a pulse) is decided.
     pub fn push(&mut self, s: Sample, emit: &mut impl FnMut(Sample)) {
-        let Some(level) = self.level else {
-            self.level = Some(s.throttle);
-            return emit(s);
-        };
-        if self.near(s.throttle, level) {
-            if !self.open.is_empty() {
+        match self.classifier.push(f64::from(s.throttle)) {
+            Decision::Pass => emit(s),
+            Decision::Hold => self.open.push(s),
+            Decision::Release { hold } => {
+                self.release(emit);
+                if hold {
+                    self.open.push(s);
+                } else {
+                    emit(s);
+                }
+            }
+            Decision::Pulse(_) => {
                 self.pulses += 1;
                 for mut p in self.open.drain(..) {
                     p.flags.0 |= SampleFlags::IMPULSE_ACTIVE.0;
                     emit(p);
                 }
+                emit(s);
             }
-            self.level = Some(s.throttle);
-            return emit(s);
         }
-        if self.open.len() == self.cap {
-            self.close_as_level_change(emit);
-            return self.push(s, emit);
-        }
-        self.open.push(s);
     }
 
-    /// Releases an open excursion as a level change (end of input, a new boot, a gap too long
-    /// to tell): a pulse cannot be confirmed without its end.
+    /// Releases held samples unflagged (end of input, a new boot, a gap too long to tell): a
+    /// pulse cannot be confirmed without its end.
     pub fn flush(&mut self, emit: &mut impl FnMut(Sample)) {
-        if !self.open.is_empty() {
-            self.close_as_level_change(emit);
+        if self.classifier.flush() {
+            self.release(emit);
         }
     }
 
     /// Forgets the held level (a new boot).
     pub fn restart(&mut self, emit: &mut impl FnMut(Sample)) {
         self.flush(emit);
-        self.level = None;
+        self.classifier.restart();
     }
 
-    fn close_as_level_change(&mut self, emit: &mut impl FnMut(Sample)) {
-        self.level = self.open.last().map(|s| s.throttle);
+    fn release(&mut self, emit: &mut impl FnMut(Sample)) {
         for p in self.open.drain(..) {
             emit(p);
         }
@@ -104,7 +103,10 @@ mod tests {
     use super::*;
 
     fn run(throttles: &[u16], cap: usize) -> (Vec<(u16, bool)>, u64) {
-        let mut f = PulseFlagger::new(0.005, cap);
+        let mut f = PulseFlagger::new(SegmentRules {
+            max_pulse_samples: cap,
+            ..SegmentRules::CSV_BENCH
+        });
         let mut out = Vec::new();
         let mut emit = |s: Sample| {
             out.push((s.throttle, s.flags.contains(SampleFlags::IMPULSE_ACTIVE)));
@@ -156,5 +158,50 @@ mod tests {
         assert_eq!(pulses, 0);
         assert_eq!(out.len(), 41);
         assert!(out.iter().all(|o| !o.1));
+    }
+
+    #[test]
+    fn the_flags_are_the_pulses_a_recorded_file_is_segmented_into() {
+        // wobble of ±10 steps (within the 0.005 tolerance), pulses of both signs and widths,
+        // a pulse right after a step, two values in a row (not one flat pulse), a ramp
+        let mut t: Vec<u16> = Vec::new();
+        for (v, n) in [
+            (3000, 30),
+            (3300, 1),
+            (3000, 20),
+            (2700, 4),
+            (3000, 20),
+            (4000, 3),
+            (3700, 2),
+            (4000, 70),
+            (4500, 1),
+            (4000, 30),
+            (4300, 2),
+            (4600, 2),
+            (4000, 30),
+        ] {
+            t.extend(std::iter::repeat_n(v, n));
+        }
+        t.extend((0..40).map(|k| 4000 + 60 * k));
+        for (k, v) in t.iter_mut().enumerate() {
+            *v = (i32::from(*v) + [0, 10, -10, 5][k % 4]) as u16;
+        }
+        let (out, pulses) = run(&t, 64);
+        let u: Vec<f64> = t.iter().map(|&v| f64::from(v) / 10_000.0).collect();
+        let rules = SegmentRules::CSV_BENCH;
+        let offline: Vec<_> =
+            propid_numerics::segment::pulses(propid_numerics::segment::Command::new(&u), &rules)
+                .collect();
+        assert_eq!(pulses, 4);
+        assert_eq!(offline.len(), 4);
+        let flagged: Vec<bool> = out.iter().map(|o| o.1).collect();
+        let want: Vec<bool> = (0..t.len())
+            .map(|k| {
+                offline
+                    .iter()
+                    .any(|p| (p.start..p.start + p.width).contains(&k))
+            })
+            .collect();
+        assert_eq!(flagged, want);
     }
 }

@@ -412,30 +412,22 @@ pub fn looks_like_pulses(input: &AnyInput<'_>, max_pulse_width: usize) -> bool {
         || is_ramped_staircase(u, max_pulse_width)
 }
 
-/// True when at least half of the samples of `u` lie in runs of constant value longer than
-/// `max_pulse_width` samples: flat levels joined by ramps (or steps), possibly with pulses on
-/// them. Random, chirp and multisine inputs have no such runs.
+/// True when `u` is a ramped staircase with pulses up to `max_pulse_width` samples wide
+/// ([`crate::segment::is_ramped_staircase`]).
 pub fn is_ramped_staircase(u: &[f64], max_pulse_width: usize) -> bool {
-    let mut flat = 0;
-    let mut start = 0;
-    for k in 1..=u.len() {
-        if k == u.len() || !(u[k] - u[start]).abs().le(&1e-9) {
-            if k - start > max_pulse_width {
-                flat += k - start;
-            }
-            start = k;
-        }
-    }
-    flat * 2 >= u.len() && !u.is_empty()
+    let rules = crate::segment::SegmentRules {
+        max_pulse_samples: max_pulse_width,
+        ..crate::segment::SegmentRules::DEFAULT
+    };
+    crate::segment::is_ramped_staircase(crate::segment::Command::new(u), &rules)
 }
 
-/// True when `u` changes (by more than 1e-9) on at most half of its samples.
+/// True when `u` is piecewise constant ([`crate::segment::is_piecewise_constant`]).
 pub fn is_piecewise_constant(u: &[f64]) -> bool {
-    let changes = u
-        .windows(2)
-        .filter(|w| w[0].is_finite() && w[1].is_finite() && (w[1] - w[0]).abs() > 1e-9)
-        .count();
-    changes * 2 <= u.len()
+    crate::segment::is_piecewise_constant(
+        crate::segment::Command::new(u),
+        &crate::segment::SegmentRules::DEFAULT,
+    )
 }
 
 /// Root mean square of `v` (NaN when empty).

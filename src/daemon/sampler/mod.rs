@@ -29,22 +29,25 @@
 //! itself. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
 //! acknowledges it or the stop timeout passes.
 
-use crossbeam_channel::{Sender, TrySendError};
+mod handler;
+
+use crossbeam_channel::Sender;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::time::{Duration, Instant};
 
 use super::config::WireProtocol;
 use super::csv_link::CsvLinkOptions;
-use super::item::{EventItem, Item, Notice, PlanNote, SampleItem};
+use super::item::{Item, Notice, PlanNote};
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
 use super::tracker::Tracker;
 use super::wire::Wire;
 use super::DaemonError;
+use handler::Handler;
 use propid_wire::protocol::detect::WireFormat;
-use propid_wire::protocol::message::{msg_type, Frame, Message};
+use propid_wire::protocol::message::{Frame, Message};
 use propid_wire::protocol::MAX_FRAME_LEN;
 
 /// Where the experiment stands.
@@ -116,108 +119,6 @@ const RESEND: Duration = Duration::from_millis(50);
 
 /// Seq of the shutdown STOP when no plan assigns one.
 const STOP_SEQ: u16 = 0xFFF0;
-
-/// Frame handling, separate from the decoder so both can be borrowed at once.
-struct Handler {
-    tx: Sender<Item>,
-    lossless: bool,
-    tracker: Tracker,
-    stats: LinkStats,
-    /// Samples dropped because the queue was full (part of `samples_lost`).
-    overflow_lost: u64,
-    plan: Option<Box<dyn Plan>>,
-    segment_announced: bool,
-    awaiting_stop: Option<u16>,
-    stop_acked: bool,
-    now_us: u64,
-}
-
-impl Handler {
-    fn send(&mut self, item: Item) {
-        if self.lossless {
-            let _ = self.tx.send(item);
-            return;
-        }
-        match self.tx.try_send(item) {
-            Ok(()) => {}
-            Err(TrySendError::Full(item)) => {
-                self.stats.overflows += 1;
-                if matches!(item, Item::Sample(_)) {
-                    self.overflow_lost += 1;
-                }
-            }
-            Err(TrySendError::Disconnected(_)) => {}
-        }
-    }
-
-    fn on_frame(&mut self, frame: Frame) {
-        match &frame.msg {
-            Message::Hello(h) if self.tracker.hello(h.boot_id) => {
-                self.segment_announced = true;
-                self.send(Item::Segment { boot_id: h.boot_id });
-            }
-            Message::Sample(s) => {
-                self.stats.samples += 1;
-                let placed = self.tracker.sample(s.sample_index, s.t_us);
-                if placed.new_segment && !std::mem::take(&mut self.segment_announced) {
-                    self.send(Item::Segment { boot_id: 0 });
-                }
-                // After a new segment: a gap too long to mask (announced, not bridged).
-                if placed.lost_before > 0 {
-                    self.send(Item::Gap {
-                        before: placed.index,
-                        count: placed.lost_before,
-                    });
-                }
-                if placed.duplicate {
-                    // dropped (counted in `duplicates`), as ingest does
-                    if let Some(plan) = self.plan.as_mut() {
-                        plan.on_frame(self.now_us, &frame);
-                    }
-                    return;
-                }
-                let item = SampleItem {
-                    index: placed.index,
-                    t_us: placed.t_us,
-                    throttle_raw: s.throttle,
-                    flags: s.flags.bits(),
-                    thrust_n: valid(s.thrust_n, s.flags.bits(), 1 << 1),
-                    torque_nm: valid(s.torque_nm, s.flags.bits(), 1 << 2),
-                    rpm: valid(s.rpm, s.flags.bits(), 1 << 3),
-                    received: Instant::now(),
-                };
-                self.send(Item::Sample(item));
-            }
-            Message::Event(e) => {
-                let item = EventItem {
-                    code: e.code.to_u8(),
-                    arg: e.arg,
-                    t_us: self.tracker.event_time(e.t_us),
-                    sample_index: self.tracker.event_index(e.sample_index),
-                };
-                self.send(Item::Event(item));
-            }
-            Message::Ack(a)
-                if Some(a.cmd_seq) == self.awaiting_stop && a.cmd_type == msg_type::STOP =>
-            {
-                self.stop_acked = true;
-            }
-            _ => {}
-        }
-        if let Some(plan) = self.plan.as_mut() {
-            plan.on_frame(self.now_us, &frame);
-        }
-    }
-}
-
-/// A measurement whose VALID flag is clear is "not measured": NaN.
-fn valid(v: f32, flags: u16, bit: u16) -> f32 {
-    if flags & bit != 0 {
-        v
-    } else {
-        f32::NAN
-    }
-}
 
 /// The sampler thread's state.
 pub struct Sampler {
@@ -323,10 +224,9 @@ impl Sampler {
                 }
                 Some(PlanStatus::LinkFailed) => {
                     let _ = self.stop_device();
-                    return Err(DaemonError::LinkFailed(format!(
-                        "{} stopped acknowledging commands",
-                        self.source.describe()
-                    )));
+                    return Err(DaemonError::LinkFailed {
+                        link: self.source.describe(),
+                    });
                 }
                 _ => {}
             }
@@ -537,296 +437,4 @@ fn sleep_unless(shutdown: &Shutdown, d: Duration) {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::daemon::source::{ScriptedSource, Step};
-    use propid_sim::record::{record, RecordSummary};
-    use propid_sim::SimConfig;
-    use propid_wire::protocol::message::{Hello, Sample, SampleFlags};
-    use propid_wire::protocol::{encode_frame, Decoder, EscProtocol};
-
-    fn cfg() -> SamplerConfig {
-        SamplerConfig {
-            stop_timeout: Duration::from_millis(100),
-            max_run: None,
-            reconnect_initial: Duration::from_millis(1),
-            reconnect_max: Duration::from_millis(2),
-            protocol: WireProtocol::Auto,
-            csv: CsvLinkOptions::default(),
-            silence_timeout: SILENCE_TIMEOUT,
-        }
-    }
-
-    /// A recording of the simulated stand (`propid sim --record`: firmware + plan, faster than
-    /// real time): one operating point, `pulses` pulses; and what it holds.
-    fn stand(pulses: u32) -> (Vec<u8>, RecordSummary) {
-        let mut cfg = SimConfig::default();
-        cfg.experiment.levels = vec![0.4];
-        cfg.experiment.pulses_per_level = pulses;
-        let mut bytes = Vec::new();
-        let sum = record(&cfg, 60.0, &mut bytes).unwrap();
-        assert!(sum.finished);
-        (bytes, sum)
-    }
-
-    /// SAMPLE frames the recording holds intact.
-    fn samples_sent(sum: &RecordSummary) -> u64 {
-        sum.firmware.samples - sum.faults.samples_lost()
-    }
-
-    #[test]
-    fn csv_stream_is_decoded_by_auto_and_by_csv() {
-        let mut csv = String::from("t_us,throttle,thrust_N\n");
-        for k in 0..100 {
-            let thr = if k % 25 == 10 { 3500 } else { 3000 };
-            csv += &format!("{},{thr},1.0\n", 5_000 + k * 1000);
-        }
-        for protocol in [WireProtocol::Auto, WireProtocol::Csv] {
-            let src = ScriptedSource::new(vec![Step::Data(csv.clone().into_bytes())]);
-            let (tx, rx) = crossbeam_channel::bounded(1024);
-            let c = SamplerConfig { protocol, ..cfg() };
-            let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), c).run();
-            assert!(out.error.is_none(), "{:?}", out.error);
-            assert_eq!(out.stats.wire, "csv");
-            assert_eq!(out.stats.samples, 100);
-            assert_eq!(out.stats.frames_ok, 101);
-            assert_eq!(out.stats.samples_lost, 0);
-            let items: Vec<Item> = rx.try_iter().collect();
-            let notices = items
-                .iter()
-                .filter(|i| **i == Item::Notice(Notice::CsvLink));
-            assert_eq!(notices.count(), 1);
-            let samples: Vec<&SampleItem> = items
-                .iter()
-                .filter_map(|i| match i {
-                    Item::Sample(s) => Some(s),
-                    _ => None,
-                })
-                .collect();
-            assert_eq!(samples.len(), 100);
-            let pulses = samples
-                .iter()
-                .filter(|s| s.flags & crate::daemon::item::flags::IMPULSE_ACTIVE != 0)
-                .count();
-            assert_eq!(pulses, 4);
-            assert!(samples.iter().enumerate().all(|(k, s)| s.index == k as u64));
-        }
-    }
-
-    #[test]
-    fn binary_stream_passes_detection() {
-        let (bytes, sum) = stand(1);
-        let src = ScriptedSource::new(vec![Step::Data(bytes)]);
-        let (tx, _rx) = crossbeam_channel::bounded(1 << 16);
-        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
-        assert!(out.error.is_none());
-        assert_eq!(out.stats.samples, samples_sent(&sum));
-        assert_eq!(out.stats.frames_ok, sum.decode.frames_ok);
-    }
-
-    #[test]
-    fn hangup_reconnects_and_counts_everything_once() {
-        let (bytes, sum) = stand(2);
-        let half = bytes.len() / 2;
-        let mut src = ScriptedSource::new(vec![
-            Step::Data(bytes[..half].to_vec()),
-            Step::Stall,
-            Step::Hangup,
-            Step::Data(bytes[half..].to_vec()),
-        ]);
-        src.refuse_reconnects = 2;
-        let (tx, rx) = crossbeam_channel::bounded(1 << 16);
-        let s = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg());
-        let out = s.run();
-        assert!(out.error.is_none());
-        assert_eq!(out.stats.reconnects, 1);
-        assert_eq!(out.stats.samples, samples_sent(&sum));
-        assert_eq!(out.stats.frames_ok, sum.decode.frames_ok);
-        assert_eq!(out.stats.samples_lost, 0);
-        let notices: Vec<Notice> = rx
-            .try_iter()
-            .filter_map(|i| match i {
-                Item::Notice(n) => Some(n),
-                _ => None,
-            })
-            .collect();
-        assert_eq!(notices, vec![Notice::Disconnected, Notice::Reconnected]);
-    }
-
-    #[test]
-    fn full_queue_is_counted_as_overflow_never_waited_for() {
-        let (bytes, sum) = stand(2);
-        // what the sampler queues for this stream: the first HELLO's segment, every SAMPLE
-        // and every EVENT (ACKs, LOGs and repeated HELLOs of the same boot are not queued)
-        let mut items = 1u64;
-        Decoder::new().push(&bytes, |f| {
-            if matches!(f.msg, Message::Sample(_) | Message::Event(_)) {
-                items += 1;
-            }
-        });
-        let src = ScriptedSource::new(vec![Step::Data(bytes)]);
-        let (tx, rx) = crossbeam_channel::bounded(16);
-        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
-        let queued: Vec<Item> = rx.try_iter().collect();
-        assert_eq!(queued.len(), 16);
-        // every sample and event beyond the 16 queued items was dropped and counted
-        assert_eq!(out.stats.overflows, items - 16);
-        assert_eq!(out.stats.samples, samples_sent(&sum));
-        // every dropped sample is lost to the worker: counted in samples_lost
-        let queued_samples = queued
-            .iter()
-            .filter(|i| matches!(i, Item::Sample(_)))
-            .count() as u64;
-        assert_eq!(out.stats.samples_lost, samples_sent(&sum) - queued_samples);
-    }
-
-    fn frame(seq: u16, msg: Message) -> Vec<u8> {
-        let mut buf = [0u8; MAX_FRAME_LEN];
-        let n = encode_frame(seq, &msg, &mut buf);
-        buf[..n].to_vec()
-    }
-
-    fn sample(index: u32) -> Message {
-        Message::Sample(Sample {
-            sample_index: index,
-            t_us: index.wrapping_mul(1000),
-            throttle: 4000,
-            flags: SampleFlags(SampleFlags::THRUST_VALID.bits()),
-            thrust_n: 1.0,
-            torque_nm: f32::NAN,
-            rpm: f32::NAN,
-            voltage_v: f32::NAN,
-            current_a: f32::NAN,
-        })
-    }
-
-    #[test]
-    fn index_jump_beyond_the_largest_gap_is_a_new_segment_not_a_bridged_gap() {
-        let hello = Message::Hello(Hello {
-            proto_minor: 0,
-            esc_protocol: EscProtocol::from_u8(5),
-            fw_version: 1,
-            boot_id: 77,
-            t_us: 0,
-            sample_rate_hz: 1000,
-            channels: 1,
-            motor_poles: 14,
-            caps: 0,
-            name: Hello::name_field("t"),
-        });
-        let mut bytes = frame(0, hello);
-        let indices = [0u32, 1, 2, 3, 200_000, 200_001];
-        for (seq, &i) in indices.iter().enumerate() {
-            bytes.extend(frame(seq as u16 + 1, sample(i)));
-        }
-        let src = ScriptedSource::new(vec![Step::Data(bytes)]);
-        let (tx, rx) = crossbeam_channel::bounded(64);
-        let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), cfg()).run();
-        let kinds: Vec<String> = rx
-            .try_iter()
-            .map(|i| match i {
-                Item::Sample(s) => format!("sample {}", s.index),
-                Item::Gap { before, count } => format!("gap {count} before {before}"),
-                Item::Segment { boot_id } => format!("segment {boot_id}"),
-                other => format!("{other:?}"),
-            })
-            .collect();
-        assert_eq!(
-            kinds,
-            [
-                "segment 77",
-                "sample 0",
-                "sample 1",
-                "sample 2",
-                "sample 3",
-                "segment 0",
-                "gap 199996 before 200000",
-                "sample 200000",
-                "sample 200001",
-            ]
-        );
-        let s = &out.stats;
-        assert_eq!((s.samples, s.samples_lost), (6, 199_996));
-        assert_eq!((s.gaps, s.large_gaps, s.segments), (1, 1, 2));
-    }
-
-    /// A live link that never says anything.
-    struct Silent;
-    impl Source for Silent {
-        fn read(&mut self, _: &mut [u8]) -> Result<usize, SourceError> {
-            std::thread::sleep(Duration::from_millis(2));
-            Ok(0)
-        }
-        fn write_all(&mut self, _: &[u8]) -> Result<(), SourceError> {
-            Ok(())
-        }
-        fn reconnect(&mut self) -> Result<(), SourceError> {
-            Ok(())
-        }
-        fn is_live(&self) -> bool {
-            true
-        }
-        fn describe(&self) -> String {
-            "silent".into()
-        }
-    }
-
-    /// A plan that only counts how often it was told the link is up.
-    struct Counting(std::sync::Arc<std::sync::atomic::AtomicUsize>);
-    impl Plan for Counting {
-        fn on_connect(&mut self, _: u64) {
-            self.0.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-        }
-        fn on_frame(&mut self, _: u64, _: &Frame) {}
-        fn poll(&mut self, _: u64) {}
-        fn abort(&mut self, _: u64) {}
-        fn next(&mut self, _: &mut dyn FnMut(u16, &Message), _: &mut dyn FnMut(PlanNote)) {}
-        fn status(&self) -> PlanStatus {
-            PlanStatus::Running
-        }
-    }
-
-    #[test]
-    fn a_silent_auto_link_is_reported_once_and_the_plan_starts_anyway() {
-        let connects = std::sync::Arc::new(std::sync::atomic::AtomicUsize::new(0));
-        let plan: Box<dyn Plan> = Box::new(Counting(connects.clone()));
-        let (tx, rx) = crossbeam_channel::bounded(64);
-        let c = SamplerConfig {
-            silence_timeout: Duration::from_millis(30),
-            max_run: Some(Duration::from_millis(150)),
-            ..cfg()
-        };
-        let out = Sampler::new(
-            Box::new(Silent),
-            tx,
-            Some(plan),
-            None,
-            Shutdown::manual(),
-            c,
-        )
-        .run();
-        assert!(out.error.is_none());
-        assert_eq!(out.stats.wire, "undecided");
-        let items: Vec<Item> = rx.try_iter().collect();
-        assert_eq!(
-            items,
-            vec![
-                Item::Notice(Notice::NoData),
-                Item::Notice(Notice::StopUnacknowledged)
-            ]
-        );
-        assert_eq!(connects.load(std::sync::atomic::Ordering::SeqCst), 1);
-    }
-
-    #[test]
-    fn shutdown_sends_stop_and_reports_it_unacknowledged_without_a_device() {
-        let src = ScriptedSource::new(vec![Step::Stall; 1000]);
-        let (tx, rx) = crossbeam_channel::bounded(64);
-        let stop = Shutdown::manual();
-        stop.request();
-        let out = Sampler::new(Box::new(src), tx, None, None, stop, cfg()).run();
-        assert!(out.error.is_none());
-        let items: Vec<Item> = rx.try_iter().collect();
-        assert_eq!(items, vec![Item::Notice(Notice::StopUnacknowledged)]);
-    }
-}
+mod tests;

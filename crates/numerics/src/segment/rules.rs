@@ -1,0 +1,123 @@
+//! The one set of thresholds of the segmentation (see [`super`] for the rules they serve).
+
+/// Every threshold that decides where the levels, steps, ramps and pulses of a command are.
+///
+/// [`SegmentRules::DEFAULT`] is for a *logged* command: the value a stand applied, repeated
+/// exactly while it holds a level. Callers change a field only for a reason they can name: the
+/// daemon's CSV link passes its configured `identify.level_tolerance` and
+/// `csv.max_pulse_samples` (a bench's throttle column, [`SegmentRules::CSV_BENCH`] by default),
+/// the identification core its `IdentOptions::max_pulse_width`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentRules {
+    /// Two command values at most this far apart are the same level (command units: a
+    /// throttle fraction 0..1, or the input's own unit). `1e-9`: a logged command repeats its
+    /// value exactly, so this only absorbs decimal-to-binary rounding of a text log (TSP/1
+    /// carries throttle in steps of `1e-4`, a CSV log with a few decimals), while any real
+    /// change of the command (the smallest is one TSP/1 step) is a change.
+    pub level_tolerance: f64,
+    /// Longest pulse, samples: a run of at most this many samples between two samples at the
+    /// same level is a pulse; a longer run is a level. `32`: the stand's pulses are one to a
+    /// few samples wide, a level lasts far longer than the response settles (hundreds of
+    /// samples), and a ramp's steps between levels hold each value for fewer samples than this.
+    pub max_pulse_samples: usize,
+    /// Piecewise constant: at most this fraction of the samples start a new run. `0.5`: a
+    /// staircase with pulses and ramps changes on a few percent of its samples, random, chirp
+    /// and multisine inputs on nearly all.
+    pub max_change_fraction: f64,
+    /// Ramped staircase: at least this fraction of the samples lie in levels (runs longer than
+    /// [`max_pulse_samples`](Self::max_pulse_samples)). `0.5`: flat levels joined by ramps
+    /// still hold most of the record; random, chirp and multisine inputs have no such runs.
+    pub min_level_fraction: f64,
+    /// Ramp: the command follows time with a Pearson correlation `|r|` above this. `0.9`.
+    pub ramp_min_correlation: f64,
+    /// Ramp: fewest measured samples to call anything a ramp. `8`.
+    pub ramp_min_samples: usize,
+    /// A ramp is cut into this many windows of equal length, one operating point each. `4`.
+    pub ramp_windows: usize,
+    /// Steps found from the response when the command was not logged.
+    pub response: ResponseStepRules,
+}
+
+/// Thresholds of the steps found from a response alone (the method is documented where it
+/// runs: the application's `ingest::steps`). `σ` is the noise of the smoothed response, `R`
+/// its 1st-to-99th percentile range, `thr = max(noise_sigmas·σ, range_fraction·R)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResponseStepRules {
+    /// Running median first, samples (odd): removes spikes. `3`.
+    pub median_samples: usize,
+    /// Centred moving mean after the median, samples (even, so ripple at the Nyquist frequency
+    /// cancels exactly). `6`.
+    pub smooth_samples: usize,
+    /// Samples that must stay within `settle_fraction·thr` for a level to count as settled.
+    /// `10`; a record needs twice this many measured samples.
+    pub settle_samples: usize,
+    /// Detection threshold in noise standard deviations. `6`: no false step in noise.
+    pub noise_sigmas: f64,
+    /// Detection threshold as a fraction of the range `R`. `0.05`: a noiseless record still
+    /// needs a change of 5 % of its range.
+    pub range_fraction: f64,
+    /// Onset: walk back while the response is more than this many `σ` from the level. `3`.
+    pub onset_sigmas: f64,
+    /// Onset: … or more than this fraction of `thr`. `0.25`.
+    pub onset_fraction: f64,
+    /// Settled: the smoothed range of a window is below this fraction of `thr`. `0.5`.
+    pub settle_fraction: f64,
+}
+
+impl SegmentRules {
+    /// The rules for a logged command (see the field docs for each value and why).
+    pub const DEFAULT: SegmentRules = SegmentRules {
+        level_tolerance: 1e-9,
+        max_pulse_samples: 32,
+        max_change_fraction: 0.5,
+        min_level_fraction: 0.5,
+        ramp_min_correlation: 0.9,
+        ramp_min_samples: 8,
+        ramp_windows: 4,
+        response: ResponseStepRules::DEFAULT,
+    };
+
+    /// The daemon's defaults for a CSV bench's throttle column (its config keys
+    /// `identify.level_tolerance` and `csv.max_pulse_samples`; the other fields as
+    /// [`DEFAULT`](Self::DEFAULT)): `0.005`, half a percent of throttle, because a bench's
+    /// column is rounded text and may wobble by a step while the plan's pulses are several
+    /// percent; `64` samples, the daemon's long-standing limit (it decides live, sample by
+    /// sample, so a pulse held a little longer at a fast bench rate is still a pulse).
+    pub const CSV_BENCH: SegmentRules = SegmentRules {
+        level_tolerance: 0.005,
+        max_pulse_samples: 64,
+        ..SegmentRules::DEFAULT
+    };
+
+    /// Whether `a` and `b` are the same level: `|a − b| ≤ level_tolerance` (false when either
+    /// is NaN).
+    pub fn same(&self, a: f64, b: f64) -> bool {
+        (a - b).abs() <= self.level_tolerance
+    }
+}
+
+impl Default for SegmentRules {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl ResponseStepRules {
+    /// The values documented on each field.
+    pub const DEFAULT: ResponseStepRules = ResponseStepRules {
+        median_samples: 3,
+        smooth_samples: 6,
+        settle_samples: 10,
+        noise_sigmas: 6.0,
+        range_fraction: 0.05,
+        onset_sigmas: 3.0,
+        onset_fraction: 0.25,
+        settle_fraction: 0.5,
+    };
+}
+
+impl Default for ResponseStepRules {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}

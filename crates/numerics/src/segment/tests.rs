@@ -1,0 +1,524 @@
+//! Known sequences, the stream against the record, and the rules each caller had before
+//! (kept here as oracles: on the commands they were written for, the one rule answers the same).
+
+use proptest::prelude::*;
+
+use super::*;
+
+const R: SegmentRules = SegmentRules::DEFAULT;
+
+/// `(value, samples)` runs laid end to end.
+fn seq(parts: &[(f64, usize)]) -> Vec<f64> {
+    parts
+        .iter()
+        .flat_map(|&(v, n)| std::iter::repeat_n(v, n))
+        .collect()
+}
+
+fn found(u: &[f64], rules: &SegmentRules) -> Vec<(usize, usize, f64)> {
+    pulses(Command::new(u), rules)
+        .map(|p| (p.start, p.width, p.amplitude))
+        .collect()
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() < 1e-12
+}
+
+/// Feeds `u` to a classifier sample by sample and returns, per sample, whether it ends up
+/// marked as a pulse sample (held samples are decided later, as a delay line would).
+fn stream_marks(u: &[f64], rules: &SegmentRules) -> (Vec<bool>, Vec<PulseRun>) {
+    let mut c = PulseClassifier::new(*rules);
+    let (mut marks, mut held, mut found) = (Vec::new(), Vec::new(), Vec::new());
+    for (k, &v) in u.iter().enumerate() {
+        match c.push(v) {
+            Decision::Pass => marks.push(false),
+            Decision::Hold => held.push(k),
+            Decision::Release { hold } => {
+                marks.extend(held.drain(..).map(|_| false));
+                if hold {
+                    held.push(k);
+                } else {
+                    marks.push(false);
+                }
+            }
+            Decision::Pulse(p) => {
+                assert_eq!((p.start, p.width), (held[0], held.len()));
+                marks.extend(held.drain(..).map(|_| true));
+                marks.push(false);
+                found.push(p);
+            }
+        }
+        assert!(held.len() <= rules.max_pulse_samples, "held {}", held.len());
+    }
+    if c.flush() {
+        marks.extend(held.drain(..).map(|_| false));
+    }
+    assert!(held.is_empty());
+    (marks, found)
+}
+
+#[test]
+fn a_staircase_has_one_level_per_step_and_no_pulse() {
+    let u = seq(&[(0.3, 100), (0.4, 80), (0.5, 120), (0.3, 50)]);
+    let lv = levels(Command::new(&u), &R);
+    let got: Vec<_> = lv.iter().map(|l| (l.start, l.end, l.value)).collect();
+    assert_eq!(
+        got,
+        [
+            (0, 100, 0.3),
+            (100, 180, 0.4),
+            (180, 300, 0.5),
+            (300, 350, 0.3)
+        ]
+    );
+    assert!(found(&u, &R).is_empty());
+    assert!(is_piecewise_constant(Command::new(&u), &R));
+    assert!(is_ramped_staircase(Command::new(&u), &R));
+}
+
+#[test]
+fn a_ramped_staircase_keeps_its_ramps_in_the_level_before() {
+    let mut u = seq(&[(0.3, 100)]);
+    u.extend((1..=20).map(|k| 0.3 + 0.01 * k as f64)); // ramp 0.31 ..= 0.5, one sample each
+    u.extend(seq(&[(0.5, 100)]));
+    let cmd = Command::new(&u);
+    let got: Vec<_> = levels(cmd, &R).iter().map(|l| (l.start, l.end)).collect();
+    assert_eq!(
+        got,
+        [(0, 119), (119, 220)],
+        "the ramp's last value is the level"
+    );
+    assert!(found(&u, &R).is_empty(), "a monotone ramp has no pulse");
+    assert!(is_ramped_staircase(cmd, &R));
+    // mostly ramp: not a ramped staircase, but a ramp
+    let mut r: Vec<f64> = (0..400).map(|k| 0.2 + 0.001 * k as f64).collect();
+    r.extend(seq(&[(0.6, 40)]));
+    assert!(!is_ramped_staircase(Command::new(&r), &R));
+    assert!(!is_piecewise_constant(Command::new(&r), &R));
+    assert!(is_ramp(Command::new(&r), &R));
+    let w = ramp_windows(Command::new(&r), &R);
+    assert_eq!(w.len(), 4);
+    assert!(w
+        .windows(2)
+        .all(|p| p[1].value > p[0].value && p[1].start == p[0].end));
+}
+
+#[test]
+fn pulses_of_both_signs_and_several_widths_at_several_levels() {
+    let u = seq(&[
+        (0.3, 60),
+        (0.35, 1), // +, 1 sample
+        (0.3, 60),
+        (0.25, 3), // −, 3 samples
+        (0.3, 60),
+        (0.6, 100), // a step
+        (0.7, 32),  // +, the widest
+        (0.6, 60),
+        (0.5, 33), // one sample too wide: a step down and back up
+        (0.6, 60),
+        (0.55, 1),
+        (0.6, 1),  // one sample back at the level is enough
+        (0.65, 2), // +, right after the return of the last one
+        (0.6, 40),
+    ]);
+    let got = found(&u, &R);
+    let want = [
+        (60, 1, 0.05),
+        (121, 3, -0.05),
+        (284, 32, 0.1),
+        (469, 1, -0.05),
+        (471, 2, 0.05),
+    ];
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        assert_eq!((g.0, g.1), (w.0, w.1), "{got:?}");
+        assert!(close(g.2, w.2), "{got:?}");
+    }
+    let p = pulses(Command::new(&u), &R).nth(1).unwrap();
+    assert_eq!((p.before_start, p.level), (61, 0.3));
+    // the levels hold their pulses: 0.3 and 0.6 (0.5 held 33 samples is a level of its own)
+    let lv: Vec<_> = levels(Command::new(&u), &R)
+        .iter()
+        .map(|l| (l.start, l.value))
+        .collect();
+    assert_eq!(lv, [(0, 0.3), (184, 0.6), (376, 0.5), (409, 0.6)]);
+}
+
+#[test]
+fn a_pulse_at_a_level_change_is_a_step() {
+    // up by 0.05 for 3 samples, then on to another level: never back, so no pulse
+    let u = seq(&[(0.3, 60), (0.35, 3), (0.4, 60)]);
+    assert!(found(&u, &R).is_empty());
+    // a dip right after a step is a pulse on the new level, referred to its first samples
+    let u = seq(&[(0.3, 60), (0.4, 5), (0.35, 2), (0.4, 60)]);
+    let p: Vec<_> = pulses(Command::new(&u), &R).collect();
+    assert_eq!(p.len(), 1);
+    assert_eq!((p[0].start, p[0].width, p[0].before_start), (65, 2, 60));
+    // two values in a row, then back: not one flat pulse (and neither value alone is one)
+    let u = seq(&[(0.3, 60), (0.35, 2), (0.4, 2), (0.3, 60)]);
+    assert!(found(&u, &R).is_empty());
+}
+
+#[test]
+fn noise_on_the_command_needs_a_tolerance_above_it() {
+    // ±0.002 of deterministic "noise" on two levels with pulses of 0.05
+    let mut u = seq(&[
+        (0.3, 100),
+        (0.35, 2),
+        (0.3, 100),
+        (0.5, 100),
+        (0.45, 1),
+        (0.5, 100),
+    ]);
+    for (k, v) in u.iter_mut().enumerate() {
+        *v += 0.002 * ((k * 7919 % 13) as f64 / 6.0 - 1.0);
+    }
+    let exact = SegmentRules::DEFAULT;
+    assert!(!is_piecewise_constant(Command::new(&u), &exact));
+    assert!(levels(Command::new(&u), &exact).is_empty());
+    let noisy = SegmentRules {
+        level_tolerance: 0.01,
+        ..exact
+    };
+    let got = found(&u, &noisy);
+    assert_eq!(
+        got.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>(),
+        [(100, 2), (302, 1)]
+    );
+    assert!((got[0].2 - 0.05).abs() < 0.005 && (got[1].2 + 0.05).abs() < 0.005);
+    let lv: Vec<_> = levels(Command::new(&u), &noisy)
+        .iter()
+        .map(|l| (l.start, l.end))
+        .collect();
+    assert_eq!(lv, [(0, 202), (202, 403)]);
+    assert!(is_piecewise_constant(Command::new(&u), &noisy));
+}
+
+#[test]
+fn missing_samples_join_their_run_and_a_pulse_counts_them() {
+    let nan = f64::NAN;
+    let mut u = seq(&[(0.3, 40), (0.4, 1), (0.3, 40)]);
+    u[41] = nan; // just after the pulse: it waits for the next measured sample
+    u[10] = nan;
+    let p: Vec<_> = pulses(Command::new(&u), &R).collect();
+    assert_eq!((p.len(), p[0].start, p[0].width), (1, 40, 2));
+    assert_eq!(pulse_at(&Command::new(&u), 40, &R), Some(p[0]));
+    // the same through a mask, with finite values under it
+    let v = seq(&[(0.3, 40), (0.4, 1), (0.3, 40)]);
+    let mut m = vec![false; v.len()];
+    m[41] = true;
+    let q: Vec<_> = pulses(Command::with_missing(&v, &m), &R).collect();
+    assert_eq!((q[0].start, q[0].width), (40, 2));
+    // a record starting with missing samples: they belong to the first run
+    let mut w = seq(&[(0.3, 50), (0.5, 50)]);
+    w[..3].fill(nan);
+    let runs: Vec<_> = Runs::new(Command::new(&w), &R).collect();
+    assert_eq!((runs[0].start, runs[0].end, runs[0].value), (0, 50, 0.3));
+    assert!(Runs::new(Command::new(&[nan, nan]), &R).next().is_none());
+}
+
+#[test]
+fn the_stream_marks_exactly_the_pulses_of_the_record_and_flush_releases() {
+    let u = seq(&[(0.3, 10), (0.4, 2), (0.3, 5), (0.2, 1), (0.3, 5), (0.5, 3)]);
+    let (marks, got) = stream_marks(&u, &R);
+    assert_eq!(marks.len(), u.len());
+    let want: Vec<bool> = (0..u.len())
+        .map(|k| (10..12).contains(&k) || k == 17)
+        .collect();
+    assert_eq!(marks, want);
+    assert_eq!(got, pulses(Command::new(&u), &R).collect::<Vec<_>>());
+    // a restart forgets the level: the first sample after it is a first sample
+    let mut c = PulseClassifier::new(R);
+    c.push(0.3);
+    c.restart();
+    assert_eq!((c.push(0.5), c.samples()), (Decision::Pass, 1));
+    assert_eq!(c.push(0.6), Decision::Hold);
+    assert!(c.flush());
+    assert_eq!(
+        c.push(0.6),
+        Decision::Pass,
+        "the flushed run goes on unheld"
+    );
+}
+
+#[test]
+fn zero_width_limit_finds_no_pulse_and_holds_nothing() {
+    let rules = SegmentRules {
+        max_pulse_samples: 0,
+        ..R
+    };
+    let u = seq(&[(0.3, 10), (0.4, 1), (0.3, 10)]);
+    let (marks, got) = stream_marks(&u, &rules);
+    assert!(got.is_empty() && marks.iter().all(|m| !m));
+}
+
+#[test]
+fn rules_are_one_documented_set() {
+    assert_eq!(SegmentRules::default(), SegmentRules::DEFAULT);
+    assert_eq!(SegmentRules::DEFAULT.max_pulse_samples, 32);
+    assert_eq!(SegmentRules::DEFAULT.level_tolerance, 1e-9);
+    let b = SegmentRules::CSV_BENCH;
+    assert_eq!((b.level_tolerance, b.max_pulse_samples), (0.005, 64));
+    assert_eq!(b.response, SegmentRules::DEFAULT.response);
+    assert!(R.same(0.3, 0.3 + 1e-10) && !R.same(0.3, 0.3001) && !R.same(f64::NAN, 0.3));
+}
+
+// ---- the rules each caller had before, as oracles ----
+
+/// `pulses.rs` before: scan, `try_pulse`, `run_end`, `run_start` (1e-9, missing mask).
+fn old_pulses(u: &[f64], missing: &[bool], max_width: usize) -> Vec<(usize, usize, f64, usize)> {
+    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9;
+    let miss = |k: usize| missing.get(k).copied().unwrap_or(false);
+    let level_at = |k: usize| (0..=k).rev().find(|&j| !miss(j)).map_or(f64::NAN, |j| u[j]);
+    let run_end = |from: usize| {
+        let lv = level_at(from);
+        let mut k = from + 1;
+        while k < u.len() && (miss(k) || same(u[k], lv)) {
+            k += 1;
+        }
+        k
+    };
+    let run_start = |at: usize| {
+        let lv = level_at(at);
+        let mut k = at;
+        while k > 0 && (miss(k - 1) || same(u[k - 1], lv)) {
+            k -= 1;
+        }
+        k
+    };
+    let try_pulse = |s: usize| {
+        let n = u.len();
+        if s == 0 || s >= n {
+            return None;
+        }
+        let (l0, lp) = (level_at(s - 1), level_at(s));
+        if !l0.is_finite() || same(l0, lp) {
+            return None;
+        }
+        let e1 = run_end(s);
+        let width = e1 - s;
+        if width > max_width || e1 >= n || !same(level_at(e1), l0) {
+            return None;
+        }
+        Some((s, width, lp - l0, run_start(s - 1)))
+    };
+    let mut out = Vec::new();
+    let mut k = 1;
+    while k < u.len() {
+        if !miss(k) && !same(u[k], level_at(k - 1)) {
+            if let Some(p) = try_pulse(k) {
+                out.push(p);
+                k = p.0 + p.1 + 1;
+                continue;
+            }
+        }
+        k += 1;
+    }
+    out
+}
+
+/// `operating_points.rs::staircase` before: `(own, to, level)` per level.
+fn old_staircase(u: &[f64], max_pulse: usize) -> Vec<(usize, usize, f64)> {
+    let mut runs: Vec<(usize, usize, f64)> = Vec::new();
+    let mut start = 0;
+    for k in 1..=u.len() {
+        let end = k == u.len() || (u[k] - u[start]).abs() > 1e-9 && u[k].is_finite();
+        if end {
+            if k - start > max_pulse {
+                match runs.last_mut() {
+                    Some(last) if (last.2 - u[start]).abs() <= 1e-9 => last.1 = k,
+                    _ => runs.push((start, k, u[start])),
+                }
+            } else if let Some(last) = runs.last_mut() {
+                last.1 = k;
+            }
+            start = k;
+        }
+    }
+    runs
+}
+
+/// `okid/select.rs::is_ramped_staircase` before.
+fn old_is_ramped_staircase(u: &[f64], max_pulse_width: usize) -> bool {
+    let mut flat = 0;
+    let mut start = 0;
+    for k in 1..=u.len() {
+        if k == u.len() || !(u[k] - u[start]).abs().le(&1e-9) {
+            if k - start > max_pulse_width {
+                flat += k - start;
+            }
+            start = k;
+        }
+    }
+    flat * 2 >= u.len() && !u.is_empty()
+}
+
+/// `okid/select.rs::is_piecewise_constant` before.
+fn old_is_piecewise_constant(u: &[f64]) -> bool {
+    let changes = u
+        .windows(2)
+        .filter(|w| w[0].is_finite() && w[1].is_finite() && (w[1] - w[0]).abs() > 1e-9)
+        .count();
+    changes * 2 <= u.len()
+}
+
+/// `diagnose/report.rs::find_pulses` before (any excursion back to the level within 32).
+fn old_find_pulses(u: &[f64]) -> Vec<(usize, f64)> {
+    let mut out = Vec::new();
+    let mut k = 1;
+    while k < u.len() {
+        let level = u[k - 1];
+        let a = u[k] - level;
+        if a.abs() > 1e-9 {
+            let back = (k + 1..(k + 33).min(u.len())).find(|&j| (u[j] - level).abs() < 1e-9);
+            if let Some(j) = back {
+                out.push((k, a));
+                k = j;
+                continue;
+            }
+        }
+        k += 1;
+    }
+    out
+}
+
+/// `daemon/csv_link/pulse_flags.rs` before, on raw throttle (1e-4): the flags it set.
+fn old_flags(t: &[u16], tol_raw: u16, cap: usize) -> Vec<bool> {
+    let (mut level, mut open, mut out): (Option<u16>, Vec<u16>, Vec<bool>) =
+        (None, Vec::new(), Vec::new());
+    let mut k = 0;
+    while k < t.len() {
+        let s = t[k];
+        let Some(l) = level else {
+            level = Some(s);
+            out.push(false);
+            k += 1;
+            continue;
+        };
+        if s.abs_diff(l) <= tol_raw {
+            out.extend(open.drain(..).map(|_| true));
+            level = Some(s);
+            out.push(false);
+        } else if open.len() == cap {
+            level = open.last().copied();
+            out.extend(open.drain(..).map(|_| false));
+            continue; // the same sample again, against the new level
+        } else {
+            open.push(s);
+        }
+        k += 1;
+    }
+    out.extend(open.drain(..).map(|_| false));
+    out
+}
+
+/// Runs of values from a small grid (exact levels, as a logged command holds them).
+fn grid_runs(max_len: usize) -> impl Strategy<Value = Vec<f64>> {
+    prop::collection::vec((0usize..5, 1..max_len), 1..24).prop_map(|parts| {
+        parts
+            .iter()
+            .flat_map(|&(v, n)| std::iter::repeat_n(0.3 + 0.05 * v as f64, n))
+            .collect()
+    })
+}
+
+/// A stand's experiment: levels held longer than the widest pulse, flat pulses returning to
+/// them, steps between levels (raw throttle, 1e-4).
+fn stand_plan(w: usize) -> impl Strategy<Value = Vec<u16>> {
+    let pulse = (1..=w, -3i32..=3).prop_filter("a pulse moves", |p| p.1 != 0);
+    prop::collection::vec((0u16..4, 1..3 * w, prop::option::of(pulse)), 1..16).prop_map(
+        move |parts| {
+            let mut t = Vec::new();
+            let mut level = 3000;
+            for (i, &(l, hold, p)) in parts.iter().enumerate() {
+                let next = 3000 + 500 * l;
+                if i > 0 && next != level {
+                    level = next;
+                    t.extend(std::iter::repeat_n(level, w + 1)); // a step: held past the limit
+                }
+                t.extend(std::iter::repeat_n(level, hold));
+                if let Some((width, a)) = p {
+                    t.extend(std::iter::repeat_n((level as i32 + 100 * a) as u16, width));
+                    t.push(level);
+                }
+            }
+            t
+        },
+    )
+}
+
+proptest! {
+    #[test]
+    fn the_stream_gives_the_record_answer(u in grid_runs(40), w in 1usize..8, holes in prop::collection::vec(0usize..1000, 0..6)) {
+        let mut u = u;
+        for h in holes {
+            let n = u.len();
+            u[h % n] = f64::NAN;
+        }
+        let rules = SegmentRules { max_pulse_samples: w, ..R };
+        let (marks, streamed) = stream_marks(&u, &rules);
+        let offline: Vec<_> = pulses(Command::new(&u), &rules).collect();
+        prop_assert_eq!(&streamed, &offline);
+        let want: Vec<bool> = (0..u.len())
+            .map(|k| offline.iter().any(|p| (p.start..p.start + p.width).contains(&k)))
+            .collect();
+        prop_assert_eq!(marks, want);
+        for p in &offline {
+            prop_assert_eq!(pulse_at(&Command::new(&u), p.start, &rules), Some(*p));
+        }
+    }
+
+    #[test]
+    fn pulses_are_those_of_the_old_pulse_path(u in grid_runs(40), w in 1usize..40, holes in prop::collection::vec(0usize..1000, 0..6)) {
+        let mut missing = vec![false; u.len()];
+        let mut v = u.clone();
+        for h in holes {
+            let n = u.len();
+            missing[h % n] = true;
+            v[h % n] = f64::NAN;
+        }
+        let rules = SegmentRules { max_pulse_samples: w, ..R };
+        let new: Vec<_> = pulses(Command::with_missing(&u, &missing), &rules)
+            .map(|p| (p.start, p.width, p.amplitude, p.before_start))
+            .collect();
+        prop_assert_eq!(&new, &old_pulses(&u, &missing, w));
+        let nan: Vec<_> = pulses(Command::new(&v), &rules)
+            .map(|p| (p.start, p.width, p.amplitude, p.before_start))
+            .collect();
+        prop_assert_eq!(new, nan);
+    }
+
+    #[test]
+    fn levels_and_kinds_are_those_of_the_old_callers(u in grid_runs(80), w in 1usize..40) {
+        let rules = SegmentRules { max_pulse_samples: w, ..R };
+        let cmd = Command::new(&u);
+        let new: Vec<_> = levels(cmd, &rules).iter().map(|l| (l.start, l.end, l.value)).collect();
+        prop_assert_eq!(new, old_staircase(&u, w));
+        prop_assert_eq!(is_ramped_staircase(cmd, &rules), old_is_ramped_staircase(&u, w));
+        prop_assert_eq!(is_piecewise_constant(cmd, &rules), old_is_piecewise_constant(&u));
+    }
+
+    #[test]
+    fn the_report_finds_the_flat_pulses_it_found_before(u in grid_runs(40)) {
+        // the old report rule also took non-flat excursions (and the return of one pulse as
+        // the start of another); every flat pulse it found is still found, with its amplitude
+        let new: Vec<PulseRun> = pulses(Command::new(&u), &R).collect();
+        for (s, a) in old_find_pulses(&u) {
+            let back = (s + 1..u.len()).find(|&j| (u[j] - u[s - 1]).abs() < 1e-9).unwrap();
+            let flat = u[s..back].iter().all(|v| (v - u[s]).abs() <= 1e-9);
+            let a_return = new.iter().any(|p| p.start + p.width == s);
+            if flat && !a_return {
+                prop_assert!(new.iter().any(|p| p.start == s && close(p.amplitude, a)), "{} {:?}", s, new);
+            }
+        }
+    }
+
+    #[test]
+    fn the_csv_link_flags_a_stand_plan_as_before(t in stand_plan(8), tol in 0u16..60) {
+        let rules = SegmentRules { level_tolerance: f64::from(tol), max_pulse_samples: 8, ..R };
+        let u: Vec<f64> = t.iter().map(|&v| f64::from(v)).collect();
+        let (marks, _) = stream_marks(&u, &rules);
+        prop_assert_eq!(marks, old_flags(&t, tol, 8));
+    }
+}

@@ -1,0 +1,485 @@
+//! The published lines, typed: what the daemon says, one [`Line`] per JSON line.
+//!
+//! - `{"type":"model", "t_s", "operating_point", "level", "first_sample", "samples", "reason",
+//!   <the model fields of propid identify --json>}` ([`WindowModel`]): `t_s` is the device time
+//!   of the window's last sample (unwrapped, s), `operating_point` the throttle level (fraction).
+//! - `{"type":"event", "kind", ...}` ([`Event`]) and `{"type":"warning", "kind", ["message"],
+//!   ...}` ([`Warning`]); a model that fails the quality checks is a `model_unreliable`
+//!   warning with the model's fields and the `reasons`.
+//! - At the end `{"type":"schedule", "models":[...]}` ([`ScheduleRow`]): the last model per
+//!   operating point (the gain schedule a flight controller needs), ordered by operating point;
+//!   then `{"type":"stats", ...}` ([`StatsLine`]).
+//!
+//! **Serialised once, keys sorted.** [`Publisher::publish_line`](super::publish::Publisher)
+//! turns a line into its bytes in one place ([`Line::to_json`]): through a
+//! [`serde_json::Value`], whose objects are sorted maps (the workspace does not enable
+//! serde_json's `preserve_order`), so every object of every line has its keys in sorted order
+//! whatever the declaration order of the fields here, and the model fields (declared by the
+//! identification core's [`ModelReport`]) interleave with the window's exactly as they always
+//! have. `worker/pinned_lines.jsonl` pins the bytes of every kind of line.
+
+use serde::{Serialize, Serializer};
+use std::fmt::Display;
+use std::time::Instant;
+
+use super::identify::IdentifyError;
+use super::item::{EventItem, Notice, PlanNote};
+use super::quality::{Flaw, HINT};
+use super::stats::StatsLine;
+use super::window::{Reason, WindowView};
+use propid_numerics::nullable;
+use propid_numerics::report::{Gain, Uncertainty};
+use propid_numerics::ModelReport;
+
+/// What a model line says about the window the model comes from (no samples: copying it
+/// allocates nothing).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct WindowFacts {
+    /// Device time of the window's last sample (unwrapped), s.
+    pub t_s: f64,
+    /// The operating point: the throttle level, fraction 0..1.
+    pub operating_point: f64,
+    /// The operating point's number (0-based, in the order they were reached).
+    pub level: u32,
+    /// Device sample index of the window's first sample.
+    pub first_sample: u64,
+    /// Samples in the window.
+    pub samples: usize,
+    /// Why the window was identified.
+    pub reason: Reason,
+    /// When the window's last sample was received (latency only; never published).
+    #[serde(skip)]
+    pub last_received: Option<Instant>,
+}
+
+impl From<&WindowView<'_>> for WindowFacts {
+    fn from(v: &WindowView<'_>) -> Self {
+        WindowFacts {
+            t_s: v.last_t_us as f64 * 1e-6,
+            operating_point: v.level,
+            level: v.level_number,
+            first_sample: v.first_index,
+            samples: v.input.len(),
+            reason: v.reason,
+            last_received: v.last_received,
+        }
+    }
+}
+
+/// A model identified from one window: the window's facts and the core's report, flattened
+/// into one object.
+#[derive(Debug, Clone, Serialize)]
+pub struct WindowModel {
+    /// The window.
+    #[serde(flatten)]
+    pub window: WindowFacts,
+    /// The model (the fields of `propid identify --json`'s `"model"`).
+    #[serde(flatten)]
+    pub report: ModelReport,
+}
+
+/// One row of the gain schedule: an operating point and its last reliable model, in short.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScheduleRow {
+    /// The operating point (as first published for its number), fraction.
+    pub operating_point: f64,
+    /// Model order.
+    pub order: usize,
+    /// Natural frequency, Hz.
+    #[serde(with = "nullable::num")]
+    pub fn_hz: f64,
+    /// Damping ratio.
+    #[serde(with = "nullable::num")]
+    pub zeta: f64,
+    /// DC gain, output units per unit throttle.
+    pub dc_gain: Gain,
+    /// Time constants of the real poles, s.
+    #[serde(with = "nullable::vec")]
+    pub time_constants_s: Vec<f64>,
+    /// Pulses averaged.
+    pub pulses: usize,
+    /// Jackknife standard deviations.
+    pub uncertainty: Uncertainty,
+}
+
+impl ScheduleRow {
+    /// The row of `report` at `operating_point`.
+    pub fn new(operating_point: f64, report: &ModelReport) -> ScheduleRow {
+        ScheduleRow {
+            operating_point,
+            order: report.order,
+            fn_hz: report.fn_hz,
+            zeta: report.zeta,
+            dc_gain: report.dc_gain.clone(),
+            time_constants_s: report.time_constants_s.clone(),
+            pulses: report.pulses,
+            uncertainty: report.uncertainty.clone(),
+        }
+    }
+}
+
+/// A device EVENT as published (its kind is the [`Event`] or [`Warning`] variant).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DeviceEvent {
+    /// Event code (PROTOCOL.md §3, 0x44).
+    pub code: u8,
+    /// Code-specific argument.
+    pub arg: u16,
+    /// Device time (unwrapped), s.
+    pub t_s: f64,
+    /// Sample index (unwrapped).
+    pub sample_index: u64,
+}
+
+/// An `"event"` line: something that happened, no action needed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Event {
+    /// `count` samples before index `before` were lost (masked, not bridged).
+    Gap {
+        /// The index of the first sample after the gap.
+        before: u64,
+        /// Samples lost.
+        count: u64,
+    },
+    /// A new device segment (boot) starts.
+    Segment {
+        /// The device's boot id (0 when inferred from the index going back).
+        boot_id: u32,
+    },
+    /// The plan's handshake is done.
+    Connected {
+        /// The device's boot id.
+        boot_id: u32,
+    },
+    /// ARM acknowledged.
+    ArmAcknowledged,
+    /// An operating point is reached and settled.
+    LevelReached {
+        /// Index in the configured list.
+        index: usize,
+        /// Throttle fraction.
+        operating_point: f64,
+    },
+    /// The pulses at an operating point are done.
+    LevelDone {
+        /// Index in the configured list.
+        index: usize,
+        /// Throttle fraction.
+        operating_point: f64,
+    },
+    /// All operating points done, ramped down, disarmed.
+    PlanFinished,
+    /// STOP acknowledged (the plan's).
+    StopAcknowledged,
+    /// The link was reopened.
+    Reconnected,
+    /// The shutdown STOP was acknowledged.
+    ShutdownStopAcknowledged,
+    /// The link speaks the CSV fallback (PROTOCOL.md §6).
+    CsvLink,
+    /// Device event ARMED.
+    Armed(DeviceEvent),
+    /// Device event DISARMED.
+    Disarmed(DeviceEvent),
+    /// Device event RESET_CAUSE.
+    ResetCause(DeviceEvent),
+    /// Device event TARE_DONE.
+    TareDone(DeviceEvent),
+}
+
+/// A `"warning"` line: something went wrong or needs the operator. Kinds with a fixed
+/// explanation publish it as `"message"` ([`Warning::message`]).
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Warning<'a> {
+    /// The link dropped.
+    Disconnected,
+    /// The shutdown STOP was not acknowledged within the stop timeout.
+    ShutdownStopUnacknowledged,
+    /// A CSV bench that never acknowledged a command: sampled only, no plan.
+    PassiveBench,
+    /// Nothing heard from a live link after it opened.
+    NoData,
+    /// The device reset; the plan is over.
+    DeviceReset {
+        /// The new boot id.
+        boot_id: u32,
+    },
+    /// The device watchdog stopped the motor; the plan is over.
+    PlanHaltedWatchdog,
+    /// The device refused a command the plan needs; the plan is over.
+    CommandRefused {
+        /// Protocol name of the command.
+        command: &'static str,
+    },
+    /// A command went unanswered after its re-sends.
+    LinkFailed {
+        /// Protocol name of the command.
+        command: &'static str,
+    },
+    /// Device event WATCHDOG_TRIP.
+    WatchdogTrip(DeviceEvent),
+    /// Device event LIMIT_CUTOFF.
+    LimitCutoff(DeviceEvent),
+    /// Device event TX_OVERRUN.
+    TxOverrun(DeviceEvent),
+    /// A device event code this daemon does not know.
+    UnknownEvent(DeviceEvent),
+    /// Samples dropped by a full sampler queue (no gap announced them).
+    OverflowGap {
+        /// The index of the first sample after the hole.
+        before: u64,
+        /// Samples dropped.
+        count: u64,
+    },
+    /// The window filled before K pulses.
+    WindowFull {
+        /// The sample that found it full.
+        sample_index: u64,
+    },
+    /// A complete window gave no model.
+    IdentificationFailed {
+        /// Why (published as its text).
+        #[serde(rename = "message", serialize_with = "display")]
+        error: &'a IdentifyError,
+        /// The window's operating point.
+        operating_point: f64,
+        /// Device time of the window's last sample, s.
+        t_s: f64,
+    },
+    /// A model that fails the quality checks ([`super::quality`]): published for inspection,
+    /// never as a model nor in the schedule.
+    ModelUnreliable {
+        /// The model, its fields flattened into the line.
+        #[serde(flatten)]
+        model: &'a WindowModel,
+        /// Which checks it fails.
+        reasons: &'a [Flaw],
+    },
+}
+
+impl Warning<'_> {
+    /// The fixed explanation published with this kind, if it has one.
+    pub fn message(&self) -> Option<&'static str> {
+        Some(match self {
+            Warning::DeviceReset { .. } => {
+                "the device reset and is disarmed; the plan is over and will not re-arm"
+            }
+            Warning::PlanHaltedWatchdog => {
+                "the device watchdog stopped the motor; the plan is over"
+            }
+            Warning::CommandRefused { .. } => "the device refused a command; the plan is over",
+            Warning::LinkFailed { .. } => "a command went unanswered after its re-sends",
+            Warning::OverflowGap { .. } => {
+                "samples dropped by a full sampler queue; masked as missing"
+            }
+            Warning::WindowFull { .. } => {
+                "window filled before K pulses; its samples were discarded"
+            }
+            Warning::ModelUnreliable { .. } => HINT,
+            _ => return None,
+        })
+    }
+}
+
+/// One published line.
+#[derive(Debug, Clone)]
+pub enum Line<'a> {
+    /// `"model"`: a model that passed the quality checks.
+    Model(&'a WindowModel),
+    /// `"event"`.
+    Event(Event),
+    /// `"warning"`.
+    Warning(Warning<'a>),
+    /// `"schedule"`: the gain schedule, ordered by operating point.
+    Schedule(&'a [ScheduleRow]),
+    /// `"stats"`: the run's counters, last.
+    Stats(&'a StatsLine<'a>),
+}
+
+impl Line<'_> {
+    /// The line for a link fact.
+    pub fn notice(n: Notice) -> Line<'static> {
+        match n {
+            Notice::Disconnected => Line::Warning(Warning::Disconnected),
+            Notice::Reconnected => Line::Event(Event::Reconnected),
+            Notice::Stopped => Line::Event(Event::ShutdownStopAcknowledged),
+            Notice::StopUnacknowledged => Line::Warning(Warning::ShutdownStopUnacknowledged),
+            Notice::CsvLink => Line::Event(Event::CsvLink),
+            Notice::PassiveBench => Line::Warning(Warning::PassiveBench),
+            Notice::NoData => Line::Warning(Warning::NoData),
+        }
+    }
+
+    /// The line for an experiment-plan fact (`None`: not published; pulses are counted).
+    pub fn plan(n: PlanNote) -> Option<Line<'static>> {
+        Some(match n {
+            PlanNote::PulseFired => return None,
+            PlanNote::Connected { boot_id } => Line::Event(Event::Connected { boot_id }),
+            PlanNote::Armed => Line::Event(Event::ArmAcknowledged),
+            PlanNote::LevelReached { index, level } => Line::Event(Event::LevelReached {
+                index,
+                operating_point: level,
+            }),
+            PlanNote::LevelDone { index, level } => Line::Event(Event::LevelDone {
+                index,
+                operating_point: level,
+            }),
+            PlanNote::Finished => Line::Event(Event::PlanFinished),
+            PlanNote::Stopped => Line::Event(Event::StopAcknowledged),
+            PlanNote::DeviceReset { new_boot_id } => Line::Warning(Warning::DeviceReset {
+                boot_id: new_boot_id,
+            }),
+            PlanNote::WatchdogTripped => Line::Warning(Warning::PlanHaltedWatchdog),
+            PlanNote::Refused { command } => Line::Warning(Warning::CommandRefused { command }),
+            PlanNote::LinkFailed { command } => Line::Warning(Warning::LinkFailed { command }),
+        })
+    }
+
+    /// The line for a device EVENT (`None` for the impulse edges, counted through the samples'
+    /// flags).
+    pub fn device_event(e: &EventItem) -> Option<Line<'static>> {
+        let d = DeviceEvent {
+            code: e.code,
+            arg: e.arg,
+            t_s: e.t_us as f64 * 1e-6,
+            sample_index: e.sample_index,
+        };
+        Some(match e.code {
+            1 | 2 => return None,
+            3 => Line::Warning(Warning::WatchdogTrip(d)),
+            4 => Line::Warning(Warning::LimitCutoff(d)),
+            5 => Line::Event(Event::Armed(d)),
+            6 => Line::Event(Event::Disarmed(d)),
+            7 => Line::Warning(Warning::TxOverrun(d)),
+            8 => Line::Event(Event::ResetCause(d)),
+            9 => Line::Event(Event::TareDone(d)),
+            _ => Line::Warning(Warning::UnknownEvent(d)),
+        })
+    }
+
+    /// The line's bytes (without the newline): the one serialisation of every published line,
+    /// keys sorted at every level (see the module documentation).
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string(&serde_json::to_value(self)?)
+    }
+}
+
+impl Serialize for Line<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        /// The wire shape: the `"type"` tag, and a warning's fixed message beside its fields.
+        #[derive(Serialize)]
+        #[serde(tag = "type", rename_all = "snake_case")]
+        enum Shape<'l> {
+            Model(&'l WindowModel),
+            Event(&'l Event),
+            Warning {
+                #[serde(flatten)]
+                warning: &'l Warning<'l>,
+                #[serde(skip_serializing_if = "Option::is_none")]
+                message: Option<&'static str>,
+            },
+            Schedule {
+                models: &'l [ScheduleRow],
+            },
+            Stats(&'l StatsLine<'l>),
+        }
+        match self {
+            Line::Model(m) => Shape::Model(m),
+            Line::Event(e) => Shape::Event(e),
+            Line::Warning(w) => Shape::Warning {
+                warning: w,
+                message: w.message(),
+            },
+            Line::Schedule(models) => Shape::Schedule { models },
+            Line::Stats(st) => Shape::Stats(st),
+        }
+        .serialize(s)
+    }
+}
+
+/// Serialises a value as its `Display` text.
+fn display<T: Display, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+    s.collect_str(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::daemon::fixtures::report;
+    use serde_json::json;
+
+    #[test]
+    fn every_notice_has_its_line() {
+        let kinds: Vec<String> = [
+            Notice::Disconnected,
+            Notice::Reconnected,
+            Notice::Stopped,
+            Notice::StopUnacknowledged,
+            Notice::CsvLink,
+            Notice::PassiveBench,
+            Notice::NoData,
+        ]
+        .into_iter()
+        .map(|n| Line::notice(n).to_json().unwrap())
+        .collect();
+        assert_eq!(
+            kinds,
+            [
+                r#"{"kind":"disconnected","type":"warning"}"#,
+                r#"{"kind":"reconnected","type":"event"}"#,
+                r#"{"kind":"shutdown_stop_acknowledged","type":"event"}"#,
+                r#"{"kind":"shutdown_stop_unacknowledged","type":"warning"}"#,
+                r#"{"kind":"csv_link","type":"event"}"#,
+                r#"{"kind":"passive_bench","type":"warning"}"#,
+                r#"{"kind":"no_data","type":"warning"}"#,
+            ]
+        );
+    }
+
+    #[test]
+    fn a_failed_identification_publishes_the_error_text() {
+        let error = IdentifyError::NoModel;
+        let line = Line::Warning(Warning::IdentificationFailed {
+            error: &error,
+            operating_point: 0.5,
+            t_s: 2.0,
+        });
+        assert_eq!(
+            line.to_json().unwrap(),
+            r#"{"kind":"identification_failed","message":"no model identified","operating_point":0.5,"t_s":2.0,"type":"warning"}"#
+        );
+    }
+
+    #[test]
+    fn non_finite_model_numbers_are_null_and_keys_stay_sorted() {
+        let model = WindowModel {
+            window: WindowFacts {
+                t_s: 1.5,
+                operating_point: 0.45,
+                level: 1,
+                first_sample: 10,
+                samples: 20,
+                reason: Reason::Full,
+                last_received: None,
+            },
+            report: report(json!({"fn_hz": null, "zeta": null, "dc_gain": null})),
+        };
+        let text = Line::Model(&model).to_json().unwrap();
+        assert!(text.contains(r#""fn_hz":null"#), "{text}");
+        assert!(text.contains(r#""reason":"window_full""#), "{text}");
+        assert!(!text.contains("last_received"), "{text}");
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
+        let mut sorted = keys.clone();
+        sorted.sort();
+        assert_eq!(keys, sorted);
+        assert!(text.starts_with(r#"{"a":"#) && text.ends_with(r#""zeta":null}"#));
+        let row = ScheduleRow::new(0.45, &model.report);
+        assert_eq!(
+            Line::Schedule(&[row]).to_json().unwrap(),
+            r#"{"models":[{"dc_gain":null,"fn_hz":null,"operating_point":0.45,"order":2,"pulses":1,"time_constants_s":[],"uncertainty":{"dc_gain":0.5,"fn_hz":0.25,"zeta":null},"zeta":null}],"type":"schedule"}"#
+        );
+    }
+}

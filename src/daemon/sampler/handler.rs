@@ -1,0 +1,113 @@
+//! Frame handling: what each decoded frame becomes on the worker's queue (placed samples,
+//! gaps, segments, events) and what the plan is shown, with the never-blocking queueing.
+
+use crossbeam_channel::{Sender, TrySendError};
+use std::time::Instant;
+
+use super::Plan;
+use crate::daemon::item::{EventItem, Item, SampleItem};
+use crate::daemon::stats::LinkStats;
+use crate::daemon::tracker::Tracker;
+use propid_wire::protocol::message::{msg_type, Frame, Message};
+
+/// Frame handling, separate from the decoder so both can be borrowed at once.
+pub(super) struct Handler {
+    pub(super) tx: Sender<Item>,
+    pub(super) lossless: bool,
+    pub(super) tracker: Tracker,
+    pub(super) stats: LinkStats,
+    /// Samples dropped because the queue was full (part of `samples_lost`).
+    pub(super) overflow_lost: u64,
+    pub(super) plan: Option<Box<dyn Plan>>,
+    pub(super) segment_announced: bool,
+    pub(super) awaiting_stop: Option<u16>,
+    pub(super) stop_acked: bool,
+    pub(super) now_us: u64,
+}
+
+impl Handler {
+    pub(super) fn send(&mut self, item: Item) {
+        if self.lossless {
+            let _ = self.tx.send(item);
+            return;
+        }
+        match self.tx.try_send(item) {
+            Ok(()) => {}
+            Err(TrySendError::Full(item)) => {
+                self.stats.overflows += 1;
+                if matches!(item, Item::Sample(_)) {
+                    self.overflow_lost += 1;
+                }
+            }
+            Err(TrySendError::Disconnected(_)) => {}
+        }
+    }
+
+    pub(super) fn on_frame(&mut self, frame: Frame) {
+        match &frame.msg {
+            Message::Hello(h) if self.tracker.hello(h.boot_id) => {
+                self.segment_announced = true;
+                self.send(Item::Segment { boot_id: h.boot_id });
+            }
+            Message::Sample(s) => {
+                self.stats.samples += 1;
+                let placed = self.tracker.sample(s.sample_index, s.t_us);
+                if placed.new_segment && !std::mem::take(&mut self.segment_announced) {
+                    self.send(Item::Segment { boot_id: 0 });
+                }
+                // After a new segment: a gap too long to mask (announced, not bridged).
+                if placed.lost_before > 0 {
+                    self.send(Item::Gap {
+                        before: placed.index,
+                        count: placed.lost_before,
+                    });
+                }
+                if placed.duplicate {
+                    // dropped (counted in `duplicates`), as ingest does
+                    if let Some(plan) = self.plan.as_mut() {
+                        plan.on_frame(self.now_us, &frame);
+                    }
+                    return;
+                }
+                let item = SampleItem {
+                    index: placed.index,
+                    t_us: placed.t_us,
+                    throttle_raw: s.throttle,
+                    flags: s.flags.bits(),
+                    thrust_n: valid(s.thrust_n, s.flags.bits(), 1 << 1),
+                    torque_nm: valid(s.torque_nm, s.flags.bits(), 1 << 2),
+                    rpm: valid(s.rpm, s.flags.bits(), 1 << 3),
+                    received: Instant::now(),
+                };
+                self.send(Item::Sample(item));
+            }
+            Message::Event(e) => {
+                let item = EventItem {
+                    code: e.code.to_u8(),
+                    arg: e.arg,
+                    t_us: self.tracker.event_time(e.t_us),
+                    sample_index: self.tracker.event_index(e.sample_index),
+                };
+                self.send(Item::Event(item));
+            }
+            Message::Ack(a)
+                if Some(a.cmd_seq) == self.awaiting_stop && a.cmd_type == msg_type::STOP =>
+            {
+                self.stop_acked = true;
+            }
+            _ => {}
+        }
+        if let Some(plan) = self.plan.as_mut() {
+            plan.on_frame(self.now_us, &frame);
+        }
+    }
+}
+
+/// A measurement whose VALID flag is clear is "not measured": NaN.
+fn valid(v: f32, flags: u16, bit: u16) -> f32 {
+    if flags & bit != 0 {
+        v
+    } else {
+        f32::NAN
+    }
+}

@@ -1,0 +1,205 @@
+//! The window's rules, sample by sample: pulses, levels, gaps, segments, capacity.
+
+use super::*;
+
+fn sample(index: u64, throttle_raw: u16, flags: u16) -> SampleItem {
+    SampleItem {
+        index,
+        t_us: index * 1000,
+        throttle_raw,
+        flags,
+        thrust_n: 1.0,
+        torque_nm: 0.1,
+        rpm: 1000.0,
+        received: Instant::now(),
+    }
+}
+
+/// Feeds `n` samples at `level`, a pulse every `spacing` samples from `first_pulse`.
+fn feed(
+    w: &mut Window,
+    start: u64,
+    n: u64,
+    level: u16,
+    first_pulse: u64,
+    spacing: u64,
+    log: &mut Vec<(Reason, usize, usize, f64)>,
+) {
+    for i in start..start + n {
+        let rel = i - start;
+        let pulse = rel >= first_pulse && (rel - first_pulse) % spacing == 0;
+        let (thr, f) = if pulse {
+            (level + 500, flags::IMPULSE_ACTIVE)
+        } else {
+            (level, 0)
+        };
+        w.on_sample(&sample(i, thr, f), |v| {
+            log.push((v.reason, v.input.len(), v.pulse_starts.len(), v.level))
+        });
+    }
+}
+
+#[test]
+fn identifies_every_k_pulses_and_at_level_end() {
+    let mut w = Window::new(10_000, 2, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    // 5 pulses at spacing 100 from sample 50: models at pulse 3 and pulse 5 start, then
+    // the level end with one pulse pending identifies nothing.
+    feed(&mut w, 0, 500, 3000, 50, 100, &mut log);
+    assert_eq!(log.len(), 2);
+    assert_eq!((log[0].0, log[0].1, log[0].2), (Reason::Pulses, 250, 2));
+    assert_eq!(log[0].3, 0.3);
+    // the restarted window keeps 50 samples of baseline before pulse 3
+    assert_eq!((log[1].0, log[1].1, log[1].2), (Reason::Pulses, 250, 2));
+    w.on_sample(&sample(500, 3000, flags::RAMP_ACTIVE), |_| {
+        panic!("only one pulse pending")
+    });
+    assert_eq!(w.level(), None);
+}
+
+#[test]
+fn a_ramp_without_flags_ends_at_the_level_it_reached() {
+    // a CSV bench's ramp: 0.30 -> 0.447 in steps of 0.0035 (below the 0.005 tolerance), no
+    // RAMP_ACTIVE, the window restarting every second step (last at 0.447); then 0.45
+    let mut w = Window::new(10_000, 2, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    feed(&mut w, 0, 100, 3000, 1000, 100, &mut log);
+    for (k, thr) in (3000..=4500).step_by(35).enumerate() {
+        w.on_sample(&sample(100 + k as u64, thr, 0), |_| {});
+    }
+    feed(&mut w, 143, 400, 4500, 50, 100, &mut log);
+    assert_eq!(w.level(), Some(0.45));
+    // the ramp away: its first steps are within the tolerance, then the level ends
+    for (k, thr) in [4480u16, 4460, 4440, 4420, 4400].into_iter().enumerate() {
+        w.on_sample(&sample(543 + k as u64, thr, 0), |v| {
+            log.push((v.reason, v.input.len(), v.pulse_starts.len(), v.level))
+        });
+    }
+    assert_eq!(log.len(), 2, "{log:?}");
+    assert_eq!(log[1].0, Reason::LevelEnd);
+    assert!(log.iter().all(|l| l.3 == 0.45), "{log:?}");
+}
+
+#[test]
+fn level_end_identifies_complete_pulses() {
+    let mut w = Window::new(10_000, 2, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    feed(&mut w, 0, 300, 3000, 50, 100, &mut log); // pulses at 50, 150, 250
+    assert_eq!(log.len(), 1);
+    feed(&mut w, 300, 100, 4500, 1000, 100, &mut log); // new level, no pulses
+    assert_eq!(log.len(), 1, "one pending pulse is not enough");
+    let mut w = Window::new(10_000, 2, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    feed(&mut w, 0, 200, 3000, 50, 100, &mut log); // pulses at 50, 150
+    feed(&mut w, 200, 10, 4500, 1000, 100, &mut log);
+    assert_eq!(log.len(), 1);
+    assert_eq!((log[0].0, log[0].1, log[0].2), (Reason::LevelEnd, 200, 2));
+    assert_eq!(w.level(), Some(0.45));
+}
+
+#[test]
+fn gaps_are_masked_not_bridged() {
+    let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+    let mut seen = None;
+    w.on_sample(&sample(0, 3000, 0), |_| {});
+    w.on_sample(&sample(1, 3000, 0), |_| {});
+    w.on_gap(3);
+    w.on_sample(&sample(5, 3500, flags::IMPULSE_ACTIVE), |_| {});
+    w.on_sample(&sample(6, 3000, 0), |_| {});
+    w.finish(|v| {
+        seen = Some((
+            v.missing.to_vec(),
+            v.pulse_starts.to_vec(),
+            v.input[2].is_nan(),
+            v.dt_s,
+        ))
+    });
+    let (missing, starts, nan, dt) = seen.unwrap();
+    assert_eq!(missing, vec![false, false, true, true, true, false, false]);
+    assert_eq!(starts, vec![5]);
+    assert!(nan);
+    assert!((dt - 1e-3).abs() < 1e-12);
+}
+
+#[test]
+fn unannounced_index_jump_is_masked_not_bridged() {
+    // The sampler's queue overflowed: samples 2..=4 and their gap notice never arrived.
+    let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+    let mut seen = None;
+    w.on_sample(&sample(0, 3000, 0), |_| {});
+    w.on_sample(&sample(1, 3000, flags::IMPULSE_ACTIVE), |_| {});
+    let o = w.on_sample(&sample(5, 3000, 0), |_| {});
+    assert_eq!(o.unannounced_lost, 3);
+    w.on_sample(&sample(6, 3000, 0), |_| {});
+    w.finish(|v| seen = Some((v.missing.to_vec(), v.pulse_starts.to_vec(), v.dt_s)));
+    let (missing, starts, dt) = seen.unwrap();
+    assert_eq!(missing, vec![false, false, true, true, true, false, false]);
+    assert_eq!(starts, vec![1]);
+    assert!((dt - 1e-3).abs() < 1e-12);
+}
+
+#[test]
+fn announced_gap_is_not_counted_twice() {
+    let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+    w.on_sample(&sample(0, 3000, 0), |_| {});
+    w.on_gap(3);
+    let o = w.on_sample(&sample(4, 3000, 0), |_| {});
+    assert_eq!(o.unannounced_lost, 0);
+    assert_eq!(w.len(), 5);
+}
+
+#[test]
+fn index_going_back_closes_the_window_like_a_segment() {
+    let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    feed(&mut w, 100, 100, 3000, 50, 1000, &mut log);
+    assert!(log.is_empty());
+    let mut reasons = Vec::new();
+    w.on_sample(&sample(0, 3000, 0), |v| reasons.push(v.reason));
+    assert_eq!(reasons, vec![Reason::Segment]);
+    assert_eq!(w.len(), 1, "the new segment starts a fresh window");
+}
+
+#[test]
+fn full_window_restarts_without_allocating() {
+    let mut w = Window::new(64, 4, 0.005, OutputChannel::Thrust);
+    let cap = w.input.capacity();
+    let mut log = Vec::new();
+    let mut overflowed = 0;
+    for i in 0..200 {
+        let o = w.on_sample(&sample(i, 3000, 0), |v| log.push(v.reason));
+        overflowed += u32::from(o.overflowed);
+    }
+    assert!(log.is_empty());
+    assert_eq!(overflowed, 3);
+    assert!(w.len() <= 64);
+    assert_eq!(w.input.capacity(), cap);
+}
+
+#[test]
+fn segment_identifies_complete_window_then_waits_for_a_level() {
+    let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    feed(&mut w, 0, 100, 3000, 50, 1000, &mut log);
+    let mut n = 0;
+    w.on_segment(|v| {
+        assert_eq!(v.reason, Reason::Segment);
+        n += 1
+    });
+    assert_eq!(n, 1);
+    assert_eq!(w.level(), None);
+    // a pulse sample first after the reset is not referred to any level
+    let o = w.on_sample(&sample(0, 3500, flags::IMPULSE_ACTIVE), |_| {});
+    assert!(!o.pulse);
+}
+
+#[test]
+fn missing_measurement_is_masked() {
+    let mut w = Window::new(100, 1, 0.005, OutputChannel::Thrust);
+    let mut s = sample(0, 3000, 0);
+    w.on_sample(&s, |_| {});
+    s.index = 1;
+    s.thrust_n = f32::NAN;
+    w.on_sample(&s, |_| {});
+    assert_eq!(w.missing, vec![false, true]);
+}

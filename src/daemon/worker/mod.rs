@@ -1,0 +1,230 @@
+//! The worker: windows per operating point, identification, publishing.
+//!
+//! The worker drains the sampler's queue. For each item it does the window bookkeeping
+//! ([`Window`]), and when a window is complete the short hot call — [`Identifier::identify`],
+//! which makes no heap allocation — followed by the slow work around it: the typed model
+//! ([`Identifier::report`]), the quality checks, publishing the `"model"` line, updating the
+//! gain schedule and the latency statistics. Every line it publishes is a typed
+//! [`Line`](super::line::Line) (the shapes are documented in [`super::line`]).
+//!
+//! Nothing here depends on wall-clock time except the latency measurement, which is reported in
+//! the stats line only; the published model lines depend only on the byte stream, so a live run
+//! and the replay of its recording publish identical model lines.
+
+use crossbeam_channel::Receiver;
+
+pub use super::identify::{Identifier, IdentifyError};
+use super::item::{Item, SampleItem};
+use super::line::{Event, Line, ScheduleRow, Warning, WindowFacts, WindowModel};
+use super::publish::Publisher;
+use super::quality;
+use super::stats::WorkStats;
+use super::window::{Window, WindowView};
+use super::DaemonError;
+
+/// Latency samples kept (the first ones of a run; enough for p99).
+const LATENCY_CAP: usize = 65_536;
+
+/// What the worker hands back when the queue closes.
+pub struct WorkerOutcome {
+    /// The publisher, still open (the caller adds the stats line and closes it).
+    pub publisher: Publisher,
+    /// Worker counters.
+    pub stats: WorkStats,
+    /// Latencies from the last sample of a window to its published line, seconds, sorted.
+    pub latencies_s: Vec<f64>,
+    /// The first publishing error, if any (publishing continued on the other sinks).
+    pub error: Option<DaemonError>,
+}
+
+/// The worker's state.
+pub struct Worker<I: Identifier> {
+    window: Window,
+    identifier: I,
+    publisher: Publisher,
+    stats: WorkStats,
+    /// The gain schedule: per operating-point number, its last reliable model.
+    schedule: Vec<(u32, ScheduleRow)>,
+    latencies_s: Vec<f64>,
+    error: Option<DaemonError>,
+}
+
+impl<I: Identifier> Worker<I> {
+    /// A worker with its window (allocated here, once) and identifier.
+    pub fn new(window: Window, identifier: I, publisher: Publisher) -> Worker<I> {
+        Worker {
+            window,
+            identifier,
+            publisher,
+            stats: WorkStats::default(),
+            schedule: Vec::new(),
+            latencies_s: Vec::with_capacity(LATENCY_CAP),
+            error: None,
+        }
+    }
+
+    /// Drains the queue until the sampler closes it, then publishes the schedule.
+    pub fn run(mut self, rx: Receiver<Item>) -> WorkerOutcome {
+        for item in rx.iter() {
+            self.handle(item);
+        }
+        self.finish()
+    }
+
+    /// Handles one item.
+    pub fn handle(&mut self, item: Item) {
+        match item {
+            Item::Sample(s) => self.on_sample(&s),
+            Item::Gap { before, count } => {
+                self.window.on_gap(count);
+                self.emit(&Line::Event(Event::Gap { before, count }));
+            }
+            Item::Segment { boot_id } => {
+                let mut done = None;
+                let identifier = &mut self.identifier;
+                self.window
+                    .on_segment(|v| done = Some(identify_one(identifier, v)));
+                if let Some(d) = done {
+                    self.publish_model(d);
+                }
+                self.emit(&Line::Event(Event::Segment { boot_id }));
+            }
+            Item::Event(e) => {
+                if let Some(line) = Line::device_event(&e) {
+                    self.emit(&line);
+                }
+            }
+            Item::Plan(n) => {
+                if let Some(line) = Line::plan(n) {
+                    self.emit(&line);
+                }
+            }
+            Item::Notice(n) => self.emit(&Line::notice(n)),
+        }
+    }
+
+    /// Closes the last window and publishes the gain schedule.
+    pub fn finish(mut self) -> WorkerOutcome {
+        let mut done = None;
+        let identifier = &mut self.identifier;
+        self.window
+            .finish(|v| done = Some(identify_one(identifier, v)));
+        if let Some(d) = done {
+            self.publish_model(d);
+        }
+        self.publish_schedule();
+        self.latencies_s.sort_by(f64::total_cmp);
+        WorkerOutcome {
+            publisher: self.publisher,
+            stats: self.stats,
+            latencies_s: self.latencies_s,
+            error: self.error,
+        }
+    }
+
+    fn on_sample(&mut self, s: &SampleItem) {
+        // Hot path: bookkeeping and identification only; reports are built after.
+        let mut done: Option<Done> = None;
+        let identifier = &mut self.identifier;
+        let outcome = self
+            .window
+            .on_sample(s, |v| done = Some(identify_one(identifier, v)));
+        if outcome.pulse {
+            self.stats.pulses += 1;
+        }
+        if outcome.unannounced_lost > 0 {
+            // Only the sampler's full queue drops samples without a gap notice.
+            self.emit(&Line::Warning(Warning::OverflowGap {
+                before: s.index,
+                count: outcome.unannounced_lost,
+            }));
+        }
+        if let Some(d) = done {
+            self.publish_model(d);
+        }
+        if outcome.overflowed {
+            self.emit(&Line::Warning(Warning::WindowFull {
+                sample_index: s.index,
+            }));
+        }
+    }
+
+    fn publish_model(&mut self, d: Done) {
+        let report = match d.result.and_then(|()| self.identifier.report()) {
+            Ok(r) => r,
+            Err(error) => {
+                self.stats.identify_errors += 1;
+                self.emit(&Line::Warning(Warning::IdentificationFailed {
+                    error: &error,
+                    operating_point: d.facts.operating_point,
+                    t_s: d.facts.t_s,
+                }));
+                return;
+            }
+        };
+        let model = WindowModel {
+            window: d.facts,
+            report,
+        };
+        let flaws = quality::judge(&model.report);
+        if !flaws.is_empty() {
+            // not the plant: published for inspection, never as a model nor in the schedule
+            self.emit(&Line::Warning(Warning::ModelUnreliable {
+                model: &model,
+                reasons: &flaws,
+            }));
+            self.stats.models_unreliable += 1;
+            return;
+        }
+        self.emit(&Line::Model(&model));
+        self.stats.models += 1;
+        if let Some(t) = d.facts.last_received {
+            if self.latencies_s.len() < LATENCY_CAP {
+                self.latencies_s.push(t.elapsed().as_secs_f64());
+            }
+        }
+        let level = model.window.level;
+        match self.schedule.iter_mut().find(|e| e.0 == level) {
+            // the operating point stays the one first published for this number
+            Some(e) => e.1 = ScheduleRow::new(e.1.operating_point, &model.report),
+            None => self.schedule.push((
+                level,
+                ScheduleRow::new(model.window.operating_point, &model.report),
+            )),
+        }
+    }
+
+    fn publish_schedule(&mut self) {
+        let mut rows = std::mem::take(&mut self.schedule);
+        rows.sort_by(|a, b| {
+            a.1.operating_point
+                .total_cmp(&b.1.operating_point)
+                .then(a.0.cmp(&b.0))
+        });
+        let models: Vec<ScheduleRow> = rows.into_iter().map(|(_, row)| row).collect();
+        self.emit(&Line::Schedule(&models));
+    }
+
+    fn emit(&mut self, line: &Line<'_>) {
+        if let Err(e) = self.publisher.publish_line(line) {
+            self.error.get_or_insert(e);
+        }
+    }
+}
+
+/// An identification done in the hot path, waiting to be published.
+struct Done {
+    facts: WindowFacts,
+    result: Result<(), IdentifyError>,
+}
+
+/// The hot call and the facts needed to publish it later (no allocation).
+fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>) -> Done {
+    Done {
+        facts: WindowFacts::from(v),
+        result: id.identify(v),
+    }
+}
+
+#[cfg(test)]
+mod tests;
