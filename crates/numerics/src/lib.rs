@@ -45,6 +45,7 @@ pub mod pulses;
 pub mod report;
 pub mod segment;
 pub mod sizing;
+pub mod stand;
 pub mod statespace;
 pub mod static_map;
 pub mod step_response;

@@ -21,6 +21,8 @@
 
 use serde::Serialize;
 
+use crate::segment::Run;
+
 /// Share of a hold, from its end, taken as steady.
 pub const STEADY_SHARE: f64 = 0.5;
 
@@ -37,45 +39,60 @@ pub struct Level {
     pub samples: usize,
 }
 
-/// A stretch of constant command: samples `[start, end)` at `throttle`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Hold {
-    /// First sample.
-    pub start: usize,
-    /// One past the last sample.
-    pub end: usize,
-    /// Command, throttle 0..1.
-    pub throttle: f64,
-}
-
-/// The steady levels of channel `y` over `holds` (holds with no measured sample left out).
-pub fn levels(y: &[f64], holds: &[Hold]) -> Vec<Level> {
+/// The steady levels of channel `y` over `holds` ([`crate::segment::holds`]: runs of steady
+/// command, each at its `value`), holds with no measured sample left out.
+pub fn levels(y: &[f64], holds: &[Run]) -> Vec<Level> {
     holds
         .iter()
-        .filter_map(|h| {
-            let end = h.end.min(y.len());
-            if h.start >= end {
-                return None;
-            }
-            let len = end - h.start;
-            let from = end - ((len as f64 * STEADY_SHARE).ceil() as usize).clamp(1, len);
-            let v: Vec<f64> = y[from..end]
-                .iter()
-                .copied()
-                .filter(|v| v.is_finite())
-                .collect();
-            if v.is_empty() {
-                return None;
-            }
-            let n = v.len() as f64;
-            let mean = v.iter().sum::<f64>() / n;
-            let std = (v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / n).sqrt();
-            Some(Level {
-                throttle: h.throttle,
-                mean,
-                std,
-                samples: v.len(),
-            })
+        .filter_map(|h| levels_over(y, h, STEADY_SHARE))
+        .collect()
+}
+
+/// The level of `y` over the last `share` of `run` (`None` without a measured sample).
+fn levels_over(y: &[f64], run: &Run, share: f64) -> Option<Level> {
+    let end = run.end.min(y.len());
+    if run.start >= end {
+        return None;
+    }
+    let len = end - run.start;
+    let from = end - ((len as f64 * share).ceil() as usize).clamp(1, len);
+    let (mut n, mut s) = (0usize, 0.0);
+    for v in y[from..end].iter().filter(|v| v.is_finite()) {
+        n += 1;
+        s += v;
+    }
+    if n == 0 {
+        return None;
+    }
+    let mean = s / n as f64;
+    let var = y[from..end]
+        .iter()
+        .filter(|v| v.is_finite())
+        .map(|x| (x - mean) * (x - mean))
+        .sum::<f64>()
+        / n as f64;
+    Some(Level {
+        throttle: run.value,
+        mean,
+        std: var.sqrt(),
+        samples: n,
+    })
+}
+
+/// The levels of channel `y` over ramp windows ([`crate::segment::ramp_windows`]): each at the
+/// window's mean command, with the mean output over the whole window (a slow ramp read as
+/// quasi-static; no transient to leave out).
+pub fn window_levels(y: &[f64], windows: &[crate::segment::Level]) -> Vec<Level> {
+    windows
+        .iter()
+        .filter_map(|w| {
+            let run = Run {
+                lead: w.start,
+                start: w.start,
+                end: w.end,
+                value: w.value,
+            };
+            levels_over(y, &run, 1.0)
         })
         .collect()
 }
@@ -432,23 +449,22 @@ mod tests {
         y[0..25].iter_mut().for_each(|v| *v = 9.0); // transient, left out
         let l = levels(
             &y,
-            &[Hold {
+            &[Run {
+                lead: 0,
                 start: 0,
                 end: 100,
-                throttle: 0.5,
+                value: 0.5,
             }],
         );
         assert_eq!(l.len(), 1);
         assert_eq!((l[0].mean, l[0].std, l[0].samples), (2.0, 0.0, 49));
-        assert!(levels(
-            &[f64::NAN; 4],
-            &[Hold {
-                start: 0,
-                end: 4,
-                throttle: 0.1
-            }]
-        )
-        .is_empty());
+        let run = Run {
+            lead: 0,
+            start: 0,
+            end: 4,
+            value: 0.1,
+        };
+        assert!(levels(&[f64::NAN; 4], &[run]).is_empty());
     }
 
     #[test]

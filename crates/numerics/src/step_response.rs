@@ -1,7 +1,7 @@
 //! The figures a propulsion engineer reads off a command step: dead time, time constant, 10–90 %
 //! rise time, settling time and overshoot, per step and per direction.
 //!
-//! A step `k0` goes from a held level (`before`, the samples `[b0, k0)`) to another (`after`,
+//! A step ([`crate::segment::steps`] finds them) `k0` goes from a held level (`before`, the samples `[b0, k0)`) to another (`after`,
 //! `[k0, k1)`). The response's initial value `y₀` is the mean of the last part of the level
 //! before, its final value `y₁` the mean of the last [`FINAL_SHARE`] of the hold after; the
 //! normalised response is `r_k = (y_k − y₀)/(y₁ − y₀)` for `k ≥ k0`, and every crossing time is
@@ -24,6 +24,8 @@
 
 use serde::Serialize;
 
+pub use crate::segment::Step;
+
 /// Share of the hold after a step averaged for the final value.
 pub const FINAL_SHARE: f64 = 1.0 / 3.0;
 /// Samples of the level before a step averaged for the initial value (at most; fewer when the
@@ -42,21 +44,6 @@ pub enum Direction {
     Up,
     /// The command fell.
     Down,
-}
-
-/// One command step of a record: where it is and the levels on both sides.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Step {
-    /// First sample of the level before the step.
-    pub before_start: usize,
-    /// First sample with the new command.
-    pub at: usize,
-    /// One past the last sample of the level after the step.
-    pub after_end: usize,
-    /// Command before (throttle 0..1).
-    pub from: f64,
-    /// Command after (throttle 0..1).
-    pub to: f64,
 }
 
 /// The figures of one step's response.

@@ -1,7 +1,7 @@
 //! The rules over a whole record: pulses, levels, and what kind of command it is.
 
 use super::classify::{Decision, PulseClassifier, PulseRun};
-use super::runs::{run_end, Command, Runs};
+use super::runs::{run_end, Command, Run, Runs};
 use super::SegmentRules;
 
 /// The pulses of a record, in order: exactly the [`Decision::Pulse`]s of a
@@ -166,4 +166,48 @@ pub fn ramp_windows(cmd: Command<'_>, rules: &SegmentRules) -> Vec<Level> {
             }
         })
         .collect()
+}
+
+/// A clean command step: a held level (a run longer than
+/// [`SegmentRules::max_pulse_samples`]) followed at once by another held level, with no sample
+/// of a ramp or a pulse between them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// First sample of the level before the step.
+    pub before_start: usize,
+    /// First sample with the new command.
+    pub at: usize,
+    /// One past the last sample of the level after the step (where its run ends).
+    pub after_end: usize,
+    /// Command before.
+    pub from: f64,
+    /// Command after.
+    pub to: f64,
+}
+
+/// The holds of `cmd`: its runs longer than [`SegmentRules::max_pulse_samples`], where the
+/// command is steady (a staircase's levels, the settled part of a pulse experiment's level
+/// before its first pulse, each stretch between a random-step sequence's changes).
+pub fn holds<'a>(cmd: Command<'a>, rules: &'a SegmentRules) -> impl Iterator<Item = Run> + 'a {
+    Runs::new(cmd, rules).filter(|r| r.len() > rules.max_pulse_samples)
+}
+
+/// The clean steps of `cmd` (see [`Step`]), in order.
+pub fn steps(cmd: Command<'_>, rules: &SegmentRules) -> Vec<Step> {
+    let mut out = Vec::new();
+    let mut prev: Option<Run> = None;
+    for run in Runs::new(cmd, rules) {
+        let held = run.len() > rules.max_pulse_samples;
+        if let (Some(p), true) = (prev, held) {
+            out.push(Step {
+                before_start: p.start,
+                at: run.start,
+                after_end: run.end,
+                from: p.value,
+                to: run.value,
+            });
+        }
+        prev = held.then_some(run);
+    }
+    out
 }
