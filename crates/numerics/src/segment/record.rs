@@ -169,13 +169,15 @@ pub fn ramp_windows(cmd: Command<'_>, rules: &SegmentRules) -> Vec<Level> {
 }
 
 /// A clean command step: a held level (a run longer than
-/// [`SegmentRules::max_pulse_samples`]) followed at once by another held level, with no sample
-/// of a ramp or a pulse between them.
+/// [`SegmentRules::max_pulse_samples`]) followed by another held level, at once or through at
+/// most [`SegmentRules::max_step_transition_samples`] samples strictly between the two levels
+/// and in order (an interpolated or slewed step, never a ramp or a pulse).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Step {
     /// First sample of the level before the step.
     pub before_start: usize,
-    /// First sample with the new command.
+    /// First sample that left the level before (the first with the new command when the step
+    /// is clean, the first transition sample otherwise).
     pub at: usize,
     /// One past the last sample of the level after the step (where its run ends).
     pub after_end: usize,
@@ -195,19 +197,33 @@ pub fn holds<'a>(cmd: Command<'a>, rules: &'a SegmentRules) -> impl Iterator<Ite
 /// The clean steps of `cmd` (see [`Step`]), in order.
 pub fn steps(cmd: Command<'_>, rules: &SegmentRules) -> Vec<Step> {
     let mut out = Vec::new();
+    // The last hold, and the short runs seen since it (count, last value, still in order).
     let mut prev: Option<Run> = None;
+    let mut between: Vec<Run> = Vec::new();
     for run in Runs::new(cmd, rules) {
-        let held = run.len() > rules.max_pulse_samples;
-        if let (Some(p), true) = (prev, held) {
-            out.push(Step {
-                before_start: p.start,
-                at: run.start,
-                after_end: run.end,
-                from: p.value,
-                to: run.value,
-            });
+        if run.len() <= rules.max_pulse_samples {
+            between.push(run);
+            continue;
         }
-        prev = held.then_some(run);
+        if let Some(p) = prev {
+            let (lo, hi) = (p.value.min(run.value), p.value.max(run.value));
+            let inside = between.iter().all(|r| r.value > lo && r.value < hi);
+            let ordered = between
+                .windows(2)
+                .all(|w| (w[1].value - w[0].value) * (run.value - p.value) > 0.0);
+            let samples: usize = between.iter().map(Run::len).sum();
+            if inside && ordered && samples <= rules.max_step_transition_samples {
+                out.push(Step {
+                    before_start: p.start,
+                    at: between.first().map_or(run.start, |r| r.start),
+                    after_end: run.end,
+                    from: p.value,
+                    to: run.value,
+                });
+            }
+        }
+        prev = Some(run);
+        between.clear();
     }
     out
 }

@@ -553,6 +553,18 @@ fn steps_are_held_levels_next_to_each_other_and_holds_are_the_steady_runs() {
             (n - 70, n)
         ]
     );
+    // An interpolated step (two samples between the levels, in order) is a step from its first
+    // transition sample; a transition that overshoots or goes back is not.
+    let mut v = seq(&[(0.2, 50)]);
+    v.extend([0.3, 0.45]);
+    v.extend(seq(&[(0.6, 50)]));
+    let st = steps(Command::new(&v), &rules);
+    assert_eq!(st.len(), 1);
+    assert_eq!((st[0].at, st[0].after_end), (50, 102));
+    let mut w = seq(&[(0.2, 50)]);
+    w.extend([0.7, 0.45]);
+    w.extend(seq(&[(0.6, 50)]));
+    assert!(steps(Command::new(&w), &rules).is_empty());
     // A random-step sequence of short holds (≤ max_pulse_samples) has no step: they are pulses.
     assert!(steps(
         Command::new(&seq(&[(0.2, 30), (0.4, 30), (0.3, 30)])),
