@@ -58,6 +58,21 @@ pub struct StandFigures {
     pub static_map: BTreeMap<&'static str, StaticMap>,
 }
 
+/// Where the steady levels are read: over holds, or over a ramp's windows.
+enum Over {
+    Holds(Vec<segment::Run>),
+    Windows(Vec<segment::Level>),
+}
+
+impl Over {
+    fn levels(&self, y: &[f64]) -> Vec<Level> {
+        match self {
+            Over::Holds(h) => levels(y, h),
+            Over::Windows(w) => window_levels(y, w),
+        }
+    }
+}
+
 /// The figures of a record with command `cmd` sampled every `dt_s` (see the module doc): step
 /// figures of `step_output` (the identified output), static maps of `outputs`.
 pub fn stand_figures(
@@ -69,12 +84,11 @@ pub fn stand_figures(
 ) -> StandFigures {
     let steps = segment::steps(cmd, rules);
     let holds: Vec<segment::Run> = segment::holds(cmd, rules).collect();
-    let (command, level_of): (&'static str, Box<dyn Fn(&[f64]) -> Vec<Level>>) =
+    let (command, over) =
         if !steps.is_empty() || (holds.len() >= 2 && segment::is_piecewise_constant(cmd, rules)) {
-            ("steps", Box::new(move |y| levels(y, &holds)))
+            ("steps", Over::Holds(holds))
         } else if segment::is_ramp(cmd, rules) {
-            let windows = segment::ramp_windows(cmd, rules);
-            ("ramp", Box::new(move |y| window_levels(y, &windows)))
+            ("ramp", Over::Windows(segment::ramp_windows(cmd, rules)))
         } else {
             return StandFigures {
                 command: "none",
@@ -88,7 +102,7 @@ pub fn stand_figures(
     let mut maps: BTreeMap<&'static str, StaticMap> = outputs
         .iter()
         .map(|o| {
-            let lv = level_of(o.y);
+            let lv = over.levels(o.y);
             let map = StaticMap {
                 unit: o.unit,
                 power: fit_power_law(&lv),
