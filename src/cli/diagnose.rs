@@ -147,7 +147,7 @@ pub fn load(args: &Args) -> Result<Signals, CliError> {
     let req = Request {
         input: args.input.as_deref(),
         outputs: &outputs,
-        optional: Some(names::VOLTAGE),
+        optional: &[names::VOLTAGE],
         fs_hz: args.fs,
         columns: args.columns.as_deref(),
         esc_us: args.esc_us.as_deref(),
@@ -166,7 +166,7 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
     mark_missing(&mut y, &rec.missing);
     let voltage = file
         .optional
-        .as_ref()
+        .first()
         .map(|n| fill_gaps(file.data(n)))
         .filter(|v| v.iter().all(|x| x.is_finite()));
     let (u, input_name) = match &file.input {

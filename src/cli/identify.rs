@@ -14,6 +14,7 @@
 //! Large sizes take the truncated FFT + Lanczos SVD (O(N) memory; `docs/svd.md`).
 
 mod load;
+mod stand;
 mod summary;
 
 use std::path::PathBuf;
@@ -23,6 +24,8 @@ use propid_numerics::identify::{identify_any_sized, AnyInput};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
+use propid_numerics::segment::{Command, SegmentRules};
+use propid_numerics::stand::{stand_figures, OutputChannel, StandFigures};
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
 
@@ -107,7 +110,22 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let model = identify_any_sized(&input, &ident, &OkidOptions::default(), args.hankel)?;
     let ops = operating_points(&input, &ident, &OpOptions::default());
-    let out = summary::Output::new(&loaded, &model, &ops);
+    let stand = if loaded.commanded {
+        stand_figures(
+            Command::with_missing(&loaded.input, &loaded.missing),
+            loaded.dt_s,
+            &SegmentRules::DEFAULT,
+            loaded.outputs.first().map_or(&[][..], Vec::as_slice),
+            &loaded
+                .stand
+                .iter()
+                .map(|(key, unit, y)| OutputChannel { key, unit, y })
+                .collect::<Vec<_>>(),
+        )
+    } else {
+        StandFigures::default()
+    };
+    let out = summary::Output::new(&loaded, &model, &ops, &stand);
     if args.json {
         println!("{}", out.json().map_err(CliError::Json)?);
     } else {

@@ -68,10 +68,10 @@ pub struct Request<'a> {
     pub input: Option<&'a str>,
     /// Output columns or channels; empty = the thrust (by quantity in a CSV file).
     pub outputs: &'a [String],
-    /// A channel read too when the file has it (diagnose: the supply voltage); in a CSV file it
-    /// is asked for after the outputs (after `thrust` when `outputs` is empty), and the file is
-    /// read again without it when that fails.
-    pub optional: Option<&'a str>,
+    /// Channels read too when the file has them (diagnose: the supply voltage; identify: the
+    /// static map's thrust, torque, rpm and current); in a CSV file each is asked for after the
+    /// outputs (after `thrust` when `outputs` is empty) and left out when the file lacks it.
+    pub optional: &'a [&'a str],
     /// Sample rate, Hz (`--fs`).
     pub fs_hz: Option<f64>,
     /// Column names for a CSV file without a header (`--columns`).
@@ -103,8 +103,8 @@ pub struct LoadedFile {
     pub input: Option<String>,
     /// The output channels in `record`, in the order asked for.
     pub outputs: Vec<String>,
-    /// The optional channel in `record`, when the file has it.
-    pub optional: Option<String>,
+    /// The optional channels in `record` that the file has, in the order asked for.
+    pub optional: Vec<String>,
 }
 
 impl LoadedFile {
@@ -182,7 +182,11 @@ fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
             .map(|n| present(n))
             .collect::<Result<_, _>>()?
     };
-    let optional = req.optional.and_then(|n| present(n).ok());
+    let optional = req
+        .optional
+        .iter()
+        .filter_map(|n| present(n).ok())
+        .collect();
     Ok(LoadedFile {
         name,
         record,
@@ -214,21 +218,33 @@ fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
             },
         )
     };
-    let with_optional = req.optional.and_then(|extra| {
-        let mut outputs = req.outputs.to_vec();
-        if outputs.is_empty() {
-            outputs.push(names::THRUST.into());
+    let mut base = req.outputs.to_vec();
+    if base.is_empty() && !req.optional.is_empty() {
+        base.push(names::THRUST.into());
+    }
+    // Each optional channel is tried on top of those found so far; the last read that worked
+    // holds them all.
+    let mut found: Vec<&str> = Vec::new();
+    let mut with_optional = None;
+    for extra in req.optional {
+        if base.iter().any(|o| o == extra) {
+            continue;
         }
-        outputs.push(extra.into());
-        read(outputs).ok()
-    });
+        let mut outputs = base.clone();
+        outputs.extend(found.iter().map(|s| s.to_string()));
+        outputs.push(extra.to_string());
+        if let Ok(f) = read(outputs) {
+            found.push(extra);
+            with_optional = Some(f);
+        }
+    }
     let (file, optional) = match with_optional {
         Some(mut f) => {
-            let extra = f.outputs.pop();
+            let extra = f.outputs.split_off(f.outputs.len() - found.len());
             (f, extra)
         }
         None => match read(req.outputs.to_vec()) {
-            Ok(f) => (f, None),
+            Ok(f) => (f, Vec::new()),
             Err(source) => return Err(LoadError::Csv { file: name, source }.into()),
         },
     };
@@ -296,17 +312,17 @@ mod tests {
     fn csv_reads_the_optional_channel_when_present_and_not_otherwise() {
         let dir = tempfile::tempdir().unwrap();
         let req = Request {
-            optional: Some(names::VOLTAGE),
+            optional: &[names::VOLTAGE],
             ..Request::default()
         };
         let with = load(&write(dir.path(), "v.csv", &csv(true)), &req).unwrap();
         assert_eq!(with.input.as_deref(), Some(names::THROTTLE));
         assert_eq!(with.outputs, [names::THRUST]);
-        assert_eq!(with.optional.as_deref(), Some(names::VOLTAGE));
+        assert_eq!(with.optional, vec![names::VOLTAGE.to_string()]);
         assert_eq!(with.data(names::VOLTAGE).len(), 100);
         let without = load(&write(dir.path(), "n.csv", &csv(false)), &req).unwrap();
         assert_eq!(without.outputs, [names::THRUST]);
-        assert_eq!(without.optional, None);
+        assert!(without.optional.is_empty());
         assert!(matches!(without.origin, Origin::Csv(_)));
     }
 

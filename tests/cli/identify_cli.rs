@@ -293,3 +293,91 @@ fn simulated_stand_recording_takes_the_pulse_path() {
         "{pts:?}"
     );
 }
+
+/// A staircase up and down through a first-order motor (τ 60 ms up, 120 ms down: spin-down is
+/// slower), a 20 ms dead time and a quadratic thrust map: `identify --json` reports every
+/// step's figures and the static map, and the human summary shows them as tables.
+#[test]
+fn a_staircase_reports_its_steps_and_static_map() {
+    let dt = 0.005;
+    let levels = [0.2, 0.35, 0.5, 0.65, 0.8, 0.5, 0.3];
+    let u: Vec<f64> = levels
+        .iter()
+        .flat_map(|&v| std::iter::repeat(v).take(400))
+        .collect();
+    let (delay, kmap) = (4, 12.0);
+    let mut y = vec![0.0; u.len()];
+    let mut x = kmap * levels[0] * levels[0];
+    for k in 0..u.len() {
+        let target = kmap * u[k.saturating_sub(delay)].powi(2);
+        let tau: f64 = if target >= x { 0.06 } else { 0.12 };
+        x += (target - x) * (1.0 - (-dt / tau).exp());
+        // 0.5 mN of deterministic ripple, as a load cell shows
+        y[k] = x + 5e-4 * ((k * 37 % 11) as f64 / 5.0 - 1.0);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("staircase.csv");
+    let rows: String = (0..u.len())
+        .map(|k| format!("{},{},{}\n", k as f64 * dt, 100.0 * u[k], y[k]))
+        .collect();
+    std::fs::write(&path, format!("t_s,throttle_pct,thrust_N\n{rows}")).unwrap();
+    let v = json(&["identify", "--json", path.to_str().unwrap()]);
+    let steps = v["steps"].as_array().expect("steps");
+    assert_eq!(steps.len(), levels.len() - 1);
+    for (i, s) in steps.iter().enumerate() {
+        let (from, to) = (levels[i], levels[i + 1]);
+        assert!((s["from"].as_f64().unwrap() - from).abs() < 1e-9, "{s}");
+        assert!((s["to"].as_f64().unwrap() - to).abs() < 1e-9, "{s}");
+        let up = to > from;
+        assert_eq!(s["direction"], if up { "up" } else { "down" });
+        let tau = s["time_constant_s"].as_f64().unwrap();
+        let want = if up { 0.06 } else { 0.12 };
+        assert!(
+            (tau - want).abs() < 0.15 * want,
+            "step {i}: τ {tau} vs {want}"
+        );
+        let dead = s["dead_time_s"].as_f64().unwrap();
+        assert!(
+            (dead - delay as f64 * dt).abs() <= 1.5 * dt,
+            "step {i}: θ {dead}"
+        );
+        assert_eq!(s["resolvable"], true);
+        assert!(s["rise_10_90_s"].as_f64().unwrap() > 0.0);
+        assert!(s["overshoot_pct"].as_f64().unwrap() < 1.0);
+    }
+    let thrust = &v["static_map"]["thrust"];
+    assert_eq!(thrust["unit"], "N");
+    let lv = thrust["levels"].as_array().unwrap();
+    assert_eq!(lv.len(), levels.len());
+    for l in lv {
+        let u = l["throttle"].as_f64().unwrap();
+        assert!(
+            (l["mean"].as_f64().unwrap() - kmap * u * u).abs() < 2e-3,
+            "{l}"
+        );
+    }
+    let p = &thrust["power"];
+    assert!((p["exponent"].as_f64().unwrap() - 2.0).abs() < 0.05, "{p}");
+    assert!(p["uncertainty"]["exponent"].as_f64().unwrap() > 0.0);
+    let e = &thrust["expo"];
+    assert!((e["a"].as_f64().unwrap() - 1.0).abs() < 0.02, "{e}");
+    assert!((e["t_max"].as_f64().unwrap() - kmap).abs() < 0.1, "{e}");
+    let (code, human, _) = propid(&["identify", path.to_str().unwrap()]);
+    assert_eq!(code, 0);
+    assert!(human.contains("steps (6):"), "{human}");
+    assert!(
+        human.contains("static map: thrust (N) over 7 levels"),
+        "{human}"
+    );
+}
+
+/// A record without steps (random input) has empty `steps` and `static_map`.
+#[test]
+fn random_input_has_no_steps_and_no_static_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let plant = Plant::new(12.0, 0.4, 5.0, 0.002);
+    let path = write_csv(dir.path(), "random.csv", &plant, &random_u(3000));
+    let v = json(&["identify", "--json", path.to_str().unwrap()]);
+    assert_eq!(v["steps"].as_array().unwrap().len(), 0);
+    assert!(v["static_map"].as_object().unwrap().is_empty());
+}

@@ -9,6 +9,7 @@ use crate::ingest::csv_file::CsvSource;
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
 use propid_wire::protocol::detect::WireFormat;
+use propid_wire::record::names;
 
 /// What `identify` works on.
 #[derive(Debug, Clone)]
@@ -23,6 +24,10 @@ pub struct Loaded {
     pub missing: Vec<bool>,
     /// Device pulse starts (TSP/1 events), if any.
     pub pulse_starts: Option<Vec<usize>>,
+    /// Whether `input` is a command read from the file (not steps found from the response).
+    pub commanded: bool,
+    /// The static map's channels the file has: key, unit, samples (NaN = not measured).
+    pub stand: Vec<(&'static str, &'static str, Vec<f64>)>,
     /// Description for the output.
     pub source: Source,
 }
@@ -73,6 +78,14 @@ pub struct StepOut {
     pub to: f64,
 }
 
+/// The channels of a stand's static map: its key, the record's channel and its unit.
+pub const STAND_CHANNELS: [(&str, &str, &str); 4] = [
+    ("thrust", names::THRUST, "N"),
+    ("torque", names::TORQUE, "N·m"),
+    ("rpm", names::RPM, "rev/min"),
+    ("current", names::CURRENT, "A"),
+];
+
 /// Reads FILE as the options say: the shared loader ([`crate::cli::load`]), then what identify
 /// keeps (the missing mask, device pulse starts, the JSON `"source"`), with the input found from
 /// the response's steps when a CSV file has no input column.
@@ -80,7 +93,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
     let req = Request {
         input: args.input.as_deref(),
         outputs: &args.output,
-        optional: None,
+        optional: &STAND_CHANNELS.map(|c| c.1),
         fs_hz: args.fs,
         columns: args.columns.as_deref(),
         esc_us: args.esc_us.as_deref(),
@@ -121,6 +134,12 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
     } else {
         rec.impulse_starts().collect()
     };
+    let commanded = file.input.is_some();
+    let stand = STAND_CHANNELS
+        .iter()
+        .filter(|c| rec.channel(c.1).is_some())
+        .map(|&(key, channel, unit)| (key, unit, file.data(channel)))
+        .collect();
     let (format, output_names, rate_hz, tsp1, csv) = match file.origin {
         Origin::Tsp1(stats) => (
             "tsp1",
@@ -137,6 +156,8 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         outputs,
         missing: rec.missing.clone(),
         pulse_starts: (!starts.is_empty()).then_some(starts),
+        commanded,
+        stand,
         source: Source {
             file: file.name,
             format,

@@ -8,6 +8,7 @@ use super::load::{Loaded, Source};
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::report::Gain;
+use propid_numerics::stand::StandFigures;
 use propid_numerics::ModelReport;
 
 /// Everything `identify` prints.
@@ -19,11 +20,20 @@ pub struct Output<'a> {
     pub source: Source,
     /// The gain schedule.
     pub operating_points: &'a OpTable,
+    /// Step figures, one per clean command step (empty without steps).
+    pub steps: &'a [propid_numerics::step_response::StepFigures],
+    /// Steady levels and fitted curves per output (empty without steps or a ramp).
+    pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
 }
 
 impl<'a> Output<'a> {
     /// Assembles the output.
-    pub fn new(loaded: &Loaded, model: &'a AnyModel, ops: &'a OpTable) -> Self {
+    pub fn new(
+        loaded: &Loaded,
+        model: &'a AnyModel,
+        ops: &'a OpTable,
+        stand: &'a StandFigures,
+    ) -> Self {
         let mut source = loaded.source.clone();
         source.path = path_name(model.path);
         source.okid = model.okid.clone();
@@ -31,6 +41,8 @@ impl<'a> Output<'a> {
             model: &model.report,
             source,
             operating_points: ops,
+            steps: &stand.steps,
+            static_map: &stand.static_map,
         }
     }
 
@@ -119,6 +131,14 @@ impl<'a> Output<'a> {
                 let _ = writeln!(o, "  {:>10.4}  skipped: {}", sk.level, sk.reason);
             }
         }
+        super::stand::write_tables(
+            &mut o,
+            &StandFigures {
+                command: "",
+                steps: self.steps.to_vec(),
+                static_map: self.static_map.clone(),
+            },
+        );
         o
     }
 }

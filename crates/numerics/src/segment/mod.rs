@@ -24,6 +24,9 @@
 //!   when at least [`SegmentRules::min_level_fraction`] of them lie in levels; a *ramp* when
 //!   the value follows time (`|r| > ramp_min_correlation`), cut into
 //!   [`SegmentRules::ramp_windows`] windows ([`ramp_windows`]).
+//! - **Hold**: a run longer than `max_pulse_samples` (the command steady: [`holds`]); a clean
+//!   **step** is one hold followed at once by another ([`steps`]), the input of the step
+//!   figures (`step_response`) and the static map (`static_map`).
 //!
 //! Pulses are decided one sample at a time by [`PulseClassifier`] (fixed memory, no
 //! allocation, at most `max_pulse_samples` samples held): the daemon's CSV link feeds it live,
@@ -43,8 +46,8 @@ mod tests;
 
 pub use classify::{Decision, PulseClassifier, PulseRun};
 pub use record::{
-    is_piecewise_constant, is_ramp, is_ramped_staircase, levels, pulse_at, pulses, ramp_windows,
-    Level, Pulses,
+    holds, is_piecewise_constant, is_ramp, is_ramped_staircase, levels, pulse_at, pulses,
+    ramp_windows, steps, Level, Pulses, Step,
 };
 pub use rules::{ResponseStepRules, SegmentRules};
 pub use runs::{run_end, run_start, Command, Run, Runs};

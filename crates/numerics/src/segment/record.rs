@@ -1,7 +1,7 @@
 //! The rules over a whole record: pulses, levels, and what kind of command it is.
 
 use super::classify::{Decision, PulseClassifier, PulseRun};
-use super::runs::{run_end, Command, Runs};
+use super::runs::{run_end, Command, Run, Runs};
 use super::SegmentRules;
 
 /// The pulses of a record, in order: exactly the [`Decision::Pulse`]s of a
@@ -166,4 +166,64 @@ pub fn ramp_windows(cmd: Command<'_>, rules: &SegmentRules) -> Vec<Level> {
             }
         })
         .collect()
+}
+
+/// A clean command step: a held level (a run longer than
+/// [`SegmentRules::max_pulse_samples`]) followed by another held level, at once or through at
+/// most [`SegmentRules::max_step_transition_samples`] samples strictly between the two levels
+/// and in order (an interpolated or slewed step, never a ramp or a pulse).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Step {
+    /// First sample of the level before the step.
+    pub before_start: usize,
+    /// First sample that left the level before (the first with the new command when the step
+    /// is clean, the first transition sample otherwise).
+    pub at: usize,
+    /// One past the last sample of the level after the step (where its run ends).
+    pub after_end: usize,
+    /// Command before.
+    pub from: f64,
+    /// Command after.
+    pub to: f64,
+}
+
+/// The holds of `cmd`: its runs longer than [`SegmentRules::max_pulse_samples`], where the
+/// command is steady (a staircase's levels, the settled part of a pulse experiment's level
+/// before its first pulse, each stretch between a random-step sequence's changes).
+pub fn holds<'a>(cmd: Command<'a>, rules: &'a SegmentRules) -> impl Iterator<Item = Run> + 'a {
+    Runs::new(cmd, rules).filter(|r| r.len() > rules.max_pulse_samples)
+}
+
+/// The clean steps of `cmd` (see [`Step`]), in order.
+pub fn steps(cmd: Command<'_>, rules: &SegmentRules) -> Vec<Step> {
+    let mut out = Vec::new();
+    // The last hold, and the short runs seen since it (count, last value, still in order).
+    let mut prev: Option<Run> = None;
+    let mut between: Vec<Run> = Vec::new();
+    for run in Runs::new(cmd, rules) {
+        if run.len() <= rules.max_pulse_samples {
+            between.push(run);
+            continue;
+        }
+        if let Some(p) = prev {
+            let (lo, hi) = (p.value.min(run.value), p.value.max(run.value));
+            let inside = between.iter().all(|r| r.value > lo && r.value < hi);
+            let ordered = between
+                .windows(2)
+                .all(|w| (w[1].value - w[0].value) * (run.value - p.value) > 0.0);
+            let samples: usize = between.iter().map(Run::len).sum();
+            if inside && ordered && samples <= rules.max_step_transition_samples {
+                out.push(Step {
+                    before_start: p.start,
+                    at: between.first().map_or(run.start, |r| r.start),
+                    after_end: run.end,
+                    from: p.value,
+                    to: run.value,
+                });
+            }
+        }
+        prev = Some(run);
+        between.clear();
+    }
+    out
 }

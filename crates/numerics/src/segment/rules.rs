@@ -34,6 +34,10 @@ pub struct SegmentRules {
     pub ramp_min_samples: usize,
     /// A ramp is cut into this many windows of equal length, one operating point each. `4`.
     pub ramp_windows: usize,
+    /// A step between two holds may pass through this many samples between the two levels
+    /// (each strictly between them, in order): a logged command resampled onto a uniform grid
+    /// by interpolation, or an ESC that slews over a sample or two. `3`.
+    pub max_step_transition_samples: usize,
     /// Steps found from the response when the command was not logged.
     pub response: ResponseStepRules,
 }
@@ -74,6 +78,7 @@ impl SegmentRules {
         ramp_min_correlation: 0.9,
         ramp_min_samples: 8,
         ramp_windows: 4,
+        max_step_transition_samples: 3,
         response: ResponseStepRules::DEFAULT,
     };
 

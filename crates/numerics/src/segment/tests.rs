@@ -522,3 +522,53 @@ proptest! {
         prop_assert_eq!(marks, old_flags(&t, tol, 8));
     }
 }
+
+#[test]
+fn steps_are_held_levels_next_to_each_other_and_holds_are_the_steady_runs() {
+    let rules = SegmentRules::DEFAULT;
+    // 0.2 held, step to 0.5, held with a pulse, ramp (short runs) to 0.8, held, step down to 0.4.
+    let mut u = seq(&[(0.2, 100), (0.5, 60), (0.6, 1), (0.5, 60)]);
+    u.extend((1..10).map(|i| 0.5 + 0.03 * i as f64));
+    u.extend(seq(&[(0.8, 80), (0.4, 70)]));
+    let cmd = Command::new(&u);
+    let st = steps(cmd, &rules);
+    assert_eq!(st.len(), 2, "{st:?}");
+    assert_eq!(
+        (st[0].before_start, st[0].at, st[0].after_end),
+        (0, 100, 160)
+    );
+    assert!(close(st[0].from, 0.2) && close(st[0].to, 0.5));
+    let n = u.len();
+    assert_eq!((st[1].at, st[1].after_end), (n - 70, n));
+    assert!(close(st[1].from, 0.8) && close(st[1].to, 0.4));
+    // The ramp into 0.8 is no step; the pulse splits 0.5 into two holds.
+    let h: Vec<(usize, usize)> = holds(cmd, &rules).map(|r| (r.start, r.end)).collect();
+    assert_eq!(
+        h,
+        vec![
+            (0, 100),
+            (100, 160),
+            (161, 221),
+            (n - 150, n - 70),
+            (n - 70, n)
+        ]
+    );
+    // An interpolated step (two samples between the levels, in order) is a step from its first
+    // transition sample; a transition that overshoots or goes back is not.
+    let mut v = seq(&[(0.2, 50)]);
+    v.extend([0.3, 0.45]);
+    v.extend(seq(&[(0.6, 50)]));
+    let st = steps(Command::new(&v), &rules);
+    assert_eq!(st.len(), 1);
+    assert_eq!((st[0].at, st[0].after_end), (50, 102));
+    let mut w = seq(&[(0.2, 50)]);
+    w.extend([0.7, 0.45]);
+    w.extend(seq(&[(0.6, 50)]));
+    assert!(steps(Command::new(&w), &rules).is_empty());
+    // A random-step sequence of short holds (≤ max_pulse_samples) has no step: they are pulses.
+    assert!(steps(
+        Command::new(&seq(&[(0.2, 30), (0.4, 30), (0.3, 30)])),
+        &rules
+    )
+    .is_empty());
+}

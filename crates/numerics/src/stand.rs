@@ -1,0 +1,236 @@
+//! What a propulsion engineer reads off a stand record first, before any model: the figures of
+//! every command step ([`crate::step_response`]) and the static map of every output
+//! ([`crate::static_map`]), found with the one segmentation ([`crate::segment`]).
+//!
+//! - A record with clean steps (a staircase, a random-step sequence, steps up and down) gives
+//!   one [`StepFigures`] per step, for the identified output, and the static map over its holds.
+//! - A ramp gives no step; its static map is read over [`crate::segment::ramp_windows`]
+//!   windows, each at its mean command and mean output (quasi-static: a ramp slow against the
+//!   plant's time constants, which the record cannot check by itself).
+//! - Anything else (pulses on one level, random or multisine input) gives neither.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use crate::segment::{self, Command, SegmentRules};
+use crate::static_map::{
+    fit_expo, fit_power_law, fit_thrust_coefficient, levels, window_levels, Expo, Level, PowerLaw,
+    ThrustCoefficient,
+};
+use crate::step_response::{step_figures, StepFigures};
+
+/// One output channel of the record.
+#[derive(Debug, Clone, Copy)]
+pub struct OutputChannel<'a> {
+    /// Key in the static map (`thrust`, `torque`, `rpm`, `current`).
+    pub key: &'static str,
+    /// Its unit.
+    pub unit: &'static str,
+    /// Samples (NaN = not measured).
+    pub y: &'a [f64],
+}
+
+/// The static map of one output.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StaticMap {
+    /// The output's unit.
+    pub unit: &'static str,
+    /// Steady level per held command.
+    pub levels: Vec<Level>,
+    /// `T = k·max(u − u0, 0)^exponent` (`null` with fewer than 3 levels).
+    pub power: Option<PowerLaw>,
+    /// `T/t_max = (1 − a)·x + a·x²` (`null` with fewer than 2 levels).
+    pub expo: Option<Expo>,
+    /// Thrust only, when the record has rotor speed too: `T = k_t·ω²`, ω in rad/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_t: Option<ThrustCoefficient>,
+}
+
+/// Step figures and static maps of a record.
+#[derive(Debug, Clone, PartialEq, Default, Serialize)]
+pub struct StandFigures {
+    /// `"steps"`, `"ramp"` or `"none"`: what the command was read as.
+    pub command: &'static str,
+    /// One per clean step, for the first output.
+    pub steps: Vec<StepFigures>,
+    /// Per output key.
+    pub static_map: BTreeMap<&'static str, StaticMap>,
+}
+
+/// Where the steady levels are read: over holds, or over a ramp's windows.
+enum Over {
+    Holds(Vec<segment::Run>),
+    Windows(Vec<segment::Level>),
+}
+
+impl Over {
+    fn levels(&self, y: &[f64]) -> Vec<Level> {
+        match self {
+            Over::Holds(h) => levels(y, h),
+            Over::Windows(w) => window_levels(y, w),
+        }
+    }
+}
+
+/// The figures of a record with command `cmd` sampled every `dt_s` (see the module doc): step
+/// figures of `step_output` (the identified output), static maps of `outputs`.
+pub fn stand_figures(
+    cmd: Command<'_>,
+    dt_s: f64,
+    rules: &SegmentRules,
+    step_output: &[f64],
+    outputs: &[OutputChannel<'_>],
+) -> StandFigures {
+    let steps = segment::steps(cmd, rules);
+    let holds: Vec<segment::Run> = segment::holds(cmd, rules).collect();
+    let (command, over) =
+        if !steps.is_empty() || (holds.len() >= 2 && segment::is_piecewise_constant(cmd, rules)) {
+            ("steps", Over::Holds(holds))
+        } else if segment::is_ramp(cmd, rules) {
+            ("ramp", Over::Windows(segment::ramp_windows(cmd, rules)))
+        } else {
+            return StandFigures {
+                command: "none",
+                ..StandFigures::default()
+            };
+        };
+    let step_figs = steps
+        .iter()
+        .map(|s| step_figures(step_output, dt_s, s))
+        .collect();
+    let mut maps: BTreeMap<&'static str, StaticMap> = outputs
+        .iter()
+        .map(|o| {
+            let lv = over.levels(o.y);
+            let map = StaticMap {
+                unit: o.unit,
+                power: fit_power_law(&lv),
+                expo: fit_expo(&lv),
+                levels: lv,
+                k_t: None,
+            };
+            (o.key, map)
+        })
+        .collect();
+    if let (Some(rpm), Some(thrust)) = (maps.get("rpm").cloned(), maps.get_mut("thrust")) {
+        let omega: Vec<Level> = rpm
+            .levels
+            .iter()
+            .map(|l| Level {
+                mean: l.mean * std::f64::consts::TAU / 60.0,
+                std: l.std * std::f64::consts::TAU / 60.0,
+                ..*l
+            })
+            .collect();
+        if rpm.levels.len() == thrust.levels.len() {
+            thrust.k_t = fit_thrust_coefficient(&thrust.levels, &omega);
+        }
+    }
+    StandFigures {
+        command,
+        steps: step_figs,
+        static_map: maps,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A staircase 0.2 → 0.4 → 0.6 → 0.8 → 0.5 at 100 Hz into a first-order thrust with a
+    /// quadratic static map and 20 ms dead time; rpm linear in the command.
+    fn staircase() -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let dt = 0.01;
+        let u: Vec<f64> = [0.2, 0.4, 0.6, 0.8, 0.5]
+            .iter()
+            .flat_map(|&v| std::iter::repeat(v).take(200))
+            .collect();
+        let (tau, delay) = (0.05f64, 2);
+        let mut t = vec![0.0; u.len()];
+        let mut x = 10.0 * 0.2f64.powi(2);
+        for k in 0..u.len() {
+            let target = 10.0 * u[k.saturating_sub(delay)].powi(2);
+            x += (target - x) * (1.0 - (-dt / tau).exp());
+            t[k] = x;
+        }
+        let rpm: Vec<f64> = t
+            .iter()
+            .map(|v| (v / 2e-5).sqrt() * 60.0 / std::f64::consts::TAU)
+            .collect();
+        (u, t, rpm)
+    }
+
+    #[test]
+    fn a_staircase_gives_its_steps_and_its_quadratic_map() {
+        let (u, t, rpm) = staircase();
+        let f = stand_figures(
+            Command::new(&u),
+            0.01,
+            &SegmentRules::DEFAULT,
+            &t,
+            &[
+                OutputChannel {
+                    key: "thrust",
+                    unit: "N",
+                    y: &t,
+                },
+                OutputChannel {
+                    key: "rpm",
+                    unit: "rev/min",
+                    y: &rpm,
+                },
+            ],
+        );
+        assert_eq!(f.command, "steps");
+        assert_eq!(f.steps.len(), 4);
+        for s in &f.steps {
+            assert!((s.time_constant_s.unwrap() - 0.05).abs() < 0.01, "{s:?}");
+            assert!((s.dead_time_s.unwrap() - 0.02).abs() <= 0.011, "{s:?}");
+        }
+        let thrust = &f.static_map["thrust"];
+        assert_eq!(thrust.levels.len(), 5);
+        for l in &thrust.levels {
+            assert!(
+                (l.mean - 10.0 * l.throttle * l.throttle).abs() < 1e-3,
+                "{l:?}"
+            );
+        }
+        let p = thrust.power.unwrap();
+        assert!(
+            (p.exponent - 2.0).abs() < 1e-3 && p.u0.abs() < 1e-3,
+            "{p:?}"
+        );
+        let e = thrust.expo.unwrap();
+        assert!(
+            (e.a - 1.0).abs() < 1e-3 && (e.t_max - 10.0).abs() < 1e-2,
+            "{e:?}"
+        );
+        assert!((thrust.k_t.unwrap().k_t - 2e-5).abs() < 1e-9);
+        assert!(f.static_map["rpm"].k_t.is_none());
+    }
+
+    #[test]
+    fn a_ramp_has_a_map_and_no_steps_and_noise_has_neither() {
+        let u: Vec<f64> = (0..1000).map(|k| 0.1 + 0.8 * k as f64 / 1000.0).collect();
+        let y: Vec<f64> = u.iter().map(|v| 5.0 * v * v).collect();
+        let out = [OutputChannel {
+            key: "thrust",
+            unit: "N",
+            y: &y,
+        }];
+        let f = stand_figures(Command::new(&u), 0.01, &SegmentRules::DEFAULT, &y, &out);
+        assert_eq!(f.command, "ramp");
+        assert!(f.steps.is_empty());
+        assert_eq!(
+            f.static_map["thrust"].levels.len(),
+            SegmentRules::DEFAULT.ramp_windows
+        );
+        let r: Vec<f64> = (0..1000)
+            .map(|k| ((k * 7919) % 1000) as f64 / 1000.0)
+            .collect();
+        let f = stand_figures(Command::new(&r), 0.01, &SegmentRules::DEFAULT, &y, &out);
+        assert_eq!(f.command, "none");
+        assert!(f.static_map.is_empty());
+    }
+}

@@ -1,0 +1,128 @@
+//! The human tables of the step figures and static maps (`identify`'s summary); the JSON has
+//! the same numbers as `"steps"` and `"static_map"`.
+
+use std::fmt::Write;
+
+use propid_numerics::stand::StandFigures;
+use propid_numerics::step_response::Direction;
+
+/// A number, or `-` where the data supports none.
+fn num(v: Option<f64>, prec: usize) -> String {
+    match v {
+        Some(x) if x.is_finite() => format!("{x:.prec$}"),
+        _ => "-".into(),
+    }
+}
+
+/// `value ± sd`, or `value` alone without an uncertainty.
+fn pm(v: f64, sd: Option<f64>) -> String {
+    let f = |x: f64| {
+        if x != 0.0 && (x.abs() < 1e-3 || x.abs() >= 1e5) {
+            format!("{x:.4e}")
+        } else {
+            format!("{x:.4}")
+        }
+    };
+    match sd {
+        Some(s) => format!("{} ± {}", f(v), f(s)),
+        None => f(v),
+    }
+}
+
+/// Appends the step table and the static maps to `o` (nothing when the record has neither).
+pub fn write_tables(o: &mut String, f: &StandFigures) {
+    if !f.steps.is_empty() {
+        let _ = writeln!(o, "steps ({}):", f.steps.len());
+        let _ = writeln!(
+            o,
+            "  {:>9}  {:>15}  {:>4}  {:>9}  {:>9}  {:>9}  {:>9}  {:>9}",
+            "t (s)",
+            "command",
+            "dir",
+            "dead (s)",
+            "tau (s)",
+            "10-90 (s)",
+            "settle (s)",
+            "overshoot"
+        );
+        for s in &f.steps {
+            let dir = match s.direction {
+                Direction::Up => "up",
+                Direction::Down => "down",
+            };
+            let tau = match (s.time_constant_s, s.resolvable, s.note) {
+                (None, false, Some(_)) if s.dead_time_s.is_some() => "< dt".to_string(),
+                (t, ..) => num(t, 4),
+            };
+            let _ = writeln!(
+                o,
+                "  {:>9.3}  {:>6.3} -> {:>5.3}  {:>4}  {:>9}  {:>9}  {:>9}  {:>9}  {:>8}%{}",
+                s.t_s,
+                s.from,
+                s.to,
+                dir,
+                num(s.dead_time_s, 4),
+                tau,
+                num(s.rise_10_90_s, 4),
+                num(s.settling_90_s, 4),
+                num(s.overshoot_pct, 1),
+                s.note.map(|n| format!("  ({n})")).unwrap_or_default()
+            );
+        }
+    }
+    for (key, map) in &f.static_map {
+        let _ = writeln!(
+            o,
+            "static map: {key} ({}) over {} levels",
+            map.unit,
+            map.levels.len()
+        );
+        let _ = writeln!(
+            o,
+            "  {:>9}  {:>12}  {:>10}  {:>8}",
+            "throttle", "mean", "std", "samples"
+        );
+        for l in &map.levels {
+            let _ = writeln!(
+                o,
+                "  {:>9.4}  {:>12.5}  {:>10.5}  {:>8}",
+                l.throttle, l.mean, l.std, l.samples
+            );
+        }
+        match &map.power {
+            Some(p) => {
+                let sd = p.uncertainty;
+                let _ = writeln!(
+                    o,
+                    "  power     k·max(u − u0, 0)^e: k {}, u0 {}, e {}",
+                    pm(p.k, sd.map(|s| s.k)),
+                    pm(p.u0, sd.map(|s| s.u0)),
+                    pm(p.exponent, sd.map(|s| s.exponent))
+                );
+            }
+            None => {
+                let _ = writeln!(o, "  power     - (fewer than 3 levels)");
+            }
+        }
+        match &map.expo {
+            Some(e) => {
+                let sd = e.uncertainty;
+                let _ = writeln!(
+                    o,
+                    "  expo      (1 − a)·x + a·x²: a {}, t_max {}",
+                    pm(e.a, sd.map(|s| s.a)),
+                    pm(e.t_max, sd.map(|s| s.t_max))
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    o,
+                    "  expo      - (fewer than 2 levels, or no positive t_max)"
+                );
+            }
+        }
+        if let Some(k) = &map.k_t {
+            let _ = writeln!(o, "  k_t       {} N/(rad/s)²", pm(k.k_t, k.k_t_sd));
+        }
+    }
+}
