@@ -240,7 +240,11 @@ fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
     }
     let (file, optional) = match with_optional {
         Some(mut f) => {
+            // The optional channels are read, not identified: `source.outputs` lists the
+            // outputs alone.
             let extra = f.outputs.split_off(f.outputs.len() - found.len());
+            let n = f.source.outputs.len().saturating_sub(found.len());
+            f.source.outputs.truncate(n);
             (f, extra)
         }
         None => match read(req.outputs.to_vec()) {
