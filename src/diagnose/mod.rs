@@ -56,8 +56,10 @@ pub enum DiagnoseError {
         /// Sample index.
         index: usize,
     },
-    /// The sample period is not a positive number.
-    #[error("the sample period {0} s is not positive")]
+    /// The sample period is not a positive number of at most [`MAX_SAMPLE_PERIOD_S`].
+    #[error(
+        "the sample period {0} s is outside 0 < dt <= 490000 s (a time column in ns read as s?)"
+    )]
     BadSamplePeriod(f64),
     /// Input or output does not vary: nothing to identify.
     #[error("the {0} is constant on the estimation part: nothing to identify")]
@@ -66,6 +68,10 @@ pub enum DiagnoseError {
     #[error("the 2nd-order baseline could not be fitted to this data")]
     FitFailed,
 }
+
+/// Longest sample period diagnosed, s: above it the highest frequency a mode may take
+/// ([`model::max_freq_hz`], 0.49/dt) falls below the fit's lowest (1e-6 Hz).
+pub const MAX_SAMPLE_PERIOD_S: f64 = 0.49 / 1e-6;
 
 /// Options of a diagnosis.
 #[derive(Debug, Clone)]
@@ -147,7 +153,7 @@ pub fn diagnose(
     voltage: Option<&[f64]>,
     opts: &Options,
 ) -> Result<Diagnosis, DiagnoseError> {
-    if !(dt_s.is_finite() && dt_s > 0.0) {
+    if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= MAX_SAMPLE_PERIOD_S) {
         return Err(DiagnoseError::BadSamplePeriod(dt_s));
     }
     let n = u
