@@ -108,11 +108,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let ops = operating_points(&input, &ident, &OpOptions::default());
     let out = summary::Output::new(&loaded, &model, &ops);
     if args.json {
-        println!("{}", out.json().map_err(CliError::Json)?);
+        super::stdout::line(&out.json().map_err(CliError::Json)?)
     } else {
-        print!("{}", out.human());
+        super::stdout::write(&out.human())
     }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -32,13 +32,12 @@
 mod handler;
 
 use crossbeam_channel::Sender;
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::time::{Duration, Instant};
 
 use super::config::WireProtocol;
 use super::csv_link::CsvLinkOptions;
 use super::item::{Item, Notice, PlanNote};
+use super::recorder::Recorder;
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
@@ -112,6 +111,10 @@ pub struct SamplerOutcome {
     pub stats: LinkStats,
     /// Why it stopped with an error, if it did.
     pub error: Option<DaemonError>,
+    /// The plan ended on a fault (device reset, watchdog trip, refusal) and the run stopped.
+    pub plan_halted: bool,
+    /// The recording failed (the run went on): reported at the end, exit 7.
+    pub record_error: Option<DaemonError>,
 }
 
 /// STOP re-send period (PROTOCOL.md §4: re-send after 50 ms without ACK).
@@ -125,7 +128,7 @@ pub struct Sampler {
     source: Box<dyn Source>,
     wire: Wire,
     handler: Handler,
-    record: Option<BufWriter<File>>,
+    record: Option<Recorder>,
     shutdown: Shutdown,
     cfg: SamplerConfig,
     start: Instant,
@@ -135,6 +138,8 @@ pub struct Sampler {
     connected_at: Instant,
     /// The plan was told the link is up.
     plan_started: bool,
+    /// The plan ended on a fault.
+    plan_halted: bool,
 }
 
 impl Sampler {
@@ -143,7 +148,7 @@ impl Sampler {
         source: Box<dyn Source>,
         tx: Sender<Item>,
         plan: Option<Box<dyn Plan>>,
-        record: Option<File>,
+        record: Option<Recorder>,
         shutdown: Shutdown,
         cfg: SamplerConfig,
     ) -> Sampler {
@@ -163,7 +168,7 @@ impl Sampler {
                 stop_acked: false,
                 now_us: 0,
             },
-            record: record.map(|f| BufWriter::with_capacity(1 << 16, f)),
+            record,
             shutdown,
             cfg,
             start: Instant::now(),
@@ -171,6 +176,7 @@ impl Sampler {
             cmd: [0u8; MAX_FRAME_LEN],
             connected_at: Instant::now(),
             plan_started: false,
+            plan_halted: false,
         }
     }
 
@@ -182,12 +188,26 @@ impl Sampler {
             self.decided(f);
         }
         if let Some(r) = self.record.as_mut() {
-            let _ = r.flush();
+            r.flush();
         }
+        self.forward_record_notes();
         self.finish_stats();
         SamplerOutcome {
             stats: self.handler.stats,
             error,
+            plan_halted: self.plan_halted,
+            record_error: self.record.as_ref().and_then(Recorder::error),
+        }
+    }
+
+    /// Flushes the recording when due and hands what it reports to the worker.
+    fn forward_record_notes(&mut self) {
+        let Some(r) = self.record.as_mut() else {
+            return;
+        };
+        r.tick();
+        for n in r.take_notes() {
+            self.handler.send(Item::Record(n));
         }
     }
 
@@ -197,6 +217,7 @@ impl Sampler {
             self.decided(f);
         }
         loop {
+            self.forward_record_notes();
             if self.shutdown.requested() || self.time_up() {
                 if live {
                     self.stop_device()?;
@@ -215,6 +236,13 @@ impl Sampler {
             }
             match self.handler.plan.as_ref().map(|p| p.status()) {
                 Some(PlanStatus::Done) => return Ok(()),
+                Some(PlanStatus::Halted) if !self.shutdown.requested() => {
+                    // A device reset, a watchdog trip or a refusal ended the plan (its warning
+                    // is queued): the run is over, with a fault, so that a supervisor sees it.
+                    self.plan_halted = true;
+                    let _ = self.stop_device();
+                    return Ok(());
+                }
                 Some(PlanStatus::LinkFailed)
                     if self.wire.format() == Some(WireFormat::Csv) && self.wire.csv_acks() == 0 =>
                 {
@@ -282,9 +310,7 @@ impl Sampler {
             return Ok(());
         }
         if let Some(r) = self.record.as_mut() {
-            if r.write_all(&self.buf[..n]).is_err() {
-                self.record = None; // a full disk must not stop the stand; stats show bytes
-            }
+            r.write(&self.buf[..n]); // a failure is reported, never stops the stand
         }
         self.handler.stats.bytes += n as u64;
         self.handler.now_us = self.now_us();
@@ -346,6 +372,7 @@ impl Sampler {
         self.handler.send(Item::Notice(Notice::Disconnected));
         let mut backoff = Backoff::new(self.cfg.reconnect_initial, self.cfg.reconnect_max);
         loop {
+            self.forward_record_notes();
             if self.shutdown.requested() || self.time_up() {
                 return Ok(()); // the main loop sees the request; STOP cannot reach anyone
             }
@@ -412,6 +439,7 @@ impl Sampler {
         let s = &mut self.handler.stats;
         s.wire = self.wire.name().to_string();
         s.frames_ok = self.wire.frames_ok();
+        s.empty_frames = self.wire.empty_frames();
         for (k, v) in self.wire.dropped() {
             s.frames_dropped.insert(k.to_string(), v);
         }
@@ -421,6 +449,7 @@ impl Sampler {
         s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
+        s.record_bytes_written = self.record.as_ref().map(Recorder::bytes_written);
     }
 }
 
