@@ -59,6 +59,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let shutdown = Shutdown::install()?;
     let plan = crate::daemon::plan::from_config(&cfg)?;
     let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
+    // the socket first: a live daemon on its path is found before the stand is touched
+    let publisher = Publisher::open(&cfg.publish)?;
     let source = SerialSource::open(&cfg.device.port, cfg.device.baud, cfg.device.read_timeout)
         .map_err(CliError::Serial)?;
     let record = match &cfg.daemon.record {
@@ -68,7 +70,6 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ),
         None => None,
     };
-    let publisher = Publisher::open(&cfg.publish)?;
     let parts = RunParts {
         source: Box::new(source),
         plan: Some(plan),

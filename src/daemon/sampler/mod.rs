@@ -26,7 +26,8 @@
 //!
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
 //! exponential backoff; the plan is told, does a HELLO handshake again and never re-arms by
-//! itself. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
+//! itself. A plan over on a fault (device reset, watchdog trip, refusal) ends the run 500 ms
+//! later (the link still read meanwhile), with [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
 //! acknowledges it or the stop timeout passes.
 
 mod handler;
@@ -117,6 +118,9 @@ pub struct SamplerOutcome {
     pub record_error: Option<DaemonError>,
 }
 
+/// How long the link is still read after the plan ended on a fault, before the run ends.
+const HALT_DRAIN: Duration = Duration::from_millis(500);
+
 /// STOP re-send period (PROTOCOL.md §4: re-send after 50 ms without ACK).
 const RESEND: Duration = Duration::from_millis(50);
 
@@ -140,6 +144,8 @@ pub struct Sampler {
     plan_started: bool,
     /// The plan ended on a fault.
     plan_halted: bool,
+    /// When the plan was first seen over on a fault.
+    halted_at: Option<Instant>,
 }
 
 impl Sampler {
@@ -177,6 +183,7 @@ impl Sampler {
             connected_at: Instant::now(),
             plan_started: false,
             plan_halted: false,
+            halted_at: None,
         }
     }
 
@@ -238,10 +245,15 @@ impl Sampler {
                 Some(PlanStatus::Done) => return Ok(()),
                 Some(PlanStatus::Halted) if !self.shutdown.requested() => {
                     // A device reset, a watchdog trip or a refusal ended the plan (its warning
-                    // is queued): the run is over, with a fault, so that a supervisor sees it.
-                    self.plan_halted = true;
-                    let _ = self.stop_device();
-                    return Ok(());
+                    // is queued): the run is over, with a fault, so that a supervisor sees it;
+                    // after HALT_DRAIN, so that what the device says about it (its HELLO, its
+                    // events) is still read and published.
+                    let since = *self.halted_at.get_or_insert_with(Instant::now);
+                    if since.elapsed() >= HALT_DRAIN {
+                        self.plan_halted = true;
+                        let _ = self.stop_device();
+                        return Ok(());
+                    }
                 }
                 Some(PlanStatus::LinkFailed)
                     if self.wire.format() == Some(WireFormat::Csv) && self.wire.csv_acks() == 0 =>
