@@ -16,9 +16,11 @@
 //! - [`ingest`]: files into records (TSP/1 recordings, CSV exports of commercial stands).
 //! - [`daemon`]: sources, sampler and worker threads, publishing, shutdown.
 //! - [`diagnose`]: what the 2nd-order simulation gets wrong, and why.
+//! - [`input`]: reading an input file within a bound (1 GiB).
 //! - [`cli`]: the subcommands of the `propid` binary.
 
 pub mod cli;
 pub mod daemon;
 pub mod diagnose;
 pub mod ingest;
+pub mod input;

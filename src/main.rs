@@ -41,6 +41,10 @@ fn main() {
         Command::Diagnose(a) => cli::diagnose::run(a),
     };
     if let Err(e) = result {
+        if e.is_closed_pipe() {
+            // the reader of stdout went away: it has what it wanted (as coreutils do)
+            std::process::exit(0);
+        }
         eprintln!("propid: {e}");
         std::process::exit(e.exit_code());
     }

@@ -8,12 +8,12 @@
 //! instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
 //! they are published, and their bytes; nothing is parsed back.
 
-use std::io::Write;
+use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::CliError;
+use super::{stdout, CliError};
 use crate::daemon::identify::CoreIdentifier;
 use crate::daemon::line::{Line, ScheduleRow, WindowModel};
 use crate::daemon::plan;
@@ -85,13 +85,19 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .map_err(CliError::Serial)?;
     let publisher = Publisher::open(&cfg.publish)?;
     if !args.json {
-        println!(
+        stdout::line(&format!(
             "{:>6} {:>8} {:>22} {:>20} {:>22}",
             "t_s", "throttle", "fn_hz (true)", "zeta (true)", "dc_gain N (true)"
-        );
+        ))?;
     }
     let schedule = Arc::new(Mutex::new(None));
-    let publisher = publisher.with_tap(printer(args.json, sim.plant.clone(), schedule.clone()));
+    let failed = Arc::new(Mutex::new(None));
+    let publisher = publisher.with_tap(printer(
+        args.json,
+        sim.plant.clone(),
+        schedule.clone(),
+        failed.clone(),
+    ));
     let parts = RunParts {
         source: Box::new(source),
         plan: Some(plan::from_experiment(sim.experiment.clone())?),
@@ -103,13 +109,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let result = runner::run(&cfg, parts);
     let _ = handle.stop();
     let summary = result?;
+    if let Some(e) = failed.lock().ok().and_then(|mut f| f.take()) {
+        return Err(CliError::Stdout(e));
+    }
     if args.json {
         return Ok(());
     }
+    let mut t = String::new();
     if let Some(rows) = schedule.lock().ok().and_then(|mut s| s.take()) {
-        print_schedule(&rows, &sim.plant);
+        schedule_table(&mut t, &rows, &sim.plant);
     }
-    println!(
+    let _ = writeln!(
+        t,
         "\n{} samples, {} lost, {} frames dropped, {} models in {:.1} s",
         summary.link.samples,
         summary.link.samples_lost,
@@ -117,29 +128,41 @@ pub fn run(args: Args) -> Result<(), CliError> {
         summary.work.models,
         summary.elapsed_s
     );
-    Ok(())
+    stdout::write(&t)
 }
 
+/// Where the printer keeps the first stdout write error (printing stops there).
+type Failed = Arc<Mutex<Option<std::io::Error>>>;
+
 /// Prints each line as it is published (models as table rows, or every line's JSON with
-/// `--json`) and keeps the gain schedule for the end.
-fn printer(json: bool, plant: PlantConfig, schedule: Arc<Mutex<Option<Vec<ScheduleRow>>>>) -> Tap {
+/// `--json`) and keeps the gain schedule for the end. The first write error stops the printing
+/// and is kept in `failed`: the run goes on, and `run` reports it as [`CliError::Stdout`].
+fn printer(
+    json: bool,
+    plant: PlantConfig,
+    schedule: Arc<Mutex<Option<Vec<ScheduleRow>>>>,
+    failed: Failed,
+) -> Tap {
     Box::new(move |line: &Line<'_>, text: &str| {
-        let mut out = std::io::stdout().lock();
-        if json {
-            let _ = writeln!(out, "{text}");
-        }
-        match line {
-            Line::Model(m) if !json => {
-                let _ = writeln!(out, "{}", model_row(m, &plant));
+        let printed = match line {
+            _ if json => Some(text.to_string()),
+            Line::Model(m) => Some(model_row(m, &plant)),
+            _ => None,
+        };
+        if let Line::Schedule(rows) = line {
+            if let Ok(mut s) = schedule.lock() {
+                *s = Some(rows.to_vec());
             }
-            Line::Schedule(rows) => {
-                if let Ok(mut s) = schedule.lock() {
-                    *s = Some(rows.to_vec());
-                }
-            }
-            _ => {}
         }
-        let _ = out.flush();
+        let Some(printed) = printed else { return };
+        let Ok(mut failed) = failed.lock() else {
+            return;
+        };
+        if failed.is_none() {
+            if let Err(CliError::Stdout(e)) = stdout::line(&printed) {
+                *failed = Some(e);
+            }
+        }
     })
 }
 
@@ -168,18 +191,21 @@ fn model_row(m: &WindowModel, p: &PlantConfig) -> String {
     )
 }
 
-/// The gain schedule (the last model per operating point).
-fn print_schedule(rows: &[ScheduleRow], p: &PlantConfig) {
-    println!(
+/// The gain schedule (the last model per operating point), appended to `t`.
+fn schedule_table(t: &mut String, rows: &[ScheduleRow], p: &PlantConfig) {
+    let _ = writeln!(
+        t,
         "\ngain schedule (true plant: fn {} Hz, zeta {}, gain {} N per unit throttle):",
         p.fn_hz, p.zeta, p.gain_n_per_throttle
     );
-    println!(
+    let _ = writeln!(
+        t,
         "{:>8} {:>8} {:>8} {:>10}",
         "throttle", "fn_hz", "zeta", "dc_gain"
     );
     for m in rows {
-        println!(
+        let _ = writeln!(
+            t,
             "{:>8.3} {:>8.3} {:>8.3} {:>10.3}",
             m.operating_point,
             m.fn_hz,

@@ -3,6 +3,7 @@
 //! (binary or CSV dialect) or any CSV form `propid identify` reads; the supply voltage is used
 //! when the file has one.
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use super::load::{self as shared, steps_from_response, LoadedFile, Request};
@@ -76,11 +77,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     }
     if args.json {
         let text = serde_json::to_string(&d).map_err(CliError::DiagnosisJson)?;
-        println!("{text}");
+        super::stdout::line(&text)
     } else {
-        print_summary(&args, &s, &d);
+        super::stdout::write(&summary(&args, &s, &d))
     }
-    Ok(())
 }
 
 /// Whether a diagnosis error is the input's fault (exit 3) rather than the data not supporting
@@ -94,9 +94,12 @@ pub(crate) fn is_input_error(e: &DiagnoseError) -> bool {
     )
 }
 
-fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
+/// The human summary of a diagnosis (writing into a `String` cannot fail).
+fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
+    let mut t = String::new();
     let b = &d.baseline;
-    println!(
+    let _ = writeln!(
+        t,
         "{}: {} → {}, {} samples at {:.4} s",
         args.file.display(),
         s.input_name,
@@ -104,11 +107,13 @@ fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
         s.u.len(),
         s.dt_s
     );
-    println!(
+    let _ = writeln!(
+        t,
         "estimation samples {}..{}, validation samples {}..{}",
         d.split.estimation[0], d.split.estimation[1], d.split.validation[0], d.split.validation[1]
     );
-    println!(
+    let _ = writeln!(
+        t,
         "baseline 2nd order: fn {:.3} Hz, zeta {:.3}, dc gain {:.4}; validation fit {:.2} %",
         b.model.report.fn_hz,
         b.model.report.zeta,
@@ -116,20 +121,25 @@ fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
         b.fit_percent
     );
     if let Some(c) = &b.core_model {
-        println!(
+        let _ = writeln!(
+            t,
             "  (identification core, {:?} path: fn {:.3} Hz, zeta {:.3}, fit {:.2} %)",
             c.path, c.fn_hz, c.zeta, c.fit_percent
         );
     }
     if d.findings.is_empty() {
-        println!("no effect found: the 2nd-order model explains the data to the noise");
-        return;
+        let _ = writeln!(
+            t,
+            "no effect found: the 2nd-order model explains the data to the noise"
+        );
+        return t;
     }
     for f in &d.findings {
-        println!("- {} (score {:.0}): {}", f.effect, f.score, f.evidence);
+        let _ = writeln!(t, "- {} (score {:.0}): {}", f.effect, f.score, f.evidence);
     }
     if let (Some(e), Some(g)) = (&d.extended, &d.gain) {
-        println!(
+        let _ = writeln!(
+            t,
             "extended by {}: validation fit {:.2} % ({:+.2} points, residual RMS × {:.3})",
             e.effects.join(", "),
             e.fit_percent,
@@ -137,6 +147,7 @@ fn print_summary(args: &Args, s: &Signals, d: &Diagnosis) {
             g.rms_ratio
         );
     }
+    t
 }
 
 /// Reads FILE with the loader `propid identify` uses ([`crate::cli::load`]; the output

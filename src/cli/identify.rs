@@ -127,11 +127,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let out = summary::Output::new(&loaded, &model, &ops, &stand);
     if args.json {
-        println!("{}", out.json().map_err(CliError::Json)?);
+        super::stdout::line(&out.json().map_err(CliError::Json)?)
     } else {
-        print!("{}", out.human());
+        super::stdout::write(&out.human())
     }
-    Ok(())
 }
 
 #[cfg(test)]

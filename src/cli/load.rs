@@ -19,6 +19,7 @@ use super::{CliError, UsageError};
 use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource};
 use crate::ingest::steps::{find_steps, StepFinding};
 use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
+use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
 use propid_wire::protocol::csv::device::parse_comment;
 use propid_wire::protocol::csv::line::{strip_checksum_str, text_lines};
 use propid_wire::protocol::detect::{detect, Detection, WireFormat};
@@ -32,6 +33,22 @@ pub enum LoadError {
     Empty {
         /// The file as given.
         file: String,
+    },
+    /// The file is larger than what propid reads of one input.
+    #[error("{file}: larger than {limit} bytes (1 GiB), the most propid reads of one input")]
+    TooLarge {
+        /// The file as given.
+        file: String,
+        /// The bound, bytes.
+        limit: u64,
+    },
+    /// A recording in which no frame decoded (`propid replay`).
+    #[error("{file}: no TSP/1 frame or CSV row decoded ({bytes} bytes)")]
+    Undecodable {
+        /// The file as given.
+        file: String,
+        /// Its size, bytes.
+        bytes: u64,
     },
     /// A binary TSP/1 recording that does not decode into a record.
     #[error("{file}: {source}")]
@@ -117,10 +134,20 @@ impl LoadedFile {
     }
 }
 
+/// Reads all of `file` within [`MAX_INPUT_BYTES`]: unreadable is an I/O error (exit 7), too
+/// large is bad input (exit 3).
+pub fn read_input(file: &Path) -> Result<Vec<u8>, CliError> {
+    let name = file.display().to_string();
+    read_bounded(file, MAX_INPUT_BYTES).map_err(|e| match e {
+        ReadError::Io(e) => CliError::io(format!("reading {name}"), e),
+        ReadError::TooLarge { limit } => LoadError::TooLarge { file: name, limit }.into(),
+    })
+}
+
 /// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
 pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
     let name = file.display().to_string();
-    let bytes = std::fs::read(file).map_err(|e| CliError::io(format!("reading {name}"), e))?;
+    let bytes = read_input(file)?;
     if bytes.is_empty() {
         return Err(LoadError::Empty { file: name }.into());
     }

@@ -9,6 +9,7 @@ pub mod load;
 pub mod replay;
 pub mod run;
 pub mod sim;
+pub mod stdout;
 pub mod walkthrough;
 
 use crate::daemon::source::SourceError;
@@ -82,6 +83,9 @@ pub enum CliError {
     /// The daemon stopped with an error.
     #[error("{}", daemon_message(.0))]
     Daemon(#[from] DaemonError),
+    /// Writing to stdout failed (a closed pipe: [`CliError::is_closed_pipe`], the quiet end).
+    #[error("write error: {0}")]
+    Stdout(#[source] std::io::Error),
     /// Reading or writing a file failed.
     #[error("{context}: {source}")]
     Io {
@@ -107,6 +111,9 @@ pub enum ExitClass {
     Device = 6,
     /// Reading or writing a file failed (exit 7).
     Io = 7,
+    /// The experiment plan ended on a fault (device reset, watchdog trip, refused command):
+    /// the daemon stopped by itself (exit 8).
+    PlanFault = 8,
 }
 
 /// A wrong command line, by option.
@@ -121,6 +128,9 @@ pub enum UsageError {
     /// `--record` without `--seconds`.
     #[error("--record needs --seconds S")]
     RecordNeedsSeconds,
+    /// `--record-max-bytes` neither 0 nor in range.
+    #[error("--record-max-bytes {0}: 0 (no limit) or 65536..=1125899906842624 bytes")]
+    RecordMaxBytes(u64),
     /// `--esc-us` without exactly two values.
     #[error("--esc-us takes MIN,MAX")]
     EscUs,
@@ -154,12 +164,22 @@ impl CliError {
                 DaemonError::Config(_) => ExitClass::Config,
                 DaemonError::Source(_) | DaemonError::LinkFailed { .. } => ExitClass::Device,
                 DaemonError::Identify(_) => ExitClass::Identification,
+                DaemonError::PlanHalted => ExitClass::PlanFault,
                 DaemonError::Io { .. }
+                | DaemonError::Output { .. }
                 | DaemonError::Serialize(_)
                 | DaemonError::Signal(_)
                 | DaemonError::ThreadPanicked { .. } => ExitClass::Io,
             },
-            CliError::Io { .. } => ExitClass::Io,
+            CliError::Io { .. } | CliError::Stdout(_) => ExitClass::Io,
+        }
+    }
+
+    /// Whether this is stdout closed by its reader (EPIPE): `main` ends quietly with exit 0.
+    pub fn is_closed_pipe(&self) -> bool {
+        match self {
+            CliError::Stdout(e) => stdout::is_closed_pipe(e),
+            _ => false,
         }
     }
 

@@ -8,6 +8,7 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use super::load::LoadError;
 use super::run::load_config;
 use super::CliError;
 use crate::daemon::runner::{self, RunParts};
@@ -32,8 +33,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let cfg = load_config(args.config.as_ref())?;
     let shutdown = Shutdown::install()?;
     let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
-    let source =
-        RecordingSource::open(&args.file, args.chunk as usize).map_err(CliError::Recording)?;
+    // unreadable: exit 7; empty, too large or (below) nothing decoded: exit 3, as identify
+    let bytes = super::load::read_input(&args.file)?;
+    let file = args.file.display().to_string();
+    if bytes.is_empty() {
+        return Err(LoadError::Empty { file }.into());
+    }
+    let size = bytes.len() as u64;
+    let source = RecordingSource::from_bytes(&args.file, bytes, args.chunk as usize);
     let source: Box<dyn Source> = if std::io::stderr().is_terminal() {
         Box::new(Progress::new(source))
     } else {
@@ -48,7 +55,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         record: None,
         shutdown,
     };
-    runner::run(&cfg, parts)?;
+    let summary = runner::run(&cfg, parts)?;
+    if summary.link.frames_ok == 0 {
+        return Err(LoadError::Undecodable { file, bytes: size }.into());
+    }
     Ok(())
 }
 

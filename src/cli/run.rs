@@ -3,11 +3,14 @@
 //! Opens the serial port (timeout always set), starts the experiment plan (handshake, arm,
 //! operating points, pulses, heartbeats), identifies after every K pulses and publishes JSON
 //! lines (stdout, file, UNIX socket as configured). `--record` stores the raw bytes received,
-//! for `propid replay`. Ctrl-C / SIGTERM: STOP until acknowledged, flush, stats line, exit 0.
+//! for `propid replay` (never overwriting a file: [`crate::daemon::recorder`]). Ctrl-C /
+//! SIGTERM: STOP until acknowledged, flush, stats line, exit 0. The plan ended on a fault
+//! (device reset, watchdog trip, refusal): the run stops by itself, exit 8.
 
 use std::path::PathBuf;
 
-use super::CliError;
+use super::{CliError, UsageError};
+use crate::daemon::recorder::Recorder;
 use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::SerialSource;
 use crate::daemon::{Config, Publisher, Shutdown};
@@ -21,9 +24,14 @@ pub struct Args {
     /// Serial device of the stand (overrides `device.port`).
     #[arg(long)]
     pub port: Option<String>,
-    /// Store the raw bytes received in FILE (overrides `daemon.record`).
+    /// Store the raw bytes received in FILE (overrides `daemon.record`); an existing FILE is
+    /// kept and the recording goes to FILE's first free numbered name (rec.1.tsp, ...).
     #[arg(long)]
     pub record: Option<PathBuf>,
+    /// Start a new numbered recording file when this many bytes are in the current one
+    /// (overrides `daemon.record_max_bytes`; 0 = no limit).
+    #[arg(long, value_name = "BYTES")]
+    pub record_max_bytes: Option<u64>,
 }
 
 /// Loads the configuration (defaults without a file).
@@ -43,19 +51,25 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(r) = args.record {
         cfg.daemon.record = Some(r);
     }
+    if let Some(m) = args.record_max_bytes {
+        cfg.daemon.record_max_bytes =
+            crate::daemon::config::record_max_bytes("--record-max-bytes", m)
+                .map_err(|_| UsageError::RecordMaxBytes(m))?;
+    }
     let shutdown = Shutdown::install()?;
     let plan = crate::daemon::plan::from_config(&cfg)?;
     let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
+    // the socket first: a live daemon on its path is found before the stand is touched
+    let publisher = Publisher::open(&cfg.publish)?;
     let source = SerialSource::open(&cfg.device.port, cfg.device.baud, cfg.device.read_timeout)
         .map_err(CliError::Serial)?;
     let record = match &cfg.daemon.record {
         Some(p) => Some(
-            std::fs::File::create(p)
+            Recorder::create(p, cfg.daemon.record_max_bytes)
                 .map_err(|e| CliError::io(format!("create recording {}", p.display()), e))?,
         ),
         None => None,
     };
-    let publisher = Publisher::open(&cfg.publish)?;
     let parts = RunParts {
         source: Box::new(source),
         plan: Some(plan),

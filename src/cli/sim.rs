@@ -7,7 +7,6 @@
 //! With `--record FILE --seconds S` the firmware and the host's experiment plan run in one loop
 //! on a simulated clock and the device's bytes go to FILE; stdout gets one JSON summary line.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -145,7 +144,7 @@ fn run_record(cfg: &SimConfig, file: &Path, args: &Args) -> Result<(), CliError>
     {
         obj.extend(s);
     }
-    print_line(&line.to_string())
+    super::stdout::line(&line.to_string())
 }
 
 fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
@@ -163,7 +162,7 @@ fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
     };
     let mut print_err = None;
     let report = pty::run(cfg, &opts, &stop, |p, slave| {
-        if let Err(e) = print_line(&p.display().to_string()) {
+        if let Err(e) = super::stdout::line(&p.display().to_string()) {
             print_err.get_or_insert(e);
         }
         let via = if p == slave {
@@ -190,16 +189,5 @@ fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
     {
         obj.extend(s);
     }
-    print_line(&line.to_string())
-}
-
-/// One line on stdout, flushed (a closed stdout is not an error worth failing for).
-fn print_line(s: &str) -> Result<(), CliError> {
-    let mut out = std::io::stdout().lock();
-    match writeln!(out, "{s}").and_then(|_| out.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-            Err(CliError::io("writing to stdout", e))
-        }
-        _ => Ok(()),
-    }
+    super::stdout::line(&line.to_string())
 }

@@ -7,6 +7,7 @@ mod derivation;
 mod page;
 mod plot;
 
+use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use super::CliError;
@@ -69,17 +70,20 @@ pub fn run(args: Args) -> Result<(), CliError> {
     page::write(&d, &args.out, &files)?;
     let s = &d.setup;
     let msd = &d.report.mass_spring_damper;
-    println!(
+    let mut t = String::new();
+    let _ = writeln!(
+        t,
         "walkthrough written to {} ({} files)",
         args.out.display(),
         files.len() + 2
     );
-    println!(
+    let _ = writeln!(
+        t,
         "            true        identified (ERA, order {})",
         d.report.order
     );
-    println!("m (kg)      {:<10.5}  {:.5}", s.m, msd.m);
-    println!("d (N s/m)   {:<10.5}  {:.5}", s.d, msd.d);
-    println!("k (N/m)     {:<10.5}  {:.5}", s.k, msd.k);
-    Ok(())
+    let _ = writeln!(t, "m (kg)      {:<10.5}  {:.5}", s.m, msd.m);
+    let _ = writeln!(t, "d (N s/m)   {:<10.5}  {:.5}", s.d, msd.d);
+    let _ = writeln!(t, "k (N/m)     {:<10.5}  {:.5}", s.k, msd.k);
+    super::stdout::write(&t)
 }

@@ -1,6 +1,7 @@
 //! What the sampler hands the worker over the bounded queue.
 //!
-//! Items are small `Copy` values (no heap), so queueing one never allocates. Samples carry
+//! Items are small values without heap (but for the rare [`Item::Record`]), so queueing one
+//! never allocates. Samples carry
 //! their unwrapped device index and time; gaps and new segments travel as their own items so
 //! the worker never bridges them.
 
@@ -134,7 +135,7 @@ pub enum PlanNote {
 }
 
 /// One item on the sampler → worker queue.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Item {
     /// A sample.
     Sample(SampleItem),
@@ -156,4 +157,6 @@ pub enum Item {
     Notice(Notice),
     /// An experiment-plan fact.
     Plan(PlanNote),
+    /// A recording fact (a file opened, a write failure): rare, the one item that holds heap.
+    Record(super::recorder::RecordNote),
 }

@@ -132,7 +132,7 @@ pub struct DeviceEvent {
 }
 
 /// An `"event"` line: something that happened, no action needed.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Event {
     /// `count` samples before index `before` were lost (masked, not bridged).
@@ -178,6 +178,12 @@ pub enum Event {
     ShutdownStopAcknowledged,
     /// The link speaks the CSV fallback (PROTOCOL.md §6).
     CsvLink,
+    /// The raw recording goes to this file from now on (the first, or the next after a
+    /// rotation; never one that existed).
+    Recording {
+        /// The file's path.
+        path: String,
+    },
     /// Device event ARMED.
     Armed(DeviceEvent),
     /// Device event DISARMED.
@@ -247,6 +253,16 @@ pub enum Warning<'a> {
         operating_point: f64,
         /// Device time of the window's last sample, s.
         t_s: f64,
+    },
+    /// An output failed and was disabled; the run goes on and exits 7 at the end.
+    OutputFailed {
+        /// Which output: `stdout` or `record`.
+        sink: &'a str,
+        /// The recording's file (`record` only).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        path: Option<&'a str>,
+        /// The OS error, as text.
+        message: &'a str,
     },
     /// A model that fails the quality checks ([`super::quality`]): published for inspection,
     /// never as a model nor in the schedule.

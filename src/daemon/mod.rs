@@ -24,6 +24,7 @@ pub mod line;
 pub mod plan;
 pub mod publish;
 pub mod quality;
+pub mod recorder;
 pub mod runner;
 pub mod sampler;
 pub mod shutdown;
@@ -56,12 +57,24 @@ pub enum DaemonError {
         /// The OS error.
         source: std::io::Error,
     },
+    /// An output (stdout, the recording) failed while the run went on; reported at the end.
+    #[error("write error: {sink}: {source}")]
+    Output {
+        /// Which output: `stdout` or the recording's path.
+        sink: String,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// The experiment plan ended on a fault (device reset, watchdog trip, refused command) and
+    /// the run stopped by itself: the warning line published before says which.
+    #[error("the experiment plan ended on a fault (see the warning line); the run stopped")]
+    PlanHalted,
     /// A line could not be serialised (a bug: every published type serialises).
     #[error("publish: cannot serialise a line: {0}")]
     Serialize(#[source] serde_json::Error),
     /// The signal handler could not be installed.
     #[error("cannot install the signal handler: {0}")]
-    Signal(#[source] ctrlc::Error),
+    Signal(#[source] std::io::Error),
     /// The device stopped answering commands.
     #[error("link failed: {link} stopped acknowledging commands")]
     LinkFailed {

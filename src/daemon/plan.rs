@@ -3,8 +3,9 @@
 //!
 //! The sampler gives it the host clock and every device frame, sends what it asks for, and
 //! turns its notices into published lines. After a device reset, a watchdog trip or a refused
-//! command the plan is over and never re-arms; the daemon keeps sampling (passively) until it
-//! is stopped. A failed link (a command unanswered after its re-sends) ends the run.
+//! command the plan is over and never re-arms, and the run ends with exit 8 (the sampler reads
+//! the link 500 ms more first). A failed link (a command unanswered after its re-sends) ends
+//! the run (exit 6).
 
 use propid_wire::experiment::{Experiment, ExperimentConfig, Notice, Output};
 use propid_wire::protocol::message::{Frame, Message};

@@ -1,14 +1,26 @@
 //! Publishing: JSON lines fanned out to stdout, a file and a UNIX socket.
 //!
 //! One object per line. Every sink gets every line, in order:
-//! - **stdout**: written and flushed per line. A closed pipe (`propid run | head`) silently
-//!   disables the sink; the daemon keeps running for the other sinks.
+//! - **stdout**: written and flushed per line. A closed pipe (`propid run | head`: EPIPE)
+//!   quietly disables the sink, as coreutils end quietly ([`crate::cli::stdout`]); the daemon
+//!   keeps running for the other sinks. Any other write error (`> /dev/full`) disables it too,
+//!   is published to the other sinks as an `output_failed` warning, and is kept: the run goes
+//!   on, and ends with `write error: stdout: ...` and exit 7 ([`Publisher::take_error`]).
 //! - **file**: opened for append, each line written with one `write_all` and flushed, so a crash
 //!   loses nothing already published.
 //! - **UNIX socket**: an accept thread registers clients; each client has a bounded queue of
 //!   lines and a writer thread. [`Publisher::publish`] only does `try_send` on every queue: a
 //!   client whose queue is full is dropped (its connection closed), so a slow subscriber never
-//!   blocks the worker.
+//!   blocks the worker. At most `[publish] max_clients` clients are served: one more is sent a
+//!   `too_many_clients` warning line, closed and counted (`clients_refused` in the stats line),
+//!   so idle clients cannot exhaust the descriptors the serial port needs to reopen. A client's
+//!   place is freed at the first line after it left.
+//!
+//!   The socket file is the daemon's own: a socket file at the path that answers `connect()`
+//!   belongs to a live daemon and is an error (`socket ... is in use`, exit 7: the configuration
+//!   is valid, the path is busy now), one that refuses is stale and replaced. It is created with
+//!   mode 0600 (owner only; umask 0177 while binding), or 0660 and the group `[publish]
+//!   socket_group`; it is removed at exit only while it is still the one this daemon bound.
 //!
 //! Lines come in typed ([`Line`]) and are serialised here, once ([`Line::to_json`]). A *tap*
 //! ([`Publisher::with_tap`]) sees every typed line beside its bytes, in order, on the publishing
@@ -25,7 +37,7 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use super::config::PublishConfig;
-use super::line::Line;
+use super::line::{Line, Warning};
 use super::DaemonError;
 
 /// Sees every published line, typed and as published (without the newline).
@@ -42,11 +54,15 @@ struct SocketShared {
     queue_lines: usize,
     closing: AtomicBool,
     dropped_clients: AtomicU64,
+    max_clients: usize,
+    clients_refused: AtomicU64,
 }
 
 /// The UNIX socket sink.
 struct SocketSink {
     path: PathBuf,
+    /// (device, inode) of the socket file bound, so only it is removed at exit.
+    file_id: Option<(u64, u64)>,
     shared: Arc<SocketShared>,
     accept: Option<JoinHandle<()>>,
 }
@@ -54,6 +70,8 @@ struct SocketSink {
 /// Fans every published line out to the configured sinks.
 pub struct Publisher {
     stdout: bool,
+    /// Why the stdout sink failed (not for a closed pipe), until [`Publisher::take_error`].
+    stdout_error: Option<std::io::Error>,
     file: Option<File>,
     socket: Option<SocketSink>,
     capture: Option<Arc<Mutex<Vec<String>>>>,
@@ -77,11 +95,12 @@ impl Publisher {
             None => None,
         };
         let socket = match &cfg.socket {
-            Some(p) => Some(SocketSink::bind(p, cfg.client_queue_lines)?),
+            Some(p) => Some(SocketSink::bind(p, cfg)?),
             None => None,
         };
         Ok(Publisher {
             stdout: cfg.stdout,
+            stdout_error: None,
             file,
             socket,
             capture: None,
@@ -95,6 +114,7 @@ impl Publisher {
         let lines = Arc::new(Mutex::new(Vec::new()));
         let p = Publisher {
             stdout: false,
+            stdout_error: None,
             file: None,
             socket: None,
             capture: Some(lines.clone()),
@@ -116,7 +136,26 @@ impl Publisher {
         if let Some(tap) = self.tap.as_mut() {
             tap(line, &text);
         }
-        self.publish(&text)
+        let had_failed = self.stdout_error.is_some();
+        self.publish(&text)?;
+        if let (false, Some(e)) = (had_failed, &self.stdout_error) {
+            let message = e.to_string();
+            let warning = Line::Warning(Warning::OutputFailed {
+                sink: "stdout",
+                path: None,
+                message: &message,
+            });
+            self.publish(&warning.to_json().map_err(DaemonError::Serialize)?)?;
+        }
+        Ok(())
+    }
+
+    /// The failure of an output that the run went on without (stdout, not a closed pipe), once.
+    pub fn take_error(&mut self) -> Option<DaemonError> {
+        self.stdout_error.take().map(|source| DaemonError::Output {
+            sink: "stdout".into(),
+            source,
+        })
     }
 
     /// Publishes one line of text (without its newline) to every sink.
@@ -125,9 +164,12 @@ impl Publisher {
         if self.stdout {
             let mut out = std::io::stdout().lock();
             let r = writeln!(out, "{line}").and_then(|_| out.flush());
-            if r.is_err() {
-                // A closed stdout (reader went away) is not a daemon failure.
+            if let Err(e) = r {
                 self.stdout = false;
+                // A closed pipe (the reader went away) is not a failure; anything else is.
+                if e.kind() != std::io::ErrorKind::BrokenPipe {
+                    self.stdout_error = Some(e);
+                }
             }
         }
         if let Some(f) = &mut self.file {
@@ -161,6 +203,13 @@ impl Publisher {
             .map_or(0, |s| s.shared.dropped_clients.load(Ordering::Relaxed))
     }
 
+    /// Socket clients refused because `max_clients` were connected (`None` without a socket).
+    pub fn clients_refused(&self) -> Option<u64> {
+        self.socket
+            .as_ref()
+            .map(|s| s.shared.clients_refused.load(Ordering::Relaxed))
+    }
+
     /// Flushes every sink and closes the socket (queued lines are still delivered).
     pub fn close(&mut self) {
         if let Some(f) = &mut self.file {
@@ -179,24 +228,30 @@ impl Drop for Publisher {
 }
 
 impl SocketSink {
-    fn bind(path: &Path, queue_lines: usize) -> Result<SocketSink, DaemonError> {
-        // A stale socket file from an earlier run would make bind fail; only remove sockets.
-        if let Ok(meta) = std::fs::symlink_metadata(path) {
-            use std::os::unix::fs::FileTypeExt;
-            if meta.file_type().is_socket() {
-                let _ = std::fs::remove_file(path);
-            }
-        }
-        let listener = UnixListener::bind(path)
-            .map_err(|e| DaemonError::io(format!("bind socket {}", path.display()), e))?;
+    fn bind(path: &Path, cfg: &PublishConfig) -> Result<SocketSink, DaemonError> {
+        let bind_err = |e| DaemonError::io(format!("bind socket {}", path.display()), e);
+        replace_stale_socket(path).map_err(bind_err)?;
+        // owner only from the start: no moment where the umask's mode lets others connect
+        // (the umask is process-wide; no other thread runs yet)
+        let old = unsafe { libc::umask(0o177) };
+        let bound = UnixListener::bind(path);
+        unsafe { libc::umask(old) };
+        let listener = bound.map_err(bind_err)?;
+        set_access(path, cfg.socket_group).map_err(|e| {
+            let _ = std::fs::remove_file(path);
+            DaemonError::io(format!("set the mode of socket {}", path.display()), e)
+        })?;
+        let file_id = file_id(path);
         listener
             .set_nonblocking(true)
             .map_err(|e| DaemonError::io("socket nonblocking", e))?;
         let shared = Arc::new(SocketShared {
             clients: Mutex::new(Vec::new()),
-            queue_lines,
+            queue_lines: cfg.client_queue_lines,
             closing: AtomicBool::new(false),
             dropped_clients: AtomicU64::new(0),
+            max_clients: cfg.max_clients,
+            clients_refused: AtomicU64::new(0),
         });
         let sh = shared.clone();
         let accept = std::thread::Builder::new()
@@ -205,6 +260,7 @@ impl SocketSink {
             .map_err(|e| DaemonError::io("spawn the socket thread", e))?;
         Ok(SocketSink {
             path: path.to_path_buf(),
+            file_id,
             shared,
             accept: Some(accept),
         })
@@ -238,8 +294,52 @@ impl SocketSink {
         if let Ok(mut c) = self.shared.clients.lock() {
             c.clear(); // writers drain their queues, then close
         }
-        let _ = std::fs::remove_file(&self.path);
+        // another daemon may have replaced a socket it found stale: leave its file alone
+        if self.file_id.is_some() && file_id(&self.path) == self.file_id {
+            let _ = std::fs::remove_file(&self.path);
+        }
     }
+}
+
+/// A socket file at `path` that refuses connections is stale (its daemon is gone): removed. One
+/// that accepts belongs to a live daemon: `AddrInUse`. Anything that is not a socket is left
+/// for `bind` to refuse.
+fn replace_stale_socket(path: &Path) -> std::io::Result<()> {
+    use std::os::unix::fs::FileTypeExt;
+    let Ok(meta) = std::fs::symlink_metadata(path) else {
+        return Ok(());
+    };
+    if !meta.file_type().is_socket() {
+        return Ok(());
+    }
+    match UnixStream::connect(path) {
+        Ok(_) => Err(std::io::Error::new(
+            std::io::ErrorKind::AddrInUse,
+            "in use: another process (a second propid?) serves it; stop it or set another [publish] socket",
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::ConnectionRefused => {
+            std::fs::remove_file(path)
+        }
+        Err(_) => Ok(()),
+    }
+}
+
+/// Mode 0600, or 0660 with the group `gid`.
+fn set_access(path: &Path, gid: Option<u32>) -> std::io::Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    if let Some(gid) = gid {
+        std::os::unix::fs::chown(path, None, Some(gid))?;
+    }
+    let mode = if gid.is_some() { 0o660 } else { 0o600 };
+    std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode))
+}
+
+/// (device, inode) of `path`, if it exists.
+fn file_id(path: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::symlink_metadata(path)
+        .ok()
+        .map(|m| (m.dev(), m.ino()))
 }
 
 /// Accepts clients until the sink closes; polls so that closing needs no wake-up connection.
@@ -255,8 +355,21 @@ fn accept_loop(listener: UnixListener, shared: Arc<SocketShared>) {
     }
 }
 
-/// Registers a client and starts its writer thread.
-fn add_client(stream: UnixStream, shared: &SocketShared) {
+/// What a refused client reads before its connection is closed.
+const REFUSED_LINE: &[u8] = b"{\"kind\":\"too_many_clients\",\"message\":\"publish.max_clients clients are connected; try again later\",\"type\":\"warning\"}\n";
+
+/// Registers a client and starts its writer thread; refuses it (counted) when `max_clients`
+/// are connected.
+fn add_client(mut stream: UnixStream, shared: &SocketShared) {
+    let full = shared
+        .clients
+        .lock()
+        .map_or(true, |c| c.len() >= shared.max_clients);
+    if full {
+        shared.clients_refused.fetch_add(1, Ordering::Relaxed);
+        let _ = stream.write_all(REFUSED_LINE); // non-blocking: best effort
+        return; // dropped: closed
+    }
     if stream.set_nonblocking(false).is_err() {
         return;
     }
@@ -296,6 +409,8 @@ mod tests {
             file,
             socket,
             client_queue_lines: q,
+            max_clients: 64,
+            socket_group: None,
         }
     }
 

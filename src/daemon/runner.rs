@@ -2,13 +2,13 @@
 //! final stats line. `propid run`, `propid replay` and `propid demo` all go through [`run`].
 
 use crossbeam_channel::bounded;
-use std::fs::File;
 use std::time::Instant;
 
 use super::config::Config;
 use super::csv_link::CsvLinkOptions;
 use super::line::Line;
 use super::publish::Publisher;
+use super::recorder::Recorder;
 use super::sampler::{Plan, Sampler, SamplerConfig};
 use super::shutdown::Shutdown;
 use super::source::Source;
@@ -66,13 +66,18 @@ pub struct RunParts<I: Identifier> {
     /// Where lines go.
     pub publisher: Publisher,
     /// Raw-byte recording of everything received.
-    pub record: Option<File>,
+    pub record: Option<Recorder>,
     /// The stop flag.
     pub shutdown: Shutdown,
 }
 
-/// Runs the sampler and the worker until the source ends, the plan finishes, or a stop is
-/// requested; then publishes the final stats line and flushes every output.
+/// Runs the sampler and the worker until the source ends, the plan finishes or ends on a fault,
+/// or a stop is requested; then publishes the final stats line and flushes every output.
+///
+/// The error, when there is one, is the first of: what stopped the sampler or the worker (a
+/// failed link, a bug), [`DaemonError::PlanHalted`] (the plan ended on a fault, exit 8), an
+/// output the run went on without ([`DaemonError::Output`]: the recording, stdout; exit 7).
+/// Everything is published before it is returned.
 pub fn run<I: Identifier + 'static>(
     cfg: &Config,
     parts: RunParts<I>,
@@ -120,16 +125,24 @@ pub fn run<I: Identifier + 'static>(
         .map_err(|_| DaemonError::ThreadPanicked { thread: "worker" })?;
     let mut publisher = worked.publisher;
     let elapsed_s = start.elapsed().as_secs_f64();
-    let stats = StatsLine::new(
+    let mut stats = StatsLine::new(
         &sampled.stats,
         &worked.stats,
         publisher.dropped_clients(),
         elapsed_s,
         &worked.latencies_s,
     );
+    stats.clients_refused = publisher.clients_refused();
     publisher.publish_line(&Line::Stats(&stats))?;
+    let output_error = publisher.take_error();
     publisher.close();
     if let Some(e) = sampled.error.or(worked.error) {
+        return Err(e);
+    }
+    if sampled.plan_halted {
+        return Err(DaemonError::PlanHalted);
+    }
+    if let Some(e) = sampled.record_error.or(output_error) {
         return Err(e);
     }
     Ok(RunSummary {

@@ -3,12 +3,14 @@
 //! The first SIGINT or SIGTERM sets a flag that the sampler and the worker poll: the sampler
 //! sends STOP until it is acknowledged (at most `daemon.stop_timeout_ms`), the worker flushes
 //! every output and publishes the final stats line, and the process exits 0. A second signal
-//! exits at once (status 130), for an operator who does not want to wait: STOP is not waited
-//! for and no stats line is written, but nothing already published is lost (stdout and the
-//! file are flushed per line; `tests/daemon_e2e.rs` checks it through the binary).
+//! exits at once with 128 + its number, as a shell reports a process killed by it (SIGINT:
+//! 130, SIGTERM: 143), for an operator who does not want to wait: STOP is not waited for and no
+//! stats line is written, but nothing already published is lost (stdout and the file are
+//! flushed per line; `tests/daemon/daemon_e2e.rs` checks it through the binary).
 //!
-//! The handler is process-wide (the `ctrlc` crate allows one per process); [`Shutdown::manual`]
-//! gives the same flag without a handler, for tests and in-process runs.
+//! The handler is process-wide, installed once with `sigaction` (it only stores to atomics and
+//! calls `_exit`, both async-signal-safe); [`Shutdown::manual`] gives the same flag without a
+//! handler, for tests and in-process runs.
 
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, OnceLock};
@@ -37,17 +39,22 @@ impl Shutdown {
         if let Some(s) = GLOBAL.get() {
             return Ok(s.clone());
         }
-        let s = Shutdown::default();
-        let for_handler = s.clone();
-        ctrlc::set_handler(move || {
-            if SIGNALS.fetch_add(1, Ordering::SeqCst) >= 1 {
-                // Second signal: the operator insists.
-                std::process::exit(130);
+        let s = GLOBAL.get_or_init(Shutdown::default).clone();
+        for sig in [libc::SIGINT, libc::SIGTERM] {
+            // SAFETY: a zeroed sigaction with a handler that only touches atomics and calls
+            // `_exit` (async-signal-safe); the mask is emptied by sigemptyset.
+            let r = unsafe {
+                let mut action: libc::sigaction = std::mem::zeroed();
+                action.sa_sigaction = on_signal as extern "C" fn(libc::c_int) as usize;
+                action.sa_flags = libc::SA_RESTART;
+                libc::sigemptyset(&mut action.sa_mask);
+                libc::sigaction(sig, &action, std::ptr::null_mut())
+            };
+            if r != 0 {
+                return Err(DaemonError::Signal(std::io::Error::last_os_error()));
             }
-            for_handler.request();
-        })
-        .map_err(DaemonError::Signal)?;
-        Ok(GLOBAL.get_or_init(|| s).clone())
+        }
+        Ok(s)
     }
 
     /// Asks everything polling this flag to stop.
@@ -58,6 +65,18 @@ impl Shutdown {
     /// Whether a stop was requested.
     pub fn requested(&self) -> bool {
         self.flag.load(Ordering::SeqCst)
+    }
+}
+
+/// The process-wide handler: the first signal asks for a stop, a second one exits at once
+/// with 128 + its number.
+extern "C" fn on_signal(sig: libc::c_int) {
+    if SIGNALS.fetch_add(1, Ordering::SeqCst) >= 1 {
+        // SAFETY: `_exit` is async-signal-safe; the operator insists.
+        unsafe { libc::_exit(128 + sig) };
+    }
+    if let Some(s) = GLOBAL.get() {
+        s.request();
     }
 }
 

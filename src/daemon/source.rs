@@ -170,10 +170,16 @@ pub struct RecordingSource {
 impl RecordingSource {
     /// Reads the whole recording into memory.
     pub fn open(path: &Path, chunk: usize) -> Result<RecordingSource, SourceError> {
-        let bytes = std::fs::read(path).map_err(|source| SourceError::Open {
-            what: path.display().to_string(),
-            source,
-        })?;
+        let bytes =
+            crate::input::read_bounded(path, crate::input::MAX_INPUT_BYTES).map_err(|e| {
+                SourceError::Open {
+                    what: path.display().to_string(),
+                    source: match e {
+                        crate::input::ReadError::Io(e) => e,
+                        e => std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
+                    },
+                }
+            })?;
         Ok(RecordingSource::from_bytes(path, bytes, chunk))
     }
 

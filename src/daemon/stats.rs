@@ -16,6 +16,10 @@ pub struct LinkStats {
     pub frames_ok: u64,
     /// Frames dropped, one count per kind of drop (names from the protocol decoder).
     pub frames_dropped: BTreeMap<String, u64>,
+    /// Empty frames (two 0x00 delimiters in a row; a stream of zero bytes is all of them):
+    /// ignored by the protocol, published when there is one.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub empty_frames: u64,
     /// Bytes received.
     pub bytes: u64,
     /// SAMPLE frames received.
@@ -37,6 +41,15 @@ pub struct LinkStats {
     pub clock_wraps: u64,
     /// SAMPLE frames dropped as duplicates (same `sample_index` as the previous one).
     pub duplicates: u64,
+    /// Bytes of the raw recording the OS accepted, over every file (only with a recording:
+    /// below `bytes` after a write failure).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub record_bytes_written: Option<u64>,
+}
+
+/// For `skip_serializing_if`: counters published only when they counted something.
+fn is_zero(v: &u64) -> bool {
+    *v == 0
 }
 
 /// Worker-side counters.
@@ -64,6 +77,10 @@ pub struct StatsLine<'a> {
     pub work: &'a WorkStats,
     /// Socket clients dropped for falling behind.
     pub dropped_clients: u64,
+    /// Socket clients refused because `publish.max_clients` were connected (only with a
+    /// socket).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clients_refused: Option<u64>,
     /// Wall-clock duration of the run, seconds.
     pub elapsed_s: f64,
     /// Latency from a window's last sample to its published model line.
@@ -94,6 +111,7 @@ impl<'a> StatsLine<'a> {
             link,
             work,
             dropped_clients,
+            clients_refused: None,
             elapsed_s,
             latency_s: Latency {
                 p50: quantile(sorted_latencies_s, 0.5),

@@ -157,6 +157,15 @@ impl Wire {
         }
     }
 
+    /// Empty binary frames (two 0x00 delimiters in a row): ignored by the protocol, counted so
+    /// that a stream of zero bytes is never silent.
+    pub fn empty_frames(&self) -> u64 {
+        match self {
+            Wire::Tsp(d) => d.stats().empty_frames,
+            _ => 0,
+        }
+    }
+
     /// Every drop counter of [`DROP_KINDS`], in that order (zeros for the other format).
     pub fn dropped(&self) -> [(&'static str, u64); 13] {
         let mut out = DROP_KINDS.map(|k| (k, 0));

@@ -26,8 +26,11 @@ pub enum DiagnoseError {
         /// Sample index.
         index: usize,
     },
-    /// The sample period is not a positive number.
-    #[error("the sample period {0} s is not positive")]
+    /// The sample period is not a positive number of at most
+    /// [`MAX_SAMPLE_PERIOD_S`](super::MAX_SAMPLE_PERIOD_S).
+    #[error(
+        "the sample period {0} s is outside 0 < dt <= 490000 s (a time column in ns read as s?)"
+    )]
     BadSamplePeriod(f64),
     /// Input or output does not vary: nothing to identify.
     #[error("the {0} is constant on the estimation part: nothing to identify")]

@@ -41,6 +41,10 @@ use propid_wire::record::{names, Record};
 pub use result::{Diagnosis, Extended, Finding, Gain, Split, Stage, Traces};
 pub use summary::ModelSummary;
 
+/// Longest sample period diagnosed, s: above it the highest frequency a mode may take
+/// ([`model::max_freq_hz`], 0.49/dt) falls below the fit's lowest (1e-6 Hz).
+pub const MAX_SAMPLE_PERIOD_S: f64 = 0.49 / 1e-6;
+
 /// Options of a diagnosis.
 #[derive(Debug, Clone)]
 pub struct Options {
@@ -121,7 +125,7 @@ pub fn diagnose(
     voltage: Option<&[f64]>,
     opts: &Options,
 ) -> Result<Diagnosis, DiagnoseError> {
-    if !(dt_s.is_finite() && dt_s > 0.0) {
+    if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= MAX_SAMPLE_PERIOD_S) {
         return Err(DiagnoseError::BadSamplePeriod(dt_s));
     }
     let n = u

@@ -233,14 +233,15 @@ fn device_clock_wrap_is_unwrapped() {
 }
 
 #[test]
-fn missing_or_garbage_file_is_an_input_error_not_a_panic() {
+fn missing_or_garbage_file_is_an_error_not_a_panic() {
+    // as identify (issue 12): a missing file is file I/O (7), undecodable content bad input (3)
     let out = Command::new(BIN)
         .args(["replay", "/nonexistent/run.tsp"])
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(3));
+    assert_eq!(out.status.code(), Some(7));
     let (lines, status, _) = replay(b"just some text\n\x00\xff\xfe\x00", &[]);
-    assert!(status.success());
+    assert_eq!(status.code(), Some(3), "nothing decoded");
     let s = stats(&lines);
     assert_eq!(s["frames_ok"], 0);
     assert_eq!(dropped_total(s), 2);

@@ -6,3 +6,4 @@ mod daemon_e2e_gaps;
 mod daemon_live;
 mod daemon_proc;
 mod daemon_replay;
+mod host_faults;

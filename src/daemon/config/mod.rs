@@ -87,6 +87,8 @@ pub struct DaemonConfig {
     pub queue_capacity: usize,
     /// Raw-byte recording, if any.
     pub record: Option<PathBuf>,
+    /// Size at which the recording goes on in the next numbered file (None = no limit).
+    pub record_max_bytes: Option<u64>,
     /// Longest time to send STOP at shutdown.
     pub stop_timeout: Duration,
     /// Run length limit (None = until the plan ends or a signal).
@@ -121,6 +123,10 @@ pub struct PublishConfig {
     pub socket: Option<PathBuf>,
     /// Lines queued per socket client before it is dropped.
     pub client_queue_lines: usize,
+    /// Most socket clients served at once; more are refused and counted.
+    pub max_clients: usize,
+    /// Group (gid) given the socket, mode 0660 (None: owner only, 0600).
+    pub socket_group: Option<u32>,
 }
 
 /// Validated CSV-bench settings.
@@ -151,6 +157,25 @@ pub struct Config {
     pub csv: CsvConfig,
     /// `[experiment]` table, validated by the experiment plan.
     pub experiment: toml::Table,
+}
+
+/// Smallest `daemon.record_max_bytes` other than 0 (a file holds at least 64 KiB).
+pub const RECORD_MAX_BYTES_MIN: u64 = 65_536;
+
+/// `daemon.record_max_bytes` (or `--record-max-bytes`, named by `key`): 0 = no limit, else
+/// 65536..=2^50 bytes.
+pub fn record_max_bytes(key: &'static str, v: u64) -> Result<Option<u64>, ConfigError> {
+    if v == 0 {
+        return Ok(None);
+    }
+    raw::int_in(
+        key,
+        v,
+        RECORD_MAX_BYTES_MIN,
+        1 << 50,
+        "0 (no limit) or 65536..=1125899906842624 bytes",
+    )
+    .map(Some)
 }
 
 impl Default for Config {

@@ -2,6 +2,7 @@
 //! optional, unknown keys refused) and its validation into [`Config`] (defaults filled, every
 //! value range-checked, NaN refused).
 
+use propid_numerics::segment::SegmentRules;
 use serde::Deserialize;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -37,6 +38,8 @@ pub struct RawDaemon {
     pub queue_capacity: Option<usize>,
     /// Raw-byte recording path.
     pub record: Option<String>,
+    /// Recording size at which the next numbered file starts, bytes (0 = no limit).
+    pub record_max_bytes: Option<u64>,
     /// Longest time to send STOP at shutdown, ms.
     pub stop_timeout_ms: Option<u64>,
     /// Run length limit, s (0 = until the plan ends or a signal).
@@ -73,6 +76,10 @@ pub struct RawPublish {
     pub socket: Option<String>,
     /// Lines queued per socket client before it is dropped.
     pub client_queue_lines: Option<usize>,
+    /// Most socket clients at once.
+    pub max_clients: Option<usize>,
+    /// Group (name or number) that may connect to the socket (mode 0660).
+    pub socket_group: Option<String>,
 }
 
 /// `[csv]` as written: how a CSV bench (PROTOCOL.md §6) is read.
@@ -114,7 +121,7 @@ pub struct RawConfig {
 }
 
 /// Checks an integer range; names the key and the value on failure.
-fn int_in<T>(
+pub(super) fn int_in<T>(
     key: &'static str,
     v: T,
     lo: T,
@@ -242,6 +249,10 @@ impl RawDaemon {
                 "16..=16777216 items",
             )?,
             record: non_empty(self.record).map(PathBuf::from),
+            record_max_bytes: super::record_max_bytes(
+                "daemon.record_max_bytes",
+                self.record_max_bytes.unwrap_or(0),
+            )?,
             stop_timeout: Duration::from_millis(int_in(
                 "daemon.stop_timeout_ms",
                 self.stop_timeout_ms.unwrap_or(1_000),
@@ -290,7 +301,8 @@ impl RawIdentify {
             )?,
             level_tolerance: float_in(
                 "identify.level_tolerance",
-                self.level_tolerance.unwrap_or(0.005),
+                self.level_tolerance
+                    .unwrap_or(SegmentRules::CSV_BENCH.level_tolerance),
                 1.0e-4,
                 0.5,
                 "1e-4..=0.5 (throttle fraction)",
@@ -313,8 +325,50 @@ impl RawPublish {
                 1_048_576,
                 "1..=1048576 lines",
             )?,
+            max_clients: int_in(
+                "publish.max_clients",
+                self.max_clients.unwrap_or(64),
+                1,
+                4_096,
+                "1..=4096 clients",
+            )?,
+            socket_group: match non_empty(self.socket_group) {
+                None => None,
+                Some(g) => Some(group_id(&g).ok_or(ConfigError::OutOfRange {
+                    key: "publish.socket_group",
+                    value: format!("{g:?}"),
+                    expected: "a group of this system, by name or number",
+                })?),
+            },
         })
     }
+}
+
+/// The gid of a group given by name or number, if the system has it.
+fn group_id(name: &str) -> Option<u32> {
+    let mut buf = vec![0 as libc::c_char; 16_384];
+    let mut grp: libc::group = unsafe { std::mem::zeroed() };
+    let mut found: *mut libc::group = std::ptr::null_mut();
+    let r = match name.parse::<u32>() {
+        // SAFETY: every pointer is to a live local of the size given
+        Ok(gid) => unsafe {
+            libc::getgrgid_r(gid, &mut grp, buf.as_mut_ptr(), buf.len(), &mut found)
+        },
+        Err(_) => {
+            let c = std::ffi::CString::new(name).ok()?;
+            // SAFETY: as above; `c` is NUL-terminated
+            unsafe {
+                libc::getgrnam_r(
+                    c.as_ptr(),
+                    &mut grp,
+                    buf.as_mut_ptr(),
+                    buf.len(),
+                    &mut found,
+                )
+            }
+        }
+    };
+    (r == 0 && !found.is_null()).then_some(grp.gr_gid)
 }
 
 impl RawCsv {
@@ -348,7 +402,8 @@ impl RawCsv {
             motor_poles: (poles > 0).then_some(poles),
             max_pulse_samples: int_in(
                 "csv.max_pulse_samples",
-                self.max_pulse_samples.unwrap_or(64),
+                self.max_pulse_samples
+                    .unwrap_or(SegmentRules::CSV_BENCH.max_pulse_samples),
                 1,
                 4_096,
                 "1..=4096 samples",

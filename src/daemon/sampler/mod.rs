@@ -26,19 +26,19 @@
 //!
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
 //! exponential backoff; the plan is told, does a HELLO handshake again and never re-arms by
-//! itself. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
+//! itself. A plan over on a fault (device reset, watchdog trip, refusal) ends the run 500 ms
+//! later (the link still read meanwhile), with [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
 //! acknowledges it or the stop timeout passes.
 
 mod handler;
 
 use crossbeam_channel::Sender;
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::time::{Duration, Instant};
 
 use super::config::WireProtocol;
 use super::csv_link::CsvLinkOptions;
 use super::item::{Item, Notice, PlanNote};
+use super::recorder::Recorder;
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
@@ -112,7 +112,14 @@ pub struct SamplerOutcome {
     pub stats: LinkStats,
     /// Why it stopped with an error, if it did.
     pub error: Option<DaemonError>,
+    /// The plan ended on a fault (device reset, watchdog trip, refusal) and the run stopped.
+    pub plan_halted: bool,
+    /// The recording failed (the run went on): reported at the end, exit 7.
+    pub record_error: Option<DaemonError>,
 }
+
+/// How long the link is still read after the plan ended on a fault, before the run ends.
+const HALT_DRAIN: Duration = Duration::from_millis(500);
 
 /// STOP re-send period (PROTOCOL.md §4: re-send after 50 ms without ACK).
 const RESEND: Duration = Duration::from_millis(50);
@@ -125,7 +132,7 @@ pub struct Sampler {
     source: Box<dyn Source>,
     wire: Wire,
     handler: Handler,
-    record: Option<BufWriter<File>>,
+    record: Option<Recorder>,
     shutdown: Shutdown,
     cfg: SamplerConfig,
     start: Instant,
@@ -135,6 +142,10 @@ pub struct Sampler {
     connected_at: Instant,
     /// The plan was told the link is up.
     plan_started: bool,
+    /// The plan ended on a fault.
+    plan_halted: bool,
+    /// When the plan was first seen over on a fault.
+    halted_at: Option<Instant>,
 }
 
 impl Sampler {
@@ -143,7 +154,7 @@ impl Sampler {
         source: Box<dyn Source>,
         tx: Sender<Item>,
         plan: Option<Box<dyn Plan>>,
-        record: Option<File>,
+        record: Option<Recorder>,
         shutdown: Shutdown,
         cfg: SamplerConfig,
     ) -> Sampler {
@@ -163,7 +174,7 @@ impl Sampler {
                 stop_acked: false,
                 now_us: 0,
             },
-            record: record.map(|f| BufWriter::with_capacity(1 << 16, f)),
+            record,
             shutdown,
             cfg,
             start: Instant::now(),
@@ -171,6 +182,8 @@ impl Sampler {
             cmd: [0u8; MAX_FRAME_LEN],
             connected_at: Instant::now(),
             plan_started: false,
+            plan_halted: false,
+            halted_at: None,
         }
     }
 
@@ -182,12 +195,26 @@ impl Sampler {
             self.decided(f);
         }
         if let Some(r) = self.record.as_mut() {
-            let _ = r.flush();
+            r.flush();
         }
+        self.forward_record_notes();
         self.finish_stats();
         SamplerOutcome {
             stats: self.handler.stats,
             error,
+            plan_halted: self.plan_halted,
+            record_error: self.record.as_ref().and_then(Recorder::error),
+        }
+    }
+
+    /// Flushes the recording when due and hands what it reports to the worker.
+    fn forward_record_notes(&mut self) {
+        let Some(r) = self.record.as_mut() else {
+            return;
+        };
+        r.tick();
+        for n in r.take_notes() {
+            self.handler.send(Item::Record(n));
         }
     }
 
@@ -197,6 +224,7 @@ impl Sampler {
             self.decided(f);
         }
         loop {
+            self.forward_record_notes();
             if self.shutdown.requested() || self.time_up() {
                 if live {
                     self.stop_device()?;
@@ -215,6 +243,18 @@ impl Sampler {
             }
             match self.handler.plan.as_ref().map(|p| p.status()) {
                 Some(PlanStatus::Done) => return Ok(()),
+                Some(PlanStatus::Halted) if !self.shutdown.requested() => {
+                    // A device reset, a watchdog trip or a refusal ended the plan (its warning
+                    // is queued): the run is over, with a fault, so that a supervisor sees it;
+                    // after HALT_DRAIN, so that what the device says about it (its HELLO, its
+                    // events) is still read and published.
+                    let since = *self.halted_at.get_or_insert_with(Instant::now);
+                    if since.elapsed() >= HALT_DRAIN {
+                        self.plan_halted = true;
+                        let _ = self.stop_device();
+                        return Ok(());
+                    }
+                }
                 Some(PlanStatus::LinkFailed)
                     if self.wire.format() == Some(WireFormat::Csv) && self.wire.csv_acks() == 0 =>
                 {
@@ -282,9 +322,7 @@ impl Sampler {
             return Ok(());
         }
         if let Some(r) = self.record.as_mut() {
-            if r.write_all(&self.buf[..n]).is_err() {
-                self.record = None; // a full disk must not stop the stand; stats show bytes
-            }
+            r.write(&self.buf[..n]); // a failure is reported, never stops the stand
         }
         self.handler.stats.bytes += n as u64;
         self.handler.now_us = self.now_us();
@@ -346,6 +384,7 @@ impl Sampler {
         self.handler.send(Item::Notice(Notice::Disconnected));
         let mut backoff = Backoff::new(self.cfg.reconnect_initial, self.cfg.reconnect_max);
         loop {
+            self.forward_record_notes();
             if self.shutdown.requested() || self.time_up() {
                 return Ok(()); // the main loop sees the request; STOP cannot reach anyone
             }
@@ -412,6 +451,7 @@ impl Sampler {
         let s = &mut self.handler.stats;
         s.wire = self.wire.name().to_string();
         s.frames_ok = self.wire.frames_ok();
+        s.empty_frames = self.wire.empty_frames();
         for (k, v) in self.wire.dropped() {
             s.frames_dropped.insert(k.to_string(), v);
         }
@@ -421,6 +461,7 @@ impl Sampler {
         s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
+        s.record_bytes_written = self.record.as_ref().map(Recorder::bytes_written);
     }
 }
 

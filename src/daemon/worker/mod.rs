@@ -18,6 +18,7 @@ use super::item::{Item, SampleItem};
 use super::line::{Event, Line, ScheduleRow, Warning, WindowFacts, WindowModel};
 use super::publish::Publisher;
 use super::quality;
+use super::recorder::RecordNote;
 use super::stats::WorkStats;
 use super::window::{Window, WindowView};
 use super::DaemonError;
@@ -100,6 +101,18 @@ impl<I: Identifier> Worker<I> {
                 }
             }
             Item::Notice(n) => self.emit(&Line::notice(n)),
+            Item::Record(RecordNote::File { path }) => {
+                let path = path.display().to_string();
+                self.emit(&Line::Event(Event::Recording { path }));
+            }
+            Item::Record(RecordNote::Failed { path, error }) => {
+                let (path, message) = (path.display().to_string(), error.to_string());
+                self.emit(&Line::Warning(Warning::OutputFailed {
+                    sink: "record",
+                    path: Some(&path),
+                    message: &message,
+                }));
+            }
         }
     }
 

@@ -1,0 +1,72 @@
+//! Reading an input file (`identify`, `diagnose`, `replay`) within a bound, so that
+//! `propid identify /dev/zero` ends with a clear error instead of reading until memory runs out.
+//!
+//! Every input is read through [`read_bounded`]: at most [`MAX_INPUT_BYTES`] (1 GiB, README),
+//! regular files checked by their size first (nothing is read), anything else (a device, a
+//! FIFO, a pipe) read through the same bound and refused one byte past it.
+
+use std::io::{self, Read};
+use std::path::Path;
+
+/// The largest input read, bytes (1 GiB: a TSP/1 recording of ~3 h at 1 kHz, a CSV of ~30 M
+/// rows).
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// Why an input could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The file could not be opened or read (missing, unreadable): exit 7.
+    #[error(transparent)]
+    Io(#[from] io::Error),
+    /// The input is larger than the bound: exit 3.
+    #[error("larger than {limit} bytes (1 GiB), the most propid reads of one input")]
+    TooLarge {
+        /// The bound, bytes.
+        limit: u64,
+    },
+}
+
+/// Reads all of `path`, at most `limit` bytes.
+pub fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
+    let file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if meta.is_file() && meta.len() > limit {
+        return Err(ReadError::TooLarge { limit });
+    }
+    let mut bytes = Vec::with_capacity(if meta.is_file() {
+        meta.len() as usize
+    } else {
+        0
+    });
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(ReadError::TooLarge { limit });
+    }
+    Ok(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_and_devices_are_read_within_the_bound() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("f");
+        std::fs::write(&f, [7u8; 100]).unwrap();
+        assert_eq!(read_bounded(&f, 100).unwrap().len(), 100);
+        assert!(matches!(
+            read_bounded(&f, 99),
+            Err(ReadError::TooLarge { limit: 99 })
+        ));
+        // a device without an end: refused one byte past the bound
+        assert!(matches!(
+            read_bounded(Path::new("/dev/zero"), 4096),
+            Err(ReadError::TooLarge { limit: 4096 })
+        ));
+        assert!(matches!(
+            read_bounded(&dir.path().join("missing"), 10),
+            Err(ReadError::Io(e)) if e.kind() == io::ErrorKind::NotFound
+        ));
+    }
+}
