@@ -264,18 +264,23 @@ mod tests {
                 7,
             ),
             (
-                SimError::Pty("no pty".into()).into(),
-                "pseudo-terminal: no pty",
+                SimError::Pty(propid_sim::PtyError::NotOpened).into(),
+                "pseudo-terminal: the simulator did not open a pty",
                 6,
             ),
             (
-                SimError::Plant("fn_hz".into()).into(),
-                "plant model: fn_hz",
+                SimError::Plant(propid_sim::PlantError::InvalidParameter {
+                    key: "plant.zeta",
+                    value: 0.0,
+                    reason: "must be in (0, 20]",
+                })
+                .into(),
+                "plant model: plant parameter `plant.zeta` = 0 is invalid: must be in (0, 20]",
                 5,
             ),
             (
-                CliError::SimulatedStand(SimError::Pty("no pty".into())),
-                "simulated stand: pseudo-terminal: no pty",
+                CliError::SimulatedStand(SimError::Pty(propid_sim::PtyError::NotOpened)),
+                "simulated stand: pseudo-terminal: the simulator did not open a pty",
                 6,
             ),
         ];

@@ -215,22 +215,48 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     if rows < 2 {
         return Err(CsvFileError::TooFewRows(rows));
     }
-    build(
-        columns, picks, values, header, rows, skipped, comments, opts,
-    )
+    let table = Table {
+        columns,
+        picks,
+        values,
+        header,
+        rows,
+        skipped,
+        comments,
+    };
+    build(table, opts)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn build(
+/// What the text held, before the time base: the columns, the ones picked, and what was read.
+struct Table {
+    /// Every column of the file (named by the header, the caller or §6's order).
     columns: Vec<Column>,
+    /// The time, input and output columns used.
     picks: Picks,
-    mut values: Vec<Vec<f64>>,
+    /// The picked columns' converted values, in [`Picks::all`] order: time, input, outputs.
+    values: Vec<Vec<f64>>,
+    /// True when the file had a header line.
     header: bool,
+    /// Data rows read.
     rows: usize,
+    /// Rows skipped, by cause.
     skipped: SkippedRows,
+    /// Comment lines.
     comments: usize,
-    opts: &CsvFileOptions,
-) -> Result<CsvFile, CsvFileError> {
+}
+
+/// The record from the table: time base (resampled, or `fs`), missing samples, channels, and
+/// the source report.
+fn build(table: Table, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
+    let Table {
+        columns,
+        picks,
+        mut values,
+        header,
+        rows,
+        skipped,
+        comments,
+    } = table;
     let time_vals = picks.time.map(|_| values.remove(0));
     let (t0_s, dt_s, missing, jitter, rate_from) = match time_vals {
         Some(t) => {

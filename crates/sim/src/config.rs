@@ -15,12 +15,12 @@ use propid_wire::experiment::ExperimentConfig;
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
     /// The file is not valid TOML, has an unknown key or a value of the wrong type.
-    #[error("{path}: {message}")]
+    #[error("{path}: {source}")]
     Parse {
         /// The file (or `<string>`).
         path: String,
-        /// The parser's message, which shows the offending line.
-        message: String,
+        /// The parser's error, whose message shows the offending line.
+        source: toml::de::Error,
     },
     /// A value is NaN or outside its range.
     #[error("config key `{key}` = {value}: {reason}")]
@@ -164,9 +164,9 @@ pub struct SimConfig {
 impl SimConfig {
     /// Parses and validates a configuration from TOML text; `path` only labels errors.
     pub fn from_toml_str(text: &str, path: &str) -> Result<SimConfig, ConfigError> {
-        let cfg: SimConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+        let cfg: SimConfig = toml::from_str(text).map_err(|source| ConfigError::Parse {
             path: path.to_string(),
-            message: e.to_string(),
+            source,
         })?;
         cfg.validate()?;
         Ok(cfg)

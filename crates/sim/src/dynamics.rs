@@ -28,7 +28,7 @@ pub struct PlantDynamics {
 impl PlantDynamics {
     /// A plant at rest sampled every `dt_s` seconds.
     pub fn new(cfg: &PlantConfig, dt_s: f64, seed: u64) -> Result<Self, SimError> {
-        let plant = Plant::new(cfg, dt_s, seed).map_err(|e| SimError::Plant(e.to_string()))?;
+        let plant = Plant::new(cfg, dt_s, seed)?;
         Ok(PlantDynamics { plant, seed })
     }
 
@@ -46,8 +46,7 @@ impl Dynamics for PlantDynamics {
     fn set_sample_period(&mut self, dt_s: f64) -> Result<(), SimError> {
         let cfg = self.plant.config().clone();
         self.seed = self.seed.wrapping_add(1);
-        self.plant =
-            Plant::new(&cfg, dt_s, self.seed).map_err(|e| SimError::Plant(e.to_string()))?;
+        self.plant = Plant::new(&cfg, dt_s, self.seed)?;
         Ok(())
     }
 }

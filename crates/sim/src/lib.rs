@@ -41,6 +41,9 @@ pub mod synth;
 mod experiment_tests;
 
 pub use config::{ConfigError, SimConfig};
+pub use plant::PlantError;
+pub use pty::PtyError;
+pub use record::ExperimentError;
 
 /// The boot id of boot number `boot` of a stand seeded with `seed`: random-looking, different
 /// for every boot, the same for the same seed (so runs are reproducible).
@@ -59,10 +62,10 @@ pub enum SimError {
     Config(#[from] ConfigError),
     /// The plant model refused its parameters.
     #[error("plant model: {0}")]
-    Plant(String),
+    Plant(#[from] PlantError),
     /// The pseudo-terminal could not be created or used.
     #[error("pseudo-terminal: {0}")]
-    Pty(String),
+    Pty(#[from] PtyError),
     /// Reading or writing a file or the terminal failed.
     #[error("{context}: {source}")]
     Io {
@@ -71,9 +74,9 @@ pub enum SimError {
         /// The OS error.
         source: std::io::Error,
     },
-    /// The host-side experiment refused its configuration.
+    /// The host-side experiment of a recording cannot run (protocol, length or plan refused).
     #[error("experiment: {0}")]
-    Experiment(String),
+    Experiment(#[from] ExperimentError),
 }
 
 impl SimError {
@@ -83,5 +86,84 @@ impl SimError {
             context: context.into(),
             source,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::error::Error as _;
+
+    use super::*;
+    use crate::config::WireProtocol;
+    use crate::dynamics::PlantDynamics;
+    use crate::plant::PlantConfig;
+
+    /// Each refusal keeps the message it had when the causes were strings, and carries the
+    /// typed cause.
+    #[test]
+    fn errors_keep_their_messages_and_carry_typed_causes() {
+        let mut sink = Vec::new();
+        let mut cfg = SimConfig::default();
+        cfg.stand.protocol = WireProtocol::Csv;
+        let e = record::record(&cfg, 1.0, &mut sink).unwrap_err();
+        assert!(matches!(e, SimError::Experiment(ExperimentError::NotTsp)));
+        assert_eq!(
+            e.to_string(),
+            "experiment: record mode runs the TSP/1 experiment plan: set stand.protocol = \"tsp\""
+        );
+        let e = record::record(&SimConfig::default(), -1.0, &mut sink).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "experiment: --seconds -1: must be in (0, 86400]"
+        );
+        let mut cfg = SimConfig::default();
+        cfg.experiment.levels.clear();
+        let e = record::record(&cfg, 1.0, &mut sink).unwrap_err();
+        let SimError::Experiment(ExperimentError::Plan(plan)) = &e else {
+            panic!("{e:?}")
+        };
+        assert_eq!(plan.key, "levels.len()");
+        assert_eq!(e.to_string(), format!("experiment: {plan}"));
+
+        let plant = PlantConfig {
+            fn_hz: f64::NAN,
+            ..PlantConfig::default()
+        };
+        let Err(e) = PlantDynamics::new(&plant, 1e-3, 0) else {
+            panic!("a NaN fn_hz is refused")
+        };
+        let cause = e.source().and_then(|s| s.downcast_ref::<PlantError>());
+        assert!(
+            matches!(
+                cause,
+                Some(PlantError::InvalidParameter {
+                    key: "plant.fn_hz",
+                    ..
+                })
+            ),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            "plant model: plant parameter `plant.fn_hz` = NaN is invalid: must be > 0 and below \
+             the Nyquist frequency"
+        );
+
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("not-a-link");
+        std::fs::write(&file, "").unwrap();
+        let e = pty::point_link(&file, dir.path()).unwrap_err();
+        assert!(matches!(&e, SimError::Pty(PtyError::LinkNotSymlink(p)) if *p == file));
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "pseudo-terminal: --link {}: exists and is not a symlink",
+                file.display()
+            )
+        );
+
+        let e = SimConfig::from_toml_str("[stand]\nsample_rate_hz = \"fast\"\n", "t").unwrap_err();
+        let cause = e.source().and_then(|s| s.downcast_ref::<toml::de::Error>());
+        assert_eq!(e.to_string(), format!("t: {}", cause.unwrap()));
     }
 }

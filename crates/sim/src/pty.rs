@@ -51,6 +51,26 @@ const MAX_WAIT: Duration = Duration::from_millis(5);
 /// wake the runner at once.
 const MIN_BATCH_US: u64 = 500;
 
+/// Why the pseudo-terminal could not be created or used.
+#[derive(Debug, thiserror::Error)]
+pub enum PtyError {
+    /// The master/slave pair could not be opened.
+    #[error(transparent)]
+    Open(#[from] serialport::Error),
+    /// The slave of a new pair has no path.
+    #[error("the pty slave has no name")]
+    NoSlaveName,
+    /// `--link` names a file that is not a symlink (left alone).
+    #[error("--link {}: exists and is not a symlink", .0.display())]
+    LinkNotSymlink(PathBuf),
+    /// The runner thread ended before it opened a pty.
+    #[error("the simulator did not open a pty")]
+    NotOpened,
+    /// The runner thread panicked.
+    #[error("the simulator thread panicked")]
+    ThreadPanicked,
+}
+
 /// How the runner is started.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
@@ -330,7 +350,7 @@ impl SimHandle {
             Err(_) => Err(handle
                 .join()
                 .err()
-                .unwrap_or_else(|| SimError::Pty("the simulator did not open a pty".into()))),
+                .unwrap_or_else(|| PtyError::NotOpened.into())),
         }
     }
 
@@ -362,9 +382,7 @@ impl SimHandle {
 
     fn join(&mut self) -> Result<(), SimError> {
         match self.thread.take() {
-            Some(t) => t
-                .join()
-                .map_err(|_| SimError::Pty("the simulator thread panicked".into()))?,
+            Some(t) => t.join().map_err(|_| PtyError::ThreadPanicked)?,
             None => Ok(()),
         }
     }

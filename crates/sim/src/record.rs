@@ -13,8 +13,22 @@ use super::dynamics::{Dynamics, PlantDynamics};
 use super::faults::{FaultInjector, FaultStats};
 use super::firmware::{Firmware, FirmwareStats};
 use super::SimError;
-use propid_wire::experiment::{Experiment, Notice, Output};
+use propid_wire::experiment::{Experiment, ExperimentConfigError, Notice, Output};
 use propid_wire::protocol::{encode_frame, DecodeStats, Decoder, MAX_FRAME_LEN};
+
+/// Why the host-side experiment of a recording cannot run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ExperimentError {
+    /// Record mode runs the TSP/1 plan; the stand speaks another protocol.
+    #[error("record mode runs the TSP/1 experiment plan: set stand.protocol = \"tsp\"")]
+    NotTsp,
+    /// The recording's length is not in (0, 86400] seconds.
+    #[error("--seconds {0}: must be in (0, 86400]")]
+    Seconds(f64),
+    /// The plan refused its configuration.
+    #[error(transparent)]
+    Plan(#[from] ExperimentConfigError),
+}
 
 /// What a recording run did.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -53,22 +67,17 @@ pub fn record(
     sink: &mut dyn Write,
 ) -> Result<RecordSummary, SimError> {
     if cfg.stand.protocol != WireProtocol::Tsp {
-        return Err(SimError::Experiment(
-            "record mode runs the TSP/1 experiment plan: set stand.protocol = \"tsp\"".into(),
-        ));
+        return Err(ExperimentError::NotTsp.into());
     }
     if !(seconds.is_finite() && seconds > 0.0 && seconds <= 86_400.0) {
-        return Err(SimError::Experiment(format!(
-            "--seconds {seconds}: must be in (0, 86400]"
-        )));
+        return Err(ExperimentError::Seconds(seconds).into());
     }
     let dt_s = 1.0 / cfg.stand.sample_rate_hz as f64;
     let plant = PlantDynamics::new(&cfg.plant, dt_s, cfg.stand.seed)?;
     let faults = FaultInjector::new(&cfg.faults, cfg.stand.seed);
     let boot_id = super::boot_id(cfg.stand.seed, 0);
     let mut fw = Firmware::new(&cfg.stand, plant, boot_id, faults);
-    let mut plan = Experiment::new(cfg.experiment.clone(), 0)
-        .map_err(|e| SimError::Experiment(e.to_string()))?;
+    let mut plan = Experiment::new(cfg.experiment.clone(), 0).map_err(ExperimentError::from)?;
     run_loop(&mut fw, &mut plan, seconds, sink)
 }
 

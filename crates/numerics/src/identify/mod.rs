@@ -39,7 +39,7 @@ use crate::{IdentError, ModelReport};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PathTaken {
-    /// Pulses segmented and ensemble-averaged (core::pulses).
+    /// Pulses segmented and ensemble-averaged ([`crate::pulses`]).
     Pulse,
     /// Observer/Kalman filter identification from arbitrary input.
     Okid,

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use serialport::{SerialPort, TTYPort};
 
+use super::PtyError;
 use crate::SimError;
 
 /// One pty pair: the master we keep, the slave path the host opens.
@@ -17,11 +18,11 @@ pub(super) struct Link {
 }
 
 pub(super) fn open_link(link: Option<&Path>) -> Result<Link, SimError> {
-    let (master, slave) = TTYPort::pair().map_err(|e| SimError::Pty(e.to_string()))?;
+    let (master, slave) = TTYPort::pair().map_err(PtyError::Open)?;
     let path = slave
         .name()
         .map(PathBuf::from)
-        .ok_or_else(|| SimError::Pty("the pty slave has no name".into()))?;
+        .ok_or(PtyError::NoSlaveName)?;
     drop(slave);
     set_cloexec(master.as_raw_fd())?;
     set_nonblocking(master.as_raw_fd())?;
@@ -75,10 +76,7 @@ fn add_fcntl_flag(
 pub fn point_link(link: &Path, target: &Path) -> Result<(), SimError> {
     if let Ok(meta) = std::fs::symlink_metadata(link) {
         if !meta.file_type().is_symlink() {
-            return Err(SimError::Pty(format!(
-                "--link {}: exists and is not a symlink",
-                link.display()
-            )));
+            return Err(PtyError::LinkNotSymlink(link.to_path_buf()).into());
         }
     }
     let tmp = link.with_extension(format!("tmp{}", std::process::id()));

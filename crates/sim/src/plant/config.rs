@@ -1,0 +1,154 @@
+//! The plant's configuration (the `[plant]` table of `config/sim.toml`): keys with their units,
+//! defaults, and the range checks that name the first bad key.
+
+use serde::Deserialize;
+
+use crate::effects::EffectsConfig;
+
+/// A plant parameter that cannot be simulated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlantError {
+    /// A configuration value is out of range (the key and the value are named).
+    #[error("plant parameter `{key}` = {value} is invalid: {reason}")]
+    InvalidParameter {
+        /// Configuration key, e.g. `plant.fn_hz` or `plant.effects.dead_time.delay_s`.
+        key: &'static str,
+        /// The refused value.
+        value: f64,
+        /// What the valid range is.
+        reason: &'static str,
+    },
+}
+
+/// Configuration of the simulated plant (the `[plant]` table of `config/sim.toml`).
+/// Every key has its unit in its name or its doc; unknown keys are refused.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlantConfig {
+    /// Natural frequency of the thrust response, Hz (> 0, below the Nyquist frequency).
+    pub fn_hz: f64,
+    /// Damping ratio of the thrust response (> 0; above 1 the poles are real, overdamped).
+    pub zeta: f64,
+    /// Small-signal (and static) thrust gain, newtons per unit throttle (> 0).
+    pub gain_n_per_throttle: f64,
+    /// Throttle (0..1, exclusive) at which the derived channels and the static map of the
+    /// `static_nonlinearity` effect are referenced.
+    pub reference_throttle: f64,
+    /// RMS of the white Gaussian noise added to the thrust, newtons (≥ 0).
+    pub noise_rms_n: f64,
+    /// Load-cell resolution, newtons (≥ 0; 0 = no quantisation).
+    pub quantum_n: f64,
+    /// The load cell's converter saturates at ± this thrust, newtons (> 0).
+    pub adc_full_scale_n: f64,
+    /// Torque per thrust, metres (≥ 0): `torque_nm = torque_m · thrust_n`.
+    pub torque_m: f64,
+    /// Rotor speed at the reference throttle in steady state, rev/min (≥ 0).
+    pub rpm_at_reference: f64,
+    /// Supply current with the rotor at rest, amperes (≥ 0).
+    pub idle_current_a: f64,
+    /// Extra current at the reference thrust, amperes (≥ 0); scales with thrust^1.5.
+    pub current_at_reference_a: f64,
+    /// Open-circuit battery voltage at t = 0, volts (> 0).
+    pub battery_v: f64,
+    /// Battery internal resistance, ohms (≥ 0).
+    pub internal_resistance_ohm: f64,
+    /// Fall of the open-circuit voltage with time as the battery discharges, volts per second
+    /// (≥ 0).
+    pub discharge_v_per_s: f64,
+    /// Effects switched on (`[plant.effects.*]`); all off by default.
+    pub effects: EffectsConfig,
+}
+
+impl Default for PlantConfig {
+    fn default() -> Self {
+        PlantConfig {
+            fn_hz: 12.0,
+            zeta: 0.7,
+            gain_n_per_throttle: 12.0,
+            reference_throttle: 0.5,
+            noise_rms_n: 0.01,
+            quantum_n: 0.001,
+            adc_full_scale_n: 50.0,
+            torque_m: 0.012,
+            rpm_at_reference: 18000.0,
+            idle_current_a: 0.4,
+            current_at_reference_a: 8.0,
+            battery_v: 16.8,
+            internal_resistance_ohm: 0.05,
+            discharge_v_per_s: 0.002,
+            effects: EffectsConfig::default(),
+        }
+    }
+}
+
+/// Checks `ok` (written as a positive check so that NaN fails) or names the key and the value.
+pub(crate) fn check(
+    ok: bool,
+    key: &'static str,
+    value: f64,
+    reason: &'static str,
+) -> Result<(), PlantError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(PlantError::InvalidParameter { key, value, reason })
+    }
+}
+
+impl PlantConfig {
+    /// Checks every value for a sample period `dt_s`; the error names the first bad key.
+    pub fn validate(&self, dt_s: f64) -> Result<(), PlantError> {
+        check(dt_s.is_finite() && dt_s > 0.0, "dt_s", dt_s, "must be > 0")?;
+        let nyquist = 0.5 / dt_s;
+        check(
+            self.fn_hz.is_finite() && self.fn_hz > 0.0 && self.fn_hz < nyquist,
+            "plant.fn_hz",
+            self.fn_hz,
+            "must be > 0 and below the Nyquist frequency",
+        )?;
+        check(
+            self.zeta.is_finite() && self.zeta > 0.0 && self.zeta <= 20.0,
+            "plant.zeta",
+            self.zeta,
+            "must be in (0, 20]",
+        )?;
+        let positive = [
+            (self.gain_n_per_throttle, "plant.gain_n_per_throttle"),
+            (self.adc_full_scale_n, "plant.adc_full_scale_n"),
+            (self.battery_v, "plant.battery_v"),
+        ];
+        for (v, key) in positive {
+            check(v.is_finite() && v > 0.0, key, v, "must be > 0")?;
+        }
+        check(
+            self.reference_throttle.is_finite()
+                && self.reference_throttle > 0.0
+                && self.reference_throttle < 1.0,
+            "plant.reference_throttle",
+            self.reference_throttle,
+            "must be in (0, 1)",
+        )?;
+        let non_negative = [
+            (self.noise_rms_n, "plant.noise_rms_n"),
+            (self.quantum_n, "plant.quantum_n"),
+            (self.torque_m, "plant.torque_m"),
+            (self.rpm_at_reference, "plant.rpm_at_reference"),
+            (self.idle_current_a, "plant.idle_current_a"),
+            (self.current_at_reference_a, "plant.current_at_reference_a"),
+            (
+                self.internal_resistance_ohm,
+                "plant.internal_resistance_ohm",
+            ),
+            (self.discharge_v_per_s, "plant.discharge_v_per_s"),
+        ];
+        for (v, key) in non_negative {
+            check(v.is_finite() && v >= 0.0, key, v, "must be >= 0")?;
+        }
+        self.effects.validate(dt_s)
+    }
+
+    /// Thrust at the reference throttle in steady state, newtons (the clean static map).
+    pub fn reference_thrust_n(&self) -> f64 {
+        self.gain_n_per_throttle * self.reference_throttle
+    }
+}

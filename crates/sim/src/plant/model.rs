@@ -1,0 +1,173 @@
+//! The plant that steps: the exactly discretised linear core, the effects applied around it,
+//! the derived channels and the load cell's noise, quantisation and saturation (formulas in the
+//! module doc of [`super`]).
+
+use nalgebra::{Matrix2, Vector2};
+use propid_numerics::discretise::discretise_second_order;
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+
+use super::{PlantConfig, PlantError};
+use crate::effects::EffectState;
+
+/// One sample of every channel the stand measures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measurement {
+    /// Measured thrust (noise, quantisation, effects), newtons.
+    pub thrust_n: f64,
+    /// Torque, newton metres.
+    pub torque_nm: f64,
+    /// Rotor speed, rev/min.
+    pub rpm: f64,
+    /// Supply voltage at the ESC, volts.
+    pub voltage_v: f64,
+    /// Supply current, amperes.
+    pub current_a: f64,
+    /// True when the load cell's converter (or a `saturation` effect on the sensor) clipped.
+    pub adc_saturated: bool,
+}
+
+/// The simulated plant. Create it with [`Plant::new`], drive it with [`Plant::step`].
+#[derive(Debug, Clone)]
+pub struct Plant {
+    cfg: PlantConfig,
+    dt_s: f64,
+    a: Matrix2<f64>,
+    b: Vector2<f64>,
+    x: Vector2<f64>,
+    k: u64,
+    noise: Option<Normal<f64>>,
+    rng: StdRng,
+    effects: EffectState,
+    last_current_a: f64,
+}
+
+impl Plant {
+    /// A plant at rest (throttle 0, thrust 0) sampled every `dt_s` seconds, with noise drawn from
+    /// a generator seeded by `seed` (same seed, same inputs ⇒ same measurements).
+    pub fn new(cfg: &PlantConfig, dt_s: f64, seed: u64) -> Result<Plant, PlantError> {
+        cfg.validate(dt_s)?;
+        let (a, b) = discretise_second_order(cfg.fn_hz, cfg.zeta, cfg.gain_n_per_throttle, dt_s);
+        let noise = if cfg.noise_rms_n > 0.0 {
+            Some(
+                Normal::new(0.0, cfg.noise_rms_n).map_err(|_| PlantError::InvalidParameter {
+                    key: "plant.noise_rms_n",
+                    value: cfg.noise_rms_n,
+                    reason: "must be a finite standard deviation",
+                })?,
+            )
+        } else {
+            None
+        };
+        let effects = EffectState::new(&cfg.effects, cfg, dt_s, seed)?;
+        Ok(Plant {
+            cfg: cfg.clone(),
+            dt_s,
+            a,
+            b,
+            x: Vector2::zeros(),
+            k: 0,
+            noise,
+            rng: StdRng::seed_from_u64(seed),
+            effects,
+            last_current_a: cfg.idle_current_a,
+        })
+    }
+
+    /// The configuration the plant was built from.
+    pub fn config(&self) -> &PlantConfig {
+        &self.cfg
+    }
+
+    /// Sample period, seconds.
+    pub fn dt_s(&self) -> f64 {
+        self.dt_s
+    }
+
+    /// Time of the next sample, seconds since the plant was created.
+    pub fn time_s(&self) -> f64 {
+        self.k as f64 * self.dt_s
+    }
+
+    /// The discrete linear core `(A, B, C)` with state `[T, T']`, `C = [1, 0]`, `D = 0`.
+    pub fn linear_core(&self) -> (Matrix2<f64>, Vector2<f64>) {
+        (self.a, self.b)
+    }
+
+    /// Puts the plant in steady state at `throttle` (as if it had been held there for ever),
+    /// without advancing time. Effects with memory (delay lines, extra mode) settle too.
+    pub fn settle(&mut self, throttle: f64) {
+        let u = self
+            .effects
+            .input_map(throttle.clamp(0.0, 1.0), self.cfg.battery_v, &self.cfg);
+        self.x = Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0);
+        self.effects.settle(throttle.clamp(0.0, 1.0), self.x[0]);
+        self.last_current_a = self.current_a(self.x[0]);
+    }
+
+    /// Advances one sample with `throttle` (0..1; NaN counts as 0, out-of-range values are
+    /// clamped as an ESC would) held during this sample; returns what the stand measures at the
+    /// start of the sample (`y_k = C x_k`, see the module doc).
+    pub fn step(&mut self, throttle: f64) -> Measurement {
+        let throttle = if throttle.is_finite() {
+            throttle.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let t_s = self.time_s();
+        let thrust_true = self.x[0];
+        let current_a = self.current_a(thrust_true);
+        let voltage_v = self.cfg.battery_v
+            - self.cfg.discharge_v_per_s * t_s
+            - self.cfg.internal_resistance_ohm * current_a;
+        // Measured thrust: the load-cell path (extra mode), additive terms, noise, clip, quantum.
+        let mut thrust = self.effects.sensor_path(thrust_true);
+        thrust += self.effects.additive(t_s);
+        if let Some(n) = self.noise {
+            thrust += n.sample(&mut self.rng);
+        }
+        let (thrust, mut saturated) = self.effects.sensor_clip(thrust);
+        let fs = self.cfg.adc_full_scale_n;
+        if thrust.abs() >= fs {
+            saturated = true;
+        }
+        let thrust = quantise(thrust.clamp(-fs, fs), self.cfg.quantum_n);
+        // Input path: dead time, then the static map and supply sag, then the linear core.
+        let delayed = self.effects.delay(throttle);
+        let u = self.effects.input_map(delayed, voltage_v, &self.cfg);
+        self.x = self.a * self.x + self.b * u;
+        self.k += 1;
+        self.last_current_a = current_a;
+        let t_pos = thrust_true.max(0.0);
+        let t_ref = self.cfg.reference_thrust_n();
+        Measurement {
+            thrust_n: thrust,
+            torque_nm: self.cfg.torque_m * t_pos,
+            rpm: self.cfg.rpm_at_reference * (t_pos / t_ref).sqrt(),
+            voltage_v,
+            current_a,
+            adc_saturated: saturated,
+        }
+    }
+
+    /// Supply current at true thrust `t_n` (momentum theory, see the module doc).
+    fn current_a(&self, t_n: f64) -> f64 {
+        let r = t_n.max(0.0) / self.cfg.reference_thrust_n();
+        self.cfg.idle_current_a + self.cfg.current_at_reference_a * r.powf(1.5)
+    }
+
+    /// The current drawn at the last step, amperes.
+    pub fn last_current_a(&self) -> f64 {
+        self.last_current_a
+    }
+}
+
+/// Rounds `v` to the nearest multiple of `q` (no rounding for `q == 0`).
+fn quantise(v: f64, q: f64) -> f64 {
+    if q > 0.0 {
+        (v / q).round() * q
+    } else {
+        v
+    }
+}
