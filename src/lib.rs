@@ -17,6 +17,7 @@
 //! - [`daemon`]: sources, sampler and worker threads, publishing, shutdown.
 //! - [`diagnose`]: what the 2nd-order simulation gets wrong, and why.
 //! - [`input`]: reading an input file within a bound (1 GiB).
+//! - [`plot`]: SVG figures more than one report draws (the stabilization diagram).
 //! - [`cli`]: the subcommands of the `propid` binary.
 
 pub mod cli;
@@ -24,3 +25,4 @@ pub mod daemon;
 pub mod diagnose;
 pub mod ingest;
 pub mod input;
+pub mod plot;

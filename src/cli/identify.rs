@@ -1,12 +1,17 @@
-//! `propid identify FILE [--order N] [--json] [--input NAME] [--output NAME]... [--fs HZ]
-//! [--svd auto|dense|truncated] [--hankel auto|square|RxC]`: a model from a TSP/1 recording or a CSV file, by the pulse path
-//! for a clean pulse experiment and by OKID otherwise.
+//! `propid identify FILE [--order N] [--json] [--report DIR] [--input NAME] [--output NAME]...
+//! [--fs HZ] [--svd auto|dense|truncated] [--hankel auto|square|RxC]`: a model from a TSP/1
+//! recording or a CSV file, by the pulse path for a clean pulse experiment and by OKID
+//! otherwise.
 //!
 //! With `--json` exactly one JSON object: `{"model": {...}, "source": {...},
-//! "operating_points": [...]}`; `"model"` holds the fields of
-//! [`ModelReport`](propid_numerics::ModelReport) (`dc_gain` a number for one output, a list for
-//! several), `"source"` says which file format, columns, rate and path were used, and
-//! `"operating_points"` is the gain schedule (one model per level, where the data allows).
+//! "operating_points": [...], "steps": [...], "static_map": {...}, "stabilization": {...}}`;
+//! `"model"` holds the fields of [`ModelReport`](propid_numerics::ModelReport) (`dc_gain` a
+//! number for one output, a list for several), `"source"` says which file format, columns,
+//! rate and path were used, `"operating_points"` is the gain schedule (one model per level,
+//! where the data allows) and `"stabilization"` the stabilization diagram of the model's Hankel
+//! SVD ([`propid_numerics::stabilization`]; null when it cannot be realised).
+//!
+//! `--report DIR` writes `stabilization.svg` (the diagram) and `identify.md` into `DIR`.
 //!
 //! `--hankel` sizes ERA's Hankel matrix: `auto` (default) from the noise floor, `square` the
 //! largest near-square one the Markov sequence allows (`r = c ≈ (L − 1)/2` blocks), `RxC`
@@ -14,17 +19,19 @@
 //! Large sizes take the truncated FFT + Lanczos SVD (O(N) memory; `docs/svd.md`).
 
 mod load;
+mod report;
 mod stand;
 mod summary;
 
 use std::path::PathBuf;
 
 use super::CliError;
-use propid_numerics::identify::{identify_any_sized, AnyInput};
+use propid_numerics::identify::{identify_any_with, AnyInput};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
 use propid_numerics::segment::{Command, SegmentRules};
+use propid_numerics::stabilization::StabOptions;
 use propid_numerics::stand::{stand_figures, OutputChannel, StandFigures};
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
@@ -40,6 +47,9 @@ pub struct Args {
     /// Print exactly one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
+    /// Write the stabilization diagram (stabilization.svg) and identify.md into this directory.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// Input column (default: the throttle column; none: steps are found from the response).
     #[arg(long)]
     pub input: Option<String>,
@@ -108,7 +118,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         missing: &loaded.missing,
         pulse_starts: loaded.pulse_starts.as_deref(),
     };
-    let model = identify_any_sized(&input, &ident, &OkidOptions::default(), args.hankel)?;
+    let stab = StabOptions::default();
+    let okid = OkidOptions::default();
+    let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab))?;
     let ops = operating_points(&input, &ident, &OpOptions::default());
     let stand = if loaded.commanded {
         stand_figures(
@@ -126,6 +138,10 @@ pub fn run(args: Args) -> Result<(), CliError> {
         StandFigures::default()
     };
     let out = summary::Output::new(&loaded, &model, &ops, &stand);
+    if let Some(dir) = &args.report {
+        report::write(dir, &out)
+            .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
+    }
     if args.json {
         super::stdout::line(&out.json().map_err(CliError::Json)?)
     } else {

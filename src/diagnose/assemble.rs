@@ -96,6 +96,10 @@ pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagno
             y: ctx.sig.y.to_vec(),
             baseline: sim_b,
             extended: sim_e,
+            stabilization: era.and_then(|e| {
+                let s = e.stabilization.clone()?;
+                Some((s, e.report.fn_hz, e.report.zeta))
+            }),
         },
     }
 }

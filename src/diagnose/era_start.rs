@@ -2,14 +2,17 @@
 //! Markov parameters for a clean pulse experiment, OKID + ERA otherwise:
 //! [`propid_numerics::identify::identify_any`]). It is what `propid identify` and the daemon
 //! publish; `diagnose` reports its validation fit beside the baseline and uses it as one more
-//! starting point of the baseline's output-error fit.
+//! starting point of the baseline's output-error fit, and `diagnose --report` draws the
+//! stabilization diagram of its Hankel SVD ([`propid_numerics::stabilization`]).
 
 use serde::Serialize;
 
 use super::ctx::Ctx;
 use super::model::{simulate, Core, Model};
-use propid_numerics::identify::{identify_any, AnyError, AnyInput, PathTaken};
+use propid_numerics::identify::{identify_any_with, AnyError, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
+use propid_numerics::order::HankelSize;
+use propid_numerics::stabilization::{StabOptions, Stabilization};
 use propid_numerics::{IdentOptions, ModelReport};
 
 /// The core's model and how well it predicts the validation part.
@@ -55,6 +58,8 @@ pub struct EraStart {
     pub path: PathTaken,
     /// The core's published model (what `propid identify --json` prints for this data).
     pub report: ModelReport,
+    /// The stabilization diagram of the core's Hankel SVD (for the report).
+    pub stabilization: Option<Stabilization>,
 }
 
 /// Runs the core on the estimation part with order 2; an error when it refuses the data or its
@@ -78,7 +83,8 @@ pub fn era_start(ctx: &Ctx) -> Result<EraStart, CoreRefusal> {
         jackknife: false,
         ..IdentOptions::default()
     };
-    let m = identify_any(&input, &opts, &OkidOptions::default())?;
+    let (okid, stab) = (OkidOptions::default(), StabOptions::default());
+    let m = identify_any_with(&input, &opts, &okid, HankelSize::Auto, Some(&stab))?;
     let r = &m.report;
     let k = r.dc_gain.get(0);
     let ok = |v: f64| v.is_finite() && v > 0.0;
@@ -99,6 +105,7 @@ pub fn era_start(ctx: &Ctx) -> Result<EraStart, CoreRefusal> {
         core,
         path: m.path,
         report: m.report,
+        stabilization: m.stabilization,
     })
 }
 

@@ -1,7 +1,9 @@
 //! `propid diagnose --report DIR`: a Markdown page (`index.md`) with SVG plots (plotters):
 //! measured output against the baseline and extended simulations, their residuals, the residual
-//! spectra, the response against pulse amplitude, and the Hankel singular values of the
-//! data's Markov parameters (OKID, [`propid_numerics::okid::okid`]).
+//! spectra, the response against pulse amplitude, the Hankel singular values of the data's
+//! Markov parameters (OKID, [`propid_numerics::okid::okid`]) and, when the identification
+//! core gave the baseline an ERA start, the stabilization diagram of that start's Hankel SVD
+//! ([`crate::plot::stabilization`]).
 
 use std::fmt::Write as _;
 use std::io;
@@ -11,6 +13,7 @@ use plotters::prelude::*;
 
 use super::result::{Diagnosis, Traces};
 use super::spectrum::periodogram;
+use crate::plot::stabilization;
 use propid_numerics::okid::{okid, OkidOptions};
 use propid_numerics::segment::{self, Command, SegmentRules};
 
@@ -241,7 +244,19 @@ pub fn write(dir: &Path, title: &str, output: &str, d: &Diagnosis) -> io::Result
         true,
         true,
     )?;
-    std::fs::write(dir.join("index.md"), markdown(title, d, pulses.len(), &sv))
+    let mut md = markdown(title, d, pulses.len(), &sv);
+    if let Some((s, fn_hz, zeta)) = &t.stabilization {
+        let caption = "stabilization diagram of the identification core's ERA start";
+        stabilization::svg(&dir.join("stabilization.svg"), caption, s)?;
+        md.push_str("\nThe identification core's ERA start (estimation part). ");
+        md.push_str(&stabilization::markdown(
+            s,
+            *fn_hz,
+            *zeta,
+            "stabilization.svg",
+        ));
+    }
+    std::fs::write(dir.join("index.md"), md)
 }
 
 fn markdown(title: &str, d: &Diagnosis, pulses: usize, sv: &[f64]) -> String {

@@ -94,4 +94,7 @@ pub struct Traces {
     pub baseline: Vec<f64>,
     /// Extended simulation (equal to the baseline when nothing was found).
     pub extended: Vec<f64>,
+    /// Stabilization diagram of the identification core's ERA start (when it gave one) and
+    /// that model's fn and ζ.
+    pub stabilization: Option<(propid_numerics::stabilization::Stabilization, f64, f64)>,
 }

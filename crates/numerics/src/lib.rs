@@ -23,6 +23,8 @@
 //!    EMAC, MPC, CMI; jackknife over pulses.
 //! 7. [`workspace`] runs it all on preallocated buffers ([`model::Model`] holds the result);
 //!    [`report`] is the published, serde-serialisable [`report::ModelReport`].
+//! 8. [`stabilization`]: the stabilization diagram, the poles of every order `1..n_max`
+//!    realised from the model's own Hankel SVD, stable ones marked.
 //!
 //! Measured accuracy with noise and timings: `docs/core.md`.
 
@@ -49,6 +51,7 @@ pub mod order;
 pub mod pulses;
 pub mod report;
 pub mod segment;
+pub mod stabilization;
 pub mod stand;
 pub mod statespace;
 pub mod static_map;

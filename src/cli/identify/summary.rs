@@ -8,6 +8,7 @@ use super::load::{Loaded, Source};
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::report::Gain;
+use propid_numerics::stabilization::Stabilization;
 use propid_numerics::stand::StandFigures;
 use propid_numerics::ModelReport;
 
@@ -24,6 +25,8 @@ pub struct Output<'a> {
     pub steps: &'a [propid_numerics::step_response::StepFigures],
     /// Steady levels and fitted curves per output (empty without steps or a ramp).
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
+    /// The stabilization diagram of the model's Hankel SVD (null when it cannot be realised).
+    pub stabilization: Option<&'a Stabilization>,
 }
 
 impl<'a> Output<'a> {
@@ -43,6 +46,7 @@ impl<'a> Output<'a> {
             operating_points: ops,
             steps: &stand.steps,
             static_map: &stand.static_map,
+            stabilization: model.stabilization.as_ref(),
         }
     }
 
@@ -107,6 +111,10 @@ impl<'a> Output<'a> {
         let _ = writeln!(o, "zeta      {:.4}", m.zeta);
         let _ = writeln!(o, "tau       {}", taus(&m.time_constants_s));
         let _ = writeln!(o, "dc gain   {}", gain(&m.dc_gain));
+        if let Some(st) = self.stabilization {
+            let line = crate::plot::stabilization::summary_line(st, m.fn_hz, m.zeta);
+            let _ = writeln!(o, "stability {line}");
+        }
         let ops = self.operating_points;
         if !ops.points.is_empty() || !ops.skipped.is_empty() {
             let _ = writeln!(o, "operating points ({}):", ops.kind);

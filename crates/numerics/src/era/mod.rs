@@ -237,6 +237,24 @@ impl Era {
         Ok(())
     }
 
+    /// `T = H(1) V_n` of the last [`decompose`](Self::decompose) into `t` (`rows × n`,
+    /// column-major, `n` at most [`kmax`](Self::kmax)): the realisation's product for every
+    /// order up to `n` at once (the first `m` columns are `H(1) V_m`), for the stabilization
+    /// diagram ([`crate::stabilization`]).
+    pub fn h1_times_v_into(
+        &mut self,
+        markov: &MarkovSeq,
+        dims: HankelDims,
+        n: usize,
+        path: SvdPath,
+        t: &mut [f64],
+    ) -> Result<(), IdentError> {
+        if n > self.kmax || t.len() < dims.rows() * n {
+            return Err(SvdError::Dimensions("H(1) V: more columns than triplets or room").into());
+        }
+        h1v_into(&mut self.trunc, markov, dims, n, path, &self.v, t)
+    }
+
     /// `t = H(1) V_n` (of the leave-one-out `V` when `loo`), by FFT products on the truncated
     /// path and direct products on the dense one.
     fn h1v(
@@ -247,25 +265,39 @@ impl Era {
         path: SvdPath,
         loo: bool,
     ) -> Result<(), IdentError> {
-        let (rows, cols) = (dims.rows(), dims.cols());
         let v = if loo { &self.loo_v } else { &self.v };
-        match path {
-            SvdPath::Dense => h1_times_v(markov.as_slice(), &dims, n, v, &mut self.t),
-            SvdPath::Truncated => {
-                let h1 = Hankel::new(markov.as_slice(), dims, 1);
-                for l in 0..n {
-                    self.trunc
-                        .apply(
-                            h1,
-                            &v[l * cols..(l + 1) * cols],
-                            &mut self.t[l * rows..(l + 1) * rows],
-                        )
-                        .map_err(SvdError::from)?;
-                }
+        h1v_into(&mut self.trunc, markov, dims, n, path, v, &mut self.t)
+    }
+}
+
+/// `t = H(1) V_n` for the `V` given, by FFT products (`trunc`'s operator) on the truncated path
+/// and direct products on the dense one.
+fn h1v_into(
+    trunc: &mut TruncatedSvd,
+    markov: &MarkovSeq,
+    dims: HankelDims,
+    n: usize,
+    path: SvdPath,
+    v: &[f64],
+    t: &mut [f64],
+) -> Result<(), IdentError> {
+    let (rows, cols) = (dims.rows(), dims.cols());
+    match path {
+        SvdPath::Dense => h1_times_v(markov.as_slice(), &dims, n, v, t),
+        SvdPath::Truncated => {
+            let h1 = Hankel::new(markov.as_slice(), dims, 1);
+            for l in 0..n {
+                trunc
+                    .apply(
+                        h1,
+                        &v[l * cols..(l + 1) * cols],
+                        &mut t[l * rows..(l + 1) * rows],
+                    )
+                    .map_err(SvdError::from)?;
             }
         }
-        Ok(())
     }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -25,13 +25,14 @@ use serde::Serialize;
 
 pub use excitation::{is_piecewise_constant, is_ramped_staircase, looks_like_pulses};
 pub use finite::{check_finite, ILL_CONDITIONED};
-pub use okid_path::{identify_okid, identify_okid_sized, OkidSummary};
+pub use okid_path::{identify_okid, identify_okid_sized, identify_okid_with, OkidSummary};
 
 use crate::okid::{OkidError, OkidOptions};
 use crate::order::hankel_size::square_blocks;
 use crate::order::model_order::check_order;
 use crate::order::HankelSize;
 use crate::pulses::PulseInput;
+use crate::stabilization::{StabOptions, Stabilization};
 use crate::workspace::{IdentOptions, Limits, Workspace};
 use crate::{IdentError, ModelReport};
 
@@ -54,6 +55,9 @@ pub struct AnyModel {
     pub path: PathTaken,
     /// The OKID regression, when that path was taken.
     pub okid: Option<OkidSummary>,
+    /// The stabilization diagram of the model's Hankel SVD, when asked for
+    /// ([`identify_any_with`]) and computable.
+    pub stabilization: Option<Stabilization>,
 }
 
 /// Why neither path gave a model.
@@ -115,6 +119,19 @@ pub fn identify_any_sized(
     okid_opts: &OkidOptions,
     size: HankelSize,
 ) -> Result<AnyModel, AnyError> {
+    identify_any_with(input, ident, okid_opts, size, None)
+}
+
+/// [`identify_any_sized`], with the stabilization diagram of the model's own Hankel SVD
+/// ([`crate::stabilization`]) when `stab` is given: [`AnyModel::stabilization`] (`None` when
+/// the diagram cannot be realised; the model is the same either way).
+pub fn identify_any_with(
+    input: &AnyInput<'_>,
+    ident: &IdentOptions,
+    okid_opts: &OkidOptions,
+    size: HankelSize,
+    stab: Option<&StabOptions>,
+) -> Result<AnyModel, AnyError> {
     let n = input.u.first().map_or(0, |c| c.len());
     let q = input.y.len();
     check_order(ident.order, n, q, input.u.len(), size)?;
@@ -172,17 +189,19 @@ pub fn identify_any_sized(
             Ok(_) => {
                 let report = ws.to_report();
                 check_finite(&report, None)?;
+                let stabilization = stab.and_then(|o| ws.stabilization(o).ok());
                 return Ok(AnyModel {
                     report,
                     path: PathTaken::Pulse,
                     okid: None,
+                    stabilization,
                 });
             }
             Err(IdentError::NoPulse | IdentError::AllPulsesSkipped { .. }) => {}
             Err(e) => return Err(e.into()),
         }
     }
-    identify_okid_sized(input, ident, okid_opts, size)
+    identify_okid_with(input, ident, okid_opts, size, stab)
 }
 
 /// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs and the Hankel

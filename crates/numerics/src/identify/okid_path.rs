@@ -23,6 +23,7 @@ use crate::okid::{okid, OkidOptions, OkidResult};
 use crate::order::hankel_size::{self, square_blocks, Span};
 use crate::order::model_order::{self, check_order};
 use crate::order::HankelSize;
+use crate::stabilization::StabOptions;
 use crate::workspace::{IdentOptions, Workspace};
 use crate::{MarkovSeq, ModelReport};
 
@@ -97,6 +98,18 @@ pub fn identify_okid_sized(
     okid_opts: &OkidOptions,
     size: HankelSize,
 ) -> Result<AnyModel, AnyError> {
+    identify_okid_with(input, ident, okid_opts, size, None)
+}
+
+/// [`identify_okid_sized`] with the stabilization diagram of the final ERA's SVD when `stab`
+/// is given (see [`super::identify_any_with`]).
+pub fn identify_okid_with(
+    input: &AnyInput<'_>,
+    ident: &IdentOptions,
+    okid_opts: &OkidOptions,
+    size: HankelSize,
+    stab: Option<&StabOptions>,
+) -> Result<AnyModel, AnyError> {
     let n = input.u.first().map_or(0, |c| c.len());
     check_order(ident.order, n, input.y.len(), input.u.len(), size)?;
     let missing = (!input.missing.is_empty()).then_some(input.missing);
@@ -149,10 +162,12 @@ pub fn identify_okid_sized(
     // regression (RMS over outputs).
     report.noise_rms = rms(&r.residual_rms);
     check_finite(&report, Some(r.condition))?;
+    let stabilization = stab.and_then(|o| ws.stabilization_markov(&markov, o).ok());
     Ok(AnyModel {
         report,
         path: PathTaken::Okid,
         okid: Some(summary),
+        stabilization,
     })
 }
 

@@ -29,6 +29,7 @@ use super::grouped::{WidthGroups, MAX_GROUPS};
 use super::model::Model;
 use super::order::noise_floor;
 use super::pulses::{PulseEnsemble, PulseInput};
+use super::stabilization::{self, StabOptions, Stabilization};
 use super::svd::{SvdChoice, SvdPath};
 use super::{IdentError, MarkovSeq};
 
@@ -106,6 +107,18 @@ pub struct Workspace {
     jk_markov: MarkovSeq,
     jk_weights: [f64; MAX_GROUPS],
     engine: Engine,
+    /// What the SVD in the engine decomposed: the model's, from pulses or given Markov
+    /// parameters (`None`: no model, or the SVD no longer the model's).
+    era_of: Option<EraOf>,
+}
+
+/// Which Markov sequence the last model's ERA ran on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum EraOf {
+    /// The per-width pulse responses of [`Workspace::identify_model`].
+    Pulses,
+    /// The sequence given to [`Workspace::identify_markov`].
+    Given,
 }
 
 impl Workspace {
@@ -135,6 +148,7 @@ impl Workspace {
             jk_markov: MarkovSeq::zeros(l.max_outputs, max_p(&l), markov_cap),
             jk_weights: [0.0; MAX_GROUPS],
             engine: Engine::new(&l),
+            era_of: None,
         })
     }
 
@@ -189,6 +203,7 @@ impl Workspace {
         input: &PulseInput<'_>,
         opts: &IdentOptions,
     ) -> Result<&Model, IdentError> {
+        self.era_of = None;
         self.prepare_pulses(input, opts)?;
         let q = input.y.len();
         let rms = (self
@@ -206,7 +221,35 @@ impl Workspace {
         e.model.pulses = self.ensemble.kept();
         e.model.skipped = self.ensemble.skipped();
         e.model.noise_rms = rms;
+        self.era_of = Some(EraOf::Pulses);
         Ok(&self.engine.model)
+    }
+
+    /// The stabilization diagram ([`crate::stabilization`]) of the last pulse identification
+    /// ([`identify`](Self::identify), [`identify_model`](Self::identify_model)), realised from
+    /// that model's own Hankel SVD at every order. Allocates; not for the hot path.
+    pub fn stabilization(&mut self, opts: &StabOptions) -> Result<Stabilization, IdentError> {
+        if self.era_of != Some(EraOf::Pulses) {
+            return Err(IdentError::InvalidInput(
+                "stabilization: no pulse model in this workspace",
+            ));
+        }
+        self.engine.stabilization(&self.grouped, opts)
+    }
+
+    /// [`stabilization`](Self::stabilization) of the last
+    /// [`identify_markov`](Self::identify_markov); `markov` must be the sequence it was given.
+    pub fn stabilization_markov(
+        &mut self,
+        markov: &MarkovSeq,
+        opts: &StabOptions,
+    ) -> Result<Stabilization, IdentError> {
+        if self.era_of != Some(EraOf::Given) {
+            return Err(IdentError::InvalidInput(
+                "stabilization: no model from given Markov parameters in this workspace",
+            ));
+        }
+        self.engine.stabilization(markov, opts)
     }
 
     /// The jackknife uncertainty of an order-2 model on the truncated SVD path, without the
@@ -227,6 +270,7 @@ impl Workspace {
         if !opts.jackknife || opts.order != Some(2) {
             return Ok(false);
         }
+        self.era_of = None;
         self.prepare_pulses(input, opts)?;
         let (dims, path) = self.engine.plan(&self.grouped, &[], true, opts)?;
         if path != SvdPath::Truncated {
@@ -287,6 +331,7 @@ impl Workspace {
         dt_s: f64,
         opts: &IdentOptions,
     ) -> Result<&Model, IdentError> {
+        self.era_of = None;
         let l = &self.limits;
         let (q, p, len) = (markov.outputs(), markov.inputs(), markov.len());
         if !(dt_s.is_finite() && dt_s > 0.0) {
@@ -320,6 +365,24 @@ impl Workspace {
         e.model.pulses = 0;
         e.model.skipped = 0;
         e.model.noise_rms = rms;
+        self.era_of = Some(EraOf::Given);
         Ok(&self.engine.model)
+    }
+}
+
+impl Engine {
+    /// The stabilization diagram of the model from the SVD of `markov` still in [`Era`]
+    /// ([`stabilization::from_era`]).
+    ///
+    /// [`Era`]: crate::era::Era
+    fn stabilization(
+        &mut self,
+        markov: &MarkovSeq,
+        opts: &StabOptions,
+    ) -> Result<Stabilization, IdentError> {
+        let m = &self.model;
+        let sigma = &m.sigma[..m.n_sigma];
+        let plan = (m.dims, m.path);
+        stabilization::from_era(&mut self.era, markov, plan, sigma, m.dt_s, m.n, opts)
     }
 }

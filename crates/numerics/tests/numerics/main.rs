@@ -8,5 +8,6 @@ mod core_noise;
 mod okid_identify;
 mod okid_noise;
 mod okid_recovery;
+mod stabilization;
 mod svd_accuracy;
 mod svd_products;
