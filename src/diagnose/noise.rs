@@ -19,7 +19,8 @@
 //! stricter ([`super::verdict`]) — never a model called explained above the noise.
 //!
 //! **High-order fit** (fallback, when the holds give fewer than [`MIN_HOLD_SAMPLES`]
-//! differences: random, chirp or multisine inputs). An ARX model of order [`ARX_ORDER`],
+//! differences — random, chirp or multisine inputs — or a median of zero: an output quantised
+//! coarser than its noise). An ARX model of order [`ARX_ORDER`],
 //! `y_k = Σ_{i=1..n} a_i y_{k−i} + Σ_{i=1..n} b_i u_{k−i} + c`, least squares over the whole
 //! record (rows with a missing sample skipped); the floor is its one-step residual RMS,
 //! `√(SSE / (m − p))` with `m` rows and `p = 2n + 1` parameters. Order 8 follows a 2nd-order
@@ -88,7 +89,8 @@ pub fn from_holds(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
     } else {
         0.5 * (d[m / 2 - 1] + d[m / 2])
     };
-    Some(NoiseFloor {
+    // A quantised output that rests on one code in most holds has median 0: no estimate.
+    (median > 0.0).then_some(NoiseFloor {
         rms: median / (MAD_NORMAL * 6f64.sqrt()),
         from: FloorSource::SteadyHolds,
         samples: m,

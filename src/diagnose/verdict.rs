@@ -159,7 +159,7 @@ pub fn excited_band(u: &[f64], dt_s: f64) -> [f64; 2] {
     let (freqs, power) = periodogram(&du, dt_s);
     let total: f64 = power.iter().sum();
     let nyquist = 0.5 / dt_s;
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return [lo, nyquist];
     }
     let mut acc = 0.0;
