@@ -8,6 +8,8 @@ use std::path::PathBuf;
 
 use super::load::{self as shared, steps_from_response, LoadedFile, Request};
 use super::{CliError, UsageError};
+use crate::diagnose::noise::FloorSource;
+use crate::diagnose::verdict::VerdictKind;
 use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
 use propid_wire::record::names;
 
@@ -127,12 +129,13 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
             c.path, c.fn_hz, c.zeta, c.fit_percent
         );
     }
-    if d.findings.is_empty() {
+    if d.findings.is_empty() && d.verdict.kind == VerdictKind::Explained {
         let _ = writeln!(
             t,
             "no effect found: the 2nd-order model explains the data to the noise"
         );
-        return t;
+    } else if d.findings.is_empty() {
+        let _ = writeln!(t, "no effect in the catalogue found");
     }
     for f in &d.findings {
         let _ = writeln!(t, "- {} (score {:.0}): {}", f.effect, f.score, f.evidence);
@@ -146,6 +149,31 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
             g.fit_percent_points,
             g.rms_ratio
         );
+    }
+    match &d.noise_floor {
+        Some(f) => {
+            let from = match f.from {
+                FloorSource::SteadyHolds => "steady holds",
+                FloorSource::HighOrderFit => "high-order fit",
+            };
+            let _ = writeln!(
+                t,
+                "noise floor {:.4} (from {from}, {} samples)",
+                f.rms, f.samples
+            );
+        }
+        None => {
+            let _ = writeln!(t, "noise floor: could not be measured");
+        }
+    }
+    let kind = match d.verdict.kind {
+        VerdictKind::Explained => "explained",
+        VerdictKind::EffectsFound => "effects found",
+        VerdictKind::Unexplained => "UNEXPLAINED",
+    };
+    let _ = writeln!(t, "verdict: {kind}: {}", d.verdict.reason);
+    for w in &d.warnings {
+        let _ = writeln!(t, "warning: {}", w.message);
     }
     t
 }

@@ -6,9 +6,11 @@ use super::ctx::Ctx;
 use super::era_start::{self, EraStart};
 use super::fit::Fit;
 use super::model::{simulate, Model};
+use super::noise;
 use super::result::{Diagnosis, Extended, Gain, Split, Stage, Traces};
 use super::search::Searched;
 use super::summary::ModelSummary;
+use super::verdict::{self, Residual};
 
 /// Validation fit percent and residual RMS of a fit; its simulation over the whole record is
 /// left in `sim`.
@@ -65,9 +67,9 @@ pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagno
         fit_percent: fit_b,
         core_model,
     };
-    let (extended, gain) = if effects.is_empty() {
+    let (extended, gain, rms_e) = if effects.is_empty() {
         sim_e = sim_b.clone();
-        (None, None)
+        (None, None, None)
     } else {
         let (fit_e, rms_e) = validate(ctx, &cur, &mut sim_e);
         let ext = Extended {
@@ -79,8 +81,19 @@ pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagno
             fit_percent_points: fit_e - fit_b,
             rms_ratio: rms_e / rms_b.max(1e-300),
         };
-        (Some(ext), Some(gain))
+        (Some(ext), Some(gain), Some(rms_e))
     };
+    let noise_floor = noise::noise_floor(ctx.sig.u, ctx.sig.y);
+    let residual = Residual {
+        baseline_rms: rms_b,
+        extended_rms: rms_e,
+    };
+    let verdict = verdict::verdict(noise_floor.as_ref(), &residual, extended.is_some());
+    let band = verdict::excited_band(ctx.sig.u, dt);
+    let mut warnings = verdict::warnings(&baseline.model, "baseline", band);
+    if let Some(e) = &extended {
+        warnings.extend(verdict::warnings(&e.model, "extended", band));
+    }
     Diagnosis {
         baseline,
         findings,
@@ -90,6 +103,10 @@ pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagno
             estimation: [ctx.est.start, ctx.est.end],
             validation: [ctx.val.start, ctx.val.end],
         },
+        noise_floor,
+        residual,
+        verdict,
+        warnings,
         traces: Traces {
             dt_s: dt,
             u: ctx.sig.u.to_vec(),

@@ -26,11 +26,13 @@ pub mod era_start;
 pub mod error;
 pub mod fit;
 pub mod model;
+pub mod noise;
 pub mod report;
 pub mod result;
 pub mod search;
 pub mod spectrum;
 pub mod summary;
+pub mod verdict;
 
 use serde_json::Value;
 
@@ -261,7 +263,9 @@ mod tests {
              core_model path fn_hz zeta dc_gain fit_percent \
              findings effect score evidence delay_s delay_samples \
              extended effects model {model} delay_s delay_samples gain offset fit_percent \
-             gain fit_percent_points rms_ratio split estimation validation"
+             gain fit_percent_points rms_ratio split estimation validation \
+             noise_floor rms from samples residual baseline_rms extended_rms \
+             verdict kind unexplained_share reason warnings"
         );
         let want: Vec<&str> = want.split_whitespace().collect();
         assert_eq!(keys_in_order(&text), want, "{text}");

@@ -76,6 +76,14 @@ pub struct Diagnosis {
     pub gain: Option<Gain>,
     /// Estimation and validation samples.
     pub split: Split,
+    /// The noise floor measured from the data (null when none could be measured).
+    pub noise_floor: Option<super::noise::NoiseFloor>,
+    /// Residual RMS of the models on the validation samples.
+    pub residual: super::verdict::Residual,
+    /// Is the final residual at the noise floor ([`super::verdict`]).
+    pub verdict: super::verdict::Verdict,
+    /// Implausible results of the published models.
+    pub warnings: Vec<super::verdict::Warning>,
     /// Fitted models and predictions, for reports (not serialised).
     #[serde(skip)]
     pub traces: Traces,

@@ -2,6 +2,7 @@
 
 mod diagnose_detection;
 mod diagnose_record;
+mod diagnose_verdict;
 mod ingest_csv_files;
 mod protocol_ingest;
 mod protocol_ingest_sim;

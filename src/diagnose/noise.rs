@@ -1,0 +1,200 @@
+//! The noise floor of a record, measured from the data itself (issue 11): how small a residual
+//! any model of this output can honestly reach.
+//!
+//! **Steady holds** (preferred). Over the holds of the command
+//! ([`propid_numerics::segment::holds`], the one segmentation, [`SegmentRules::DEFAULT`]), the
+//! second differences `d_k = y_{k+1} − 2 y_k + y_{k−1}` of the output, all three samples inside
+//! one hold and measured, are pooled and
+//!
+//! `σ = median |d_k| / (Φ⁻¹(3/4) · √6)`, `Φ⁻¹(3/4) = 0.6745`.
+//!
+//! For white noise `e` of RMS `σ`, `d_k ~ N(0, 6σ²)` (`1 + 4 + 1`), so the median of `|d_k|` is
+//! `0.6745 √6 σ`. Why this estimator is not biased by what else moves inside a hold: the second
+//! difference of a linear drift is exactly zero, and of a smooth trend (a slow sag, the tail of
+//! a step response) it is `y'' dt²`, tiny against the noise at the stand's sample rates; the
+//! first samples of a hold, where a step response still bends sharply, give large `|d_k|` but
+//! are a few samples of hundreds, which the median ignores (breakdown point 50 %). Noise
+//! correlated over several samples (a filtered load cell) has less power in `d_k` than white
+//! noise of the same RMS: the floor is then *under*-estimated, which only makes the verdict
+//! stricter ([`super::verdict`]) — never a model called explained above the noise.
+//!
+//! **High-order fit** (fallback, when the holds give fewer than [`MIN_HOLD_SAMPLES`]
+//! differences — random, chirp or multisine inputs — or a median of zero: an output quantised
+//! coarser than its noise). An ARX model of order [`ARX_ORDER`],
+//! `y_k = Σ_{i=1..n} a_i y_{k−i} + Σ_{i=1..n} b_i u_{k−i} + c`, least squares over the whole
+//! record (rows with a missing sample skipped); the floor is its one-step residual RMS,
+//! `√(SSE / (m − p))` with `m` rows and `p = 2n + 1` parameters. Order 8 follows a 2nd-order
+//! plant with a few samples of delay and an extra mode; its one-step prediction error is the
+//! part of the output no linear model of the input predicts.
+
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use propid_numerics::segment::{holds, Command, SegmentRules};
+
+/// Fewest pooled second differences for the hold estimate.
+pub const MIN_HOLD_SAMPLES: usize = 30;
+/// Order of the fallback ARX fit.
+pub const ARX_ORDER: usize = 8;
+/// `Φ⁻¹(3/4)`: median of `|N(0, 1)|`.
+const MAD_NORMAL: f64 = 0.674_489_750_196_081_7;
+
+/// Where the floor was measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum FloorSource {
+    /// Second differences of the output inside the command's steady holds.
+    #[serde(rename = "steady holds")]
+    SteadyHolds,
+    /// One-step residual of an order-8 ARX fit.
+    #[serde(rename = "high-order fit")]
+    HighOrderFit,
+}
+
+/// The noise floor (`"noise_floor"` of `diagnose --json`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct NoiseFloor {
+    /// Noise RMS, output units.
+    pub rms: f64,
+    /// How it was measured.
+    pub from: FloorSource,
+    /// Samples it rests on (second differences, or ARX rows).
+    pub samples: usize,
+}
+
+/// The noise floor of output `y` (`NaN` = missing) driven by `u`.
+pub fn noise_floor(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
+    from_holds(u, y).or_else(|| from_arx(u, y))
+}
+
+/// The steady-hold estimate (see the module doc), `None` below [`MIN_HOLD_SAMPLES`].
+pub fn from_holds(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
+    let rules = SegmentRules::DEFAULT;
+    let n = u.len().min(y.len());
+    let mut d: Vec<f64> = Vec::new();
+    for run in holds(Command::new(&u[..n]), &rules) {
+        for k in run.start + 1..run.end.saturating_sub(1) {
+            let v = y[k + 1] - 2.0 * y[k] + y[k - 1];
+            if v.is_finite() {
+                d.push(v.abs());
+            }
+        }
+    }
+    if d.len() < MIN_HOLD_SAMPLES {
+        return None;
+    }
+    d.sort_by(f64::total_cmp);
+    let m = d.len();
+    let median = if m % 2 == 1 {
+        d[m / 2]
+    } else {
+        0.5 * (d[m / 2 - 1] + d[m / 2])
+    };
+    // A quantised output that rests on one code in most holds has median 0: no estimate.
+    (median > 0.0).then_some(NoiseFloor {
+        rms: median / (MAD_NORMAL * 6f64.sqrt()),
+        from: FloorSource::SteadyHolds,
+        samples: m,
+    })
+}
+
+/// The high-order-fit estimate (see the module doc).
+pub fn from_arx(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
+    let n = ARX_ORDER;
+    let p = 2 * n + 1;
+    let len = u.len().min(y.len());
+    let rows: Vec<usize> = (n..len)
+        .filter(|&k| (k - n..=k).all(|j| y[j].is_finite() && u[j].is_finite()))
+        .collect();
+    let m = rows.len();
+    if m < 4 * p {
+        return None;
+    }
+    // Centre and scale each column so the least squares are well conditioned.
+    let yc = rows.iter().map(|&k| y[k]).sum::<f64>() / m as f64;
+    let uc = rows.iter().map(|&k| u[k]).sum::<f64>() / m as f64;
+    let phi = DMatrix::from_fn(m, p, |r, c| {
+        let k = rows[r];
+        if c < n {
+            y[k - 1 - c] - yc
+        } else if c < 2 * n {
+            u[k - 1 - (c - n)] - uc
+        } else {
+            1.0
+        }
+    });
+    let target = DVector::from_fn(m, |r, _| y[rows[r]] - yc);
+    let svd = phi.clone().svd(true, true);
+    let theta = svd.solve(&target, 1e-12).ok()?;
+    let resid = target - phi * theta;
+    let rms = (resid.norm_squared() / (m - p) as f64).sqrt();
+    rms.is_finite().then_some(NoiseFloor {
+        rms,
+        from: FloorSource::HighOrderFit,
+        samples: m,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::rngs::StdRng;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+
+    fn noise(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let d = Normal::new(0.0, sigma).unwrap();
+        (0..n).map(|_| d.sample(&mut rng)).collect()
+    }
+
+    #[test]
+    fn holds_measure_white_noise_under_steps_and_a_drift() {
+        // A staircase with a first-order response and a linear drift, plus 0.02 of noise.
+        let u: Vec<f64> = (0..3000).map(|k| [0.3, 0.6, 0.45][k / 1000]).collect();
+        let e = noise(3000, 0.02, 1);
+        let mut x = 0.0;
+        let y: Vec<f64> = (0..3000)
+            .map(|k| {
+                x += 0.1 * (10.0 * u[k] - x);
+                x + 0.001 * k as f64 + e[k]
+            })
+            .collect();
+        let f = noise_floor(&u, &y).unwrap();
+        assert_eq!(f.from, FloorSource::SteadyHolds);
+        assert!((f.rms / 0.02 - 1.0).abs() < 0.1, "{f:?}");
+        assert!(f.samples > 2900, "{f:?}");
+    }
+
+    #[test]
+    fn without_holds_the_high_order_fit_measures_the_noise() {
+        // A random input changing every sample: no holds.
+        let u = noise(4000, 1.0, 2);
+        let e = noise(4000, 0.05, 3);
+        let mut x: [f64; 2] = [0.0, 0.0];
+        let y: Vec<f64> = (0..4000usize)
+            .map(|k| {
+                let nx = 1.5 * x[0] - 0.7 * x[1] + 0.2 * u[k.saturating_sub(1)];
+                x = [nx, x[0]];
+                nx + e[k]
+            })
+            .collect();
+        assert!(from_holds(&u, &y).is_none());
+        let f = noise_floor(&u, &y).unwrap();
+        assert_eq!(f.from, FloorSource::HighOrderFit);
+        assert!((f.rms / 0.05 - 1.0).abs() < 0.2, "{f:?}");
+    }
+
+    #[test]
+    fn missing_samples_are_skipped() {
+        let u = vec![0.5; 500];
+        let mut y = noise(500, 0.01, 4);
+        for v in y.iter_mut().step_by(7) {
+            *v = f64::NAN;
+        }
+        let f = noise_floor(&u, &y).unwrap();
+        assert!(
+            f.rms.is_finite() && (f.rms / 0.01 - 1.0).abs() < 0.2,
+            "{f:?}"
+        );
+    }
+}
