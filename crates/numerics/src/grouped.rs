@@ -281,7 +281,13 @@ impl WidthGroups {
                 };
                 let blk = out.block_mut(k);
                 for i in 0..q {
-                    blk[i + g * q] = (sums[src + i] - w_rm * self.one[src + i]) * scale;
+                    // (a missing lag of the removed pulse is NaN in `one`: never touched)
+                    let rm = if w_rm == 0.0 {
+                        0.0
+                    } else {
+                        w_rm * self.one[src + i]
+                    };
+                    blk[i + g * q] = (sums[src + i] - rm) * scale;
                 }
             }
         }

@@ -71,7 +71,10 @@ impl PulseEnsemble {
             // Holes are no reason to leave a pulse out (the average is per lag), an
             // unmeasured baseline is: the response has no reference.
             let no_base = (p.base_start..p.start).all(|k| missing(input, k));
-            if p.kept && (p.window < len || no_base) {
+            // A missing sample inside the pulse carries the pulse level: its width (the
+            // input) is not known.
+            let no_input = (p.start..p.start + p.width).any(|k| missing(input, k));
+            if p.kept && (p.window < len || no_base || no_input) {
                 p.kept = false;
             }
             if p.kept {

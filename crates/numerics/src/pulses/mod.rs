@@ -23,8 +23,9 @@
 //! wider than one sample the deconvolution below needs every earlier lag, so such a pulse
 //! contributes to the deconvolved average only up to its first missing sample (the per-width
 //! responses ERA runs on need no deconvolution and use every measured lag). A pulse is left
-//! out (and counted) only when its baseline has no measured sample; the common length stops
-//! before the first lag that no pulse has.
+//! out (and counted) only when its baseline has no measured sample or a sample of the pulse
+//! itself is missing (the carried level makes its width, the input, unknown); the common
+//! length stops before the first lag that no pulse has.
 //!
 //! **Common length.** All pulses are averaged over the same `L` samples, the window length that
 //! maximises `L × (pulses whose window is at least L)`; shorter ones are left out and counted.
