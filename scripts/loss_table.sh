@@ -40,7 +40,7 @@ CASES=(
   "1 % random|--drop-samples 0.01"
   "5 % random|--drop-samples 0.05"
   "bursts of 20|--drop-burst 0.0005 --drop-burst-samples 20"
-  "bursts of 200|--drop-burst 0.00005 --drop-burst-samples 200"
+  "bursts of 200|--drop-burst 0.0002 --drop-burst-samples 200"
 )
 
 ROWS="$WORK/rows.tsv"
