@@ -477,7 +477,11 @@ mod tests {
                 }
             }
             (Value::Object(x), Value::Object(y)) => {
-                assert_eq!(x.keys().collect::<Vec<_>>(), y.keys().collect::<Vec<_>>(), "{at}");
+                assert_eq!(
+                    x.keys().collect::<Vec<_>>(),
+                    y.keys().collect::<Vec<_>>(),
+                    "{at}"
+                );
                 for (k, x) in x {
                     assert_close(x, &y[k], &format!("{at}.{k}"));
                 }

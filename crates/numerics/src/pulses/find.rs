@@ -103,7 +103,9 @@ impl PulseEnsemble {
         }
         if end < len {
             for p in pulses.iter_mut().filter(|p| p.kept) {
-                p.missing = (p.start..p.start + end).filter(|&k| missing(input, k)).count();
+                p.missing = (p.start..p.start + end)
+                    .filter(|&k| missing(input, k))
+                    .count();
                 p.first_missing = p.first_missing.min(end);
             }
         }

@@ -80,7 +80,10 @@ fn missing_sample_in_window_is_averaged_around_never_fatal() {
     assert!(counts.iter().enumerate().all(|(k, c)| *c == 2 || k == 10));
     // Every lag, the missing one included, is the exact response (nothing interpolated).
     for k in 0..m.len() {
-        assert!((m.get(k, 0, 0) - 0.5f64.powi(k as i32)).abs() < 1e-12, "k={k}");
+        assert!(
+            (m.get(k, 0, 0) - 0.5f64.powi(k as i32)).abs() < 1e-12,
+            "k={k}"
+        );
     }
     // The lag seen by one pulse of two is √2 noisier.
     assert!((ens.growth()[10] - 2f64.sqrt()).abs() < 1e-12);
