@@ -180,7 +180,9 @@ pub struct ModelReport {
     pub pulses_skipped: usize,
     /// Samples marked missing in the samples the model was identified from (a record, a
     /// daemon window); they are left out, never interpolated (pulse path: the average per lag
-    /// over the pulses measured there; OKID: their regression rows are left out).
+    /// over the pulses measured there; OKID: their regression rows are left out). Absent in
+    /// JSON written before it existed: 0.
+    #[serde(default)]
     pub missing_samples: usize,
     /// Output noise RMS estimated from the pre-pulse baselines (output units; for given
     /// Markov parameters: the RMS of the sequence's noise tail; on the OKID path of
