@@ -4,6 +4,7 @@
 #   <!-- BEGIN real_data -->  ... <!-- END real_data -->   from docs/real_data.md (scripts/real_data.sh)
 #   <!-- BEGIN detection -->  ... <!-- END detection -->   from docs/diagnose.md (scripts/detection_table.sh)
 #   <!-- BEGIN svd -->        ... <!-- END svd -->         from docs/svd.md (scripts/bench_vs_python_control.sh, scripts/svd_scale.sh)
+#   <!-- BEGIN loss -->       ... <!-- END loss -->        from docs/loss.md (scripts/loss_table.sh)
 # Each source section is the block of Markdown table lines (and the paragraph right above it)
 # that the generating script wrote. Run after the generating scripts.
 set -euo pipefail
@@ -44,6 +45,7 @@ readme = open("README.md", encoding="utf-8").read()
 readme = splice(readme, "real_data", tables("docs/real_data.md"))
 readme = splice(readme, "detection", tables("docs/diagnose.md", 1))  # skip the model-field table
 readme = splice(readme, "svd", tables("docs/svd.md"))
+readme = splice(readme, "loss", tables("docs/loss.md"))
 open("README.md", "w", encoding="utf-8").write(readme)
 print("README.md tables updated")
 PY

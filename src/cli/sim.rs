@@ -65,6 +65,13 @@ pub struct Overrides {
     /// Fault: probability per SAMPLE that it is dropped (faults.drop_sample_prob).
     #[arg(long, value_name = "P")]
     pub drop_samples: Option<f64>,
+    /// Fault: probability per SAMPLE that a burst of dropped SAMPLEs starts
+    /// (faults.drop_burst_prob).
+    #[arg(long, value_name = "P")]
+    pub drop_burst: Option<f64>,
+    /// Fault: SAMPLEs dropped per burst (faults.drop_burst_samples).
+    #[arg(long, value_name = "N")]
+    pub drop_burst_samples: Option<u32>,
     /// Fault: stalls per second (faults.stalls_per_s).
     #[arg(long, value_name = "RATE")]
     pub stalls: Option<f64>,
@@ -118,6 +125,8 @@ pub fn load_config(args: &Args) -> Result<SimConfig, CliError> {
     set(&mut f.garbage_bursts_per_s, o.garbage);
     set(&mut f.garbage_burst_bytes, o.garbage_bytes);
     set(&mut f.drop_sample_prob, o.drop_samples);
+    set(&mut f.drop_burst_prob, o.drop_burst);
+    set(&mut f.drop_burst_samples, o.drop_burst_samples);
     set(&mut f.stalls_per_s, o.stalls);
     set(&mut f.stall_ms, o.stall_ms);
     set(&mut f.hangup_after_s, o.hangup_after);

@@ -15,7 +15,7 @@ pub fn report(overrides: Value) -> ModelReport {
         "indicators": [{"msv": 3.0, "mac": 1.0, "emac": 0.5, "mpc": 1.0, "cmi": 0.5},
                        {"msv": 3.0, "mac": 1.0, "emac": 0.5, "mpc": 1.0, "cmi": 0.5}],
         "uncertainty": {"fn_hz": 0.25, "zeta": null, "dc_gain": 0.5},
-        "pulses": 1, "pulses_skipped": 0, "noise_rms": 0.01,
+        "pulses": 1, "pulses_skipped": 0, "missing_samples": 0, "noise_rms": 0.01,
         "mass_spring_damper": {"m": 0.25, "d": 0.125, "k": 0.5},
         "hankel_block_rows": 10, "hankel_block_cols": 10, "svd": "truncated"
     });

@@ -405,6 +405,91 @@ mod tests {
         }
     }
 
+    /// Issue 12, one answer for one window: a daemon window with lost samples (in three of
+    /// the four pulse responses, one of them at lag 2, and in a baseline) gives the model
+    /// `propid identify` gives for the same samples through `identify_any` with the same
+    /// options: the same rule (average per lag over the pulses measured there, path "pulse"),
+    /// the same numbers, the jackknife included, and both say how many samples were missing.
+    #[test]
+    fn window_with_holes_gives_the_model_identify_gives() {
+        use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
+        use propid_numerics::okid::OkidOptions;
+        let (u, mut y, starts) = window();
+        let mut missing = vec![false; u.len()];
+        let mut u = u;
+        for k in [60, 102, 433, 434, 790, 1111] {
+            missing[k] = true;
+            u[k] = f64::NAN;
+            y[k] = f64::NAN;
+        }
+        let cfg = Config::default();
+        let mut id = CoreIdentifier::new(&cfg).unwrap();
+        id.identify(&view(&u, &y, &missing, &starts)).unwrap();
+        let daemon = id.report().unwrap();
+        assert_eq!((daemon.pulses, daemon.pulses_skipped), (4, 0));
+        assert_eq!(daemon.missing_samples, 6);
+        let ins = [&u[..]];
+        let outs = [&y[..]];
+        let offline = identify_any(
+            &AnyInput {
+                dt_s: 1e-3,
+                u: &ins,
+                y: &outs,
+                missing: &missing,
+                pulse_starts: Some(&starts),
+            },
+            &id.opts,
+            &OkidOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(offline.path, PathTaken::Pulse);
+        // The daemon's workspace is sized for its configuration (max order 8), identify's for
+        // the record (max order 12): the truncated SVD's Lanczos basis differs in size, so the
+        // numbers agree to rounding (1e-9 relative) and the singular values beyond the
+        // converged ones differ in count; everything else is equal.
+        let mut a = serde_json::to_value(&daemon).unwrap();
+        let mut b = serde_json::to_value(&offline.report).unwrap();
+        for v in [&mut a, &mut b] {
+            let sv = v["singular_values"].as_array_mut().unwrap();
+            sv.truncate(3);
+        }
+        assert_close(&a, &b, "model");
+        // and the clean tolerance holds: fn 12 Hz, ζ 0.6, DC gain 0.5/(1 − a1 − a2)
+        assert!((daemon.fn_hz / 12.0 - 1.0).abs() < 0.01, "{}", daemon.fn_hz);
+        assert!((daemon.zeta / 0.6 - 1.0).abs() < 0.02, "{}", daemon.zeta);
+    }
+
+    /// `a == b` with numbers within 1e-9 relative (1e-12 absolute).
+    fn assert_close(a: &serde_json::Value, b: &serde_json::Value, at: &str) {
+        use serde_json::Value;
+        match (a, b) {
+            (Value::Number(x), Value::Number(y)) => {
+                let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+                assert!(
+                    (x - y).abs() <= 1e-9 * x.abs().max(y.abs()) + 1e-12,
+                    "{at}: {x} vs {y}"
+                );
+            }
+            (Value::Array(x), Value::Array(y)) => {
+                assert_eq!(x.len(), y.len(), "{at}");
+                for (i, (x, y)) in x.iter().zip(y).enumerate() {
+                    assert_close(x, y, &format!("{at}[{i}]"));
+                }
+            }
+            (Value::Object(x), Value::Object(y)) => {
+                assert_eq!(
+                    x.keys().collect::<Vec<_>>(),
+                    y.keys().collect::<Vec<_>>(),
+                    "{at}"
+                );
+                for (k, x) in x {
+                    assert_close(x, &y[k], &format!("{at}.{k}"));
+                }
+            }
+            _ => assert_eq!(a, b, "{at}"),
+        }
+    }
+
     /// An identification error is reported as the sequential path reports it.
     #[test]
     fn helper_path_reports_the_same_errors() {

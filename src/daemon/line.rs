@@ -1,7 +1,7 @@
 //! The published lines, typed: what the daemon says, one [`Line`] per JSON line.
 //!
 //! - `{"type":"model", "t_s", "operating_point", "level", "first_sample", "samples", "reason",
-//!   <the model fields of propid identify --json>}` ([`WindowModel`]): `t_s` is the device time
+//!   "path", <the model fields of propid identify --json>}` ([`WindowModel`]): `t_s` is the device time
 //!   of the window's last sample (unwrapped, s), `operating_point` the throttle level (fraction).
 //! - `{"type":"event", "kind", ...}` ([`Event`]) and `{"type":"warning", "kind", ["message"],
 //!   ...}` ([`Warning`]); a model that fails the quality checks is a `model_unreliable`
@@ -27,6 +27,7 @@ use super::item::{EventItem, Notice, PlanNote};
 use super::quality::{Flaw, HINT};
 use super::stats::StatsLine;
 use super::window::{Reason, WindowView};
+use propid_numerics::identify::PathTaken;
 use propid_numerics::nullable;
 use propid_numerics::report::{Gain, Uncertainty};
 use propid_numerics::ModelReport;
@@ -73,6 +74,9 @@ pub struct WindowModel {
     /// The window.
     #[serde(flatten)]
     pub window: WindowFacts,
+    /// How the Markov parameters were obtained: always `"pulse"` (the daemon identifies
+    /// windows of pulses; `propid identify` reports the same in `source.path`).
+    pub path: PathTaken,
     /// The model (the fields of `propid identify --json`'s `"model"`).
     #[serde(flatten)]
     pub report: ModelReport,
@@ -480,6 +484,7 @@ mod tests {
                 reason: Reason::Full,
                 last_received: None,
             },
+            path: PathTaken::Pulse,
             report: report(json!({"fn_hz": null, "zeta": null, "dc_gain": null})),
         };
         let text = Line::Model(&model).to_json().unwrap();

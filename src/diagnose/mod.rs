@@ -256,7 +256,7 @@ mod tests {
         let text = serde_json::to_string(&d).unwrap();
         let model = "order dt_s fn_hz zeta dc_gain time_constants_s poles_s poles_z a b c d \
                      singular_values indicators msv mac emac mpc cmi msv mac emac mpc cmi \
-                     uncertainty fn_hz zeta dc_gain pulses pulses_skipped noise_rms \
+                     uncertainty fn_hz zeta dc_gain pulses pulses_skipped missing_samples noise_rms \
                      mass_spring_damper m d k hankel_block_rows hankel_block_cols svd terms";
         let want = format!(
             "baseline model {model} gain offset fit_percent \

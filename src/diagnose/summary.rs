@@ -132,6 +132,7 @@ impl ModelSummary {
             },
             pulses: core.map_or(0, |r| r.pulses),
             pulses_skipped: core.map_or(0, |r| r.pulses_skipped),
+            missing_samples: core.map_or(0, |r| r.missing_samples),
             noise_rms: if fit.n > 0 {
                 (fit.sse / fit.n as f64).sqrt()
             } else {

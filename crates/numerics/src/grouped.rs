@@ -18,9 +18,15 @@
 //! its normal equations; `D = P_0` averaged over all pulses. For one-sample pulses only,
 //! `M = Y` and `B = B̃`. `S_g` is singular only if `A` has an eigenvalue at a `w_g`-th root of
 //! unity other than 1, the frequencies that pulse width cannot excite at all.
+//!
+//! **Missing samples.** Each group's average is per lag over the pulses measured at that lag
+//! (`W_g,k`, the squared amplitudes there; [`crate::pulses`]): its noise is `σ/√W_g,k`, i.e.
+//! `√(W_g/W_g,k)` times that of a complete lag ([`WidthGroups::growth`], which sizes the Hankel
+//! matrix, [`crate::order::noise_floor::signal_length`]), and the leave-one-out removes a
+//! pulse only at the lags it has. `M` stops before the first block a group has no pulse for.
 
 use super::linalg::solve_real;
-use super::pulses::{PulseEnsemble, PulseInput};
+use super::pulses::{Pulse, PulseEnsemble, PulseInput};
 use super::{IdentError, MarkovSeq};
 
 /// Most distinct pulse widths in one record.
@@ -35,6 +41,12 @@ pub struct WidthGroups {
     weights: [f64; MAX_GROUPS],
     count: usize,
     sums: Vec<f64>,
+    /// `W_g,k` per group and lag (stride `max_samples`).
+    lag_weights: Vec<f64>,
+    /// Noise growth per block of `M` (`max_g √(W_g/W_g,k+w_g−1)`); empty when no lag misses.
+    growth: Vec<f64>,
+    holes: bool,
+    blocks: usize,
     one: Vec<f64>,
     d: Vec<f64>,
     group_of: Vec<usize>,
@@ -52,6 +64,10 @@ impl WidthGroups {
             weights: [0.0; MAX_GROUPS],
             count: 0,
             sums: vec![0.0; MAX_GROUPS * max_samples * max_outputs],
+            lag_weights: vec![0.0; MAX_GROUPS * max_samples],
+            growth: vec![0.0; max_samples],
+            holes: false,
+            blocks: 0,
             one: vec![0.0; max_samples * max_outputs],
             d: vec![0.0; max_outputs],
             group_of: vec![0; max_pulses],
@@ -73,6 +89,16 @@ impl WidthGroups {
     /// Total squared amplitude `W_g` of each group.
     pub fn weights(&self) -> &[f64] {
         &self.weights[..self.count]
+    }
+
+    /// Noise growth of each block of `M` from missing samples, `max_g √(W_g / W_g,k+w_g−1)`
+    /// (empty when every pulse has every lag).
+    pub fn growth(&self) -> &[f64] {
+        if self.holes {
+            &self.growth[..self.blocks]
+        } else {
+            &[]
+        }
     }
 
     /// `D = P_0`, the amplitude-weighted average over all pulses, per output.
@@ -113,11 +139,14 @@ impl WidthGroups {
             self.group_of[pi] = g;
         }
         let stride = self.max_samples * self.max_outputs;
+        let ls = self.max_samples;
         for g in 0..self.count {
             self.sums[g * stride..g * stride + len * q].fill(0.0);
+            self.lag_weights[g * ls..g * ls + len].fill(0.0);
             self.weights[g] = 0.0;
         }
         self.d[..q].fill(0.0);
+        self.holes = false;
         let mut total = 0.0;
         for (pi, p) in ens.pulses().iter().enumerate() {
             if !p.kept {
@@ -127,22 +156,56 @@ impl WidthGroups {
             let one = &mut self.one[..len * q];
             response(input, p.start, p.amplitude, ens.baseline(pi), len, one);
             let w = p.amplitude * p.amplitude;
-            for (s, v) in self.sums[g * stride..g * stride + len * q]
-                .iter_mut()
-                .zip(one.iter())
+            let lag_w = &mut self.lag_weights[g * ls..g * ls + len];
+            for (k, (s, v)) in self.sums[g * stride..g * stride + len * q]
+                .chunks_mut(q)
+                .zip(one.chunks(q))
+                .enumerate()
             {
-                *s += w * v;
+                if measured(input, p, k) {
+                    for (s, v) in s.iter_mut().zip(v) {
+                        *s += w * v;
+                    }
+                    lag_w[k] += w;
+                }
             }
-            for i in 0..q {
-                self.d[i] += w * one[i];
+            if measured(input, p, 0) {
+                for i in 0..q {
+                    self.d[i] += w * one[i];
+                }
+                total += w;
             }
             self.weights[g] += w;
-            total += w;
+            self.holes |= p.missing > 0;
         }
         for v in &mut self.d[..q] {
             *v /= total;
         }
-        self.write(out, None)
+        self.blocks = self.measured_blocks();
+        if self.holes {
+            for k in 0..self.blocks {
+                let mut gk = 1.0f64;
+                for g in 0..self.count {
+                    let lag = k + self.widths[g] - 1;
+                    gk = gk.max((self.weights[g] / self.lag_weights[g * ls + lag]).sqrt());
+                }
+                self.growth[k] = gk;
+            }
+        }
+        self.write(out, None, input)
+    }
+
+    /// Blocks of `M`: `len + 1 − w_max`, cut before the first block whose lag
+    /// `k + w_g − 1` no pulse of group `g` has (never with every lag measured).
+    fn measured_blocks(&self) -> usize {
+        let wmax = self.widths[..self.count].iter().copied().max().unwrap_or(1);
+        let blocks = (self.len + 1).saturating_sub(wmax);
+        let ls = self.max_samples;
+        (0..blocks)
+            .find(|&k| {
+                (0..self.count).any(|g| self.lag_weights[g * ls + k + self.widths[g] - 1] <= 0.0)
+            })
+            .unwrap_or(blocks)
     }
 
     /// `M` without pulse `i` (kept, an index into the ensemble's pulses), for the jackknife;
@@ -159,7 +222,7 @@ impl WidthGroups {
         let (q, len) = (self.q, self.len);
         let one = &mut self.one[..len * q];
         response(input, p.start, p.amplitude, ens.baseline(i), len, one);
-        self.write(out, Some((self.group_of[i], p.amplitude * p.amplitude)))?;
+        self.write(out, Some((self.group_of[i], p)), input)?;
         weights_out[..self.count].copy_from_slice(&self.weights[..self.count]);
         let g = self.group_of[i];
         let w = p.amplitude * p.amplitude;
@@ -174,39 +237,67 @@ impl WidthGroups {
 
     /// Writes `M_k(i, g) = P^(g)_{k + w_g − 1}`, optionally with one pulse (in `self.one`)
     /// removed from group `g`.
-    fn write(&self, out: &mut MarkovSeq, remove: Option<(usize, f64)>) -> Result<(), IdentError> {
+    fn write(
+        &self,
+        out: &mut MarkovSeq,
+        remove: Option<(usize, Pulse)>,
+        input: &PulseInput<'_>,
+    ) -> Result<(), IdentError> {
         let (q, gcount) = (self.q, self.count);
-        let wmax = self.widths[..gcount].iter().copied().max().unwrap_or(1);
-        let blocks = (self.len + 1).saturating_sub(wmax);
+        let blocks = self.blocks;
         out.set_len(q, gcount, blocks)?;
         let stride = self.max_samples * self.max_outputs;
+        let ls = self.max_samples;
         for g in 0..gcount {
             let shift = self.widths[g] - 1;
             let sums = &self.sums[g * stride..];
-            let (w_rm, scale) = match remove {
-                Some((rg, w)) if rg == g => {
-                    let rest = self.weights[g] - w;
-                    (
-                        w,
-                        if rest > 1e-12 * self.weights[g] {
-                            1.0 / rest
-                        } else {
-                            0.0
-                        },
-                    )
-                }
-                _ => (0.0, 1.0 / self.weights[g]),
+            let lag_w = &self.lag_weights[g * ls..];
+            let removed = match remove {
+                Some((rg, p)) if rg == g => Some(p),
+                _ => None,
             };
+            // A group emptied by the removal is all zeros (its weight goes to 0 as well).
+            let emptied = removed.is_some_and(|p| {
+                let rest = self.weights[g] - p.amplitude * p.amplitude;
+                rest <= 1e-12 * self.weights[g]
+            });
             for k in 0..blocks {
-                let src = (k + shift) * q;
+                let lag = k + shift;
+                let src = lag * q;
+                let wk = lag_w[lag];
+                let (w_rm, scale) = match removed {
+                    _ if emptied => (0.0, 0.0),
+                    Some(p) if measured(input, &p, lag) => {
+                        let w = p.amplitude * p.amplitude;
+                        let rest = wk - w;
+                        if rest > 1e-12 * wk {
+                            (w, 1.0 / rest)
+                        } else {
+                            // The only pulse measured at this lag: the lag keeps the average.
+                            (0.0, 1.0 / wk)
+                        }
+                    }
+                    _ => (0.0, 1.0 / wk),
+                };
                 let blk = out.block_mut(k);
                 for i in 0..q {
-                    blk[i + g * q] = (sums[src + i] - w_rm * self.one[src + i]) * scale;
+                    // (a missing lag of the removed pulse is NaN in `one`: never touched)
+                    let rm = if w_rm == 0.0 {
+                        0.0
+                    } else {
+                        w_rm * self.one[src + i]
+                    };
+                    blk[i + g * q] = (sums[src + i] - rm) * scale;
                 }
             }
         }
         Ok(())
     }
+}
+
+/// Whether lag `k` of pulse `p`'s response is measured.
+fn measured(input: &PulseInput<'_>, p: &Pulse, k: usize) -> bool {
+    p.missing == 0 || !input.missing.get(p.start + k).copied().unwrap_or(false)
 }
 
 /// Per-unit-amplitude response `(y(s + k) − b) / a`, `len × q` sample-major.

@@ -49,6 +49,7 @@ pub struct Model {
     pub(crate) path: SvdPath,
     pub(crate) pulses: usize,
     pub(crate) skipped: usize,
+    pub(crate) missing_samples: usize,
     pub(crate) noise_rms: f64,
     pub(crate) std_fn: f64,
     pub(crate) std_zeta: f64,
@@ -88,6 +89,7 @@ impl Model {
             path: SvdPath::Dense,
             pulses: 0,
             skipped: 0,
+            missing_samples: 0,
             noise_rms: f64::NAN,
             std_fn: f64::NAN,
             std_zeta: f64::NAN,
@@ -372,6 +374,7 @@ impl Model {
             },
             pulses: self.pulses,
             pulses_skipped: self.skipped,
+            missing_samples: self.missing_samples,
             noise_rms: self.noise_rms,
             mass_spring_damper: MassSpringDamper {
                 m: mm,

@@ -178,6 +178,12 @@ pub struct ModelReport {
     pub pulses: usize,
     /// Pulses found but left out (missing samples, short window).
     pub pulses_skipped: usize,
+    /// Samples marked missing in the samples the model was identified from (a record, a
+    /// daemon window); they are left out, never interpolated (pulse path: the average per lag
+    /// over the pulses measured there; OKID: their regression rows are left out). Absent in
+    /// JSON written before it existed: 0.
+    #[serde(default)]
+    pub missing_samples: usize,
     /// Output noise RMS estimated from the pre-pulse baselines (output units; for given
     /// Markov parameters: the RMS of the sequence's noise tail; on the OKID path of
     /// `identify_any`: the one-step residual RMS of the OKID regression).

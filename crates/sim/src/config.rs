@@ -107,6 +107,11 @@ pub struct FaultConfig {
     pub garbage_burst_bytes: u32,
     /// Probability per SAMPLE that it is not sent (its `sample_index` is skipped), 0..=0.5.
     pub drop_sample_prob: f64,
+    /// Probability per SAMPLE that a burst of `drop_burst_samples` dropped SAMPLEs starts
+    /// there (a serial link losing a run of bytes), 0..=0.1.
+    pub drop_burst_prob: f64,
+    /// SAMPLEs dropped per burst, 1..=100000.
+    pub drop_burst_samples: u32,
     /// Rate of stalls (no output, then everything at once), per second, 0..=100.
     pub stalls_per_s: f64,
     /// Length of one stall, ms, 1..=10000.
@@ -135,6 +140,8 @@ impl Default for FaultConfig {
             garbage_bursts_per_s: 0.0,
             garbage_burst_bytes: 32,
             drop_sample_prob: 0.0,
+            drop_burst_prob: 0.0,
+            drop_burst_samples: 20,
             stalls_per_s: 0.0,
             stall_ms: 50,
             hangup_after_s: 0.0,
@@ -257,6 +264,13 @@ impl FaultConfig {
             1024,
         )?;
         check_f64("faults.drop_sample_prob", self.drop_sample_prob, 0.0, 0.5)?;
+        check_f64("faults.drop_burst_prob", self.drop_burst_prob, 0.0, 0.1)?;
+        check_int(
+            "faults.drop_burst_samples",
+            self.drop_burst_samples as i64,
+            1,
+            100_000,
+        )?;
         check_f64("faults.stalls_per_s", self.stalls_per_s, 0.0, 100.0)?;
         check_int("faults.stall_ms", self.stall_ms as i64, 1, 10_000)?;
         check_f64("faults.hangup_after_s", self.hangup_after_s, 0.0, 86_400.0)?;
@@ -284,6 +298,7 @@ impl FaultConfig {
         self.bit_flip_per_byte == 0.0
             && self.garbage_bursts_per_s == 0.0
             && self.drop_sample_prob == 0.0
+            && self.drop_burst_prob == 0.0
             && self.stalls_per_s == 0.0
             && self.hangup_after_s == 0.0
             && self.drop_samples_at.is_empty()

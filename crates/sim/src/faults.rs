@@ -8,6 +8,9 @@
 //! - a **garbage burst** is `n` random non-zero bytes and one 0x00, inserted between frames:
 //!   one dropped frame (of whatever kind the decoder finds);
 //! - a **dropped sample** is a SAMPLE not sent: its `sample_index` is missing at the host;
+//! - a **drop burst** is `drop_burst_samples` consecutive SAMPLEs not sent (a link losing a
+//!   run of bytes), starting at a SAMPLE with probability `drop_burst_prob`; each counts as a
+//!   dropped sample;
 //! - a **stall** holds all output for `stall_ms`, then sends it at once (nothing lost).
 //!
 //! Drops, flips and bursts also come at exact places, by `sample_index`
@@ -82,6 +85,8 @@ pub struct FaultInjector {
     enabled: bool,
     /// The next SAMPLE frame gets a flipped bit (`corrupt_samples_at`).
     corrupt_next_sample: bool,
+    /// SAMPLEs still to drop in the current drop burst.
+    burst_left: u32,
 }
 
 impl FaultInjector {
@@ -107,6 +112,7 @@ impl FaultInjector {
             delimiter: 0,
             enabled: true,
             corrupt_next_sample: false,
+            burst_left: 0,
         };
         inj.next_garbage_us = inj.gap_us(inj.cfg.garbage_bursts_per_s, 0);
         inj.next_stall_us = inj.gap_us(inj.cfg.stalls_per_s, 0);
@@ -209,12 +215,26 @@ impl FaultInjector {
             self.burst();
         }
         let drop = self.cfg.drop_samples_at.binary_search(&index).is_ok()
-            || (self.cfg.drop_sample_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_sample_prob));
+            || (self.cfg.drop_sample_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_sample_prob))
+            || self.in_drop_burst();
         if drop {
             self.stats.dropped_samples += 1;
             return true;
         }
         self.corrupt_next_sample = self.cfg.corrupt_samples_at.binary_search(&index).is_ok();
+        false
+    }
+
+    /// Whether this SAMPLE falls in a drop burst (one running, or one starting here).
+    fn in_drop_burst(&mut self) -> bool {
+        if self.burst_left > 0 {
+            self.burst_left -= 1;
+            return true;
+        }
+        if self.cfg.drop_burst_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_burst_prob) {
+            self.burst_left = self.cfg.drop_burst_samples.saturating_sub(1);
+            return true;
+        }
         false
     }
 

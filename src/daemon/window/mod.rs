@@ -24,8 +24,9 @@
 //!   itself: a jump the sampler could not announce (its queue was full, so the samples *and*
 //!   the gap notice may have been dropped) is treated exactly like an announced gap, and an
 //!   index going backwards (a new segment whose notice was dropped) closes the window like a
-//!   segment. The identification core leaves out, and counts (`pulses_skipped`), every pulse
-//!   whose response window holds a missing sample.
+//!   segment. The identification core averages each lag over the pulses measured there (a pulse
+//!   with holes still counts, nothing is interpolated) and the model says how many samples
+//!   were missing (`missing_samples`).
 
 mod view;
 

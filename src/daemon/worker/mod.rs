@@ -177,6 +177,7 @@ impl<I: Identifier> Worker<I> {
         };
         let model = WindowModel {
             window: d.facts,
+            path: propid_numerics::identify::PathTaken::Pulse,
             report,
         };
         let flaws = quality::judge(&model.report);

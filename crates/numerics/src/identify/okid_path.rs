@@ -161,6 +161,7 @@ pub fn identify_okid_with(
     // measurement. The output noise on this path is the one-step residual RMS of the OKID
     // regression (RMS over outputs).
     report.noise_rms = rms(&r.residual_rms);
+    report.missing_samples = crate::workspace::count_missing(input.missing);
     check_finite(&report, Some(r.condition))?;
     let stabilization = stab.and_then(|o| ws.stabilization_markov(&markov, o).ok());
     Ok(AnyModel {

@@ -2,7 +2,7 @@
 //! amplitude-weighted average `Σ a_i² Y_i / Σ a_i²` and its noise growth (formulas in the
 //! module doc of [`super`]).
 
-use super::{Pulse, PulseEnsemble, PulseInput};
+use super::{contributes, missing, Pulse, PulseEnsemble, PulseInput};
 use crate::{IdentError, MarkovSeq};
 
 impl PulseEnsemble {
@@ -15,12 +15,19 @@ impl PulseEnsemble {
             if !p.kept {
                 continue;
             }
-            let nb = p.start - p.base_start;
+            let base = p.base_start..p.start;
+            let nb = base.clone().filter(|&k| !missing(input, k)).count();
             for (c, ch) in input.y.iter().enumerate() {
                 let w = &ch[p.base_start..p.start];
-                let mean = w.iter().sum::<f64>() / nb as f64;
+                let measured = || {
+                    w.iter()
+                        .zip(base.clone())
+                        .filter(|(_, k)| !missing(input, *k))
+                        .map(|(v, _)| *v)
+                };
+                let mean = measured().sum::<f64>() / nb as f64;
                 self.baselines[pi * mq + c] = mean;
-                ss[c] += w.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>();
+                ss[c] += measured().map(|v| (v - mean) * (v - mean)).sum::<f64>();
             }
             dof += nb - 1;
         }
@@ -43,6 +50,8 @@ impl PulseEnsemble {
         markov.set_len(q, 1, len)?;
         let sum = &mut self.sum[..len * q];
         sum.fill(0.0);
+        let lag_w = &mut self.lag_weight[..len];
+        lag_w.fill(0.0);
         let mut weight = 0.0;
         for (pi, p) in self.pulses[..self.count].iter().enumerate() {
             if !p.kept {
@@ -51,25 +60,42 @@ impl PulseEnsemble {
             let one = &mut self.one[..len * q];
             deconvolve(input, p, &self.baselines[pi * mq..pi * mq + q], len, one);
             let w = p.amplitude * p.amplitude;
-            for (s, y) in sum.iter_mut().zip(one.iter()) {
-                *s += w * y;
+            for (k, (s, y)) in sum.chunks_mut(q).zip(one.chunks(q)).enumerate() {
+                if contributes(input, p, k) {
+                    for (s, y) in s.iter_mut().zip(y) {
+                        *s += w * y;
+                    }
+                    lag_w[k] += w;
+                }
             }
             weight += w;
         }
-        for (m, s) in markov.as_mut_slice().iter_mut().zip(sum.iter()) {
-            *m = s / weight;
+        for (k, (m, s)) in markov
+            .as_mut_slice()
+            .chunks_mut(q)
+            .zip(sum.chunks(q))
+            .enumerate()
+        {
+            for (m, s) in m.iter_mut().zip(s) {
+                *m = s / lag_w[k];
+            }
         }
         self.weight = weight;
-        self.noise_growth();
+        self.noise_growth(input);
         Ok(())
     }
 
-    fn noise_growth(&mut self) {
+    /// `g_k = √(W · Σ_(i∈k) a_i² g_i,k²) / W_k` (`= √(Σ a_i² g_i,k² / W)` when every pulse
+    /// has lag `k`): the noise of lag `k` relative to `σ/√W`.
+    fn noise_growth(&mut self, input: &PulseInput<'_>) {
         let g = &mut self.growth[..self.len];
         g.fill(0.0);
         for p in self.pulses[..self.count].iter().filter(|p| p.kept) {
             let a2 = p.amplitude * p.amplitude;
             for (k, gk) in g.iter_mut().enumerate() {
+                if !contributes(input, p, k) {
+                    continue;
+                }
                 let amp = if p.width == 1 {
                     1.0
                 } else {
@@ -78,8 +104,8 @@ impl PulseEnsemble {
                 *gk += a2 * amp;
             }
         }
-        for gk in g.iter_mut() {
-            *gk = (*gk / self.weight).sqrt();
+        for (gk, wk) in g.iter_mut().zip(&self.lag_weight[..self.len]) {
+            *gk = (*gk * (self.weight / wk) / wk).sqrt();
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use super::average::deconvolve;
 use super::validate::validate;
-use super::{Pulse, PulseEnsemble, PulseInput};
+use super::{contributes, Pulse, PulseEnsemble, PulseInput};
 use crate::{IdentError, MarkovSeq};
 
 impl PulseEnsemble {
@@ -18,6 +18,8 @@ impl PulseEnsemble {
             sum: vec![0.0; max_samples * max_outputs],
             one: vec![0.0; max_samples * max_outputs],
             weight: 0.0,
+            lag_weight: vec![0.0; max_samples],
+            lag_count: vec![0; max_samples],
             growth: vec![0.0; max_samples],
             noise: vec![0.0; max_outputs],
             len: 0,
@@ -44,6 +46,21 @@ impl PulseEnsemble {
     /// Pulses averaged.
     pub fn kept(&self) -> usize {
         self.kept
+    }
+
+    /// Per lag `k < L`: how many kept pulses the average at lag `k` is over (all of them
+    /// where no pulse misses that lag; see the module doc on missing samples).
+    pub fn lag_counts(&self) -> &[usize] {
+        &self.lag_count[..self.len]
+    }
+
+    /// Missing samples in the response windows (`0 .. L`) of the kept pulses.
+    pub fn missing_in_windows(&self) -> usize {
+        self.pulses[..self.count]
+            .iter()
+            .filter(|p| p.kept)
+            .map(|p| p.missing)
+            .sum()
     }
 
     /// Pulses found but left out.
@@ -131,21 +148,27 @@ impl PulseEnsemble {
                 "leave-one-out needs a kept pulse and two or more pulses",
             ));
         }
-        // (Σ a² Y − a_i² Y_i) / (W − a_i²): one pulse's deconvolution, not all of them.
+        // (Σ a² Y − a_i² Y_i) / (W_k − a_i²) at the lags pulse i has; where it is the only
+        // pulse measured there, the lag keeps the full average (it cannot be left out).
         let (q, len, mq) = (self.q, self.len, self.max_outputs);
         markov.set_len(q, 1, len)?;
         let p = self.pulses[i];
         let one = &mut self.one[..len * q];
         deconvolve(input, &p, &self.baselines[i * mq..i * mq + q], len, one);
         let w = p.amplitude * p.amplitude;
-        let rest = self.weight - w;
-        for ((m, s), y) in markov
+        for (k, ((m, s), y)) in markov
             .as_mut_slice()
-            .iter_mut()
-            .zip(&self.sum[..len * q])
-            .zip(one.iter())
+            .chunks_mut(q)
+            .zip(self.sum[..len * q].chunks(q))
+            .zip(one.chunks(q))
+            .enumerate()
         {
-            *m = (s - w * y) / rest;
+            let wk = self.lag_weight[k];
+            let rest = wk - w;
+            let has = contributes(input, &p, k) && rest > 1e-12 * wk;
+            for ((m, s), y) in m.iter_mut().zip(s).zip(y) {
+                *m = if has { (s - w * y) / rest } else { s / wk };
+            }
         }
         Ok(())
     }

@@ -2,7 +2,7 @@
 //! each with its baseline and response windows, and the common length `L` that decides which
 //! are kept.
 
-use super::{missing, Pulse, PulseEnsemble, PulseInput, MAX_BASELINE};
+use super::{contributes, missing, Pulse, PulseEnsemble, PulseInput, MAX_BASELINE};
 use crate::segment::{self, Command, PulseRun, SegmentRules};
 use crate::IdentError;
 
@@ -68,13 +68,53 @@ impl PulseEnsemble {
             }
         }
         for p in pulses.iter_mut() {
-            let gap = (p.base_start..p.start + len).any(|k| missing(input, k));
-            if p.kept && (p.window < len || gap) {
+            // Holes are no reason to leave a pulse out (the average is per lag), an
+            // unmeasured baseline is: the response has no reference.
+            let no_base = (p.base_start..p.start).all(|k| missing(input, k));
+            // A missing sample inside the pulse carries the pulse level: its width (the
+            // input) is not known.
+            let no_input = (p.start..p.start + p.width).any(|k| missing(input, k));
+            if p.kept && (p.window < len || no_base || no_input) {
                 p.kept = false;
+            }
+            if p.kept {
+                let window = p.start..p.start + len;
+                p.missing = window.clone().filter(|&k| missing(input, k)).count();
+                p.first_missing = window
+                    .clone()
+                    .position(|k| missing(input, k))
+                    .unwrap_or(len);
             }
         }
         self.kept = pulses.iter().filter(|p| p.kept).count();
-        self.len = if self.kept > 0 { len } else { 0 };
+        // Per-lag count of the pulses measured there; the common length stops before the
+        // first lag that none has (nothing is interpolated).
+        let mut end = len;
+        for k in 0..len {
+            let c = pulses
+                .iter()
+                .filter(|p| p.kept && contributes(input, p, k))
+                .count();
+            self.lag_count[k] = c;
+            if c == 0 {
+                end = k;
+                break;
+            }
+        }
+        if end < len {
+            for p in pulses.iter_mut().filter(|p| p.kept) {
+                p.missing = (p.start..p.start + end)
+                    .filter(|&k| missing(input, k))
+                    .count();
+                p.first_missing = p.first_missing.min(end);
+            }
+        }
+        if end == 0 {
+            // Not even lag 0 is measured in any pulse: nothing to average.
+            pulses.iter_mut().for_each(|p| p.kept = false);
+            self.kept = 0;
+        }
+        self.len = if self.kept > 0 { end } else { 0 };
     }
 }
 
@@ -92,5 +132,7 @@ fn pulse(cmd: &Command<'_>, p: &PulseRun, rules: &SegmentRules) -> Pulse {
         base_start: p.start - nb,
         window: segment::run_end(cmd, back, rules) - p.start,
         kept: true,
+        missing: 0,
+        first_missing: 0,
     }
 }

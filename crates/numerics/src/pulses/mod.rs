@@ -11,8 +11,21 @@
 //! pulse or step), so each pulse is referenced to its own level: several operating points in
 //! one record are fine. Its *baseline* is the mean of each output over the last half (at most
 //! [`MAX_BASELINE`] samples) of the run before the pulse, where the previous response has
-//! decayed most. Missing samples carry the previous throttle level; a pulse whose baseline or
-//! response window holds a missing sample is left out and counted.
+//! decayed most, over its measured samples. Missing samples carry the previous throttle level
+//! for the segmentation.
+//!
+//! **Missing samples are missing, not fatal.** A pulse whose response window holds missing
+//! samples still contributes at every lag it has: the average at lag `k` is taken over the
+//! pulses measured there, `Σ_(i∈k) a_i² P_i,k / W_k` with `W_k = Σ_(i∈k) a_i²`, and its noise
+//! standard deviation is `σ/√W_k`, larger than the `σ/√W` of a lag every pulse has (the
+//! per-lag count and weight are kept, [`PulseEnsemble::lag_counts`], and carried into the
+//! Hankel sizing and the jackknife: [`crate::grouped`]). Nothing is interpolated. For a pulse
+//! wider than one sample the deconvolution below needs every earlier lag, so such a pulse
+//! contributes to the deconvolved average only up to its first missing sample (the per-width
+//! responses ERA runs on need no deconvolution and use every measured lag). A pulse is left
+//! out (and counted) only when its baseline has no measured sample or a sample of the pulse
+//! itself is missing (the carried level makes its width, the input, unknown); the common
+//! length stops before the first lag that no pulse has.
 //!
 //! **Common length.** All pulses are averaged over the same `L` samples, the window length that
 //! maximises `L × (pulses whose window is at least L)`; shorter ones are left out and counted.
@@ -84,6 +97,10 @@ pub struct Pulse {
     pub window: usize,
     /// Whether the pulse is used (false: left out and counted).
     pub kept: bool,
+    /// Missing samples in its response window `start .. start + L` (set for kept pulses).
+    pub missing: usize,
+    /// Lag of its first missing sample within `0 .. L` (`L` when none is missing).
+    pub first_missing: usize,
 }
 
 /// Preallocated pulse segmentation and ensemble average.
@@ -97,6 +114,10 @@ pub struct PulseEnsemble {
     sum: Vec<f64>,
     one: Vec<f64>,
     weight: f64,
+    /// `W_k`: squared amplitudes of the kept pulses that contribute to the average at lag `k`.
+    lag_weight: Vec<f64>,
+    /// Kept pulses that contribute to the average at lag `k`.
+    lag_count: Vec<usize>,
     growth: Vec<f64>,
     noise: Vec<f64>,
     len: usize,
@@ -107,4 +128,18 @@ pub struct PulseEnsemble {
 /// Whether sample `k` is marked missing (an empty mask marks none).
 fn missing(input: &PulseInput<'_>, k: usize) -> bool {
     input.missing.get(k).copied().unwrap_or(false)
+}
+
+/// Whether pulse `p` contributes to the width-deconvolved average at lag `k`: a one-sample
+/// pulse wherever its sample `start + k` is measured, a wider one up to its first missing
+/// sample (the recursion `Y_k = P_k − P_(k−1) + Y_(k−w)` needs every earlier lag).
+fn contributes(input: &PulseInput<'_>, p: &Pulse, k: usize) -> bool {
+    if p.missing == 0 {
+        return true;
+    }
+    if p.width == 1 {
+        !missing(input, p.start + k)
+    } else {
+        k < p.first_missing
+    }
 }

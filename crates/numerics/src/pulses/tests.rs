@@ -52,7 +52,7 @@ fn widths_signs_and_amplitudes_average_to_the_one_sample_response() {
 }
 
 #[test]
-fn missing_sample_in_window_is_left_out() {
+fn missing_sample_in_window_is_averaged_around_never_fatal() {
     let mut u = vec![0.3; 300];
     u[50] = 0.4;
     u[150] = 0.4;
@@ -61,6 +61,47 @@ fn missing_sample_in_window_is_left_out() {
     miss[60] = true;
     y[60] = f64::NAN;
     u[60] = f64::NAN;
+    let chans = [&y[..]];
+    let input = PulseInput {
+        dt_s: 0.01,
+        u: &u,
+        y: &chans,
+        missing: &miss,
+        pulse_starts: None,
+    };
+    let mut ens = PulseEnsemble::new(300, 1, 8);
+    let mut m = MarkovSeq::zeros(1, 1, 300);
+    ens.build(&input, 16, &mut m).unwrap();
+    // Both pulses are used; lag 10 of the first one is missing: one pulse there.
+    assert_eq!((ens.kept(), ens.skipped()), (2, 0));
+    assert_eq!(ens.missing_in_windows(), 1);
+    let counts = ens.lag_counts();
+    assert_eq!(counts[10], 1);
+    assert!(counts.iter().enumerate().all(|(k, c)| *c == 2 || k == 10));
+    // Every lag, the missing one included, is the exact response (nothing interpolated).
+    for k in 0..m.len() {
+        assert!(
+            (m.get(k, 0, 0) - 0.5f64.powi(k as i32)).abs() < 1e-12,
+            "k={k}"
+        );
+    }
+    // The lag seen by one pulse of two is √2 noisier.
+    assert!((ens.growth()[10] - 2f64.sqrt()).abs() < 1e-12);
+    assert_eq!(ens.growth()[11], 1.0);
+}
+
+#[test]
+fn unmeasured_baseline_leaves_the_pulse_out() {
+    let mut u = vec![0.3; 300];
+    u[50] = 0.4;
+    u[150] = 0.4;
+    let mut y = simulate(&u, 0.3);
+    let mut miss = vec![false; 300];
+    // The baseline of the first pulse is the last half of the level before it: 25..50.
+    for k in 25..50 {
+        miss[k] = true;
+        y[k] = f64::NAN;
+    }
     let chans = [&y[..]];
     let input = PulseInput {
         dt_s: 0.01,

@@ -149,7 +149,10 @@ impl Engine {
         m.n_sigma = svd.n_sigma;
         let sig = &m.sigma[..m.n_sigma];
         let cap = l.max_order.min(k);
-        let n = model_order::choose(sig, &self.noise[..q], &dims, growth, opts.order, cap)?;
+        // `growth` (the per-lag noise of missing samples) sizes the Hankel matrix only: the
+        // noise stays white, and its singular-value bound is the white one (the Frobenius
+        // bound of `noise_singular_value` is for the deconvolution's random walk).
+        let n = model_order::choose(sig, &self.noise[..q], &dims, &[], opts.order, cap)?;
         if n > svd.converged {
             // The automatic order reached past the triplets that had converged: ask for them.
             self.era

@@ -215,11 +215,12 @@ impl Workspace {
             / q as f64)
             .sqrt();
         let e = &mut self.engine;
-        e.run(&self.grouped, input.dt_s, &[], true, opts)?;
+        e.run(&self.grouped, input.dt_s, self.groups.growth(), true, opts)?;
         e.single_input(self.groups.widths(), self.groups.weights(), self.groups.d())?;
         e.model.finish_gain()?;
         e.model.pulses = self.ensemble.kept();
         e.model.skipped = self.ensemble.skipped();
+        e.model.missing_samples = count_missing(input.missing);
         e.model.noise_rms = rms;
         self.era_of = Some(EraOf::Pulses);
         Ok(&self.engine.model)
@@ -272,7 +273,9 @@ impl Workspace {
         }
         self.era_of = None;
         self.prepare_pulses(input, opts)?;
-        let (dims, path) = self.engine.plan(&self.grouped, &[], true, opts)?;
+        let (dims, path) = self
+            .engine
+            .plan(&self.grouped, self.groups.growth(), true, opts)?;
         if path != SvdPath::Truncated {
             return Ok(false);
         }
@@ -364,6 +367,7 @@ impl Workspace {
         e.model.finish_gain()?;
         e.model.pulses = 0;
         e.model.skipped = 0;
+        e.model.missing_samples = 0;
         e.model.noise_rms = rms;
         self.era_of = Some(EraOf::Given);
         Ok(&self.engine.model)
@@ -385,4 +389,9 @@ impl Engine {
         let plan = (m.dims, m.path);
         stabilization::from_era(&mut self.era, markov, plan, sigma, m.dt_s, m.n, opts)
     }
+}
+
+/// Samples marked missing in a mask (an empty mask marks none).
+pub fn count_missing(missing: &[bool]) -> usize {
+    missing.iter().filter(|m| **m).count()
 }

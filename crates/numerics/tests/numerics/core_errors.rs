@@ -57,7 +57,7 @@ fn no_pulse_constant_output_and_non_finite() {
             ..
         })
     ));
-    // NaN is fine where marked missing (and that pulse is left out).
+    // NaN is fine where marked missing; that pulse still counts at its other lags (issue 12).
     let mut miss = vec![false; u.len()];
     miss[321] = true;
     bad[321] = f64::NAN;
@@ -66,7 +66,7 @@ fn no_pulse_constant_output_and_non_finite() {
         .identify(&input(&u, &bc, &miss), &opts)
         .unwrap()
         .to_report();
-    assert_eq!((m.pulses, m.pulses_skipped), (2, 1));
+    assert_eq!((m.pulses, m.pulses_skipped, m.missing_samples), (3, 0, 1));
 }
 
 #[test]
