@@ -121,9 +121,15 @@ pub enum UsageError {
     /// `--record` without `--seconds`.
     #[error("--record needs --seconds S")]
     RecordNeedsSeconds,
-    /// `--esc-us` without exactly two values.
+    /// `--esc-us` without exactly two finite values, `MIN < MAX`.
     #[error("--esc-us takes MIN,MAX")]
     EscUs,
+    /// `--input-range` without exactly two finite values, `MIN < MAX`.
+    #[error("--input-range takes MIN,MAX (the raw command values at throttle 0 and 1)")]
+    InputRange,
+    /// `--poles` zero or odd.
+    #[error("--poles {0}: a motor has an even number of magnet poles > 0")]
+    Poles(u32),
 }
 
 impl CliError {

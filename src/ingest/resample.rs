@@ -401,17 +401,27 @@ mod tests {
         assert_eq!(u.channels[0], cmd, "a full channel is the rows as they are");
         let y = &u.channels[1];
         assert!(y[0].is_nan(), "nothing before its first sample");
-        assert!(y[38..].iter().all(|v| v.is_nan()), "nor after its last (row 37)");
+        assert!(
+            y[38..].iter().all(|v| v.is_nan()),
+            "nor after its last (row 37)"
+        );
         for k in 1..=37 {
             assert!((y[k] - 2.0 * t[k]).abs() < 1e-12, "{k}: {}", y[k]);
         }
         let c = u.carried[1];
         assert_eq!(c.values, 10);
         assert!((c.own_dt_s.unwrap() - 0.04).abs() < 1e-12);
-        assert_eq!(c.bridged, 37 - 1 + 1 - 10, "every row between its own samples");
+        assert_eq!(
+            c.bridged,
+            37 - 1 + 1 - 10,
+            "every row between its own samples"
+        );
         assert_eq!(c.missing, 1 + 3);
         assert_eq!(u.carried[0].bridged, 0);
-        assert!(u.missing.iter().all(|m| !m), "the rows themselves have no gap");
+        assert!(
+            u.missing.iter().all(|m| !m),
+            "the rows themselves have no gap"
+        );
     }
 
     #[test]
