@@ -189,10 +189,7 @@ fn command_scales_are_declared_by_a_unit_or_left_to_the_values() {
         scales("throttle (%)"),
         Some(CommandScales::Declared(Scale::PERCENT))
     );
-    assert_eq!(
-        scales("dshot"),
-        Some(CommandScales::Declared(Scale::DSHOT))
-    );
+    assert_eq!(scales("dshot"), Some(CommandScales::Declared(Scale::DSHOT)));
     let Some(CommandScales::FromValues(bare)) = scales("ESC signal") else {
         panic!("a bare command is decided from its values");
     };
