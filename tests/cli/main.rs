@@ -8,5 +8,6 @@ mod identify_cli;
 mod identify_real_data;
 mod identify_sim_recording;
 mod identify_square_hankel;
+mod identify_units;
 mod sim_cli;
 mod walkthrough_cli;
