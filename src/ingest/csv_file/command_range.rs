@@ -242,7 +242,8 @@ mod tests {
 
     #[test]
     fn bare_values_decide_each_usual_range() {
-        let cases: [(Unit, Vec<f64>, (f64, f64), &str); 7] = [
+        type Case = (Unit, Vec<f64>, (f64, f64), &'static str);
+        let cases: [Case; 7] = [
             (
                 Unit::ThrottleLevel,
                 vec![0.40, 0.45],
