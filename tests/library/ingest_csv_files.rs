@@ -341,3 +341,24 @@ fn real_tyto_export_from_shared_data() {
         "the export starts with two rows at t = 0"
     );
 }
+
+#[test]
+fn an_input_range_scales_an_input_the_table_does_not_know() {
+    let text = "t_s,u8,thrust_N\n0,51,1\n0.01,102,2\n0.02,204,3\n";
+    let o = CsvFileOptions {
+        input: InputChoice::Column("u8".into()),
+        ..opts()
+    };
+    let f = read_csv(text, &o).unwrap();
+    assert_eq!(f.record.channel("u8").unwrap().data, vec![51.0, 102.0, 204.0]);
+    assert_eq!(f.source.input_range, None, "read as it is, and no scale claimed");
+    let o = CsvFileOptions {
+        input_range: Some((0.0, 255.0)),
+        ..o
+    };
+    let f = read_csv(text, &o).unwrap();
+    assert_eq!(f.record.channel("u8").unwrap().data, vec![0.2, 0.4, 0.8]);
+    let r = f.source.input_range.as_ref().unwrap();
+    assert_eq!((r.raw_max, r.from.as_str()), (255.0, "--input-range"));
+    assert_eq!(f.source.units["u8"].unit, "raw");
+}

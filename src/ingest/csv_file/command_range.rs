@@ -3,7 +3,8 @@
 //! ([`CommandRange::from`]), never guessed in silence.
 //!
 //! The rule, first that applies:
-//! 1. `--input-range MIN,MAX` is the scale (`"--input-range"`).
+//! 1. `--input-range MIN,MAX` is the scale (`"--input-range"`), also of an input column the
+//!    unit table does not know as a command (`--input u`).
 //! 2. `--esc-us MIN,MAX` is the scale of a column in µs or without a unit (`"--esc-us"`).
 //! 3. A header that declares the unit (`ESC signal (µs)`, `throttle (%)`, `throttle (0-1)`,
 //!    `dshot`: [`CommandScales::Declared`]) gives the scale (`"header: µs"`); the values must
@@ -62,6 +63,11 @@ impl CommandRange {
             mul: 1.0,
             div: self.raw_max - self.raw_min,
         }
+    }
+
+    /// `--input-range` for an input column the unit table does not know as a command.
+    pub fn given_input(range: (f64, f64)) -> Self {
+        Self::given(range, "raw", "--input-range")
     }
 
     fn given(range: (f64, f64), unit: &'static str, from: &str) -> Self {

@@ -45,39 +45,46 @@ pub(super) fn convert(
     for (n, &i) in used.iter().enumerate() {
         let col = &columns[i];
         let optional = picks.optional.contains(&i);
-        let (affine, unit) = match col.spec {
-            None => (Affine::IDENTITY, time_or_unknown(picks, i)),
-            Some(spec) => match command_range(spec.unit, &values[n], &given) {
-                Some(Ok(r)) => {
-                    let out = (r.affine(), r.unit.to_string());
-                    if picks.input == Some(i) {
-                        input_range = Some(r);
-                    }
-                    out
+        let is_command = col.spec.is_some_and(|s| s.unit.command_scales().is_some());
+        let scale = match (col.spec, opts.input_range) {
+            // `--input-range` scales the input whatever the table knows of its name.
+            (_, Some(range)) if picks.input == Some(i) && !is_command => {
+                Some(Ok(CommandRange::given_input(range)))
+            }
+            (Some(spec), _) => command_range(spec.unit, &values[n], &given),
+            (None, _) => None,
+        };
+        let (affine, unit) = match (scale, col.spec) {
+            (Some(Ok(r)), _) => {
+                let out = (r.affine(), r.unit.to_string());
+                if picks.input == Some(i) {
+                    input_range = Some(r);
                 }
-                Some(Err(source)) => {
-                    return Err(CsvFileError::CommandRange {
+                out
+            }
+            (Some(Err(source)), _) => {
+                return Err(CsvFileError::CommandRange {
+                    column: col.name.clone(),
+                    source,
+                })
+            }
+            (None, None) => (Affine::IDENTITY, time_or_unknown(picks, i)),
+            (None, Some(spec)) => match spec.conversion(&conv) {
+                Ok(a) => (a, spec.unit.symbol().to_string()),
+                Err(e) if optional => {
+                    dropped.push(n);
+                    unread.push(Unread {
                         column: col.name.clone(),
-                        source,
+                        reason: needs(e),
+                    });
+                    continue;
+                }
+                Err(e) => {
+                    return Err(CsvFileError::Conversion {
+                        column: col.name.clone(),
+                        reason: needs(e),
                     })
                 }
-                None => match spec.conversion(&conv) {
-                    Ok(a) => (a, spec.unit.symbol().to_string()),
-                    Err(e) if optional => {
-                        dropped.push(n);
-                        unread.push(Unread {
-                            column: col.name.clone(),
-                            reason: needs(e),
-                        });
-                        continue;
-                    }
-                    Err(e) => {
-                        return Err(CsvFileError::Conversion {
-                            column: col.name.clone(),
-                            reason: needs(e),
-                        })
-                    }
-                },
             },
         };
         for v in &mut values[n] {
