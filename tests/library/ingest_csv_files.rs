@@ -350,8 +350,14 @@ fn an_input_range_scales_an_input_the_table_does_not_know() {
         ..opts()
     };
     let f = read_csv(text, &o).unwrap();
-    assert_eq!(f.record.channel("u8").unwrap().data, vec![51.0, 102.0, 204.0]);
-    assert_eq!(f.source.input_range, None, "read as it is, and no scale claimed");
+    assert_eq!(
+        f.record.channel("u8").unwrap().data,
+        vec![51.0, 102.0, 204.0]
+    );
+    assert_eq!(
+        f.source.input_range, None,
+        "read as it is, and no scale claimed"
+    );
     let o = CsvFileOptions {
         input_range: Some((0.0, 255.0)),
         ..o
