@@ -78,7 +78,7 @@ const REAL: &[RealCase] = &[
     case(
         "krull-thrust-steps",
         "0500_thrust_response.csv",
-        None,
+        Some("none"),
         Some("load_kg"),
         None,
         Some(KRULL),
@@ -86,7 +86,7 @@ const REAL: &[RealCase] = &[
     case(
         "krull-thrust-steps",
         "1500_thrust_response.csv",
-        None,
+        Some("none"),
         Some("load_kg"),
         None,
         Some(KRULL),
@@ -94,7 +94,7 @@ const REAL: &[RealCase] = &[
     case(
         "krull-thrust-steps",
         "increasing_thrust_response.csv",
-        None,
+        Some("none"),
         Some("load_kg"),
         None,
         Some(KRULL),
@@ -245,6 +245,9 @@ fn real_data(dir: &Path) {
             fs: c.fs,
             columns: c.columns.map(|v| v.iter().map(|s| s.to_string()).collect()),
             esc_us: None,
+            // The BL-Ctrl takes an 8-bit command (PROVENANCE.md): 10..250 of 0..255.
+            input_range: (c.columns == Some(BLCTRL)).then(|| vec![0.0, 255.0]),
+            poles: None,
             estimation_fraction: 0.7,
         };
         let row = load(&args).map_err(|e| e.to_string()).and_then(|s| {

@@ -15,7 +15,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
-use propid::ingest::csv_file::{read_csv, CsvFileOptions};
+use propid::ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
 use propid::ingest::steps::find_steps;
 use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
@@ -27,7 +27,11 @@ use propid_numerics::ModelReport;
 struct Case {
     folder: &'static str,
     file: &'static str,
+    /// The input column: `None` the command column, `Some("none")` no input (steps found in
+    /// the response).
     input: Option<&'static str>,
+    /// Raw command values at throttle 0 and 1 when the values cannot tell (`--input-range`).
+    input_range: Option<(f64, f64)>,
     outputs: &'static [&'static str],
     fs: Option<f64>,
     columns: Option<&'static [&'static str]>,
@@ -40,6 +44,7 @@ const CASES: &[Case] = &[
         folder: "vanderploeg-rcbenchmark-steps",
         file: "90PERCENT_2024-08-13_185523.csv",
         input: None,
+        input_range: None,
         outputs: &[],
         fs: None,
         columns: None,
@@ -48,7 +53,8 @@ const CASES: &[Case] = &[
     Case {
         folder: "krull-thrust-steps",
         file: "0500_thrust_response.csv",
-        input: None,
+        input: Some("none"),
+        input_range: None,
         outputs: &["load_kg"],
         fs: None,
         columns: Some(&["t_s", "load_kg"]),
@@ -57,7 +63,8 @@ const CASES: &[Case] = &[
     Case {
         folder: "krull-thrust-steps",
         file: "1200_thrust_response.csv",
-        input: None,
+        input: Some("none"),
+        input_range: None,
         outputs: &["load_kg"],
         fs: None,
         columns: Some(&["t_s", "load_kg"]),
@@ -66,7 +73,8 @@ const CASES: &[Case] = &[
     Case {
         folder: "krull-thrust-steps",
         file: "1500_thrust_response.csv",
-        input: None,
+        input: Some("none"),
+        input_range: None,
         outputs: &["load_kg"],
         fs: None,
         columns: Some(&["t_s", "load_kg"]),
@@ -75,7 +83,8 @@ const CASES: &[Case] = &[
     Case {
         folder: "krull-thrust-steps",
         file: "increasing_thrust_response.csv",
-        input: None,
+        input: Some("none"),
+        input_range: None,
         outputs: &["load_kg"],
         fs: None,
         columns: Some(&["t_s", "load_kg"]),
@@ -85,6 +94,7 @@ const CASES: &[Case] = &[
         folder: "dantonio-rcbenchmark-ramp",
         file: "StepsTest20230615_2023-06-15_174003.csv",
         input: None,
+        input_range: None,
         outputs: &[],
         fs: None,
         columns: None,
@@ -94,6 +104,8 @@ const CASES: &[Case] = &[
         folder: "noahcurtiss-blctrl-steps",
         file: "robbe12.0.txt",
         input: Some("cmd"),
+        // The BL-Ctrl takes an 8-bit command (PROVENANCE.md): 10..250 of 0..255.
+        input_range: Some((0.0, 255.0)),
         outputs: &["force"],
         fs: Some(50.0),
         columns: Some(&[
@@ -105,6 +117,8 @@ const CASES: &[Case] = &[
         folder: "noahcurtiss-blctrl-steps",
         file: "tiger12.0.txt",
         input: Some("cmd"),
+        // The BL-Ctrl takes an 8-bit command (PROVENANCE.md): 10..250 of 0..255.
+        input_range: Some((0.0, 255.0)),
         outputs: &["force"],
         fs: Some(50.0),
         columns: Some(&[
@@ -116,6 +130,7 @@ const CASES: &[Case] = &[
         folder: "nanodrone-cf-motors",
         file: "multisine_20251017_run1.csv",
         input: Some("m1_thrust"),
+        input_range: None,
         outputs: &["m1_erpm"],
         fs: None,
         columns: None,
@@ -125,6 +140,7 @@ const CASES: &[Case] = &[
         folder: "nanodrone-cf-motors",
         file: "random1_20251017_run1.csv",
         input: Some("m1_thrust"),
+        input_range: None,
         outputs: &["m1_erpm"],
         fs: None,
         columns: None,
@@ -134,6 +150,7 @@ const CASES: &[Case] = &[
         folder: "nanodrone-cf-motors",
         file: "square_20251017_run1.csv",
         input: Some("m1_thrust"),
+        input_range: None,
         outputs: &["m1_erpm"],
         fs: None,
         columns: None,
@@ -143,6 +160,7 @@ const CASES: &[Case] = &[
         folder: "nanodrone-cf-motors",
         file: "melon_20251017_run1.csv",
         input: Some("m1_thrust"),
+        input_range: None,
         outputs: &["m1_erpm"],
         fs: None,
         columns: None,
@@ -152,6 +170,7 @@ const CASES: &[Case] = &[
         folder: "bitcraze-cf21-pwm-steps",
         file: "cf21_stock2.csv",
         input: Some("pwm"),
+        input_range: None,
         outputs: &["weight[g]"],
         fs: Some(100.0),
         columns: None,
@@ -161,6 +180,7 @@ const CASES: &[Case] = &[
         folder: "silverbox",
         file: "SNLS80mV.csv",
         input: Some("V1"),
+        input_range: None,
         outputs: &["V2"],
         fs: Some(610.35),
         columns: None,
@@ -170,6 +190,7 @@ const CASES: &[Case] = &[
         folder: "f16-gvt",
         file: "F16Data_SineSw_Level1.csv",
         input: Some("force_N"),
+        input_range: None,
         outputs: &["acc1", "acc2", "acc3"],
         fs: None,
         columns: None,
@@ -179,6 +200,7 @@ const CASES: &[Case] = &[
         folder: "f16-gvt",
         file: "F16Data_SineSw_Level7.csv",
         input: Some("force_N"),
+        input_range: None,
         outputs: &["acc1", "acc2", "acc3"],
         fs: None,
         columns: None,
@@ -188,6 +210,7 @@ const CASES: &[Case] = &[
         folder: "daisy-mechanical",
         file: "robot_arm.csv",
         input: Some("u_torque"),
+        input_range: None,
         outputs: &["y_accel"],
         fs: Some(100.0),
         columns: None,
@@ -197,6 +220,7 @@ const CASES: &[Case] = &[
         folder: "daisy-mechanical",
         file: "flutter.csv",
         input: Some("u"),
+        input_range: None,
         outputs: &["y"],
         fs: Some(1.0),
         columns: None,
@@ -206,6 +230,7 @@ const CASES: &[Case] = &[
         folder: "daisy-mechanical",
         file: "CD_player_arm.csv",
         input: Some("u1"),
+        input_range: None,
         outputs: &["y1", "y2"],
         fs: Some(1.0),
         columns: None,
@@ -215,6 +240,7 @@ const CASES: &[Case] = &[
         folder: "cascaded-tanks",
         file: "dataBenchmark.csv",
         input: Some("uEst"),
+        input_range: None,
         outputs: &["yEst"],
         fs: Some(0.25),
         columns: None,
@@ -224,6 +250,7 @@ const CASES: &[Case] = &[
         folder: "emps",
         file: "DATA_EMPS.csv",
         input: Some("vir_force_N"),
+        input_range: None,
         outputs: &["qm_position_m"],
         fs: None,
         columns: None,
@@ -293,7 +320,12 @@ fn run_case(case: &Case, path: &Path) -> Result<String, String> {
     let text = std::fs::read(path).map_err(|e| format!("absent ({e})"))?;
     let text = String::from_utf8_lossy(&text);
     let opts = CsvFileOptions {
-        input: case.input.map(str::to_string),
+        input: match case.input {
+            None => InputChoice::Command,
+            Some("none") => InputChoice::None,
+            Some(c) => InputChoice::Column(c.to_string()),
+        },
+        input_range: case.input_range,
         outputs: case.outputs.iter().map(|s| s.to_string()).collect(),
         fs_hz: case.fs,
         columns: case

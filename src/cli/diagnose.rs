@@ -24,7 +24,8 @@ pub struct Args {
     /// Write a Markdown page with SVG plots into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Input column (default: the throttle column; none: steps are found from the response).
+    /// Input column (default: the command column, throttle/ESC signal/pwm; `none`: no input,
+    /// steps are found from the response).
     #[arg(long)]
     pub input: Option<String>,
     /// Output column (default: thrust).
@@ -39,6 +40,13 @@ pub struct Args {
     /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
     #[arg(long, value_delimiter = ',')]
     pub esc_us: Option<Vec<f64>>,
+    /// Raw command values at throttle 0 and 1, `MIN,MAX` (default: from the header's unit or
+    /// the values, e.g. 0..1, 0..100 %, 0..2047 DShot/raw ESC).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub input_range: Option<Vec<f64>>,
+    /// Motor magnet poles, for a speed column in eRPM.
+    #[arg(long)]
+    pub poles: Option<u32>,
     /// Share of the samples (from the start) used for estimation, 0.3..0.9.
     #[arg(long, default_value_t = 0.7)]
     pub estimation_fraction: f64,
@@ -190,6 +198,8 @@ pub fn load(args: &Args) -> Result<Signals, CliError> {
         fs_hz: args.fs,
         columns: args.columns.as_deref(),
         esc_us: args.esc_us.as_deref(),
+        input_range: args.input_range.as_deref(),
+        poles: args.poles,
     };
     signals(&shared::load(&args.file, &req)?)
 }
@@ -287,11 +297,13 @@ mod tests {
             file,
             json: true,
             report: None,
-            input: None,
+            input: Some("none".into()),
             output: None,
             fs: None,
             columns: None,
             esc_us: None,
+            input_range: None,
+            poles: None,
             estimation_fraction: 0.7,
         };
         let e = load(&args).unwrap_err();

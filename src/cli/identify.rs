@@ -50,7 +50,8 @@ pub struct Args {
     /// Write the stabilization diagram (stabilization.svg) and identify.md into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Input column (default: the throttle column; none: steps are found from the response).
+    /// Input column (default: the command column, throttle/ESC signal/pwm; `none`: no input,
+    /// steps are found from the response).
     #[arg(long)]
     pub input: Option<String>,
     /// Output column, repeatable (default: thrust).
@@ -71,6 +72,13 @@ pub struct Args {
     /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
     #[arg(long, value_delimiter = ',')]
     pub esc_us: Option<Vec<f64>>,
+    /// Raw command values at throttle 0 and 1, `MIN,MAX` (default: from the header's unit or
+    /// the values, e.g. 0..1, 0..100 %, 0..2047 DShot/raw ESC).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub input_range: Option<Vec<f64>>,
+    /// Motor magnet poles, for a speed column in eRPM.
+    #[arg(long)]
+    pub poles: Option<u32>,
 }
 
 fn parse_svd(s: &str) -> Result<SvdChoice, String> {

@@ -1,22 +1,25 @@
 //! FILE → a [`Record`] holding the channels a subcommand asked for: the one file loader of
 //! `propid identify` and `propid diagnose`.
 //!
-//! The format is detected from the bytes ([`detect`]): a binary TSP/1 recording goes through
-//! [`read_record_with`] (channels by canonical name, device events kept), everything else through
-//! the CSV reader [`read_csv`] (TSP/1 CSV §6, exported stand logs: aliases, units, BOM, files
-//! without a header or a time column; see [`crate::ingest::csv_file`]). Errors are the same for
-//! both subcommands: an unreadable file is an I/O error (exit 7), an empty or bad file, an absent
-//! channel or column an input error (exit 3), a malformed `--esc-us` a usage error (exit 2).
+//! The format is detected from the bytes ([`detect`]): a binary TSP/1 recording, or a TSP/1
+//! CSV stream, goes through [`read_record_with`] (channels by canonical name, device events
+//! kept), everything else through the CSV reader [`read_csv`] (exported stand logs: aliases,
+//! units, the command's scale decided and stated, empty cells per channel, BOM, files without a
+//! time column; a file without a header needs `--columns`; see [`crate::ingest::csv_file`]).
+//! The input is the command column (throttle) unless `--input NAME` names another, or
+//! `--input none` ([`NO_INPUT`]) asks for none. Errors are the same for both subcommands: an
+//! unreadable file is an I/O error (exit 7), an empty or bad file, an absent channel or column,
+//! a command whose scale cannot be decided an input error (exit 3), a malformed `--esc-us`,
+//! `--input-range` or `--poles` a usage error (exit 2).
 //!
 //! What a subcommand does with the channels afterwards (identify: the missing mask and the JSON
 //! `"source"`; diagnose: gap-filled signals) is its own step after [`load`]; finding the input
-//! from the response's steps, for a CSV file without an input column, is the shared step
-//! [`steps_from_response`].
+//! from the response's steps, with `--input none`, is the shared step [`steps_from_response`].
 
 use std::path::Path;
 
 use super::{CliError, UsageError};
-use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource};
+use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
 use crate::ingest::steps::{find_steps, StepFinding};
 use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
 use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
@@ -81,7 +84,8 @@ pub enum LoadError {
 /// What to read from a file (the options `identify` and `diagnose` share).
 #[derive(Debug, Clone, Default)]
 pub struct Request<'a> {
-    /// Input column or channel; `None` = the throttle (a CSV file without one: no input).
+    /// Input column or channel; `None` = the command (throttle) column, which a CSV file must
+    /// then have; [`NO_INPUT`] (`--input none`) = no input, steps are found in the response.
     pub input: Option<&'a str>,
     /// Output columns or channels; empty = the thrust (by quantity in a CSV file).
     pub outputs: &'a [String],
@@ -95,7 +99,14 @@ pub struct Request<'a> {
     pub columns: Option<&'a [String]>,
     /// ESC pulse range for throttle columns, µs (`--esc-us MIN,MAX`, CSV files only).
     pub esc_us: Option<&'a [f64]>,
+    /// Raw command values at throttle 0 and 1 (`--input-range MIN,MAX`, CSV files only).
+    pub input_range: Option<&'a [f64]>,
+    /// Motor pole count, for a speed in eRPM (`--poles N`, CSV files only).
+    pub poles: Option<u32>,
 }
+
+/// The `--input` value that asks for no input column: the steps are found in the response.
+pub const NO_INPUT: &str = "none";
 
 /// The format a file was read as, with what its reader reports.
 #[derive(Debug, Clone)]
@@ -200,7 +211,10 @@ fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
             .into()),
         }
     };
-    let input = present(req.input.unwrap_or(names::THROTTLE))?;
+    let input = match req.input {
+        Some(NO_INPUT) => None,
+        other => Some(present(other.unwrap_or(names::THROTTLE))?),
+    };
     let outputs = if req.outputs.is_empty() {
         vec![present(names::THRUST)?]
     } else {
@@ -218,74 +232,48 @@ fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
         name,
         record,
         origin: Origin::Tsp1(Box::new(stats)),
-        input: Some(input),
+        input,
         outputs,
         optional,
     })
 }
 
-/// A CSV file: the columns asked for (with the optional one when the file has it).
+/// A CSV file: the columns asked for, with the optional ones the file has.
 fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, CliError> {
     let text = String::from_utf8_lossy(bytes);
-    let esc_us = match req.esc_us {
-        Some([lo, hi]) => Some((*lo, *hi)),
-        Some(_) => return Err(UsageError::EscUs.into()),
-        None => None,
+    let pair = |v: Option<&[f64]>, bad: UsageError| match v {
+        Some(&[lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Ok(Some((lo, hi))),
+        Some(_) => Err(bad),
+        None => Ok(None),
     };
-    let read = |outputs: Vec<String>| {
-        read_csv(
-            &text,
-            &CsvFileOptions {
-                input: req.input.map(str::to_string),
-                outputs,
-                fs_hz: req.fs_hz,
-                columns: req.columns.map(<[String]>::to_vec),
-                esc_us,
-                motor_poles: None,
-            },
-        )
-    };
-    let mut base = req.outputs.to_vec();
-    if base.is_empty() && !req.optional.is_empty() {
-        base.push(names::THRUST.into());
-    }
-    // Each optional channel is tried on top of those found so far; the last read that worked
-    // holds them all.
-    let mut found: Vec<&str> = Vec::new();
-    let mut with_optional = None;
-    for extra in req.optional {
-        if base.iter().any(|o| o == extra) {
-            continue;
-        }
-        let mut outputs = base.clone();
-        outputs.extend(found.iter().map(|s| s.to_string()));
-        outputs.push(extra.to_string());
-        if let Ok(f) = read(outputs) {
-            found.push(extra);
-            with_optional = Some(f);
-        }
-    }
-    let (file, optional) = match with_optional {
-        Some(mut f) => {
-            // The optional channels are read, not identified: `source.outputs` lists the
-            // outputs alone.
-            let extra = f.outputs.split_off(f.outputs.len() - found.len());
-            let n = f.source.outputs.len().saturating_sub(found.len());
-            f.source.outputs.truncate(n);
-            (f, extra)
-        }
-        None => match read(req.outputs.to_vec()) {
-            Ok(f) => (f, Vec::new()),
-            Err(source) => return Err(LoadError::Csv { file: name, source }.into()),
+    let opts = CsvFileOptions {
+        input: match req.input {
+            None => InputChoice::Command,
+            Some(NO_INPUT) => InputChoice::None,
+            Some(column) => InputChoice::Column(column.to_string()),
+        },
+        outputs: req.outputs.to_vec(),
+        optional: req.optional.iter().map(|s| s.to_string()).collect(),
+        fs_hz: req.fs_hz,
+        columns: req.columns.map(<[String]>::to_vec),
+        esc_us: pair(req.esc_us, UsageError::EscUs)?,
+        input_range: pair(req.input_range, UsageError::InputRange)?,
+        motor_poles: match req.poles {
+            Some(p) if p == 0 || p % 2 == 1 => return Err(UsageError::Poles(p).into()),
+            p => p,
         },
     };
+    let file = read_csv(&text, &opts).map_err(|source| LoadError::Csv {
+        file: name.clone(),
+        source,
+    })?;
     Ok(LoadedFile {
         name,
         record: file.record,
         origin: Origin::Csv(Box::new(file.source)),
         input: file.input,
         outputs: file.outputs,
-        optional,
+        optional: file.optional,
     })
 }
 

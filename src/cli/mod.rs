@@ -131,9 +131,15 @@ pub enum UsageError {
     /// `--record-max-bytes` neither 0 nor in range.
     #[error("--record-max-bytes {0}: 0 (no limit) or 65536..=1125899906842624 bytes")]
     RecordMaxBytes(u64),
-    /// `--esc-us` without exactly two values.
+    /// `--esc-us` without exactly two finite values, `MIN < MAX`.
     #[error("--esc-us takes MIN,MAX")]
     EscUs,
+    /// `--input-range` without exactly two finite values, `MIN < MAX`.
+    #[error("--input-range takes MIN,MAX (the raw command values at throttle 0 and 1)")]
+    InputRange,
+    /// `--poles` zero or odd.
+    #[error("--poles {0}: a motor has an even number of magnet poles > 0")]
+    Poles(u32),
 }
 
 impl CliError {

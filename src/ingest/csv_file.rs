@@ -1,5 +1,5 @@
-//! CSV files into a [`Record`]: TSP/1 CSV (PROTOCOL.md §6), exported logs of commercial stands,
-//! benchmark archives.
+//! CSV files into a [`Record`]: exported logs of commercial stands, hobby benches, benchmark
+//! archives, TSP/1 CSV (PROTOCOL.md §6) with a header.
 //!
 //! Lines, checksums, comments, separators and fields follow the one CSV dialect of the project
 //! ([`protocol::csv::line`](propid_wire::protocol::csv::line): comments `#…`, optional `*HH`
@@ -8,45 +8,86 @@
 //! 400-character headers), trailing empty columns, and columns the alias table does not know
 //! (kept under their own names so that `--input`/`--output` can pick them). Known names are
 //! mapped and converted by [`protocol::csv::columns`](propid_wire::protocol::csv::columns) (the
-//! one alias, unit and name table of the project).
+//! one alias, unit and name table of the project): thrust in N, gf, kgf, lbf, ozf; torque in
+//! N·m, N·mm, ozf·in; speed in RPM, rad/s, Hz or eRPM (with the pole count); voltage and
+//! current; every channel is converted to the record's canonical units, and the column, unit and
+//! factor used are reported per channel ([`CsvSource::units`]).
 //!
-//! A file without a header follows §6 (`t_us,throttle,thrust_N,…`) unless the caller names the
-//! columns. Bad rows are counted, never fatal: a wrong checksum, text in a column that is used,
-//! a row with too few fields. An empty file, a file without data rows, or a requested column
-//! that is absent is an error naming what is missing and what is there.
+//! **The command.** A command column (`throttle`, `ESC signal`, `pwm`, `cmd`, in µs, %, 0..1,
+//! DShot or without a unit) is the input whenever the file has one; without one the caller must
+//! say `--input NAME`, or `--input none` ([`InputChoice::None`]) to have the steps found in the
+//! response. Its full scale is decided from the options, the header and the values, and stated
+//! ([`command_range`]); a scale that cannot be decided is an error naming the option to give.
+//!
+//! **Empty cells.** An empty cell is a missing value of its channel only: the other channels of
+//! the row stay. Each channel is carried onto the time base from its own samples at its own rate
+//! ([`super::resample`]: interpolation between its own samples, gaps wider than one and a half
+//! of its own periods left NaN); the record's `missing` marks the samples where the input or an
+//! output has no value, the channels read beside them ([`CsvFileOptions::optional`]) keep their
+//! own NaNs.
+//!
+//! **Header.** A file without a header is refused unless the caller names its columns
+//! (`--columns`): a column order is never guessed (§6's header-less order is a property of a
+//! TSP/1 CSV *stream*, read by [`crate::ingest::tsp`]). Bad rows are counted, never fatal: a
+//! wrong checksum, text in the time, input or an output column, a row with too few fields. An
+//! empty file, a file without data rows, or a requested column that is absent is an error naming
+//! what is missing and what is there.
 //!
 //! Time: a time column (`t_us`, `t_ms`, `t_s`, `Time (s)`, `t`, `time`) is resampled onto a
 //! uniform grid when irregular ([`super::resample`]); `fs` overrides its rate; without a time
 //! column `fs` is required.
 
+use std::collections::BTreeMap;
+
 use serde::Serialize;
 
 mod columns;
+pub mod command_range;
+mod convert;
 
-use super::resample::{to_uniform, Jitter, ResampleError};
+use super::resample::{to_uniform, Carried, Jitter, ResampleError};
 use columns::{channel, header_columns, Column, Picks};
-use propid_wire::protocol::csv::columns::{self as csv_columns, ConvOptions};
+pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
+use convert::{convert, Converted};
+use propid_wire::protocol::csv::columns::Scale;
 use propid_wire::protocol::csv::line::{
     classify_str, fields, is_numeric, separator, text_lines, LineKind,
 };
 use propid_wire::record::{Channel, Record};
 
 /// Default ESC pulse range for throttle columns in µs, when none is given.
-pub const DEFAULT_ESC_US: (f64, f64) = (1000.0, 2000.0);
+pub const DEFAULT_ESC_US: (f64, f64) = (Scale::ESC_US.raw_min, Scale::ESC_US.raw_max);
+
+/// Which column is the input.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub enum InputChoice {
+    /// The file's command column; a file without one is an error ([`CsvFileError::NoCommand`]).
+    #[default]
+    Command,
+    /// This column (source name or canonical name).
+    Column(String),
+    /// No input: the caller finds steps in the response (`--input none`).
+    None,
+}
 
 /// What the caller wants from the file.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct CsvFileOptions {
-    /// Input column (source name or canonical name); `None` = the throttle column if any.
-    pub input: Option<String>,
+    /// The input column.
+    pub input: InputChoice,
     /// Output columns; empty = the thrust column.
     pub outputs: Vec<String>,
+    /// Columns read too when the file has them (not outputs: their empty cells do not mark
+    /// samples missing), skipped when absent or not convertible.
+    pub optional: Vec<String>,
     /// Sample rate, Hz: required without a time column, overrides it otherwise.
     pub fs_hz: Option<f64>,
-    /// Names for a file without a header (otherwise §6's default order).
+    /// Names for a file without a header (required for one).
     pub columns: Option<Vec<String>>,
-    /// ESC pulse range for throttle in µs; `None` = [`DEFAULT_ESC_US`].
+    /// ESC pulse range of a command in µs (`--esc-us`).
     pub esc_us: Option<(f64, f64)>,
+    /// Raw command values at throttle 0 and 1 (`--input-range`).
+    pub input_range: Option<(f64, f64)>,
     /// Motor pole count (for electrical rpm).
     pub motor_poles: Option<u32>,
 }
@@ -57,6 +98,16 @@ pub enum CsvFileError {
     /// Nothing but comments or blank lines.
     #[error("the file holds no data rows")]
     Empty,
+    /// The first data line is numbers, not names, and no names were given.
+    #[error(
+        "the file has no header line (its first line is numbers): name its {fields} columns \
+         with --columns NAME,NAME,... (e.g. --columns t_s,throttle,thrust_N); no column order \
+         is guessed"
+    )]
+    NoHeader {
+        /// Fields of the first line.
+        fields: usize,
+    },
     /// A requested (or the default) column is absent.
     #[error("no {what} column {wanted}; columns in the file: {available}")]
     MissingColumn {
@@ -64,6 +115,16 @@ pub enum CsvFileError {
         what: &'static str,
         /// The name asked for (or the default's description).
         wanted: String,
+        /// The columns present.
+        available: String,
+    },
+    /// No command column and no `--input`.
+    #[error(
+        "no command column (throttle, ESC signal, pwm, cmd, in µs, %, 0..1 or raw); columns in \
+         the file: {available}: give --input NAME, or --input none to find the steps in the \
+         response"
+    )]
+    NoCommand {
         /// The columns present.
         available: String,
     },
@@ -84,6 +145,14 @@ pub enum CsvFileError {
         /// What is missing.
         reason: String,
     },
+    /// The command's full scale cannot be decided.
+    #[error("command column {column}: {source}")]
+    CommandRange {
+        /// The column.
+        column: String,
+        /// Why.
+        source: RangeError,
+    },
 }
 
 /// Rows that were not used, by cause.
@@ -91,7 +160,7 @@ pub enum CsvFileError {
 pub struct SkippedRows {
     /// Wrong `*HH` checksum.
     pub bad_checksum: usize,
-    /// Text where a number was needed (in a column that is used).
+    /// Text where a number was needed (in the time, input or an output column).
     pub not_a_number: usize,
     /// Fewer fields than the columns used need.
     pub short_row: usize,
@@ -102,6 +171,24 @@ impl SkippedRows {
     pub fn total(&self) -> usize {
         self.bad_checksum + self.not_a_number + self.short_row
     }
+}
+
+/// The unit of one column as read: `canonical = (raw − zero) · factor`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ColumnUnit {
+    /// The column as named in the file.
+    pub column: String,
+    /// Its unit (`gf`, `N·mm`, `µs`, `raw ESC`, ...; `?` for a column the table does not know).
+    pub unit: String,
+    /// Canonical units per raw unit.
+    pub factor: f64,
+    /// The raw value that maps to 0 (a command's `raw_min`; omitted when 0).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub zero: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// Where the data came from and what was done to it (published beside the model).
@@ -127,19 +214,55 @@ pub struct CsvSource {
     pub comments: usize,
     /// True when the file had a header line.
     pub header: bool,
+    /// How each channel read was carried onto the time base, by its key (`thrust`, ...): own
+    /// samples, own period, samples bridged across empty cells, samples left NaN.
+    pub channels: BTreeMap<String, Carried>,
+    /// Column, unit and factor of each channel read, by its key (`time`, `throttle`,
+    /// `thrust`, `torque`, `rpm`, `voltage`, `current`, or the column's own name); identify
+    /// publishes it as `source.units`.
+    #[serde(skip)]
+    pub units: BTreeMap<String, ColumnUnit>,
+    /// The command's scale (raw values at throttle 0 and 1) and where it came from; identify
+    /// publishes it as `source.input_range` and `source.input_range_from`.
+    #[serde(skip)]
+    pub input_range: Option<CommandRange>,
+    /// Columns asked for beside the outputs that the file has but that could not be converted
+    /// (an eRPM without `--poles`), with why: left out, said.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unread: Vec<Unread>,
+}
+
+/// A column left out, and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Unread {
+    /// The column as named in the file.
+    pub column: String,
+    /// Why it could not be read.
+    pub reason: String,
 }
 
 /// A file read into a record.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CsvFile {
-    /// Channels: the input first (when there is one), then the outputs.
+    /// Channels: the input first (when there is one), then the outputs, then the optional ones.
     pub record: Record,
     /// Canonical name of the input channel in the record, if any.
     pub input: Option<String>,
     /// Canonical names of the output channels in the record.
     pub outputs: Vec<String>,
+    /// Canonical names of the optional channels the file has, in the order asked for.
+    pub optional: Vec<String>,
     /// The report.
     pub source: CsvSource,
+}
+
+/// The raw values of the columns used, one vector per column (NaN = empty cell).
+struct Parsed {
+    values: Vec<Vec<f64>>,
+    rows: usize,
+    skipped: SkippedRows,
+    comments: usize,
+    header: bool,
 }
 
 /// Reads CSV text (the whole file) into a record.
@@ -160,7 +283,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     };
     let sep = separator(first);
     let header = !is_numeric(first, sep);
-    let mut columns = header_columns(&lines, sep, header, opts);
+    let mut columns = header_columns(&lines, sep, header, opts)?;
     // A header ending in a separator (benchmark files) has an empty, unnamed last column.
     if columns.last().is_some_and(|c| c.name.is_empty()) {
         columns.pop();
@@ -170,95 +293,66 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         return Err(CsvFileError::Empty);
     }
     let picks = Picks::choose(&columns, opts)?;
-    let conv = ConvOptions {
-        esc_min_us: Some(opts.esc_us.unwrap_or(DEFAULT_ESC_US).0),
-        esc_max_us: Some(opts.esc_us.unwrap_or(DEFAULT_ESC_US).1),
-        motor_poles: opts.motor_poles,
-    };
     let used = picks.all();
-    let maps: Vec<csv_columns::Affine> = used
-        .iter()
-        .map(|&i| match columns[i].spec {
-            Some(spec) => spec
-                .conversion(&conv)
-                .map_err(|e| CsvFileError::Conversion {
-                    column: columns[i].name.clone(),
-                    reason: e.to_string(),
-                }),
-            None => Ok(csv_columns::Affine {
-                zero: 0.0,
-                mul: 1.0,
-                div: 1.0,
-            }),
-        })
-        .collect::<Result<_, _>>()?;
+    let required = used.len() - picks.optional.len();
     let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(data.len()); used.len()];
     let mut row = Vec::new();
-    for line in data {
+    'rows: for line in data {
         row.clear();
         row.extend(fields(line, sep));
-        if used.iter().any(|&i| i >= row.len()) {
+        if used[..required].iter().any(|&i| i >= row.len()) {
             skipped.short_row += 1;
             continue;
         }
-        let parsed: Option<Vec<f64>> = used
-            .iter()
-            .zip(&maps)
-            .map(|(&i, m)| parse_field(row[i]).map(|v| m.apply(v)))
-            .collect();
-        match parsed {
-            Some(row) => values.iter_mut().zip(row).for_each(|(c, v)| c.push(v)),
-            None => skipped.not_a_number += 1,
+        let mut parsed = Vec::with_capacity(used.len());
+        for (n, &i) in used.iter().enumerate() {
+            match (parse_field(row.get(i).copied().unwrap_or("")), n < required) {
+                (Some(v), _) => parsed.push(v),
+                (None, true) => {
+                    skipped.not_a_number += 1;
+                    continue 'rows;
+                }
+                // Text in a channel only read beside the others: that channel's value is missing.
+                (None, false) => parsed.push(f64::NAN),
+            }
         }
+        values.iter_mut().zip(parsed).for_each(|(c, v)| c.push(v));
     }
     let rows = values[0].len();
     if rows < 2 {
         return Err(CsvFileError::TooFewRows(rows));
     }
-    let table = Table {
-        columns,
-        picks,
+    let parsed = Parsed {
         values,
-        header,
         rows,
         skipped,
         comments,
+        header,
     };
-    build(table, opts)
+    build(&columns, picks, parsed, opts)
 }
 
-/// What the text held, before the time base: the columns, the ones picked, and what was read.
-struct Table {
-    /// Every column of the file (named by the header, the caller or §6's order).
-    columns: Vec<Column>,
-    /// The time, input and output columns used.
-    picks: Picks,
-    /// The picked columns' converted values, in [`Picks::all`] order: time, input, outputs.
-    values: Vec<Vec<f64>>,
-    /// True when the file had a header line.
-    header: bool,
-    /// Data rows read.
-    rows: usize,
-    /// Rows skipped, by cause.
-    skipped: SkippedRows,
-    /// Comment lines.
-    comments: usize,
-}
-
-/// The record from the table: time base (resampled, or `fs`), missing samples, channels, and
-/// the source report.
-fn build(table: Table, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
-    let Table {
-        columns,
-        picks,
+/// Converts the parsed columns, carries them onto the time base and puts the record together.
+fn build(
+    columns: &[Column],
+    mut picks: Picks,
+    parsed: Parsed,
+    opts: &CsvFileOptions,
+) -> Result<CsvFile, CsvFileError> {
+    let Parsed {
         mut values,
-        header,
         rows,
         skipped,
         comments,
-    } = table;
+        header,
+    } = parsed;
+    let Converted {
+        units,
+        input_range,
+        unread,
+    } = convert(columns, &mut picks, &mut values, opts)?;
     let time_vals = picks.time.map(|_| values.remove(0));
-    let (t0_s, dt_s, missing, jitter, rate_from) = match time_vals {
+    let (t0_s, dt_s, jitter, rate_from, carried) = match time_vals {
         Some(t) => {
             let u = to_uniform(&t, &values, opts.fs_hz)?;
             values = u.channels;
@@ -267,41 +361,48 @@ fn build(table: Table, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
             } else {
                 "time column"
             };
-            (u.t0_s, u.jitter.dt_s, u.missing, Some(u.jitter), from)
+            (u.t0_s, u.jitter.dt_s, Some(u.jitter), from, u.carried)
         }
         None => {
             let fs = opts.fs_hz.ok_or(CsvFileError::NeedRate)?;
             if !(fs.is_finite() && fs > 0.0) {
                 return Err(ResampleError::BadRate(fs).into());
             }
-            (0.0, 1.0 / fs, vec![false; rows], None, "--fs")
+            // Rows at the given rate are the grid; each channel is carried at its own rate.
+            let t: Vec<f64> = (0..rows).map(|k| k as f64 / fs).collect();
+            let u = to_uniform(&t, &values, Some(fs))?;
+            values = u.channels;
+            (0.0, 1.0 / fs, None, "--fs", u.carried)
         }
     };
-    // An empty field (not measured) is NaN: mark the sample missing, as the record requires.
-    let mut missing = missing;
-    for ch in &values {
+    // The samples where the input or an output has no value are missing; the optional channels
+    // keep their own NaNs.
+    let identified = values.len() - picks.optional.len();
+    let mut missing = vec![false; values.first().map_or(0, Vec::len)];
+    for ch in &values[..identified] {
         for (m, v) in missing.iter_mut().zip(ch) {
             *m |= !v.is_finite();
         }
     }
-    for ch in &mut values {
-        for (v, m) in ch.iter_mut().zip(&missing) {
-            if *m {
-                *v = f64::NAN;
-            }
-        }
-    }
-    let chosen: Vec<usize> = picks.input.iter().chain(&picks.outputs).copied().collect();
+    let chosen: Vec<usize> = picks.channels().copied().collect();
     let channels: Vec<Channel> = chosen
         .iter()
         .zip(values)
         .map(|(&i, data)| channel(&columns[i], data))
         .collect();
-    let input = picks.input.map(|_| channels[0].name.clone());
-    let outputs = channels[usize::from(picks.input.is_some())..]
+    let key = |i: usize| columns::key(&columns[i]);
+    let channels_report = chosen
         .iter()
-        .map(|c| c.name.clone())
+        .zip(carried)
+        .map(|(&i, c)| (key(i), c))
         .collect();
+    let n_in = usize::from(picks.input.is_some());
+    let names = |range: std::ops::Range<usize>| -> Vec<String> {
+        channels[range].iter().map(|c| c.name.clone()).collect()
+    };
+    let input = picks.input.map(|_| channels[0].name.clone());
+    let outputs = names(n_in..n_in + picks.outputs.len());
+    let optional = names(n_in + picks.outputs.len()..channels.len());
     let source = CsvSource {
         input: picks.input.map(|i| columns[i].name.clone()),
         outputs: picks
@@ -317,6 +418,10 @@ fn build(table: Table, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
         skipped,
         comments,
         header,
+        channels: channels_report,
+        units,
+        input_range,
+        unread,
     };
     Ok(CsvFile {
         record: Record {
@@ -328,6 +433,7 @@ fn build(table: Table, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
         },
         input,
         outputs,
+        optional,
         source,
     })
 }

@@ -1,24 +1,43 @@
-//! Irregular timestamps onto a uniform grid, with the jitter measured and reported.
+//! Irregular timestamps onto a uniform grid, each channel at its own rate, with the jitter
+//! measured and reported.
 //!
 //! Logged timestamps from hobby firmware and PC-side stand software are rarely uniform: host
 //! arrival times come in USB bursts (three rows 1 ms apart, then a 40 ms pause), exporters write
-//! duplicate times, and rows go missing. The identification core needs `t_k = t_0 + k·dt`.
+//! duplicate times, and rows go missing. Stand software also writes a row whenever *any* sensor
+//! reports, leaving the cells of the sensors that did not report empty (an RCbenchmark/Tyto
+//! export with a slow load cell: thrust on one row in four). The identification core needs
+//! `t_k = t_0 + k·dt` for every channel.
 //!
 //! Method (documented because results depend on it):
 //! 1. Rows whose time is not strictly after the previous kept row (duplicates, steps back) are
 //!    dropped and counted ([`Jitter::non_increasing`]).
 //! 2. The grid period is `1/fs` when the rate is given, otherwise the **median** spacing of the
 //!    kept rows (robust to bursts and gaps).
-//! 3. If every spacing is within 10 % of that period (`max |Δt_i − dt| ≤ 0.1 dt`), the rows are
-//!    taken as they are ([`Jitter::resampled`] = false): re-interpolating near-uniform data would
-//!    only low-pass it.
-//! 4. Otherwise each grid point `t_0 + k·dt` takes the **linear interpolation** between the two
-//!    rows around it. Linear interpolation is a two-tap FIR whose gain at frequency `f` is
-//!    between 1 and `sinc²(f·Δ)` for the local row spacing `Δ`; for the slow dynamics of a motor
-//!    (a few Hz at 50 Hz logging) this is a small, bounded attenuation, and unlike a higher-order
-//!    interpolant it never overshoots at a step.
-//! 5. A grid point with no row within `1.5·dt` on *both* sides of the interval that holds it
-//!    (a logging gap) is not bridged: it is marked missing and set to NaN.
+//! 3. If every spacing is within 10 % of that period (`max |Δt_i − dt| ≤ 0.1 dt`), the grid is
+//!    the rows as they are ([`Jitter::resampled`] = false): re-interpolating near-uniform data
+//!    would only low-pass it. Otherwise the grid is `t_0 + k·dt` ([`Jitter::resampled`]).
+//! 4. Each channel is carried onto the grid **from its own samples** (the rows where its cell
+//!    holds a number; an empty cell is a missing value of that channel only): a grid point on
+//!    one of its own samples takes it; any other takes the **linear interpolation** between the
+//!    two own samples around it. Linear interpolation is a two-tap FIR whose gain at frequency
+//!    `f` is between 1 and `sinc²(f·Δ)` for the local sample spacing `Δ`; for the slow dynamics
+//!    of a motor (a few Hz at 50 Hz logging) this is a small, bounded attenuation, and unlike a
+//!    higher-order interpolant it never overshoots at a step.
+//! 5. A channel's **own rate** bounds what is bridged: its own period `dt_c` is the median
+//!    spacing of its own samples; a grid point whose two own samples are more than
+//!    `1.5·max(dt, dt_c)` apart, and which lies more than `0.75·dt` from both, is in a gap of
+//!    that channel (a dropped reading, a logging pause): it is not bridged but left NaN, and the
+//!    reader marks it missing when the channel is one it identifies. A channel whose every cell is
+//!    filled has `dt_c = dt` and follows the rows exactly as before; grid points before a
+//!    channel's first or after its last own sample are NaN (nothing is extrapolated).
+//!
+//! Why interpolation rather than holding the last value: a held value is as old as the
+//! channel's period, so a slow channel held onto a fast grid lags by half its period on average
+//! and by a whole one just after each change — a bias in dead time and phase that looks like
+//! dynamics. Interpolation between a channel's own samples has no lag at the instants it
+//! measured and invents no level it did not measure (every value lies between two measured
+//! ones). The grid points it fills across empty cells are counted per channel
+//! ([`Carried::bridged`]) so that a reader can report how much of a channel was carried.
 //!
 //! The jitter (median, 5th and 95th percentile and largest spacing, RMS deviation from the grid
 //! period) is reported so that the user can judge the timing of the source.
@@ -76,22 +95,38 @@ pub enum ResampleError {
 /// channel of f64).
 pub const MAX_GRID_POINTS: usize = 1 << 24;
 
-/// Uniformly sampled channels and the missing mask that came out of [`to_uniform`].
+/// Uniformly sampled channels, the rows' gaps and how each channel was carried, as
+/// [`to_uniform`] made them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Uniform {
     /// Time of the first grid point, seconds.
     pub t0_s: f64,
-    /// One vector per input channel, on the grid.
+    /// One vector per input channel, on the grid; NaN where that channel has no value.
     pub channels: Vec<Vec<f64>>,
-    /// Grid points with no data.
+    /// Grid points in a gap of the rows themselves (no row near: a logging pause).
     pub missing: Vec<bool>,
+    /// How each channel was carried onto the grid, in the order of `channels`.
+    pub carried: Vec<Carried>,
     /// The timing report.
     pub jitter: Jitter,
 }
 
-/// Puts `channels` (one value per row, rows at times `t`) onto a uniform grid; `fs_hz` forces the
-/// rate. Rows with a non-finite time are dropped like non-increasing ones. A NaN in a channel
-/// stays NaN where it is used. See the module docs for the method.
+/// How one channel was carried onto the grid (module documentation, steps 4 and 5).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct Carried {
+    /// Its own samples: kept rows whose cell holds a number.
+    pub values: usize,
+    /// Its own period (median spacing of its own samples), s; `None` with fewer than two.
+    pub own_dt_s: Option<f64>,
+    /// Grid points filled by interpolation across cells left empty.
+    pub bridged: usize,
+    /// Grid points left NaN (in a gap of this channel, or outside its first and last sample).
+    pub missing: usize,
+}
+
+/// Puts `channels` (one value per row, rows at times `t`; NaN = an empty cell) onto a uniform
+/// grid, each channel from its own samples; `fs_hz` forces the rate. Rows with a non-finite time
+/// are dropped like non-increasing ones. See the module docs for the method.
 pub fn to_uniform(
     t: &[f64],
     channels: &[Vec<f64>],
@@ -123,55 +158,139 @@ pub fn to_uniform(
         resampled: false,
         gap_samples: 0,
     };
-    let rows = |c: &Vec<f64>| keep.iter().map(|&i| c[i]).collect::<Vec<f64>>();
-    if max_dev <= 0.1 * dt {
-        return Ok(Uniform {
-            t0_s: times[0],
-            channels: channels.iter().map(rows).collect(),
-            missing: vec![false; times.len()],
-            jitter,
-        });
-    }
-    // Bound the grid before allocating it: a rate far above the logging rate (`--fs 1e300`)
-    // would otherwise overflow the length or exhaust memory.
-    let points = ((times[times.len() - 1] - times[0]) / dt).floor() + 1.0;
-    let limit = MAX_GRID_POINTS;
-    if !(points.is_finite() && points <= limit as f64) {
-        return Err(ResampleError::TooManyPoints {
-            fs_hz: fs_hz.unwrap_or(1.0 / dt),
-            points,
-            limit,
-        });
-    }
-    let kept: Vec<Vec<f64>> = channels.iter().map(rows).collect();
-    let n = points as usize;
-    let mut out = vec![Vec::with_capacity(n); kept.len()];
-    let mut missing = vec![false; n];
-    let mut j = 0;
-    for (k, miss) in missing.iter_mut().enumerate() {
-        let tk = times[0] + k as f64 * dt;
-        while j + 2 < times.len() && times[j + 1] <= tk {
-            j += 1;
-        }
-        let (ta, tb) = (times[j], times[j + 1]);
-        let w = ((tk - ta) / (tb - ta)).clamp(0.0, 1.0);
-        *miss = tb - ta > 1.5 * dt && (tk - ta).min(tb - tk) > 0.75 * dt;
-        for (o, c) in out.iter_mut().zip(&kept) {
-            o.push(if *miss {
-                f64::NAN
-            } else {
-                c[j] + w * (c[j + 1] - c[j])
+    let kept: Vec<Vec<f64>> = channels
+        .iter()
+        .map(|c| keep.iter().map(|&i| c[i]).collect())
+        .collect();
+    let grid = if max_dev <= 0.1 * dt {
+        Grid::Rows
+    } else {
+        // Bound the grid before allocating it: a rate far above the logging rate (`--fs 1e300`)
+        // would otherwise overflow the length or exhaust memory.
+        let points = ((times[times.len() - 1] - times[0]) / dt).floor() + 1.0;
+        let limit = MAX_GRID_POINTS;
+        if !(points.is_finite() && points <= limit as f64) {
+            return Err(ResampleError::TooManyPoints {
+                fs_hz: fs_hz.unwrap_or(1.0 / dt),
+                points,
+                limit,
             });
         }
+        Grid::Uniform(points as usize)
+    };
+    let all_rows: Vec<usize> = (0..times.len()).collect();
+    let (_, missing) = carry(&times, &all_rows, &[], grid, dt);
+    if let Grid::Uniform(_) = grid {
+        jitter.resampled = true;
+        jitter.gap_samples = missing.iter().filter(|m| **m).count();
     }
-    jitter.resampled = true;
-    jitter.gap_samples = missing.iter().filter(|m| **m).count();
+    let mut out = Vec::with_capacity(kept.len());
+    let mut carried = Vec::with_capacity(kept.len());
+    for c in &kept {
+        let own: Vec<usize> = (0..c.len()).filter(|&i| c[i].is_finite()).collect();
+        let (values, lost) = carry(&times, &own, c, grid, dt);
+        carried.push(Carried {
+            values: own.len(),
+            own_dt_s: own_period(&times, &own),
+            bridged: bridged_points(&times, &own, &values, grid, dt),
+            missing: lost.iter().filter(|m| **m).count(),
+        });
+        out.push(values);
+    }
     Ok(Uniform {
         t0_s: times[0],
         channels: out,
         missing,
+        carried,
         jitter,
     })
+}
+
+/// The grid: the kept rows as they are, or `n` points `t_0 + k·dt`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Grid {
+    Rows,
+    Uniform(usize),
+}
+
+impl Grid {
+    fn len(self, rows: usize) -> usize {
+        match self {
+            Grid::Rows => rows,
+            Grid::Uniform(n) => n,
+        }
+    }
+
+    fn time(self, times: &[f64], k: usize, dt: f64) -> f64 {
+        match self {
+            Grid::Rows => times[k],
+            Grid::Uniform(_) => times[0] + k as f64 * dt,
+        }
+    }
+}
+
+/// One channel onto the grid from its own samples `own` (indices into the kept rows `times`,
+/// ascending; values in `c`, or `c` empty for the rows' own gap mask alone): the values and
+/// the grid points in a gap. Steps 4 and 5 of the module documentation; a channel whose every
+/// row is its own gives exactly the rows (on the rows' grid) or their interpolation.
+fn carry(times: &[f64], own: &[usize], c: &[f64], grid: Grid, dt: f64) -> (Vec<f64>, Vec<bool>) {
+    let n = grid.len(times.len());
+    let bound = 1.5 * dt.max(own_period(times, own).unwrap_or(dt));
+    let mut values = Vec::with_capacity(if c.is_empty() { 0 } else { n });
+    let mut gap = vec![true; n];
+    let value = |i: usize| c.get(i).copied().unwrap_or(0.0);
+    // (own[j], own[j + 1]) brackets the grid time, as far as the channel's span allows.
+    let mut j = 0;
+    for (k, in_gap) in gap.iter_mut().enumerate() {
+        let tk = grid.time(times, k, dt);
+        while j + 2 < own.len() && times[own[j + 1]] <= tk {
+            j += 1;
+        }
+        let v = if grid == Grid::Rows && own.binary_search(&k).is_ok() {
+            // On one of its own samples: the sample itself.
+            Some(value(k))
+        } else if own.len() < 2 {
+            None
+        } else {
+            let (a, b) = (own[j], own[j + 1]);
+            let (ta, tb) = (times[a], times[b]);
+            let outside = ta - tk > 1e-9 * dt || tk - tb > 1e-9 * dt;
+            let in_own_gap = tb - ta > bound && (tk - ta).min(tb - tk) > 0.75 * dt;
+            (!outside && !in_own_gap).then(|| {
+                let w = ((tk - ta) / (tb - ta)).clamp(0.0, 1.0);
+                value(a) + w * (value(b) - value(a))
+            })
+        };
+        *in_gap = v.is_none();
+        if !c.is_empty() {
+            values.push(v.unwrap_or(f64::NAN));
+        }
+    }
+    (values, gap)
+}
+
+/// A channel's own period: the median spacing of its own samples (`None` with fewer than two).
+fn own_period(times: &[f64], own: &[usize]) -> Option<f64> {
+    let mut d: Vec<f64> = own.windows(2).map(|w| times[w[1]] - times[w[0]]).collect();
+    (!d.is_empty()).then(|| percentile(&mut d, 0.5))
+}
+
+/// Grid points whose value was interpolated between two own samples with an empty cell
+/// between them.
+fn bridged_points(times: &[f64], own: &[usize], values: &[f64], grid: Grid, dt: f64) -> usize {
+    let mut j = 0;
+    let mut count = 0;
+    for (k, v) in values.iter().enumerate() {
+        let tk = grid.time(times, k, dt);
+        while j + 2 < own.len() && times[own[j + 1]] <= tk {
+            j += 1;
+        }
+        let on_own = grid == Grid::Rows && own.binary_search(&k).is_ok();
+        if v.is_finite() && !on_own && own.len() >= 2 && own[j + 1] - own[j] > 1 {
+            count += 1;
+        }
+    }
+    count
 }
 
 /// Indices of the rows whose time is finite and strictly after the last kept one.
@@ -267,5 +386,85 @@ mod tests {
             to_uniform(&[0.0, 1.0], &[], Some(f64::NAN)),
             Err(ResampleError::BadRate(_))
         ));
+    }
+
+    #[test]
+    fn a_slow_channel_is_interpolated_between_its_own_samples() {
+        // Rows every 10 ms; the load cell reports on one row in four, the command on each.
+        let t: Vec<f64> = (0..41).map(|k| 0.01 * k as f64).collect();
+        let cmd: Vec<f64> = (0..41).map(|k| k as f64).collect();
+        let slow: Vec<f64> = (0..41)
+            .map(|k| if k % 4 == 1 { 2.0 * t[k] } else { f64::NAN })
+            .collect();
+        let u = to_uniform(&t, &[cmd.clone(), slow], None).unwrap();
+        assert!(!u.jitter.resampled);
+        assert_eq!(u.channels[0], cmd, "a full channel is the rows as they are");
+        let y = &u.channels[1];
+        assert!(y[0].is_nan(), "nothing before its first sample");
+        assert!(
+            y[38..].iter().all(|v| v.is_nan()),
+            "nor after its last (row 37)"
+        );
+        for k in 1..=37 {
+            assert!((y[k] - 2.0 * t[k]).abs() < 1e-12, "{k}: {}", y[k]);
+        }
+        let c = u.carried[1];
+        assert_eq!(c.values, 10);
+        assert!((c.own_dt_s.unwrap() - 0.04).abs() < 1e-12);
+        assert_eq!(
+            c.bridged,
+            37 - 1 + 1 - 10,
+            "every row between its own samples"
+        );
+        assert_eq!(c.missing, 1 + 3);
+        assert_eq!(u.carried[0].bridged, 0);
+        assert!(
+            u.missing.iter().all(|m| !m),
+            "the rows themselves have no gap"
+        );
+    }
+
+    #[test]
+    fn a_dropped_reading_of_a_full_rate_channel_stays_missing() {
+        let t: Vec<f64> = (0..20).map(|k| 0.01 * k as f64).collect();
+        let mut y: Vec<f64> = (0..20).map(|k| k as f64).collect();
+        y[7] = f64::NAN;
+        let u = to_uniform(&t, &[y], None).unwrap();
+        let y = &u.channels[0];
+        assert!(y[7].is_nan(), "two own periods apart: a gap, not bridged");
+        assert_eq!((y[6], y[8]), (6.0, 8.0));
+        assert_eq!(u.carried[0].missing, 1);
+        assert_eq!(u.carried[0].bridged, 0);
+    }
+
+    #[test]
+    fn channels_at_different_rates_on_a_resampled_grid() {
+        // Irregular rows (12/20/28 ms); one channel on every row, one on every third.
+        let mut t = Vec::new();
+        for b in 0..40 {
+            for off in [0.0, 0.012, 0.032] {
+                t.push(0.06 * b as f64 + off);
+            }
+        }
+        let full: Vec<f64> = t.iter().map(|ti| 5.0 * ti).collect();
+        let third: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, ti)| if i % 3 == 0 { 1.0 - ti } else { f64::NAN })
+            .collect();
+        let u = to_uniform(&t, &[full, third], Some(50.0)).unwrap();
+        assert!(u.jitter.resampled);
+        for (k, (a, b)) in u.channels[0].iter().zip(&u.channels[1]).enumerate() {
+            let tk = u.t0_s + 0.02 * k as f64;
+            assert!((a - 5.0 * tk).abs() < 1e-9);
+            if tk <= 0.06 * 39.0 + 1e-9 {
+                assert!((b - (1.0 - tk)).abs() < 1e-9, "{k}: {b}");
+            } else {
+                assert!(b.is_nan(), "after its last own sample");
+            }
+        }
+        assert!((u.carried[1].own_dt_s.unwrap() - 0.06).abs() < 1e-9);
+        assert!(u.carried[1].bridged > 0);
+        assert_eq!(u.jitter.gap_samples, 0);
     }
 }

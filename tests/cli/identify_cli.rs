@@ -180,6 +180,8 @@ fn response_only_step_record_finds_the_steps() {
         "t_s,load",
         "--output",
         "load",
+        "--input",
+        "none",
     ]);
     let s = &v["source"];
     assert_eq!(s["input"], "steps found from the response");

@@ -128,6 +128,8 @@ fn krull_step_record_without_command_from_shared_data() {
         "t_s,load_kg",
         "--output",
         "load_kg",
+        "--input",
+        "none",
     ]);
     let s = &v["source"];
     assert_eq!(s["input"], "steps found from the response");

@@ -10,5 +10,6 @@ mod identify_real_data;
 mod identify_sim_recording;
 mod identify_square_hankel;
 mod identify_stabilization;
+mod identify_units;
 mod sim_cli;
 mod walkthrough_cli;

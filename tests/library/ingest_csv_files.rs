@@ -2,7 +2,7 @@
 //! wrong checksum, a missing column, text in a number field, an empty file), each a clear error
 //! or a counted, skipped row.
 
-use propid::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions};
+use propid::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, InputChoice};
 use propid_wire::protocol::csv::checksum;
 
 fn with_checksum(line: &str) -> String {
@@ -139,7 +139,7 @@ fn missing_column_names_what_is_there() {
         other => panic!("{other:?}"),
     }
     let o = CsvFileOptions {
-        input: Some("nope".into()),
+        input: InputChoice::Column("nope".into()),
         outputs: vec!["torque_Nm".into()],
         ..opts()
     };
@@ -167,24 +167,34 @@ fn empty_files_are_errors() {
 }
 
 #[test]
-fn headerless_files_follow_section_6_or_given_names() {
+fn headerless_files_are_refused_unless_their_columns_are_named() {
     let text = "0,1000,1.0\n1000,1000,1.1\n2000,1500,1.2\n";
-    let f = read_csv(text, &opts()).unwrap();
-    assert_eq!(f.record.dt_s, 1e-3);
-    assert!(!f.source.header);
+    let e = read_csv(text, &opts()).unwrap_err();
+    assert_eq!(e, CsvFileError::NoHeader { fields: 3 });
+    assert!(e.to_string().contains("--columns"), "{e}");
     let two = "0.0,0.797\n0.02,0.797\n0.04,0.796\n";
-    let o = CsvFileOptions {
+    let named = CsvFileOptions {
         columns: Some(vec!["t_s".into(), "load_kg".into()]),
         outputs: vec!["load_kg".into()],
         ..opts()
     };
+    // Named, but without a command column: the caller must say there is no input.
+    assert!(matches!(
+        read_csv(two, &named),
+        Err(CsvFileError::NoCommand { .. })
+    ));
+    let o = CsvFileOptions {
+        input: InputChoice::None,
+        ..named
+    };
     let f = read_csv(two, &o).unwrap();
     assert_eq!(f.input, None, "no input column: response only");
     assert_eq!(f.record.channel("load_kg").unwrap().data[2], 0.796);
+    assert!(!f.source.header);
     // Tab separated, quoted names, trailing empty column.
     let tabs = "\"V1\"\t\"V2\"\t\n0.1\t0.2\t\n0.3\t0.4\t\n";
     let o = CsvFileOptions {
-        input: Some("V1".into()),
+        input: InputChoice::Column("V1".into()),
         outputs: vec!["V2".into()],
         fs_hz: Some(610.35),
         ..opts()
@@ -194,11 +204,117 @@ fn headerless_files_follow_section_6_or_given_names() {
 }
 
 #[test]
-fn empty_fields_are_missing_samples() {
-    let text = "t_s,throttle,thrust_N\n0,1000,1\n0.01,1000,\n0.02,1000,3\n";
-    let f = read_csv(text, &opts()).unwrap();
-    assert_eq!(f.record.missing, vec![false, true, false]);
+fn a_dropped_reading_is_missing_in_its_channel_only() {
+    let mut text = String::from("t_s,throttle,thrust_N,voltage_V\n");
+    for k in 0..20 {
+        let thrust = if k == 1 { String::new() } else { k.to_string() };
+        let volt = if k == 2 { "" } else { "12" };
+        text.push_str(&format!("{},0.4,{thrust},{volt}\n", 0.01 * k as f64));
+    }
+    let o = CsvFileOptions {
+        optional: vec!["voltage_V".into()],
+        ..opts()
+    };
+    let f = read_csv(&text, &o).unwrap();
+    assert_eq!(f.record.missing_count(), 1);
+    assert!(f.record.missing[1]);
     assert!(f.record.channel("thrust_N").unwrap().data[1].is_nan());
+    assert_eq!(
+        f.record.channel("throttle").unwrap().data[1],
+        0.4,
+        "the row stays"
+    );
+    let v = &f.record.channel("voltage_V").unwrap().data;
+    assert!(
+        v[2].is_nan(),
+        "a reading beside the outputs keeps its own gap"
+    );
+    assert_eq!(v[3], 12.0);
+    assert!(!f.record.missing[2], "and does not make the sample missing");
+    assert_eq!(f.optional, vec!["voltage_V".to_string()]);
+    assert_eq!(f.source.channels["thrust"].missing, 1);
+}
+
+#[test]
+fn sensors_at_their_own_rates_are_carried_not_dropped() {
+    // A row for every command update (100 Hz); the load cell fills one row in five, the
+    // current one in ten: the record keeps every row, each channel at its own rate.
+    let mut text = String::from("Time (s),ESC signal (µs),Thrust (gf),Current (A)\n");
+    for k in 0..200 {
+        let t = 0.01 * k as f64;
+        let thrust = if k % 5 == 2 {
+            format!("{}", 100.0 + 50.0 * t)
+        } else {
+            String::new()
+        };
+        let amps = if k % 10 == 4 {
+            format!("{}", 2.0 + t)
+        } else {
+            String::new()
+        };
+        text.push_str(&format!("{t},1400,{thrust},{amps}\n"));
+    }
+    let o = CsvFileOptions {
+        optional: vec!["current_A".into()],
+        ..opts()
+    };
+    let f = read_csv(&text, &o).unwrap();
+    assert_eq!(f.record.len(), 200);
+    let y = &f.record.channel("thrust_N").unwrap().data;
+    for (k, v) in y.iter().enumerate().take(198).skip(2) {
+        let t = 0.01 * k as f64;
+        assert!(
+            (v - (100.0 + 50.0 * t) * 9.80665e-3).abs() < 1e-9,
+            "{k}: {v}"
+        );
+    }
+    assert!(y[..2].iter().chain(&y[198..]).all(|v| v.is_nan()));
+    assert_eq!(
+        f.record.missing_count(),
+        4,
+        "only before the first and after the last reading"
+    );
+    let c = &f.source.channels["thrust"];
+    assert_eq!(c.values, 40);
+    assert!((c.own_dt_s.unwrap() - 0.05).abs() < 1e-9);
+    assert_eq!(c.bridged, 196 - 40);
+    let a = &f.record.channel("current_A").unwrap().data;
+    assert!((a[50] - 2.5).abs() < 1e-9, "{}", a[50]);
+    let u = &f.source.units;
+    assert_eq!(u["thrust"].unit, "gf");
+    assert!((u["thrust"].factor - 0.00980665).abs() < 1e-15);
+    assert_eq!(u["throttle"].zero, 1000.0);
+}
+
+#[test]
+fn a_throttle_of_fractions_is_read_as_fractions() {
+    let mut text = String::from("t_s,throttle,thrust_N\n");
+    for k in 0..40 {
+        let u = if k < 20 { 0.40 } else { 0.45 };
+        text.push_str(&format!("{},{u},{}\n", 0.02 * k as f64, 3.0 * u));
+    }
+    let f = read_csv(&text, &opts()).unwrap();
+    assert_eq!(f.record.channel("throttle").unwrap().data[30], 0.45);
+    let r = f.source.input_range.as_ref().unwrap();
+    assert_eq!(
+        (r.raw_min, r.raw_max, r.from.as_str()),
+        (0.0, 1.0, "values: 0..1")
+    );
+    // The same file with a §6 level in 0..10000 is read as one.
+    let text = text.replace(",0.4,", ",4000,").replace(",0.45,", ",4500,");
+    let f = read_csv(&text, &opts()).unwrap();
+    assert_eq!(f.record.channel("throttle").unwrap().data[30], 0.45);
+    // A command whose scale its values cannot decide is refused, naming the options.
+    let text = text.replace(",4000,", ",1000,").replace(",4500,", ",2000,");
+    let e = read_csv(&text, &opts()).unwrap_err();
+    assert!(matches!(e, CsvFileError::CommandRange { .. }), "{e}");
+    assert!(e.to_string().contains("--input-range MIN,MAX"), "{e}");
+    let given = CsvFileOptions {
+        input_range: Some((1000.0, 2000.0)),
+        ..opts()
+    };
+    let f = read_csv(&text, &given).unwrap();
+    assert_eq!(f.record.channel("throttle").unwrap().data[30], 1.0);
 }
 
 /// The real exported log (RCbenchmark/Tyto, no licence: read from ../shared/data only).
@@ -224,4 +340,31 @@ fn real_tyto_export_from_shared_data() {
         j.non_increasing >= 1,
         "the export starts with two rows at t = 0"
     );
+}
+
+#[test]
+fn an_input_range_scales_an_input_the_table_does_not_know() {
+    let text = "t_s,u8,thrust_N\n0,51,1\n0.01,102,2\n0.02,204,3\n";
+    let o = CsvFileOptions {
+        input: InputChoice::Column("u8".into()),
+        ..opts()
+    };
+    let f = read_csv(text, &o).unwrap();
+    assert_eq!(
+        f.record.channel("u8").unwrap().data,
+        vec![51.0, 102.0, 204.0]
+    );
+    assert_eq!(
+        f.source.input_range, None,
+        "read as it is, and no scale claimed"
+    );
+    let o = CsvFileOptions {
+        input_range: Some((0.0, 255.0)),
+        ..o
+    };
+    let f = read_csv(text, &o).unwrap();
+    assert_eq!(f.record.channel("u8").unwrap().data, vec![0.2, 0.4, 0.8]);
+    let r = f.source.input_range.as_ref().unwrap();
+    assert_eq!((r.raw_max, r.from.as_str()), (255.0, "--input-range"));
+    assert_eq!(f.source.units["u8"].unit, "raw");
 }

@@ -6,8 +6,12 @@
 //! - Channel names are canonical (see [`names`]); units are SI except throttle, which is the
 //!   fraction 0..1 (TSP/1 carries 0..10000).
 //! - A sample that was not measured (a gap in `sample_index`, a dropped frame, a row that was
-//!   skipped) is marked in `missing`, and every channel holds `f64::NAN` there. A NaN at a sample
-//!   that is *not* marked missing is bad input, and the core refuses it with a typed error.
+//!   skipped) is marked in `missing`, and every channel holds `f64::NAN` there. A CSV file's
+//!   empty cell is a missing value of its own channel only: there `missing` marks the samples
+//!   where the input or an output a reader was asked for has no value, and a channel read beside
+//!   them (a static map's current, diagnose's voltage) keeps its own NaNs. A NaN in the input or
+//!   an output at a sample that is *not* marked missing is bad input, and the core refuses it
+//!   with a typed error.
 //! - `events` carry device-side facts with exact sample indices (impulse edges, boot segments).
 
 use serde::Serialize;
@@ -70,7 +74,7 @@ pub struct Record {
     pub t0_s: f64,
     /// The channels, all of the same length.
     pub channels: Vec<Channel>,
-    /// `missing[k]` is true where sample `k` was not measured.
+    /// `missing[k]` is true where sample `k` was not measured (see the module documentation).
     pub missing: Vec<bool>,
     /// Device events at sample indices, in order.
     pub events: Vec<RecordEvent>,

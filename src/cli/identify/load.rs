@@ -1,11 +1,13 @@
 //! FILE → input, outputs and a description of where they came from.
 
+use std::collections::BTreeMap;
+
 use serde::Serialize;
 
 use super::Args;
 use crate::cli::load::{self as shared, steps_from_response, NoSteps, Origin, Request};
 use crate::cli::CliError;
-use crate::ingest::csv_file::CsvSource;
+use crate::ingest::csv_file::{ColumnUnit, CsvSource};
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
 use propid_wire::protocol::detect::WireFormat;
@@ -43,6 +45,17 @@ pub struct Source {
     pub input: String,
     /// The output columns.
     pub outputs: Vec<String>,
+    /// CSV files: per channel, the column, its unit and the factor to canonical units (the
+    /// command's: to throttle 0..1), by key (`throttle`, `thrust`, `torque`, `rpm`, ...).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub units: Option<BTreeMap<String, ColumnUnit>>,
+    /// CSV files: the raw command values taken as throttle 0 and 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_range: Option<[f64; 2]>,
+    /// Where `input_range` came from: `"header: µs"`, `"values: 0..1"`,
+    /// `"values: 0..2047 (DShot/raw ESC)"`, `"--esc-us"`, `"--input-range"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_range_from: Option<String>,
     /// Sample rate used, Hz.
     pub rate_hz: f64,
     /// Samples in the record.
@@ -88,7 +101,7 @@ pub const STAND_CHANNELS: [(&str, &str, &str); 4] = [
 
 /// Reads FILE as the options say: the shared loader ([`crate::cli::load`]), then what identify
 /// keeps (the missing mask, device pulse starts, the JSON `"source"`), with the input found from
-/// the response's steps when a CSV file has no input column.
+/// the response's steps with `--input none`.
 pub fn load(args: &Args) -> Result<Loaded, CliError> {
     let req = Request {
         input: args.input.as_deref(),
@@ -97,6 +110,8 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         fs_hz: args.fs,
         columns: args.columns.as_deref(),
         esc_us: args.esc_us.as_deref(),
+        input_range: args.input_range.as_deref(),
+        poles: args.poles,
     };
     let file = shared::load(&args.file, &req)?;
     let rec = &file.record;
@@ -150,6 +165,8 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         ),
         Origin::Csv(src) => ("csv", src.outputs.clone(), src.rate_hz, None, Some(*src)),
     };
+    let units = csv.as_ref().map(|c| c.units.clone());
+    let range = csv.as_ref().and_then(|c| c.input_range.clone());
     Ok(Loaded {
         dt_s: rec.dt_s,
         input,
@@ -163,6 +180,9 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
             format,
             input: input_name,
             outputs: output_names,
+            units,
+            input_range: range.as_ref().map(|r| [r.raw_min, r.raw_max]),
+            input_range_from: range.map(|r| r.from),
             rate_hz,
             samples: rec.len(),
             missing: rec.missing_count(),

@@ -61,6 +61,19 @@ impl<'a> Output<'a> {
         let mut o = String::new();
         let _ = writeln!(o, "file      {} ({})", s.file, s.format);
         let _ = writeln!(o, "input     {}", s.input);
+        if let (Some([lo, hi]), Some(from)) = (s.input_range, &s.input_range_from) {
+            let _ = writeln!(o, "          {lo}..{hi} taken as throttle 0..1 ({from})");
+        }
+        if let Some(units) = &s.units {
+            let text: Vec<String> = units
+                .iter()
+                .filter(|(key, _)| *key != "time" && *key != "throttle")
+                .map(|(key, u)| format!("{key} from {} in {} (x{})", u.column, u.unit, u.factor))
+                .collect();
+            if !text.is_empty() {
+                let _ = writeln!(o, "units     {}", text.join("; "));
+            }
+        }
         let _ = writeln!(o, "outputs   {}", s.outputs.join(", "));
         let _ = writeln!(
             o,

@@ -1,8 +1,8 @@
-//! Which columns of a CSV file are used: the file's columns (named by its header, by the
-//! caller, or by §6's default order), the time, input and output columns picked from them, and
-//! the record channel each becomes.
+//! Which columns of a CSV file are used: the file's columns (named by its header or by the
+//! caller), the time, input, output and optional columns picked from them, and the record
+//! channel each becomes.
 
-use super::{CsvFileError, CsvFileOptions};
+use super::{CsvFileError, CsvFileOptions, InputChoice};
 use propid_wire::protocol::csv::columns::{self as csv_columns, ColumnSpec, Quantity};
 use propid_wire::protocol::csv::line::fields;
 use propid_wire::record::Channel;
@@ -19,6 +19,8 @@ pub(super) struct Picks {
     pub(super) time: Option<usize>,
     pub(super) input: Option<usize>,
     pub(super) outputs: Vec<usize>,
+    /// Optional columns the file has (not the input, an output or the time).
+    pub(super) optional: Vec<usize>,
 }
 
 impl Picks {
@@ -41,16 +43,19 @@ impl Picks {
                 .position(|c| matches!(csv_columns::normalise(&c.name).as_str(), "t" | "time"))
         });
         let input = match &opts.input {
-            Some(name) => Some(
-                find(columns, name).ok_or_else(|| CsvFileError::MissingColumn {
-                    what: "input",
-                    wanted: name.clone(),
-                    available: available(),
-                })?,
-            ),
-            None => by_quantity(Quantity::Throttle),
+            InputChoice::Column(name) => {
+                Some(
+                    find(columns, name).ok_or_else(|| CsvFileError::MissingColumn {
+                        what: "input",
+                        wanted: name.clone(),
+                        available: available(),
+                    })?,
+                )
+            }
+            InputChoice::Command => by_quantity(Quantity::Throttle),
+            InputChoice::None => None,
         };
-        let outputs = if opts.outputs.is_empty() {
+        let outputs: Vec<usize> = if opts.outputs.is_empty() {
             vec![
                 by_quantity(Quantity::Thrust).ok_or_else(|| CsvFileError::MissingColumn {
                     what: "output",
@@ -70,26 +75,44 @@ impl Picks {
                 })
                 .collect::<Result<_, _>>()?
         };
+        if input.is_none() && opts.input == InputChoice::Command {
+            return Err(CsvFileError::NoCommand {
+                available: available(),
+            });
+        }
         let time = if opts.fs_hz.is_some() && time.is_none() {
             None
         } else {
             Some(time.ok_or(CsvFileError::NeedRate)?)
         };
+        let mut optional: Vec<usize> = Vec::new();
+        for name in &opts.optional {
+            let taken = |i: &usize| {
+                Some(*i) == time || Some(*i) == input || outputs.contains(i) || optional.contains(i)
+            };
+            if let Some(i) = find(columns, name).filter(|i| !taken(i)) {
+                optional.push(i);
+            }
+        }
         Ok(Self {
             time,
             input,
             outputs,
+            optional,
         })
     }
 
-    /// Column indices in value order: time, input, outputs.
+    /// Column indices in value order: time, input, outputs, optional.
     pub(super) fn all(&self) -> Vec<usize> {
-        self.time
+        self.time.iter().chain(self.channels()).copied().collect()
+    }
+
+    /// The columns that become record channels, in order: input, outputs, optional.
+    pub(super) fn channels(&self) -> impl Iterator<Item = &usize> + '_ {
+        self.input
             .iter()
-            .chain(self.input.iter())
             .chain(self.outputs.iter())
-            .copied()
-            .collect()
+            .chain(self.optional.iter())
     }
 }
 
@@ -128,33 +151,32 @@ pub(super) fn channel(col: &Column, data: Vec<f64>) -> Channel {
     }
 }
 
-/// The columns of the file: the header's names, else the names given, else §6's order.
+/// A column's key in reports: its quantity's ([`Quantity::key`]), else its own name.
+pub(super) fn key(col: &Column) -> String {
+    col.spec
+        .map_or_else(|| col.name.clone(), |s| s.quantity.key().to_string())
+}
+
+/// The columns of the file: the header's names, else the names given; a file with neither is
+/// refused ([`CsvFileError::NoHeader`]: no column order is guessed).
 pub(super) fn header_columns(
     lines: &[&str],
     sep: char,
     header: bool,
     opts: &CsvFileOptions,
-) -> Vec<Column> {
+) -> Result<Vec<Column>, CsvFileError> {
     let named = |name: &str| Column {
         name: name.to_string(),
         spec: csv_columns::lookup(name),
     };
     if header {
-        return fields(lines[0], sep).map(named).collect();
+        return Ok(fields(lines[0], sep).map(named).collect());
     }
     let width = fields(lines[0], sep).count();
-    if let Some(names) = &opts.columns {
-        let mut cols: Vec<Column> = names.iter().map(|n| named(n)).collect();
-        cols.extend((cols.len()..width).map(|i| named(&format!("col{}", i + 1))));
-        return cols;
-    }
-    (0..width)
-        .map(|i| match csv_columns::DEFAULT_ORDER.get(i) {
-            Some(spec) => Column {
-                name: spec.quantity.name().to_string(),
-                spec: Some(*spec),
-            },
-            None => named(&format!("col{}", i + 1)),
-        })
-        .collect()
+    let Some(names) = &opts.columns else {
+        return Err(CsvFileError::NoHeader { fields: width });
+    };
+    let mut cols: Vec<Column> = names.iter().map(|n| named(n)).collect();
+    cols.extend((cols.len()..width).map(|i| named(&format!("col{}", i + 1))));
+    Ok(cols)
 }

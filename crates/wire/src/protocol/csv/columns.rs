@@ -1,13 +1,20 @@
 //! CSV column names → canonical quantities and units (PROTOCOL.md §6), shared by the live
-//! CSV decoder and by file readers (exported logs of commercial stands): the one alias table
-//! and the one quantity → name table ([`Quantity::name`]) of the project.
+//! CSV decoder and by file readers (exported logs of commercial stands): the one alias table,
+//! the one unit table and the one quantity → name table ([`Quantity::name`]) of the project.
 //!
 //! A header name is normalised before lookup (see [`normalise`]): a UTF-8 BOM and surrounding
 //! space are dropped, letters lower-cased, `µ`/`μ` written `u`, `[`/`]` written `(`/`)`, and
 //! spaces, `·`, `⋅`, `.`, `*` removed. `Torque (N·m)`, `torque(nm)` and `TORQUE [N.m]` all become
-//! `torque(nm)`. The alias table then maps the normalised name to a [`ColumnSpec`]; the
-//! conversion to canonical units (throttle fraction, s, N, N·m, rev/min, V, A) is affine,
-//! `canonical = (raw - zero) * mul / div`, and some units need options ([`ConvOptions`]).
+//! `torque(nm)`. [`lookup`] then finds the name in the table of whole names ([`NAMES`]: the §6
+//! names without a unit suffix and command names without a unit), else splits it into a
+//! quantity word and a unit suffix, `word(unit)` or `word_unit`, and looks both up ([`WORDS`],
+//! [`UNITS`]): `Thrust (gf)`, `thrust_lbf`, `Torque (N·mm)`, `Motor Speed (rad/s)`.
+//!
+//! The conversion to canonical units (throttle fraction, s, N, N·m, rev/min, V, A) is affine,
+//! `canonical = (raw - zero) * mul / div`; some units need options ([`ConvOptions`]). A
+//! command's full scale is not always in its unit: [`Unit::command_scales`] says which scales
+//! a command column may have (declared by its header's unit, or to be decided from its values
+//! by a file reader, which alone sees them all).
 
 use crate::record::names;
 
@@ -15,6 +22,8 @@ use crate::record::names;
 pub const G0: f64 = 9.80665;
 /// One pound-force in newtons.
 pub const LBF_N: f64 = 4.448_221_615_260_5;
+/// One ounce-force inch in newton metres.
+pub const OZF_IN_NM: f64 = LBF_N / 16.0 * 0.0254;
 
 /// What a column measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
@@ -54,6 +63,21 @@ impl Quantity {
         }
     }
 
+    /// A short key for reports (`source.units` of identify): `time`, `index`, `throttle`,
+    /// `thrust`, `torque`, `rpm`, `voltage`, `current`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Quantity::Time => "time",
+            Quantity::Index => "index",
+            Quantity::Throttle => "throttle",
+            Quantity::Thrust => "thrust",
+            Quantity::Torque => "torque",
+            Quantity::Rpm => "rpm",
+            Quantity::Voltage => "voltage",
+            Quantity::Current => "current",
+        }
+    }
+
     /// Canonical channel name of the record (`None` for time and index, which are the time base).
     pub fn channel_name(self) -> Option<&'static str> {
         match self {
@@ -87,12 +111,20 @@ pub enum Unit {
     Microsecond,
     /// A count (sample index).
     Count,
-    /// TSP/1 throttle level 0..10000.
+    /// The §6 name `throttle`: TSP/1 level 0..10000 on the wire; in an exported file its scale
+    /// is decided from its values ([`Unit::command_scales`]).
     ThrottleLevel,
     /// Percent 0..100.
     Percent,
+    /// Fraction 0..1.
+    Fraction,
     /// ESC pulse width, µs (needs the ESC's min/max µs).
     PulseMicrosecond,
+    /// DShot throttle value, 48..2047 (0 stops the motor).
+    DShot,
+    /// A command without a unit (`ESC signal`, `pwm`, `cmd`): its scale comes from an option
+    /// or, in a file, from its values.
+    Command,
     /// Newton.
     Newton,
     /// Gram-force.
@@ -101,16 +133,63 @@ pub enum Unit {
     KilogramForce,
     /// Pound-force.
     PoundForce,
+    /// Ounce-force (1/16 lbf).
+    OunceForce,
     /// Newton metre.
     NewtonMetre,
+    /// Newton millimetre.
+    NewtonMillimetre,
+    /// Ounce-force inch.
+    OunceForceInch,
     /// Mechanical rev/min.
     Rpm,
     /// Electrical rev/min (needs the motor's pole count).
     ElectricalRpm,
+    /// Radian per second.
+    RadianPerSecond,
+    /// Revolutions per second.
+    Hertz,
     /// Volt.
     Volt,
+    /// Millivolt.
+    Millivolt,
     /// Ampere.
     Ampere,
+    /// Milliampere.
+    Milliampere,
+}
+
+impl Unit {
+    /// The unit as a person writes it (for reports, e.g. identify's `source.units`).
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Unit::Second => "s",
+            Unit::Millisecond => "ms",
+            Unit::Microsecond | Unit::PulseMicrosecond => "µs",
+            Unit::Count => "1",
+            Unit::ThrottleLevel => "TSP/1 level",
+            Unit::Percent => "%",
+            Unit::Fraction => "0..1",
+            Unit::DShot => "DShot",
+            Unit::Command => "none",
+            Unit::Newton => "N",
+            Unit::GramForce => "gf",
+            Unit::KilogramForce => "kgf",
+            Unit::PoundForce => "lbf",
+            Unit::OunceForce => "ozf",
+            Unit::NewtonMetre => "N·m",
+            Unit::NewtonMillimetre => "N·mm",
+            Unit::OunceForceInch => "ozf·in",
+            Unit::Rpm => "RPM",
+            Unit::ElectricalRpm => "eRPM",
+            Unit::RadianPerSecond => "rad/s",
+            Unit::Hertz => "Hz",
+            Unit::Volt => "V",
+            Unit::Millivolt => "mV",
+            Unit::Ampere => "A",
+            Unit::Milliampere => "mA",
+        }
+    }
 }
 
 /// A column's quantity and unit.
@@ -142,6 +221,9 @@ pub enum ConvError {
     /// Pole count missing or zero/odd.
     #[error("an electrical rpm needs the motor's pole count (even, > 0)")]
     NeedsPoles,
+    /// A command without a unit: its scale is not known.
+    #[error("a command without a unit needs its range (min and max)")]
+    NeedsRange,
 }
 
 /// `canonical = (raw - zero) * mul / div`: an affine map written so that the common unit
@@ -158,7 +240,10 @@ pub struct Affine {
 }
 
 impl Affine {
-    fn ratio(mul: f64, div: f64) -> Self {
+    /// The identity (a column without a known unit).
+    pub const IDENTITY: Affine = Affine::ratio(1.0, 1.0);
+
+    const fn ratio(mul: f64, div: f64) -> Self {
         Self {
             zero: 0.0,
             mul,
@@ -170,6 +255,11 @@ impl Affine {
     pub fn apply(&self, raw: f64) -> f64 {
         (raw - self.zero) * self.mul / self.div
     }
+
+    /// Canonical units per raw unit (`mul / div`).
+    pub fn factor(&self) -> f64 {
+        self.mul / self.div
+    }
 }
 
 impl ColumnSpec {
@@ -180,14 +270,22 @@ impl ColumnSpec {
             Unit::Second | Unit::Count | Unit::Newton | Unit::NewtonMetre | Unit::Rpm => {
                 r(1.0, 1.0)
             }
-            Unit::Volt | Unit::Ampere => r(1.0, 1.0),
-            Unit::Millisecond => r(1.0, 1e3),
+            Unit::Volt | Unit::Ampere | Unit::Fraction => r(1.0, 1.0),
+            Unit::Millisecond | Unit::NewtonMillimetre | Unit::Millivolt | Unit::Milliampere => {
+                r(1.0, 1e3)
+            }
             Unit::Microsecond => r(1.0, 1e6),
             Unit::ThrottleLevel => r(1.0, 1e4),
             Unit::Percent => r(1.0, 1e2),
             Unit::GramForce => r(G0, 1e3),
             Unit::KilogramForce => r(G0, 1.0),
             Unit::PoundForce => r(LBF_N, 1.0),
+            Unit::OunceForce => r(LBF_N, 16.0),
+            Unit::OunceForceInch => r(OZF_IN_NM, 1.0),
+            Unit::RadianPerSecond => r(60.0, std::f64::consts::TAU),
+            Unit::Hertz => r(60.0, 1.0),
+            Unit::DShot => Ok(Scale::DSHOT.affine()),
+            Unit::Command => Err(ConvError::NeedsRange),
             Unit::PulseMicrosecond => match (o.esc_min_us, o.esc_max_us) {
                 (Some(lo), Some(hi)) if lo.is_finite() && hi.is_finite() && hi > lo => Ok(Affine {
                     zero: lo,
@@ -220,70 +318,106 @@ pub fn normalise(name: &str) -> String {
     out
 }
 
-/// The alias table: normalised name → quantity and unit. The TSP/1 names of §6 first, then
-/// the names of exported logs (RCbenchmark / Tyto Series 1580/1585, hobby benches).
-const ALIASES: &[(&str, Quantity, Unit)] = {
-    use Quantity as Q;
-    use Unit as U;
-    &[
-        ("t_us", Q::Time, U::Microsecond),
-        ("t_ms", Q::Time, U::Millisecond),
-        ("t_s", Q::Time, U::Second),
-        ("time(s)", Q::Time, U::Second),
-        ("time(ms)", Q::Time, U::Millisecond),
-        ("time(us)", Q::Time, U::Microsecond),
-        ("time_s", Q::Time, U::Second),
-        ("time_ms", Q::Time, U::Millisecond),
-        ("time_us", Q::Time, U::Microsecond),
-        ("idx", Q::Index, U::Count),
-        ("index", Q::Index, U::Count),
-        ("sample_index", Q::Index, U::Count),
-        ("throttle", Q::Throttle, U::ThrottleLevel),
-        ("throttle_pct", Q::Throttle, U::Percent),
-        ("throttle(%)", Q::Throttle, U::Percent),
-        ("throttle_us", Q::Throttle, U::PulseMicrosecond),
-        ("throttle(us)", Q::Throttle, U::PulseMicrosecond),
-        ("escsignal(us)", Q::Throttle, U::PulseMicrosecond),
-        ("esc(us)", Q::Throttle, U::PulseMicrosecond),
-        ("pwm(us)", Q::Throttle, U::PulseMicrosecond),
-        ("thrust_n", Q::Thrust, U::Newton),
-        ("thrust_g", Q::Thrust, U::GramForce),
-        ("thrust_gf", Q::Thrust, U::GramForce),
-        ("thrust_kgf", Q::Thrust, U::KilogramForce),
-        ("thrust(n)", Q::Thrust, U::Newton),
-        ("thrust(g)", Q::Thrust, U::GramForce),
-        ("thrust(gf)", Q::Thrust, U::GramForce),
-        ("thrust(kg)", Q::Thrust, U::KilogramForce),
-        ("thrust(kgf)", Q::Thrust, U::KilogramForce),
-        ("thrust(lbf)", Q::Thrust, U::PoundForce),
-        ("weight(g)", Q::Thrust, U::GramForce),
-        ("torque_nm", Q::Torque, U::NewtonMetre),
-        ("torque(nm)", Q::Torque, U::NewtonMetre),
-        ("rpm", Q::Rpm, U::Rpm),
-        ("erpm", Q::Rpm, U::ElectricalRpm),
-        ("rpm(rpm)", Q::Rpm, U::Rpm),
-        ("speed(rpm)", Q::Rpm, U::Rpm),
-        ("motorspeed(rpm)", Q::Rpm, U::Rpm),
-        ("motoropticalspeed(rpm)", Q::Rpm, U::Rpm),
-        // RCbenchmark's "electrical" speed is the commutation frequency already divided by
-        // the pole pairs configured in its app: a mechanical rpm (it equals the optical speed
-        // in the exports we have).
-        ("motorelectricalspeed(rpm)", Q::Rpm, U::Rpm),
-        ("voltage_v", Q::Voltage, U::Volt),
-        ("voltage(v)", Q::Voltage, U::Volt),
-        ("vbat(v)", Q::Voltage, U::Volt),
-        ("current_a", Q::Current, U::Ampere),
-        ("current(a)", Q::Current, U::Ampere),
-    ]
-};
+use Quantity as Q;
+use Unit as U;
 
-/// Look a header name up in the alias table (after [`normalise`]).
+/// Whole names (normalised): §6 names without a unit suffix, and command names without a unit.
+/// `throttle` is §6's 0..10000 on the wire; in a file, like `ESC signal` or `pwm`, its scale is
+/// decided from its values ([`Unit::command_scales`]).
+pub const NAMES: &[(&str, Quantity, Unit)] = &[
+    ("idx", Q::Index, U::Count),
+    ("index", Q::Index, U::Count),
+    ("sample_index", Q::Index, U::Count),
+    ("throttle", Q::Throttle, U::ThrottleLevel),
+    ("escsignal", Q::Throttle, U::Command),
+    ("esc", Q::Throttle, U::Command),
+    ("pwm", Q::Throttle, U::Command),
+    ("cmd", Q::Throttle, U::Command),
+    ("command", Q::Throttle, U::Command),
+    ("dshot", Q::Throttle, U::DShot),
+    ("rpm", Q::Rpm, U::Rpm),
+    ("erpm", Q::Rpm, U::ElectricalRpm),
+];
+
+/// Quantity words of `word(unit)` / `word_unit` names (§6, RCbenchmark / Tyto Series
+/// 1580/1585 exports, hobby benches).
+pub const WORDS: &[(&str, Quantity)] = &[
+    ("t", Q::Time),
+    ("time", Q::Time),
+    ("throttle", Q::Throttle),
+    ("escsignal", Q::Throttle),
+    ("esc", Q::Throttle),
+    ("pwm", Q::Throttle),
+    ("cmd", Q::Throttle),
+    ("command", Q::Throttle),
+    ("thrust", Q::Thrust),
+    ("weight", Q::Thrust),
+    ("torque", Q::Torque),
+    ("rpm", Q::Rpm),
+    ("speed", Q::Rpm),
+    ("motorspeed", Q::Rpm),
+    ("motoropticalspeed", Q::Rpm),
+    // RCbenchmark's "electrical" speed in RPM is the commutation frequency already divided by
+    // the pole pairs configured in its app: a mechanical rpm (it equals the optical speed in
+    // the exports we have). `(eRPM)` would say otherwise.
+    ("motorelectricalspeed", Q::Rpm),
+    ("voltage", Q::Voltage),
+    ("vbat", Q::Voltage),
+    ("current", Q::Current),
+];
+
+/// The unit table: a unit suffix (normalised) of a quantity → its unit.
+pub const UNITS: &[(&str, Quantity, Unit)] = &[
+    ("s", Q::Time, U::Second),
+    ("ms", Q::Time, U::Millisecond),
+    ("us", Q::Time, U::Microsecond),
+    ("%", Q::Throttle, U::Percent),
+    ("pct", Q::Throttle, U::Percent),
+    ("us", Q::Throttle, U::PulseMicrosecond),
+    ("0-1", Q::Throttle, U::Fraction),
+    ("frac", Q::Throttle, U::Fraction),
+    ("dshot", Q::Throttle, U::DShot),
+    ("n", Q::Thrust, U::Newton),
+    ("g", Q::Thrust, U::GramForce),
+    ("gf", Q::Thrust, U::GramForce),
+    ("kg", Q::Thrust, U::KilogramForce),
+    ("kgf", Q::Thrust, U::KilogramForce),
+    ("lb", Q::Thrust, U::PoundForce),
+    ("lbf", Q::Thrust, U::PoundForce),
+    ("oz", Q::Thrust, U::OunceForce),
+    ("ozf", Q::Thrust, U::OunceForce),
+    ("nm", Q::Torque, U::NewtonMetre),
+    ("nmm", Q::Torque, U::NewtonMillimetre),
+    ("ozfin", Q::Torque, U::OunceForceInch),
+    ("ozf-in", Q::Torque, U::OunceForceInch),
+    ("ozin", Q::Torque, U::OunceForceInch),
+    ("oz-in", Q::Torque, U::OunceForceInch),
+    ("rpm", Q::Rpm, U::Rpm),
+    ("erpm", Q::Rpm, U::ElectricalRpm),
+    ("rad/s", Q::Rpm, U::RadianPerSecond),
+    ("hz", Q::Rpm, U::Hertz),
+    ("v", Q::Voltage, U::Volt),
+    ("mv", Q::Voltage, U::Millivolt),
+    ("a", Q::Current, U::Ampere),
+    ("ma", Q::Current, U::Milliampere),
+];
+
+/// Look a header name up (after [`normalise`]): a whole name ([`NAMES`]), else `word(unit)` or
+/// `word_unit` ([`WORDS`] and [`UNITS`]).
 pub fn lookup(name: &str) -> Option<ColumnSpec> {
     let n = normalise(name);
-    ALIASES
+    if let Some(&(_, quantity, unit)) = NAMES.iter().find(|(a, _, _)| *a == n) {
+        return Some(ColumnSpec { quantity, unit });
+    }
+    let (word, suffix) = match n.strip_suffix(')').and_then(|s| s.split_once('(')) {
+        Some(parts) => parts,
+        None => n.rsplit_once('_')?,
+    };
+    let &(_, quantity) = WORDS.iter().find(|(w, _)| *w == word)?;
+    UNITS
         .iter()
-        .find(|(a, _, _)| *a == n)
-        .map(|&(_, quantity, unit)| ColumnSpec { quantity, unit })
+        .find(|(s, q, _)| *s == suffix && *q == quantity)
+        .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
 }
 
 /// The column order of a header-less TSP/1 CSV stream:
@@ -319,63 +453,8 @@ pub const DEFAULT_ORDER: [ColumnSpec; 7] = [
     },
 ];
 
+mod scale;
+pub use scale::{CommandScales, Scale};
+
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn exported_log_names_map_to_quantities() {
-        let cases = [
-            ("\u{feff}Time (s)", Quantity::Time, Unit::Second),
-            (
-                "ESC signal (µs)",
-                Quantity::Throttle,
-                Unit::PulseMicrosecond,
-            ),
-            ("Thrust (N)", Quantity::Thrust, Unit::Newton),
-            ("Thrust (gf)", Quantity::Thrust, Unit::GramForce),
-            ("Thrust (kgf)", Quantity::Thrust, Unit::KilogramForce),
-            ("Torque (N·m)", Quantity::Torque, Unit::NewtonMetre),
-            ("Voltage (V)", Quantity::Voltage, Unit::Volt),
-            ("Current (A)", Quantity::Current, Unit::Ampere),
-            ("Motor Electrical Speed (RPM)", Quantity::Rpm, Unit::Rpm),
-            ("weight[g]", Quantity::Thrust, Unit::GramForce),
-            ("thrust_N", Quantity::Thrust, Unit::Newton),
-            ("erpm", Quantity::Rpm, Unit::ElectricalRpm),
-            ("throttle_pct", Quantity::Throttle, Unit::Percent),
-        ];
-        for (name, q, u) in cases {
-            assert_eq!(
-                lookup(name),
-                Some(ColumnSpec {
-                    quantity: q,
-                    unit: u
-                }),
-                "{name}"
-            );
-        }
-        assert_eq!(lookup("AccX (g)"), None);
-        assert_eq!(lookup("Servo 1 (µs)"), None);
-    }
-
-    #[test]
-    fn conversions_to_canonical_units() {
-        let o = ConvOptions {
-            esc_min_us: Some(1000.0),
-            esc_max_us: Some(2000.0),
-            motor_poles: Some(14),
-        };
-        let conv = |name: &str, raw: f64| lookup(name).unwrap().conversion(&o).unwrap().apply(raw);
-        assert!((conv("ESC signal (µs)", 1500.0) - 0.5).abs() < 1e-12);
-        assert!((conv("Thrust (gf)", 1000.0) - G0).abs() < 1e-12);
-        assert!((conv("thrust_kgf", 1.0) - G0).abs() < 1e-12);
-        assert!((conv("erpm", 7000.0) - 1000.0).abs() < 1e-9);
-        assert!((conv("t_us", 2_500_000.0) - 2.5).abs() < 1e-12);
-        assert!((conv("throttle", 3500.0) - 0.35).abs() < 1e-12);
-        let none = ConvOptions::default();
-        let us = lookup("throttle_us").unwrap();
-        assert_eq!(us.conversion(&none), Err(ConvError::NeedsEscRange));
-        let e = lookup("erpm").unwrap();
-        assert_eq!(e.conversion(&none), Err(ConvError::NeedsPoles));
-    }
-}
+mod tests;

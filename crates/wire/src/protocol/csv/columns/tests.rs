@@ -1,0 +1,203 @@
+use super::*;
+
+#[test]
+fn exported_log_names_map_to_quantities() {
+    let cases = [
+        ("\u{feff}Time (s)", Quantity::Time, Unit::Second),
+        (
+            "ESC signal (µs)",
+            Quantity::Throttle,
+            Unit::PulseMicrosecond,
+        ),
+        ("Thrust (N)", Quantity::Thrust, Unit::Newton),
+        ("Thrust (gf)", Quantity::Thrust, Unit::GramForce),
+        ("Thrust (kgf)", Quantity::Thrust, Unit::KilogramForce),
+        ("Torque (N·m)", Quantity::Torque, Unit::NewtonMetre),
+        ("Voltage (V)", Quantity::Voltage, Unit::Volt),
+        ("Current (A)", Quantity::Current, Unit::Ampere),
+        ("Motor Electrical Speed (RPM)", Quantity::Rpm, Unit::Rpm),
+        ("weight[g]", Quantity::Thrust, Unit::GramForce),
+        ("thrust_N", Quantity::Thrust, Unit::Newton),
+        ("erpm", Quantity::Rpm, Unit::ElectricalRpm),
+        ("throttle_pct", Quantity::Throttle, Unit::Percent),
+    ];
+    for (name, q, u) in cases {
+        assert_eq!(
+            lookup(name),
+            Some(ColumnSpec {
+                quantity: q,
+                unit: u
+            }),
+            "{name}"
+        );
+    }
+    assert_eq!(lookup("AccX (g)"), None);
+    assert_eq!(lookup("Servo 1 (µs)"), None);
+}
+
+#[test]
+fn conversions_to_canonical_units() {
+    let o = ConvOptions {
+        esc_min_us: Some(1000.0),
+        esc_max_us: Some(2000.0),
+        motor_poles: Some(14),
+    };
+    let conv = |name: &str, raw: f64| lookup(name).unwrap().conversion(&o).unwrap().apply(raw);
+    assert!((conv("ESC signal (µs)", 1500.0) - 0.5).abs() < 1e-12);
+    assert!((conv("Thrust (gf)", 1000.0) - G0).abs() < 1e-12);
+    assert!((conv("thrust_kgf", 1.0) - G0).abs() < 1e-12);
+    assert!((conv("erpm", 7000.0) - 1000.0).abs() < 1e-9);
+    assert!((conv("t_us", 2_500_000.0) - 2.5).abs() < 1e-12);
+    assert!((conv("throttle", 3500.0) - 0.35).abs() < 1e-12);
+    let none = ConvOptions::default();
+    let us = lookup("throttle_us").unwrap();
+    assert_eq!(us.conversion(&none), Err(ConvError::NeedsEscRange));
+    let e = lookup("erpm").unwrap();
+    assert_eq!(e.conversion(&none), Err(ConvError::NeedsPoles));
+}
+
+/// Every name of the flat alias table this one replaced still maps as it did.
+#[test]
+fn the_former_aliases_keep_their_meaning() {
+    use Quantity as Q;
+    use Unit as U;
+    let former = [
+        ("t_us", Q::Time, U::Microsecond),
+        ("t_ms", Q::Time, U::Millisecond),
+        ("t_s", Q::Time, U::Second),
+        ("time(s)", Q::Time, U::Second),
+        ("time(ms)", Q::Time, U::Millisecond),
+        ("time(us)", Q::Time, U::Microsecond),
+        ("time_s", Q::Time, U::Second),
+        ("time_ms", Q::Time, U::Millisecond),
+        ("time_us", Q::Time, U::Microsecond),
+        ("idx", Q::Index, U::Count),
+        ("index", Q::Index, U::Count),
+        ("sample_index", Q::Index, U::Count),
+        ("throttle", Q::Throttle, U::ThrottleLevel),
+        ("throttle_pct", Q::Throttle, U::Percent),
+        ("throttle(%)", Q::Throttle, U::Percent),
+        ("throttle_us", Q::Throttle, U::PulseMicrosecond),
+        ("throttle(us)", Q::Throttle, U::PulseMicrosecond),
+        ("escsignal(us)", Q::Throttle, U::PulseMicrosecond),
+        ("esc(us)", Q::Throttle, U::PulseMicrosecond),
+        ("pwm(us)", Q::Throttle, U::PulseMicrosecond),
+        ("thrust_n", Q::Thrust, U::Newton),
+        ("thrust_g", Q::Thrust, U::GramForce),
+        ("thrust_gf", Q::Thrust, U::GramForce),
+        ("thrust_kgf", Q::Thrust, U::KilogramForce),
+        ("thrust(n)", Q::Thrust, U::Newton),
+        ("thrust(g)", Q::Thrust, U::GramForce),
+        ("thrust(gf)", Q::Thrust, U::GramForce),
+        ("thrust(kg)", Q::Thrust, U::KilogramForce),
+        ("thrust(kgf)", Q::Thrust, U::KilogramForce),
+        ("thrust(lbf)", Q::Thrust, U::PoundForce),
+        ("weight(g)", Q::Thrust, U::GramForce),
+        ("torque_nm", Q::Torque, U::NewtonMetre),
+        ("torque(nm)", Q::Torque, U::NewtonMetre),
+        ("rpm", Q::Rpm, U::Rpm),
+        ("erpm", Q::Rpm, U::ElectricalRpm),
+        ("rpm(rpm)", Q::Rpm, U::Rpm),
+        ("speed(rpm)", Q::Rpm, U::Rpm),
+        ("motorspeed(rpm)", Q::Rpm, U::Rpm),
+        ("motoropticalspeed(rpm)", Q::Rpm, U::Rpm),
+        ("motorelectricalspeed(rpm)", Q::Rpm, U::Rpm),
+        ("voltage_v", Q::Voltage, U::Volt),
+        ("voltage(v)", Q::Voltage, U::Volt),
+        ("vbat(v)", Q::Voltage, U::Volt),
+        ("current_a", Q::Current, U::Ampere),
+        ("current(a)", Q::Current, U::Ampere),
+    ];
+    for (name, quantity, unit) in former {
+        assert_eq!(lookup(name), Some(ColumnSpec { quantity, unit }), "{name}");
+    }
+}
+
+#[test]
+fn new_units_and_command_names_map() {
+    use Quantity as Q;
+    use Unit as U;
+    let cases = [
+        ("ESC signal", Q::Throttle, U::Command),
+        ("pwm", Q::Throttle, U::Command),
+        ("cmd", Q::Throttle, U::Command),
+        ("DShot", Q::Throttle, U::DShot),
+        ("throttle (0-1)", Q::Throttle, U::Fraction),
+        ("Torque (N·mm)", Q::Torque, U::NewtonMillimetre),
+        ("torque [ozf·in]", Q::Torque, U::OunceForceInch),
+        ("Torque (oz-in)", Q::Torque, U::OunceForceInch),
+        ("Thrust (ozf)", Q::Thrust, U::OunceForce),
+        ("thrust_lbf", Q::Thrust, U::PoundForce),
+        ("Motor Speed (rad/s)", Q::Rpm, U::RadianPerSecond),
+        ("speed (Hz)", Q::Rpm, U::Hertz),
+        ("Motor Electrical Speed (eRPM)", Q::Rpm, U::ElectricalRpm),
+        ("Voltage (mV)", Q::Voltage, U::Millivolt),
+        ("current_mA", Q::Current, U::Milliampere),
+    ];
+    for (name, quantity, unit) in cases {
+        assert_eq!(lookup(name), Some(ColumnSpec { quantity, unit }), "{name}");
+    }
+    // Neither a unit of another quantity nor a word the table lacks.
+    for name in [
+        "Thrust (N·m)",
+        "Torque (gf)",
+        "force_N",
+        "m1_thrust",
+        "m1_erpm",
+        "thrust",
+        "Vbat",
+        "Servo 1 (µs)",
+        "Electrical Power (W)",
+        "90% settling time (s)",
+        "vir_force_N",
+    ] {
+        assert_eq!(lookup(name), None, "{name}");
+    }
+}
+
+#[test]
+fn new_units_convert_to_si() {
+    let o = ConvOptions {
+        motor_poles: Some(14),
+        ..ConvOptions::default()
+    };
+    let conv = |name: &str, raw: f64| lookup(name).unwrap().conversion(&o).unwrap().apply(raw);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+    assert!(close(conv("Torque (N·mm)", 12.5), 0.0125));
+    assert!(close(conv("Torque (ozf·in)", 1.0), 0.007_061_551_814_8));
+    assert!(close(conv("Thrust (ozf)", 16.0), LBF_N));
+    assert!(close(conv("Thrust (lbf)", 1.0), 4.448_221_615_260_5));
+    assert!(close(conv("Thrust (kgf)", 1.0), 9.80665));
+    assert!(close(conv("speed (rad/s)", std::f64::consts::TAU), 60.0));
+    assert!(close(conv("speed (Hz)", 50.0), 3000.0));
+    assert!(close(conv("speed (eRPM)", 7000.0), 1000.0));
+    assert!(close(conv("Voltage (mV)", 16_800.0), 16.8));
+    assert!(close(conv("current_mA", 250.0), 0.25));
+    assert!(close(conv("dshot", 48.0), 0.0) && close(conv("dshot", 2047.0), 1.0));
+    let cmd = lookup("ESC signal").unwrap();
+    assert_eq!(cmd.conversion(&o), Err(ConvError::NeedsRange));
+}
+
+#[test]
+fn command_scales_are_declared_by_a_unit_or_left_to_the_values() {
+    let scales = |name: &str| lookup(name).unwrap().unit.command_scales();
+    assert_eq!(
+        scales("ESC signal (µs)"),
+        Some(CommandScales::Declared(Scale::ESC_US))
+    );
+    assert_eq!(
+        scales("throttle (%)"),
+        Some(CommandScales::Declared(Scale::PERCENT))
+    );
+    assert_eq!(scales("dshot"), Some(CommandScales::Declared(Scale::DSHOT)));
+    let Some(CommandScales::FromValues(bare)) = scales("ESC signal") else {
+        panic!("a bare command is decided from its values");
+    };
+    assert!(bare.contains(&Scale::RAW_ESC) && !bare.contains(&Scale::TSP1_LEVEL));
+    let Some(CommandScales::FromValues(thr)) = scales("throttle") else {
+        panic!("a file's `throttle` is decided from its values");
+    };
+    assert!(thr.contains(&Scale::TSP1_LEVEL) && thr.contains(&Scale::FRACTION));
+    assert_eq!(scales("Thrust (N)"), None);
+    assert_eq!(Scale::ESC_US.affine().apply(1500.0), 0.5);
+}

@@ -1,0 +1,137 @@
+//! Every used column of a CSV file into canonical units: a command by its decided scale
+//! ([`command_range`]), any other by the one unit table
+//! ([`protocol::csv::columns`](propid_wire::protocol::csv::columns)), each reported with its
+//! column, unit and factor ([`ColumnUnit`]).
+
+use std::collections::BTreeMap;
+
+use super::columns::{self, Column, Picks};
+use super::{
+    command_range, ColumnUnit, CommandRange, CsvFileError, CsvFileOptions, GivenRanges, Unread,
+    DEFAULT_ESC_US,
+};
+use propid_wire::protocol::csv::columns::{Affine, ConvError, ConvOptions, Quantity};
+
+/// What [`convert`] did: the units report, the command's scale, the optional columns left out.
+pub(super) struct Converted {
+    pub(super) units: BTreeMap<String, ColumnUnit>,
+    pub(super) input_range: Option<CommandRange>,
+    pub(super) unread: Vec<Unread>,
+}
+
+/// Converts every used column to canonical units in place: a command by its decided scale
+/// ([`command_range`]), any other by the unit table. An optional column that cannot be
+/// converted is dropped from `picks` and `values`, and said ([`Unread`]).
+pub(super) fn convert(
+    columns: &[Column],
+    picks: &mut Picks,
+    values: &mut Vec<Vec<f64>>,
+    opts: &CsvFileOptions,
+) -> Result<Converted, CsvFileError> {
+    let conv = ConvOptions {
+        esc_min_us: Some(opts.esc_us.unwrap_or(DEFAULT_ESC_US).0),
+        esc_max_us: Some(opts.esc_us.unwrap_or(DEFAULT_ESC_US).1),
+        motor_poles: opts.motor_poles,
+    };
+    let given = GivenRanges {
+        input_range: opts.input_range,
+        esc_us: opts.esc_us,
+    };
+    let mut units = BTreeMap::new();
+    let mut input_range = None;
+    let mut dropped = Vec::new();
+    let mut unread = Vec::new();
+    let used = picks.all();
+    for (n, &i) in used.iter().enumerate() {
+        let col = &columns[i];
+        let optional = picks.optional.contains(&i);
+        let is_command = col.spec.is_some_and(|s| s.unit.command_scales().is_some());
+        let scale = match (col.spec, opts.input_range) {
+            // `--input-range` scales the input whatever the table knows of its name.
+            (_, Some(range)) if picks.input == Some(i) && !is_command => {
+                Some(Ok(CommandRange::given_input(range)))
+            }
+            (Some(spec), _) => command_range(spec.unit, &values[n], &given),
+            (None, _) => None,
+        };
+        let (affine, unit) = match (scale, col.spec) {
+            (Some(Ok(r)), _) => {
+                let out = (r.affine(), r.unit.to_string());
+                if picks.input == Some(i) {
+                    input_range = Some(r);
+                }
+                out
+            }
+            (Some(Err(source)), _) => {
+                return Err(CsvFileError::CommandRange {
+                    column: col.name.clone(),
+                    source,
+                })
+            }
+            (None, None) => (Affine::IDENTITY, time_or_unknown(picks, i)),
+            (None, Some(spec)) => match spec.conversion(&conv) {
+                Ok(a) => (a, spec.unit.symbol().to_string()),
+                Err(e) if optional => {
+                    dropped.push(n);
+                    unread.push(Unread {
+                        column: col.name.clone(),
+                        reason: needs(e),
+                    });
+                    continue;
+                }
+                Err(e) => {
+                    return Err(CsvFileError::Conversion {
+                        column: col.name.clone(),
+                        reason: needs(e),
+                    })
+                }
+            },
+        };
+        for v in &mut values[n] {
+            *v = affine.apply(*v);
+        }
+        let key = if picks.time == Some(i) {
+            Quantity::Time.key().to_string()
+        } else {
+            columns::key(col)
+        };
+        units.insert(
+            key,
+            ColumnUnit {
+                column: col.name.clone(),
+                unit,
+                factor: affine.factor(),
+                zero: affine.zero,
+            },
+        );
+    }
+    for &n in dropped.iter().rev() {
+        values.remove(n);
+        picks.optional.retain(|&i| i != used[n]);
+    }
+    Ok(Converted {
+        units,
+        input_range,
+        unread,
+    })
+}
+
+/// What a conversion lacks, with the option that gives it.
+fn needs(e: ConvError) -> String {
+    let option = match e {
+        ConvError::NeedsPoles => "--poles N",
+        ConvError::NeedsEscRange => "--esc-us MIN,MAX",
+        ConvError::NeedsRange => "--input-range MIN,MAX",
+    };
+    format!("{e}: give {option}")
+}
+
+/// The unit of a column the table does not know: seconds for a time column found by its name
+/// (`t`, `time`), `?` otherwise.
+fn time_or_unknown(picks: &Picks, i: usize) -> String {
+    if picks.time == Some(i) {
+        Quantity::Time.canonical_unit().to_string()
+    } else {
+        "?".to_string()
+    }
+}
