@@ -241,4 +241,6 @@ fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>) -> Done {
 }
 
 #[cfg(test)]
+mod pinned;
+#[cfg(test)]
 mod tests;
