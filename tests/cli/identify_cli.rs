@@ -1,25 +1,13 @@
 //! `propid identify` as a user runs it: the real binary on small CSV files in a temp dir.
 
+use crate::support::propid;
 use propid_testkit as core_support;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use core_support::Plant;
 use rand::{Rng, SeedableRng};
 use serde_json::Value;
-
-fn propid(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
-        .args(args)
-        .output()
-        .expect("run propid");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 /// Writes `t_s,throttle_pct,thrust_N[,rpm]` rows for `u` through `plant`.
 fn write_csv(dir: &Path, name: &str, plant: &Plant, u: &[f64]) -> PathBuf {

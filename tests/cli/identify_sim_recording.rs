@@ -2,8 +2,8 @@
 //! IMPULSE_START events and 500 ms ramps between three operating points), and the audit's bad
 //! inputs: an absurd `--order`, an absurd `--fs`, `--esc-us MIN,MAX`, non-finite models.
 
+use crate::support::propid;
 use std::path::Path;
-use std::process::Command;
 
 use propid_numerics::identify::{check_finite, identify_any, AnyError, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
@@ -14,18 +14,6 @@ use serde_json::Value;
 const FN_HZ: f64 = 12.0;
 const ZETA: f64 = 0.7;
 const GAIN: f64 = 12.0;
-
-fn propid(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
-        .args(args)
-        .output()
-        .expect("run propid");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn record(dir: &Path, name: &str, extra: &[&str]) -> String {
     let f = dir.join(name).to_str().unwrap().to_owned();

@@ -1,25 +1,13 @@
 //! `identify --json`'s `"stabilization"`, `identify --report DIR` and the diagram in
 //! `diagnose --report DIR` (issue 13, item 3), with the real binary on a pulse CSV.
 
+use crate::support::propid;
 use propid_testkit as core_support;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use core_support::{add_noise, throttle, Plant};
 use serde_json::Value;
-
-fn propid(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
-        .args(args)
-        .output()
-        .expect("run propid");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 /// `t_s,throttle_pct,thrust_N` of 5 one-sample pulses through `plant` (200 Hz), noise `sd`.
 fn pulse_csv(dir: &Path, plant: &Plant, sd: f64) -> PathBuf {

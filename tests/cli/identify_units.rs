@@ -3,22 +3,10 @@
 //! torque in N·mm and sensor cells left empty between sensor updates; a plain CSV whose
 //! `throttle` holds fractions; commands whose scale cannot be decided; files without a header.
 
+use crate::support::propid;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use serde_json::Value;
-
-fn propid(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
-        .args(args)
-        .output()
-        .expect("run propid");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn identify(file: &Path, extra: &[&str]) -> Value {
     let mut args = vec!["identify", file.to_str().unwrap(), "--json"];

@@ -12,4 +12,5 @@ mod identify_square_hankel;
 mod identify_stabilization;
 mod identify_units;
 mod sim_cli;
+mod support;
 mod walkthrough_cli;

@@ -1,0 +1,16 @@
+//! What the subcommand tests share: running the real binary.
+
+use std::process::Command;
+
+/// Runs `propid ARGS`: exit code (-1 when killed by a signal), stdout, stderr.
+pub fn propid(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .args(args)
+        .output()
+        .expect("run propid");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
