@@ -23,9 +23,7 @@ use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource,
 use crate::ingest::steps::{find_steps, StepFinding};
 use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
 use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
-use propid_wire::protocol::csv::device::parse_comment;
-use propid_wire::protocol::csv::line::{strip_checksum_str, text_lines};
-use propid_wire::protocol::detect::{detect, Detection, WireFormat};
+use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};
 
 /// Why a readable file could not be read as asked (exit 3); every message starts with the file.
@@ -113,8 +111,7 @@ pub const NO_INPUT: &str = "none";
 pub enum Origin {
     /// A binary TSP/1 recording and its decoding counters.
     Tsp1(Box<IngestStats>),
-    /// A CSV file: columns as named in the file, time base, skipped rows (with
-    /// [`Request::optional`] found, its column is the last of `outputs`).
+    /// A CSV file: columns as named in the file, time base, skipped rows.
     Csv(Box<CsvSource>),
 }
 
@@ -164,29 +161,11 @@ pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
     }
     match detect(&bytes, true) {
         Detection::Format(WireFormat::Binary) => load_tsp(req, name, &bytes),
+        // A CSV stream is placed by the stream placer, as `replay` places it; any other CSV
+        // file is an exported log, read by its own time column.
         _ if req.columns.is_none() && is_csv_stream(&bytes) => load_tsp(req, name, &bytes),
         _ => load_csv(req, name, &bytes),
     }
-}
-
-/// True when the text is a TSP/1 CSV *stream* as a bench sends it (PROTOCOL.md §6; a recording
-/// made by `propid run --record` of a CSV bench): a line among its first ones carries a `*HH`
-/// checksum that checks, or is a comment only a bench writes (`# HELLO`, `#EVENT`, `#ACK`).
-/// Such a file is read by [`read_record_with`], whose stream placer is the one the daemon's
-/// CSV link uses, so `identify` and `replay` place every row of it identically. Any other CSV
-/// file is an exported log, read by its own time column ([`read_csv`]).
-fn is_csv_stream(bytes: &[u8]) -> bool {
-    const LOOK: usize = 64 * 1024;
-    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(LOOK)]);
-    let stream = text_lines(&text).take(1000).any(|line| {
-        let t = line.trim_end();
-        let checked = t.len() >= 3
-            && t.as_bytes()[t.len() - 3] == b'*'
-            && strip_checksum_str(t).is_some_and(|body| body.len() + 3 == t.len());
-        let comment = t.trim_start().strip_prefix('#').map(str::trim_start);
-        checked || comment.is_some_and(|c| c.starts_with("ACK ") || parse_comment(c).is_some())
-    });
-    stream
 }
 
 /// A binary TSP/1 recording: every channel the device sent; the input (default throttle) and

@@ -12,7 +12,8 @@
 //! 4. Otherwise: undecided, read more.
 
 use super::csv::columns;
-use super::csv::line::{classify, fields, separator, LineKind};
+use super::csv::device::parse_comment;
+use super::csv::line::{classify, fields, separator, strip_checksum_str, text_lines, LineKind};
 use super::decoder::Decoder;
 
 /// Bytes examined at most.
@@ -77,6 +78,27 @@ fn is_csv_line(line: &[u8]) -> bool {
     (numeric >= 2 && numeric + blank == n) || known
 }
 
+/// Bytes of a file examined by [`is_csv_stream`].
+pub const STREAM_LOOK: usize = 64 * 1024;
+
+/// True when CSV text is a TSP/1 CSV *stream* as a bench sends it (PROTOCOL.md §6; what
+/// `propid run --record` writes of a CSV bench), not an exported log: among its first lines one
+/// carries a `*HH` checksum that checks, or is a comment only a bench writes (`# HELLO`,
+/// `#EVENT`, `#ACK`). A stream is placed by the stream placer ([`crate::stream`]) like a live
+/// link; an exported log is read by its own time column.
+pub fn is_csv_stream(bytes: &[u8]) -> bool {
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(STREAM_LOOK)]);
+    let stream = text_lines(&text).take(1000).any(|line| {
+        let t = line.trim_end();
+        let checked = t.len() >= 3
+            && t.as_bytes()[t.len() - 3] == b'*'
+            && strip_checksum_str(t).is_some_and(|body| body.len() + 3 == t.len());
+        let comment = t.trim_start().strip_prefix('#').map(str::trim_start);
+        checked || comment.is_some_and(|c| c.starts_with("ACK ") || parse_comment(c).is_some())
+    });
+    stream
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -116,5 +138,21 @@ mod tests {
         assert_eq!(detect(&[0x05, 0x00, 0x07], false), Detection::Undecided);
         assert_eq!(detect(&[0x05, 0x00, 0x07], true), BIN);
         assert_eq!(detect(&[b'x'; 1024], false), CSV);
+    }
+
+    #[test]
+    fn csv_streams_are_told_from_exported_logs() {
+        let mut row = String::from("1000,3000,1.25");
+        crate::protocol::csv::line::append_checksum(&mut row);
+        assert!(is_csv_stream(format!("{row}\n").as_bytes()));
+        assert!(is_csv_stream(
+            b"# HELLO sim fw 3 boot_id 1 rate_hz 1000\n1000,3000,1.25\n"
+        ));
+        assert!(is_csv_stream(b"#ACK PING OK 1527156\n"));
+        assert!(!is_csv_stream(b"Time (s),Thrust (N)\n0.0,1.2\n0.1,1.3\n"));
+        // a wrong checksum or a plain comment makes no stream
+        assert!(!is_csv_stream(
+            b"1000,3000,1.25*00\n# exported by a stand\n"
+        ));
     }
 }
