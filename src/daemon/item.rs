@@ -83,6 +83,14 @@ pub enum Notice {
     PassiveBench,
     /// Nothing heard from a live link for [`super::sampler::SILENCE_TIMEOUT`] after it opened.
     NoData,
+    /// The link went silent (no data, no ACK) for `[device] stall_timeout_ms`: STOP was tried
+    /// and the port is closed and reopened.
+    LinkStalled {
+        /// How long nothing was heard, ms.
+        silent_ms: u64,
+        /// Whether the STOP was acknowledged.
+        stop_acknowledged: bool,
+    },
 }
 
 /// What the experiment plan reported, published as an `"event"` or `"warning"` line.
@@ -115,10 +123,12 @@ pub enum PlanNote {
     Finished,
     /// STOP acknowledged.
     Stopped,
-    /// The device reset; the plan is over and does not re-arm.
+    /// The device reset; the plan is over, or re-arms (`rearm_on_reset`).
     DeviceReset {
         /// The new boot id.
         new_boot_id: u32,
+        /// The plan re-arms.
+        rearm: bool,
     },
     /// The device's watchdog stopped the motor; the plan is over.
     WatchdogTripped,

@@ -216,6 +216,23 @@ pub enum Warning<'a> {
         /// The new boot id.
         boot_id: u32,
     },
+    /// The device reset; the plan hand-shakes, re-arms and resumes (`rearm_on_reset`). The same
+    /// kind as [`Warning::DeviceReset`], with `"rearm": true`.
+    #[serde(rename = "device_reset")]
+    DeviceResetRearm {
+        /// The new boot id.
+        boot_id: u32,
+        /// Always true.
+        rearm: bool,
+    },
+    /// The link stayed open but silent (no data, no ACK) for `device.stall_timeout_ms`: STOP
+    /// was tried, the port is closed and reopened.
+    LinkStalled {
+        /// How long nothing was heard, ms.
+        silent_ms: u64,
+        /// Whether the device acknowledged the STOP.
+        stop_acknowledged: bool,
+    },
     /// The device watchdog stopped the motor; the plan is over.
     PlanHaltedWatchdog,
     /// The device refused a command the plan needs; the plan is over.
@@ -286,6 +303,15 @@ impl Warning<'_> {
             Warning::DeviceReset { .. } => {
                 "the device reset and is disarmed; the plan is over and will not re-arm"
             }
+            Warning::DeviceResetRearm { .. } => {
+                "the device reset and is disarmed; the plan hand-shakes, re-arms and resumes at \
+                 the interrupted operating point (experiment.rearm_on_reset)"
+            }
+            Warning::LinkStalled { .. } => {
+                "nothing from the device (no data, no ACK) for device.stall_timeout_ms: STOP \
+                 sent, the port closed and reopened; the plan re-arms only with \
+                 experiment.rearm_on_reset"
+            }
             Warning::PlanHaltedWatchdog => {
                 "the device watchdog stopped the motor; the plan is over"
             }
@@ -329,6 +355,13 @@ impl Line<'_> {
             Notice::CsvLink => Line::Event(Event::CsvLink),
             Notice::PassiveBench => Line::Warning(Warning::PassiveBench),
             Notice::NoData => Line::Warning(Warning::NoData),
+            Notice::LinkStalled {
+                silent_ms,
+                stop_acknowledged,
+            } => Line::Warning(Warning::LinkStalled {
+                silent_ms,
+                stop_acknowledged,
+            }),
         }
     }
 
@@ -348,8 +381,18 @@ impl Line<'_> {
             }),
             PlanNote::Finished => Line::Event(Event::PlanFinished),
             PlanNote::Stopped => Line::Event(Event::StopAcknowledged),
-            PlanNote::DeviceReset { new_boot_id } => Line::Warning(Warning::DeviceReset {
+            PlanNote::DeviceReset {
+                new_boot_id,
+                rearm: false,
+            } => Line::Warning(Warning::DeviceReset {
                 boot_id: new_boot_id,
+            }),
+            PlanNote::DeviceReset {
+                new_boot_id,
+                rearm: true,
+            } => Line::Warning(Warning::DeviceResetRearm {
+                boot_id: new_boot_id,
+                rearm: true,
             }),
             PlanNote::WatchdogTripped => Line::Warning(Warning::PlanHaltedWatchdog),
             PlanNote::Refused { command } => Line::Warning(Warning::CommandRefused { command }),
@@ -440,6 +483,10 @@ mod tests {
             Notice::CsvLink,
             Notice::PassiveBench,
             Notice::NoData,
+            Notice::LinkStalled {
+                silent_ms: 1200,
+                stop_acknowledged: false,
+            },
         ]
         .into_iter()
         .map(|n| Line::notice(n).to_json().unwrap())
@@ -454,6 +501,12 @@ mod tests {
                 r#"{"kind":"csv_link","type":"event"}"#,
                 r#"{"kind":"passive_bench","type":"warning"}"#,
                 r#"{"kind":"no_data","type":"warning"}"#,
+                concat!(
+                    r#"{"kind":"link_stalled","message":"nothing from the device (no data, no ACK) for "#,
+                    r#"device.stall_timeout_ms: STOP sent, the port closed and reopened; the plan "#,
+                    r#"re-arms only with experiment.rearm_on_reset","silent_ms":1200,"#,
+                    r#""stop_acknowledged":false,"type":"warning"}"#
+                ),
             ]
         );
     }

@@ -2,10 +2,12 @@
 //! (`propid_wire::experiment`) behind the sampler's [`Plan`] trait.
 //!
 //! The sampler gives it the host clock and every device frame, sends what it asks for, and
-//! turns its notices into published lines. After a device reset, a watchdog trip or a refused
-//! command the plan is over and never re-arms, and the run ends with exit 8 (the sampler reads
-//! the link 500 ms more first). A failed link (a command unanswered after its re-sends) ends
-//! the run (exit 6).
+//! turns its notices into published lines. After a reconnect the plan asks the device whether
+//! it is the same boot before it goes on. After a device reset or a link stall the plan is over
+//! unless `[experiment] rearm_on_reset` lets it hand-shake, ARM and resume at the interrupted
+//! operating point; after a watchdog trip or a refused command it is over. A plan over on a
+//! fault ends the run with exit 8 (the sampler reads the link 500 ms more first). A failed link
+//! (a command unanswered after its re-sends) ends the run (exit 6).
 
 use propid_wire::experiment::{Experiment, ExperimentConfig, Notice, Output};
 use propid_wire::protocol::message::{Frame, Message};
@@ -54,7 +56,9 @@ fn note(n: &Notice) -> PlanNote {
         Notice::LevelDone { index, level, .. } => PlanNote::LevelDone { index, level },
         Notice::Finished => PlanNote::Finished,
         Notice::Stopped => PlanNote::Stopped,
-        Notice::DeviceReset { new_boot_id, .. } => PlanNote::DeviceReset { new_boot_id },
+        Notice::DeviceReset {
+            new_boot_id, rearm, ..
+        } => PlanNote::DeviceReset { new_boot_id, rearm },
         Notice::WatchdogTripped => PlanNote::WatchdogTripped,
         Notice::Refused { command, .. } => PlanNote::Refused { command },
         Notice::LinkFailed { command, .. } => PlanNote::LinkFailed { command },
@@ -63,12 +67,19 @@ fn note(n: &Notice) -> PlanNote {
 
 impl Plan for ExperimentPlan {
     fn on_connect(&mut self, now_us: u64) {
-        // The plan's handshake runs once; after a reconnect the next HELLO tells whether the
-        // device is the same boot (the plan goes on) or reset (the plan halts, never re-arms).
+        // The plan's handshake runs once; after a reconnect a HELLO_REQ asks whether the
+        // device is the same boot (the plan goes on) or reset (the plan halts, or re-arms with
+        // `rearm_on_reset`).
         if !self.started {
             self.started = true;
             self.exp.start(now_us);
+        } else {
+            self.exp.reconnected(now_us);
         }
+    }
+
+    fn on_stall(&mut self, now_us: u64) {
+        self.exp.link_stalled(now_us);
     }
 
     fn on_frame(&mut self, now_us: u64, frame: &Frame) {
@@ -104,7 +115,7 @@ impl Plan for ExperimentPlan {
             PlanStatus::LinkFailed
         } else if self.exp.phase() == propid_wire::experiment::Phase::Done {
             PlanStatus::Done
-        } else if self.exp.is_over() {
+        } else if self.exp.is_over() && !self.exp.rearm_pending() {
             PlanStatus::Halted
         } else {
             PlanStatus::Running

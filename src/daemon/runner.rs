@@ -110,6 +110,7 @@ pub fn run<I: Identifier + 'static>(
             protocol: cfg.device.protocol,
             csv: csv_options(cfg),
             silence_timeout: super::sampler::SILENCE_TIMEOUT,
+            stall_timeout: cfg.device.stall_timeout,
         },
     );
     let sampler = std::thread::Builder::new()

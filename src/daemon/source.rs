@@ -54,6 +54,9 @@ pub trait Source: Send {
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), SourceError>;
     /// Reopens the link after a disconnection (one attempt; the caller backs off).
     fn reconnect(&mut self) -> Result<(), SourceError>;
+    /// Closes the link (a stalled one, before [`Source::reconnect`] reopens it); reads and
+    /// writes then fail with `Disconnected`. Nothing to close by default.
+    fn close(&mut self) {}
     /// Whether commands reach a device (false for a recording).
     fn is_live(&self) -> bool;
     /// A short description for messages (`/dev/ttyACM0`, `recording run.tsp`).
@@ -74,8 +77,10 @@ fn no_data(e: &std::io::Error) -> bool {
     )
 }
 
-/// A serial port (or pty slave) opened by path. Reconnects by reopening the same path, so a
-/// udev symlink (`/dev/propid-stand`) survives re-enumeration.
+/// A serial port (or pty slave) opened by path. Reconnects by reopening the same path, which
+/// resolves a symlink again: a udev link (`/dev/propid-stand`, `/dev/serial/by-id/...`) that
+/// points at a new device node after re-enumeration (`ttyACM0` gone, `ttyACM1` back) is
+/// followed.
 pub struct SerialSource {
     path: String,
     baud: u32,
@@ -135,6 +140,10 @@ impl Source for SerialSource {
             Ok(()) => Ok(()),
             Err(e) => Err(self.disconnected(e)),
         }
+    }
+
+    fn close(&mut self) {
+        self.port = None;
     }
 
     fn reconnect(&mut self) -> Result<(), SourceError> {
@@ -308,6 +317,10 @@ impl Source for ScriptedSource {
         }
         self.written.extend_from_slice(bytes);
         Ok(())
+    }
+
+    fn close(&mut self) {
+        self.connected = false;
     }
 
     fn reconnect(&mut self) -> Result<(), SourceError> {

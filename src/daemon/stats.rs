@@ -33,8 +33,12 @@ pub struct LinkStats {
     pub large_gaps: u64,
     /// Items the sampler could not queue to the worker (queue full).
     pub overflows: u64,
-    /// Successful reconnects after a disconnection.
+    /// Successful reconnects after a disconnection or a stall.
     pub reconnects: u64,
+    /// Stalls: the link open but silent (no data, no ACK) for `device.stall_timeout_ms`, each
+    /// a `link_stalled` warning (published when there was one).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub stalls: u64,
     /// Device boots seen (distinct `boot_id`s in a row).
     pub segments: u64,
     /// Times the 32-bit device clock wrapped.

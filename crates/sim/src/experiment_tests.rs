@@ -160,7 +160,8 @@ fn device_reset_is_reported_and_never_re_armed() {
         n,
         vec![Notice::DeviceReset {
             old_boot_id: 11,
-            new_boot_id: 12
+            new_boot_id: 12,
+            rearm: false
         }]
     );
     for t in (500..2_000_000).step_by(10_000) {

@@ -19,8 +19,9 @@
 //! does not execute it twice), at most `max_retries` times, then [`Notice::LinkFailed`]. An
 //! IMPULSE answered BUSY is tried again 20 ms later with a new seq; any other refusal ends the
 //! plan with [`Notice::Refused`] and a STOP. A HELLO with a new boot id means the device reset:
-//! [`Notice::DeviceReset`], and the plan is over — it never re-arms by itself. A watchdog trip
-//! ends it too. [`Experiment::abort`] sends STOP (re-sent until acknowledged) for shutdown.
+//! [`Notice::DeviceReset`], and the plan is over unless `rearm_on_reset` says to hand-shake, ARM
+//! and resume at the interrupted operating point (`recover.rs`: also what a reconnect and a
+//! stall of the link do). A watchdog trip ends it too. [`Experiment::abort`] sends STOP (re-sent until acknowledged) for shutdown.
 //!
 //! ```
 //! use propid_wire::experiment::{Experiment, ExperimentConfig, Output};
@@ -35,6 +36,7 @@
 
 mod config;
 mod plan;
+mod recover;
 
 pub use config::{ExperimentConfig, ExperimentConfigError};
 pub use plan::{Experiment, Notice, Output, Phase};

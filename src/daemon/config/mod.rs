@@ -67,6 +67,9 @@ pub struct DeviceConfig {
     pub reconnect_max: Duration,
     /// Wire format of the link.
     pub protocol: WireProtocol,
+    /// Host-side watchdog: a live link that sends nothing (no data, no ACK) this long is
+    /// stalled: STOP is tried, the port closed and reopened (None = off).
+    pub stall_timeout: Option<Duration>,
 }
 
 /// `[device] protocol`: which wire format the daemon expects (PROTOCOL.md §6).

@@ -28,6 +28,8 @@ pub struct RawDevice {
     pub reconnect_max_ms: Option<u64>,
     /// Wire format: `auto`, `tsp` or `csv`.
     pub protocol: Option<String>,
+    /// Host-side watchdog: nothing heard for this long → STOP, reopen, ms (0 = off).
+    pub stall_timeout_ms: Option<u64>,
 }
 
 /// `[daemon]` as written.
@@ -215,6 +217,16 @@ impl RawDevice {
             )?),
             reconnect_initial: ms(initial),
             reconnect_max: ms(max),
+            stall_timeout: match self.stall_timeout_ms.unwrap_or(1_000) {
+                0 => None,
+                v => Some(ms(int_in(
+                    "device.stall_timeout_ms",
+                    v,
+                    50,
+                    600_000,
+                    "0 (off) or 50..=600000 ms",
+                )?)),
+            },
             protocol: match self.protocol.as_deref().unwrap_or("auto") {
                 "auto" => WireProtocol::Auto,
                 "tsp" => WireProtocol::Tsp,

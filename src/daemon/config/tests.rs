@@ -56,6 +56,17 @@ fn nan_and_out_of_range_name_key_and_value() {
         e.contains("device.read_timeout_ms") && e.contains("500"),
         "{e}"
     );
+    let e = err("[device]\nstall_timeout_ms = 10\n");
+    assert!(
+        e.contains("device.stall_timeout_ms") && e.contains("10"),
+        "{e}"
+    );
+    let c = Config::parse("[device]\nstall_timeout_ms = 0\n", "test").unwrap();
+    assert_eq!(c.device.stall_timeout, None);
+    assert_eq!(
+        Config::default().device.stall_timeout,
+        Some(Duration::from_secs(1))
+    );
     let e = err("[daemon]\nmax_run_s = inf\n");
     assert!(e.contains("daemon.max_run_s") && e.contains("inf"), "{e}");
     let e = err("[identify]\noutput = \"voltage\"\n");

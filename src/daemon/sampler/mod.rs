@@ -25,12 +25,17 @@
 //! throttle column.
 //!
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
-//! exponential backoff; the plan is told, does a HELLO handshake again and never re-arms by
-//! itself. A plan over on a fault (device reset, watchdog trip, refusal) ends the run 500 ms
-//! later (the link still read meanwhile), with [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms with the same seq) until the device
-//! acknowledges it or the stop timeout passes.
+//! exponential backoff (a symlink is resolved again at every attempt); a link that stays open
+//! but silent for `[device] stall_timeout_ms` is *stalled*: STOP is tried, a `link_stalled`
+//! warning published, the port closed and reopened ([`link`]). After either the plan is told:
+//! it asks the device (HELLO_REQ) whether it is the same boot and goes on, or, reset, ends —
+//! or re-arms with `[experiment] rearm_on_reset`. A plan over on a fault (device reset, stall,
+//! watchdog trip, refusal) ends the run 500 ms later (the link still read meanwhile), with
+//! [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms
+//! with the same seq) until the device acknowledges it or the stop timeout passes.
 
 mod handler;
+mod link;
 
 use crossbeam_channel::Sender;
 use std::time::{Duration, Instant};
@@ -40,7 +45,7 @@ use super::csv_link::CsvLinkOptions;
 use super::item::{Item, Notice, PlanNote};
 use super::recorder::Recorder;
 use super::shutdown::Shutdown;
-use super::source::{Backoff, Source, SourceError};
+use super::source::{Source, SourceError};
 use super::stats::LinkStats;
 use super::tracker::Tracker;
 use super::wire::Wire;
@@ -69,6 +74,8 @@ pub enum PlanStatus {
 pub trait Plan: Send {
     /// The link was (re)opened.
     fn on_connect(&mut self, now_us: u64);
+    /// The link stalled (nothing heard for the stall timeout): queue a STOP, stop commanding.
+    fn on_stall(&mut self, now_us: u64);
     /// A frame from the device.
     fn on_frame(&mut self, now_us: u64, frame: &Frame);
     /// Timers (heartbeats, re-sends, waits).
@@ -101,6 +108,9 @@ pub struct SamplerConfig {
     /// warning and the plan starts anyway (in binary TSP/1, whose HELLO_REQ makes a device
     /// speak); [`SILENCE_TIMEOUT`] in a run.
     pub silence_timeout: Duration,
+    /// `[device] stall_timeout_ms`: a live link silent this long (after its first byte) is
+    /// stalled (None = no watchdog).
+    pub stall_timeout: Option<Duration>,
 }
 
 /// PROTOCOL.md §1: expect a boot banner and a HELLO within 3 s of opening.
@@ -140,6 +150,10 @@ pub struct Sampler {
     cmd: [u8; MAX_FRAME_LEN],
     /// When the link was (re)opened.
     connected_at: Instant,
+    /// When the last byte arrived.
+    last_rx: Instant,
+    /// A byte arrived since the link was (re)opened.
+    heard_since_connect: bool,
     /// The plan was told the link is up.
     plan_started: bool,
     /// The plan ended on a fault.
@@ -181,6 +195,8 @@ impl Sampler {
             buf: Box::new([0u8; 4096]),
             cmd: [0u8; MAX_FRAME_LEN],
             connected_at: Instant::now(),
+            last_rx: Instant::now(),
+            heard_since_connect: false,
             plan_started: false,
             plan_halted: false,
             halted_at: None,
@@ -238,6 +254,7 @@ impl Sampler {
                 Err(e @ SourceError::Open { .. }) => return Err(e.into()),
             }
             if live {
+                self.check_stall()?;
                 self.check_silence();
                 self.drive_plan()?;
             }
@@ -325,6 +342,8 @@ impl Sampler {
             r.write(&self.buf[..n]); // a failure is reported, never stops the stand
         }
         self.handler.stats.bytes += n as u64;
+        self.last_rx = Instant::now();
+        self.heard_since_connect = true;
         self.handler.now_us = self.now_us();
         let handler = &mut self.handler;
         if let Some(f) = self.wire.push(&self.buf[..n], &mut |f| handler.on_frame(f)) {
@@ -379,74 +398,6 @@ impl Sampler {
         failed
     }
 
-    /// Reopens the source with backoff until it works or a stop is requested.
-    fn reconnect(&mut self) -> Result<(), DaemonError> {
-        self.handler.send(Item::Notice(Notice::Disconnected));
-        let mut backoff = Backoff::new(self.cfg.reconnect_initial, self.cfg.reconnect_max);
-        loop {
-            self.forward_record_notes();
-            if self.shutdown.requested() || self.time_up() {
-                return Ok(()); // the main loop sees the request; STOP cannot reach anyone
-            }
-            sleep_unless(&self.shutdown, backoff.next_delay());
-            match self.source.reconnect() {
-                Ok(()) => break,
-                Err(SourceError::Finished { .. }) => return Ok(()),
-                Err(_) => continue,
-            }
-        }
-        self.handler.stats.reconnects += 1;
-        self.handler.send(Item::Notice(Notice::Reconnected));
-        self.connected_at = Instant::now();
-        self.start_plan(false);
-        Ok(())
-    }
-
-    /// Sends STOP until acknowledged or the stop timeout passes: through the plan when there is
-    /// one (so it stops its heartbeats and pulses), re-sent every 50 ms with the same seq.
-    fn stop_device(&mut self) -> Result<(), DaemonError> {
-        let now = self.now_us();
-        self.handler.awaiting_stop = None;
-        if let Some(p) = self.handler.plan.as_mut() {
-            p.abort(now);
-        }
-        let _ = self.send_plan_output();
-        let seq = match self.handler.awaiting_stop {
-            Some(seq) => seq,
-            None => {
-                // No plan, or the plan was over: a STOP of our own.
-                self.handler.awaiting_stop = Some(STOP_SEQ);
-                STOP_SEQ
-            }
-        };
-        let n = self
-            .wire
-            .encode(seq, &Message::Stop, &mut self.cmd[..])
-            .unwrap_or(0);
-        let frame: [u8; MAX_FRAME_LEN] = self.cmd;
-        let deadline = Instant::now() + self.cfg.stop_timeout;
-        let mut next_send = Instant::now();
-        while !self.handler.stop_acked && Instant::now() < deadline {
-            if Instant::now() >= next_send {
-                if self.source.write_all(&frame[..n]).is_err() {
-                    break;
-                }
-                next_send += RESEND;
-            }
-            if self.read_once().is_err() {
-                break;
-            }
-        }
-        let _ = self.send_plan_output();
-        let notice = if self.handler.stop_acked {
-            Notice::Stopped
-        } else {
-            Notice::StopUnacknowledged
-        };
-        self.handler.send(Item::Notice(notice));
-        Ok(())
-    }
-
     fn finish_stats(&mut self) {
         let s = &mut self.handler.stats;
         s.wire = self.wire.name().to_string();
@@ -462,18 +413,6 @@ impl Sampler {
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
         s.record_bytes_written = self.record.as_ref().map(Recorder::bytes_written);
-    }
-}
-
-/// Sleeps `d`, waking early when a stop is requested.
-fn sleep_unless(shutdown: &Shutdown, d: Duration) {
-    let end = Instant::now() + d;
-    while !shutdown.requested() {
-        let now = Instant::now();
-        if now >= end {
-            return;
-        }
-        std::thread::sleep((end - now).min(Duration::from_millis(10)));
     }
 }
 

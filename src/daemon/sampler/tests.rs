@@ -18,6 +18,7 @@ fn cfg() -> SamplerConfig {
         protocol: WireProtocol::Auto,
         csv: CsvLinkOptions::default(),
         silence_timeout: SILENCE_TIMEOUT,
+        stall_timeout: None,
     }
 }
 
@@ -244,6 +245,7 @@ impl Plan for Counting {
     fn on_frame(&mut self, _: u64, _: &Frame) {}
     fn poll(&mut self, _: u64) {}
     fn abort(&mut self, _: u64) {}
+    fn on_stall(&mut self, _: u64) {}
     fn next(&mut self, _: &mut dyn FnMut(u16, &Message), _: &mut dyn FnMut(PlanNote)) {}
     fn status(&self) -> PlanStatus {
         PlanStatus::Running
@@ -292,4 +294,97 @@ fn shutdown_sends_stop_and_reports_it_unacknowledged_without_a_device() {
     assert!(out.error.is_none());
     let items: Vec<Item> = rx.try_iter().collect();
     assert_eq!(items, vec![Item::Notice(Notice::StopUnacknowledged)]);
+}
+
+/// A live link that sends `bytes` once after each (re)open, then nothing; counts its closes
+/// and reopens and what it was sent.
+struct SpeaksOnce {
+    bytes: Vec<u8>,
+    pending: bool,
+    open: bool,
+    log: std::sync::Arc<std::sync::Mutex<(u32, u32, Vec<u8>)>>,
+}
+impl Source for SpeaksOnce {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
+        if !self.open {
+            return Err(SourceError::Disconnected {
+                what: "speaks-once".into(),
+                source: std::io::Error::other("closed"),
+            });
+        }
+        if std::mem::take(&mut self.pending) {
+            buf[..self.bytes.len()].copy_from_slice(&self.bytes);
+            return Ok(self.bytes.len());
+        }
+        std::thread::sleep(Duration::from_millis(2));
+        Ok(0)
+    }
+    fn write_all(&mut self, b: &[u8]) -> Result<(), SourceError> {
+        self.log.lock().unwrap().2.extend_from_slice(b);
+        Ok(())
+    }
+    fn close(&mut self) {
+        self.open = false;
+        self.log.lock().unwrap().0 += 1;
+    }
+    fn reconnect(&mut self) -> Result<(), SourceError> {
+        self.open = true;
+        self.pending = true;
+        self.log.lock().unwrap().1 += 1;
+        Ok(())
+    }
+    fn is_live(&self) -> bool {
+        true
+    }
+    fn describe(&self) -> String {
+        "speaks-once".into()
+    }
+}
+
+#[test]
+fn a_link_silent_past_the_stall_timeout_gets_stop_a_warning_and_a_reopen_each_time_it_stalls() {
+    let log = std::sync::Arc::new(std::sync::Mutex::new((0, 0, Vec::new())));
+    let src = SpeaksOnce {
+        bytes: frame(1, sample(0)),
+        pending: true,
+        open: true,
+        log: log.clone(),
+    };
+    let (tx, rx) = crossbeam_channel::bounded(1024);
+    let c = SamplerConfig {
+        protocol: WireProtocol::Tsp,
+        stall_timeout: Some(Duration::from_millis(40)),
+        stop_timeout: Duration::from_millis(60),
+        max_run: Some(Duration::from_millis(400)),
+        ..cfg()
+    };
+    let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), c).run();
+    assert!(out.error.is_none());
+    let items: Vec<Item> = rx.try_iter().collect();
+    let stalls: Vec<&Item> = items
+        .iter()
+        .filter(|i| matches!(i, Item::Notice(Notice::LinkStalled { .. })))
+        .collect();
+    // every stall: ~40 ms silent, ~60 ms of STOP, ~1 ms closed; the device speaks after each
+    // reopen, so each silence is a new stall
+    let n = out.stats.stalls;
+    assert!((2..=4).contains(&n), "{n} {items:?}");
+    assert_eq!(stalls.len() as u64, n);
+    match stalls[0] {
+        Item::Notice(Notice::LinkStalled {
+            silent_ms,
+            stop_acknowledged,
+        }) => {
+            assert!(*silent_ms >= 40, "{silent_ms}");
+            assert!(!stop_acknowledged);
+        }
+        _ => unreachable!(),
+    }
+    let (closes, reopens, written) = log.lock().unwrap().clone();
+    assert_eq!((closes as u64, reopens as u64), (n, n));
+    assert_eq!(out.stats.reconnects, n);
+    // the STOP of our own (no plan), re-sent every 50 ms, before each reopen
+    let stop = frame(STOP_SEQ, Message::Stop);
+    let stops = written.windows(stop.len()).filter(|w| *w == stop).count() as u64;
+    assert!(stops >= n, "{stops}");
 }

@@ -61,6 +61,10 @@ fn pinned_run() -> Vec<String> {
         Notice::CsvLink,
         Notice::PassiveBench,
         Notice::NoData,
+        Notice::LinkStalled {
+            silent_ms: 1200,
+            stop_acknowledged: false,
+        },
     ] {
         w.handle(Item::Notice(n));
     }
@@ -78,7 +82,14 @@ fn pinned_run() -> Vec<String> {
         },
         PlanNote::Finished,
         PlanNote::Stopped,
-        PlanNote::DeviceReset { new_boot_id: 8 },
+        PlanNote::DeviceReset {
+            new_boot_id: 8,
+            rearm: false,
+        },
+        PlanNote::DeviceReset {
+            new_boot_id: 9,
+            rearm: true,
+        },
         PlanNote::WatchdogTripped,
         PlanNote::Refused { command: "ARM" },
         PlanNote::LinkFailed { command: "PULSE" },

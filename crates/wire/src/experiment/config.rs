@@ -47,6 +47,10 @@ pub struct ExperimentConfig {
     pub retry_ms: u32,
     /// Re-sends before the link is declared failed, 0..=10.
     pub max_retries: u32,
+    /// After a device reset (a HELLO with a new boot id) or a link stall the host stopped the
+    /// motor for: hand-shake, ARM again and resume at the interrupted operating point (`true`),
+    /// or end the plan (`false`, the default: a supervisor decides; the daemon exits 8).
+    pub rearm_on_reset: bool,
 }
 
 impl Default for ExperimentConfig {
@@ -64,6 +68,7 @@ impl Default for ExperimentConfig {
             watchdog_ms: 500,
             retry_ms: 50,
             max_retries: 3,
+            rearm_on_reset: false,
         }
     }
 }

@@ -50,13 +50,15 @@ pub enum Notice {
     Finished,
     /// A STOP asked for by [`Experiment::abort`] was acknowledged.
     Stopped,
-    /// The device reset (HELLO with a new boot id). It boots disarmed; the plan does not re-arm
-    /// and is over.
+    /// The device reset (HELLO with a new boot id). It boots disarmed; the plan is over, or,
+    /// with `rearm_on_reset`, hand-shakes and re-arms at the interrupted operating point.
     DeviceReset {
         /// Boot id at the handshake.
         old_boot_id: u32,
         /// The new one.
         new_boot_id: u32,
+        /// The plan re-arms (`rearm_on_reset`); else it is over.
+        rearm: bool,
     },
     /// The device's watchdog stopped the motor. The plan is over.
     WatchdogTripped,
@@ -119,11 +121,11 @@ pub enum Phase {
 }
 
 #[derive(Debug, Clone, Copy)]
-struct InFlight {
-    seq: u16,
-    msg: Message,
-    sent_us: u64,
-    resends: u32,
+pub(super) struct InFlight {
+    pub(super) seq: u16,
+    pub(super) msg: Message,
+    pub(super) sent_us: u64,
+    pub(super) resends: u32,
 }
 
 /// Wait before re-trying an IMPULSE the device answered BUSY, µs.
@@ -132,18 +134,27 @@ const BUSY_RETRY_US: u64 = 20_000;
 /// The host-side experiment plan: a pure state machine (see the [module docs](super)).
 #[derive(Debug, Clone)]
 pub struct Experiment {
-    cfg: ExperimentConfig,
-    phase: Phase,
+    pub(super) cfg: ExperimentConfig,
+    pub(super) phase: Phase,
     seq: u16,
-    out: VecDeque<Output>,
-    in_flight: Option<InFlight>,
-    next_heartbeat_us: Option<u64>,
-    boot_id: Option<u32>,
-    rate_hz: Option<u16>,
-    handshake_acked: bool,
-    level_idx: usize,
-    pulses: u32,
-    wait_until_us: Option<u64>,
+    pub(super) out: VecDeque<Output>,
+    pub(super) in_flight: Option<InFlight>,
+    pub(super) next_heartbeat_us: Option<u64>,
+    pub(super) boot_id: Option<u32>,
+    pub(super) rate_hz: Option<u16>,
+    pub(super) handshake_acked: bool,
+    pub(super) level_idx: usize,
+    pub(super) pulses: u32,
+    pub(super) wait_until_us: Option<u64>,
+    /// After a reconnect: the HELLO_REQ that asks whether the device is the same boot is in
+    /// flight; the command it displaced waits here (waits are paused meanwhile).
+    pub(super) verifying: Option<Option<InFlight>>,
+    /// Over after a stall, to re-arm at the next reconnect (`rearm_on_reset`).
+    pub(super) rearm_pending: bool,
+    /// The operating point the plan goes to after ARM (0, or the interrupted one on a re-arm).
+    pub(super) resume_level: usize,
+    /// Re-arms so far.
+    pub(super) rearms: u32,
 }
 
 impl Experiment {
@@ -163,6 +174,10 @@ impl Experiment {
             level_idx: 0,
             pulses: 0,
             wait_until_us: None,
+            verifying: None,
+            rearm_pending: false,
+            resume_level: 0,
+            rearms: 0,
         })
     }
 
@@ -234,6 +249,9 @@ impl Experiment {
             self.next_heartbeat_us = Some((t + p).max(now_us));
         }
         self.check_retry(now_us);
+        if self.verifying.is_some() {
+            return; // waits resume once the device is known to be the same boot
+        }
         if let Some(t) = self.wait_until_us.filter(|&t| t <= now_us) {
             self.wait_until_us = None;
             self.wait_over(t.max(now_us));
@@ -246,10 +264,7 @@ impl Experiment {
             Message::Hello(h) => {
                 match self.boot_id {
                     Some(old) if old != h.boot_id => {
-                        return self.halt(Notice::DeviceReset {
-                            old_boot_id: old,
-                            new_boot_id: h.boot_id,
-                        });
+                        return self.device_reset(old, h.boot_id, now_us);
                     }
                     _ => {}
                 }
@@ -274,6 +289,9 @@ impl Experiment {
             return; // heartbeats, late duplicates
         };
         self.in_flight = None;
+        if let Some(displaced) = self.verifying.take() {
+            return self.verified(displaced, now_us);
+        }
         if a.result == AckResult::Busy && matches!(f.msg, Message::Impulse(_)) {
             self.wait_until_us = Some(now_us + BUSY_RETRY_US);
             return;
@@ -295,7 +313,7 @@ impl Experiment {
                 self.notice(Notice::Armed);
                 let p = self.cfg.heartbeat_ms as u64 * 1000;
                 self.next_heartbeat_us = Some(now_us + p);
-                self.go_to_level(0, now_us);
+                self.go_to_level(self.resume_level, now_us);
             }
             Phase::Ramping => {
                 self.phase = Phase::Settling;
@@ -366,7 +384,7 @@ impl Experiment {
         }
     }
 
-    fn connected(&mut self, now_us: u64) {
+    pub(super) fn connected(&mut self, now_us: u64) {
         self.notice(Notice::Connected {
             boot_id: self.boot_id.unwrap_or(0),
             sample_rate_hz: self.rate_hz.unwrap_or(0),
@@ -410,8 +428,10 @@ impl Experiment {
         }
     }
 
-    fn halt(&mut self, n: Notice) {
+    pub(super) fn halt(&mut self, n: Notice) {
         self.phase = Phase::Halted;
+        self.verifying = None;
+        self.rearm_pending = false;
         self.in_flight = None;
         self.next_heartbeat_us = None;
         self.wait_until_us = None;
@@ -440,7 +460,7 @@ impl Experiment {
     }
 
     /// Sends a command that must be acknowledged (one at a time).
-    fn send(&mut self, msg: Message, now_us: u64) {
+    pub(super) fn send(&mut self, msg: Message, now_us: u64) {
         let seq = self.next_seq();
         self.in_flight = Some(InFlight {
             seq,
@@ -451,13 +471,13 @@ impl Experiment {
         self.out.push_back(Output::Send { seq, msg });
     }
 
-    fn next_seq(&mut self) -> u16 {
+    pub(super) fn next_seq(&mut self) -> u16 {
         let s = self.seq;
         self.seq = self.seq.wrapping_add(1);
         s
     }
 
-    fn notice(&mut self, n: Notice) {
+    pub(super) fn notice(&mut self, n: Notice) {
         self.out.push_back(Output::Notice(n));
     }
 }
