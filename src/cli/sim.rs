@@ -84,6 +84,10 @@ pub struct Overrides {
     /// Fault: re-open as a new boot MS ms after a hang-up (faults.reopen_after_ms; <0 never).
     #[arg(long, value_name = "MS", allow_negative_numbers = true)]
     pub reopen_after: Option<i64>,
+    /// Fault: freeze after S seconds, the port kept open, until the host closes it
+    /// (faults.freeze_after_s).
+    #[arg(long, value_name = "S")]
+    pub freeze_after: Option<f64>,
 }
 
 /// Runs `propid sim`.
@@ -131,6 +135,7 @@ pub fn load_config(args: &Args) -> Result<SimConfig, CliError> {
     set(&mut f.stall_ms, o.stall_ms);
     set(&mut f.hangup_after_s, o.hangup_after);
     set(&mut f.reopen_after_ms, o.reopen_after);
+    set(&mut f.freeze_after_s, o.freeze_after);
     cfg.validate()?;
     Ok(cfg)
 }

@@ -32,18 +32,27 @@ pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
             source,
         })
     })?;
-    from_experiment(ecfg)
+    let mut plan = ExperimentPlan::new(ecfg)?;
+    plan.exp
+        .set_stall_watchdog(cfg.device.stall_timeout.is_some());
+    Ok(Box::new(plan))
 }
 
 /// Builds the plan from an experiment configuration (validated here).
 pub fn from_experiment(ecfg: ExperimentConfig) -> Result<Box<dyn Plan>, DaemonError> {
-    let exp =
-        Experiment::new(ecfg, 1).map_err(|e| DaemonError::Config(ConfigError::Experiment(e)))?;
-    Ok(Box::new(ExperimentPlan {
-        exp,
-        started: false,
-        link_failed: false,
-    }))
+    Ok(Box::new(ExperimentPlan::new(ecfg)?))
+}
+
+impl ExperimentPlan {
+    fn new(ecfg: ExperimentConfig) -> Result<ExperimentPlan, DaemonError> {
+        let exp = Experiment::new(ecfg, 1)
+            .map_err(|e| DaemonError::Config(ConfigError::Experiment(e)))?;
+        Ok(ExperimentPlan {
+            exp,
+            started: false,
+            link_failed: false,
+        })
+    }
 }
 
 /// Translates the plan's notice into what the worker publishes.

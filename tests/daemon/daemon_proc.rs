@@ -40,8 +40,15 @@ pub struct Daemon {
 impl Daemon {
     /// Starts `propid ARGS` with stdout and stderr piped.
     pub fn start(args: &[&str]) -> Daemon {
-        let mut child = Command::new(BIN)
-            .args(args)
+        let mut cmd = Command::new(BIN);
+        cmd.args(args);
+        Daemon::spawn(cmd)
+    }
+
+    /// Starts `cmd` (the binary with its arguments, and whatever else the test sets up) with
+    /// stdout and stderr piped.
+    pub fn spawn(mut cmd: Command) -> Daemon {
+        let mut child = cmd
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()

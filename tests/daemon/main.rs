@@ -7,3 +7,4 @@ mod daemon_live;
 mod daemon_proc;
 mod daemon_replay;
 mod host_faults;
+mod link_faults;

@@ -122,6 +122,10 @@ pub struct FaultConfig {
     /// After a hang-up, open a new pty (and re-point `--link`) as a new boot after this delay, ms,
     /// 0..=60000; negative means never reopen (the runner ends).
     pub reopen_after_ms: i64,
+    /// Freeze (the firmware hangs: nothing sent, commands dropped, the pty kept open) after this
+    /// many seconds of the first boot, s, 0 (never) ..= 86400. The host closing the port resets
+    /// the board (a new boot on the same pty, as DTR resets an Arduino); once per run.
+    pub freeze_after_s: f64,
     /// SAMPLEs never sent, by `sample_index` (as the device counts them, from 0 at boot): drops
     /// at exact places, for tests that assert exact counts. At most 65536 indices.
     pub drop_samples_at: Vec<u32>,
@@ -146,6 +150,7 @@ impl Default for FaultConfig {
             stall_ms: 50,
             hangup_after_s: 0.0,
             reopen_after_ms: -1,
+            freeze_after_s: 0.0,
             drop_samples_at: Vec::new(),
             corrupt_samples_at: Vec::new(),
             garbage_before_samples_at: Vec::new(),
@@ -274,6 +279,7 @@ impl FaultConfig {
         check_f64("faults.stalls_per_s", self.stalls_per_s, 0.0, 100.0)?;
         check_int("faults.stall_ms", self.stall_ms as i64, 1, 10_000)?;
         check_f64("faults.hangup_after_s", self.hangup_after_s, 0.0, 86_400.0)?;
+        check_f64("faults.freeze_after_s", self.freeze_after_s, 0.0, 86_400.0)?;
         check_int(
             "faults.reopen_after_ms",
             self.reopen_after_ms,
@@ -301,6 +307,7 @@ impl FaultConfig {
             && self.drop_burst_prob == 0.0
             && self.stalls_per_s == 0.0
             && self.hangup_after_s == 0.0
+            && self.freeze_after_s == 0.0
             && self.drop_samples_at.is_empty()
             && self.corrupt_samples_at.is_empty()
             && self.garbage_before_samples_at.is_empty()

@@ -57,6 +57,8 @@ pub struct FaultStats {
     pub hangups: u64,
     /// Re-opens after a hang-up (each a new boot).
     pub reopens: u64,
+    /// Freezes (firmware hung with the port open, until the host closes it: a new boot).
+    pub freezes: u64,
 }
 
 impl FaultStats {
@@ -147,6 +149,11 @@ impl FaultInjector {
     /// Counts a re-open done by the runner.
     pub fn note_reopen(&mut self) {
         self.stats.reopens += 1;
+    }
+
+    /// Counts a freeze done by the runner.
+    pub fn note_freeze(&mut self) {
+        self.stats.freezes += 1;
     }
 
     /// Forgets output not yet sent (the link went away with it).

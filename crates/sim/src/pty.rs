@@ -20,6 +20,12 @@
 //! A hang-up fault drops the master (the host sees EOF/EIO, i.e. an unplug); with
 //! `reopen_after_ms >= 0` a new pty is opened after that delay as a new boot (new boot id,
 //! disarmed, counters restarted) and `--link` is re-pointed to it.
+//!
+//! A freeze fault (`freeze_after_s`, once per run) hangs the firmware with the port open: from
+//! then on nothing is sent and what the host sends is read and dropped, until the host closes
+//! the port (every slave descriptor closed: the master polls POLLHUP), which resets the board
+//! — as the DTR line resets an Arduino-style USB board when its port is closed and opened. The
+//! next boot (new boot id, disarmed) runs on the same pty.
 
 use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
@@ -152,21 +158,40 @@ fn run_shared(
     loop {
         let link = open_link(opts.link.as_deref())?;
         on_path(opts.link.as_deref().unwrap_or(&link.path), &link.path);
-        let plant = PlantDynamics::new(&cfg.plant, dt_s, cfg.stand.seed.wrapping_add(boot))?;
-        let id = super::boot_id(cfg.stand.seed, boot);
-        let mut fw = Firmware::new(&cfg.stand, plant, id, faults);
-        {
-            let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
-            r.boots = boot + 1;
-            r.boot_id = id;
-            r.slave_path = link.path.display().to_string();
-        }
-        let hung_up = serve(&mut fw, &link, cfg, shared, &stopped, samples_before)?;
-        samples_before += fw.stats().samples;
-        faults = fw.into_faults();
-        if !hung_up {
-            set_ended(shared, "stopped");
-            return Ok(());
+        // the boots on this pty: the first, and one after every freeze the host reset
+        loop {
+            let plant = PlantDynamics::new(&cfg.plant, dt_s, cfg.stand.seed.wrapping_add(boot))?;
+            let id = super::boot_id(cfg.stand.seed, boot);
+            let mut fw = Firmware::new(&cfg.stand, plant, id, faults);
+            {
+                let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
+                r.boots = boot + 1;
+                r.boot_id = id;
+                r.slave_path = link.path.display().to_string();
+            }
+            let freeze = boot == 0;
+            let end = serve(
+                &mut fw,
+                &link,
+                cfg,
+                shared,
+                &stopped,
+                samples_before,
+                freeze,
+            )?;
+            samples_before += fw.stats().samples;
+            faults = fw.into_faults();
+            match end {
+                End::Stopped => {
+                    set_ended(shared, "stopped");
+                    return Ok(());
+                }
+                End::Reset => {
+                    faults.discard_pending();
+                    boot += 1;
+                }
+                End::HungUp => break,
+            }
         }
         faults.note_hangup();
         faults.discard_pending();
@@ -204,7 +229,17 @@ fn update(shared: &Shared, fw: Option<FirmwareStats>, faults: &FaultInjector, sa
     r.faults = faults.stats();
 }
 
-/// Serves one boot on one pty. Returns true when it ended by a hang-up fault.
+/// How one boot ended.
+enum End {
+    /// Stopped (stop flag, `--seconds`).
+    Stopped,
+    /// A hang-up fault closed the pty.
+    HungUp,
+    /// Frozen, then reset by the host closing the port: a new boot on the same pty.
+    Reset,
+}
+
+/// Serves one boot on one pty (`freeze`: the freeze fault may strike in this boot).
 fn serve(
     fw: &mut Firmware<PlantDynamics>,
     link: &Link,
@@ -212,11 +247,14 @@ fn serve(
     shared: &Shared,
     stopped: &dyn Fn() -> bool,
     samples_before: u64,
-) -> Result<bool, SimError> {
+    freeze: bool,
+) -> Result<End, SimError> {
     let fd = link.master.as_raw_fd();
     let clock = MonoClock::start();
     let hangup_us =
         (cfg.faults.hangup_after_s > 0.0).then_some((cfg.faults.hangup_after_s * 1e6) as u64);
+    let freeze_us = (freeze && cfg.faults.freeze_after_s > 0.0)
+        .then_some((cfg.faults.freeze_after_s * 1e6) as u64);
     let mut backlog: Vec<u8> = Vec::new();
     let mut rx = [0u8; 4096];
     let (mut bytes_out, mut bytes_in, mut no_reader, mut overrun) = (0u64, 0u64, 0u64, 0u64);
@@ -233,7 +271,17 @@ fn serve(
                 samples_before,
                 [bytes_out, bytes_in, no_reader, overrun],
             );
-            return Ok(true);
+            return Ok(End::HungUp);
+        }
+        if freeze_us.is_some_and(|f| now >= f) {
+            fw.faults_mut().note_freeze();
+            publish(
+                shared,
+                fw,
+                samples_before,
+                [bytes_out, bytes_in, no_reader, overrun],
+            );
+            return Ok(frozen(fd, stopped, &mut rx, shared));
         }
         fw.faults_mut().set_enabled(reader_present);
         fw.advance(now);
@@ -292,7 +340,27 @@ fn serve(
         samples_before,
         [bytes_out, bytes_in, no_reader, overrun],
     );
-    Ok(false)
+    Ok(End::Stopped)
+}
+
+/// The firmware hung: nothing goes out, the host's bytes are read and dropped, until the host
+/// closes the port (a reset: [`End::Reset`]) or the runner is stopped.
+fn frozen(fd: i32, stopped: &dyn Fn() -> bool, rx: &mut [u8], shared: &Shared) -> End {
+    loop {
+        if stopped() {
+            return End::Stopped;
+        }
+        let dropped = match wait_master(fd, MAX_WAIT) {
+            Ready::Input => match read_master(fd, rx) {
+                Ok(n) => n as u64,
+                Err(_) => return End::Reset, // EIO: no slave open any more
+            },
+            Ready::NoReader => return End::Reset,
+            Ready::Nothing => 0,
+        };
+        let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
+        r.bytes_in += dropped;
+    }
 }
 
 fn publish(shared: &Shared, fw: &Firmware<PlantDynamics>, samples_before: u64, io: [u64; 4]) {

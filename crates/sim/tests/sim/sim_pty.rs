@@ -228,6 +228,39 @@ fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
 }
 
 #[test]
+fn a_freeze_keeps_the_port_open_and_silent_until_the_host_closes_it_which_resets_the_board() {
+    let mut cfg = SimConfig::default();
+    cfg.faults.freeze_after_s = 0.3;
+    let sim = SimHandle::spawn(cfg, RunOptions::default()).unwrap();
+    let mut port = open(sim.path());
+    let mut dec = Decoder::new();
+    let first_boot = sim.report().boot_id;
+    // samples flow, then stop: the port stays open (reads time out, never EOF or EIO)
+    let t0 = Instant::now();
+    while sim.report().faults.freezes == 0 {
+        assert!(t0.elapsed() < Duration::from_secs(3), "no freeze");
+        let _ = collect(&mut *port, &mut dec, Duration::from_millis(20), |_| false);
+    }
+    let _ = collect(&mut *port, &mut dec, Duration::from_millis(50), |_| false);
+    send(&mut *port, 3, Message::HelloReq);
+    let frames = collect(&mut *port, &mut dec, Duration::from_millis(300), |_| false);
+    assert!(frames.is_empty(), "frozen: {frames:?}");
+    assert_eq!(sim.report().boots, 1);
+    // the host closes and reopens the port: a new boot on the same pty answers
+    drop(port);
+    std::thread::sleep(Duration::from_millis(50));
+    let mut port = open(sim.path());
+    send(&mut *port, 4, Message::HelloReq);
+    let frames = collect(&mut *port, &mut dec, Duration::from_secs(2), |f| {
+        ack_of(f, 4).is_some()
+    });
+    let hello = hello_of(&frames).expect("HELLO after the reset");
+    assert_ne!(hello.boot_id, first_boot);
+    let r = sim.stop().unwrap();
+    assert_eq!((r.boots, r.faults.freezes, r.faults.hangups), (2, 1, 0));
+}
+
+#[test]
 fn csv_dialect_over_the_pty() {
     let mut cfg = SimConfig::default();
     cfg.stand.protocol = propid_sim::config::WireProtocol::Csv;

@@ -125,6 +125,8 @@ pub(super) struct InFlight {
     pub(super) seq: u16,
     pub(super) msg: Message,
     pub(super) sent_us: u64,
+    /// When it was first sent (re-sends keep it).
+    pub(super) first_sent_us: u64,
     pub(super) resends: u32,
 }
 
@@ -155,6 +157,10 @@ pub struct Experiment {
     pub(super) resume_level: usize,
     /// Re-arms so far.
     pub(super) rearms: u32,
+    /// When the last frame (of any kind) arrived.
+    pub(super) last_frame_us: Option<u64>,
+    /// The caller runs a stall watchdog ([`Experiment::set_stall_watchdog`]).
+    stall_watchdog: bool,
 }
 
 impl Experiment {
@@ -178,7 +184,19 @@ impl Experiment {
             rearm_pending: false,
             resume_level: 0,
             rearms: 0,
+            last_frame_us: None,
+            stall_watchdog: false,
         })
+    }
+
+    /// The caller runs a stall watchdog on the link (the daemon's `stall_timeout_ms`): a
+    /// command still unanswered after its re-sends while *nothing at all* has been heard since
+    /// it was first sent (after the device had spoken) is then not a link failure but a stall,
+    /// left to the watchdog ([`Self::link_stalled`]): no more re-sends, the command stays in
+    /// flight in case the device wakes. A device that goes on sending but does not acknowledge
+    /// is a link failure ([`Notice::LinkFailed`]) either way. Off by default.
+    pub fn set_stall_watchdog(&mut self, on: bool) {
+        self.stall_watchdog = on;
     }
 
     /// The configuration.
@@ -260,6 +278,7 @@ impl Experiment {
 
     /// A frame from the device arrived at `now_us`.
     pub fn on_frame(&mut self, frame: &Frame, now_us: u64) {
+        self.last_frame_us = Some(now_us);
         match frame.msg {
             Message::Hello(h) => {
                 match self.boot_id {
@@ -444,6 +463,10 @@ impl Experiment {
             return;
         }
         if f.resends >= self.cfg.max_retries {
+            let silent = self.last_frame_us.is_some_and(|t| t < f.first_sent_us);
+            if self.stall_watchdog && silent {
+                return; // a stall: the caller's watchdog acts
+            }
             let n = Notice::LinkFailed {
                 command: f.msg.name(),
                 seq: f.seq,
@@ -466,6 +489,7 @@ impl Experiment {
             seq,
             msg,
             sent_us: now_us,
+            first_sent_us: now_us,
             resends: 0,
         });
         self.out.push_back(Output::Send { seq, msg });

@@ -99,6 +99,7 @@ impl Experiment {
     pub(super) fn verified(&mut self, displaced: Option<InFlight>, now_us: u64) {
         if let Some(mut f) = displaced {
             f.sent_us = now_us;
+            f.first_sent_us = now_us;
             f.resends = 0;
             self.in_flight = Some(f);
             self.out.push_back(Output::Send {
@@ -324,6 +325,30 @@ mod tests {
         };
         assert_eq!(level, crate::protocol::message::throttle_level(0.5));
         assert_eq!(p.rearms(), 1);
+    }
+
+    #[test]
+    fn an_unanswered_command_is_a_stall_only_when_nothing_at_all_is_heard_and_a_watchdog_runs() {
+        for (watchdog, samples_flow, failed) in [
+            (false, false, true),
+            (true, true, true),
+            (true, false, false),
+        ] {
+            let (mut p, imp, t) = pulsing(false, 11);
+            p.set_stall_watchdog(watchdog);
+            for k in 1..=20u64 {
+                if samples_flow {
+                    p.on_frame(&hello(11), t + k * 10_000);
+                }
+                p.poll(t + k * 10_000 + 1);
+            }
+            let (s, n) = drain(&mut p);
+            // three re-sends of the IMPULSE with its seq either way
+            assert_eq!(s.iter().filter(|(q, _)| *q == imp).count(), 3);
+            let link_failed = n.iter().any(|x| matches!(x, Notice::LinkFailed { .. }));
+            assert_eq!(link_failed, failed, "{watchdog} {samples_flow}");
+            assert_eq!(p.is_over(), failed);
+        }
     }
 
     #[test]
