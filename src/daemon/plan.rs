@@ -24,7 +24,9 @@ pub struct ExperimentPlan {
     link_failed: bool,
 }
 
-/// Builds the plan from the config's `[experiment]` table (its keys are the plan's own).
+/// Builds the plan from the config's `[experiment]` table (its keys are the plan's own); with
+/// `[device] stall_timeout_ms` set, a command unanswered on a silent link is left to the stall
+/// watchdog ([`Experiment::set_stall_watchdog`]).
 pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
     let ecfg: ExperimentConfig = cfg.experiment.clone().try_into().map_err(|source| {
         DaemonError::Config(ConfigError::Parse {
