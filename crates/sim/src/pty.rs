@@ -21,11 +21,11 @@
 //! `reopen_after_ms >= 0` a new pty is opened after that delay as a new boot (new boot id,
 //! disarmed, counters restarted) and `--link` is re-pointed to it.
 //!
-//! A freeze fault (`freeze_after_s`, once per run) hangs the firmware with the port open: from
-//! then on nothing is sent and what the host sends is read and dropped, until the host closes
-//! the port (every slave descriptor closed: the master polls POLLHUP), which resets the board
-//! — as the DTR line resets an Arduino-style USB board when its port is closed and opened. The
-//! next boot (new boot id, disarmed) runs on the same pty.
+//! A freeze fault (`freeze_after_s`, once per run, while a host has the port open) hangs the
+//! firmware with the port open: from then on nothing is sent and what the host sends is read
+//! and dropped, until the host closes the port (every slave descriptor closed: the master polls
+//! POLLHUP), which resets the board — as the DTR line resets an Arduino-style USB board when
+//! its port is closed and opened. The next boot (new boot id, disarmed) runs on the same pty.
 
 use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
@@ -273,7 +273,7 @@ fn serve(
             );
             return Ok(End::HungUp);
         }
-        if freeze_us.is_some_and(|f| now >= f) {
+        if reader_present && freeze_us.is_some_and(|f| now >= f) {
             fw.faults_mut().note_freeze();
             publish(
                 shared,

@@ -355,7 +355,7 @@ fn a_link_silent_past_the_stall_timeout_gets_stop_a_warning_and_a_reopen_each_ti
         protocol: WireProtocol::Tsp,
         stall_timeout: Some(Duration::from_millis(40)),
         stop_timeout: Duration::from_millis(60),
-        max_run: Some(Duration::from_millis(400)),
+        max_run: Some(Duration::from_millis(600)),
         ..cfg()
     };
     let out = Sampler::new(Box::new(src), tx, None, None, Shutdown::manual(), c).run();
@@ -368,7 +368,7 @@ fn a_link_silent_past_the_stall_timeout_gets_stop_a_warning_and_a_reopen_each_ti
     // every stall: ~40 ms silent, ~60 ms of STOP, ~1 ms closed; the device speaks after each
     // reopen, so each silence is a new stall
     let n = out.stats.stalls;
-    assert!((2..=4).contains(&n), "{n} {items:?}");
+    assert!((2..=6).contains(&n), "{n} {items:?}");
     assert_eq!(stalls.len() as u64, n);
     match stalls[0] {
         Item::Notice(Notice::LinkStalled {
