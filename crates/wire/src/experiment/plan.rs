@@ -328,6 +328,10 @@ impl Experiment {
                     self.connected(now_us);
                 }
             }
+            Phase::Arming if matches!(f.msg, Message::Stop) => {
+                // a re-arm: the motor is known to be stopped, now ARM
+                self.send(Message::Arm(Arm::new(self.cfg.watchdog_ms)), now_us);
+            }
             Phase::Arming => {
                 self.notice(Notice::Armed);
                 let p = self.cfg.heartbeat_ms as u64 * 1000;
@@ -409,7 +413,13 @@ impl Experiment {
             sample_rate_hz: self.rate_hz.unwrap_or(0),
         });
         self.phase = Phase::Arming;
-        self.send(Message::Arm(Arm::new(self.cfg.watchdog_ms)), now_us);
+        if self.rearms > 0 {
+            // a device back in the same boot may still be armed and busy (it refuses ARM
+            // then): STOP first, ARM on its ACK
+            self.send(Message::Stop, now_us);
+        } else {
+            self.send(Message::Arm(Arm::new(self.cfg.watchdog_ms)), now_us);
+        }
     }
 
     fn go_to_level(&mut self, idx: usize, now_us: u64) {

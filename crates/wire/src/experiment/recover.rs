@@ -8,9 +8,10 @@
 //!   seq (a device that executed it answers DUPLICATE) and the plan goes on; a new boot id →
 //!   [`Notice::DeviceReset`].
 //! - A device reset ([`Notice::DeviceReset`]): the device boots disarmed. Without
-//!   `rearm_on_reset` the plan is over; with it the plan hand-shakes again, ARMs and resumes at
-//!   the operating point it was working on (its pulses from the first; the points done stay
-//!   done).
+//!   `rearm_on_reset` the plan is over; with it the plan hand-shakes again, sends STOP (a device
+//!   back in the same boot after a stall may still be armed and would refuse ARM), ARMs and
+//!   resumes at the operating point it was working on (its pulses from the first; the points
+//!   done stay done).
 //! - [`Experiment::link_stalled`]: the host heard nothing (no data, no ACK) for its stall timeout.
 //!   One STOP goes out untracked (a device that does not answer cannot acknowledge it: the
 //!   caller re-sends it for a bounded time) and the plan is over; with `rearm_on_reset` the next
@@ -315,6 +316,10 @@ mod tests {
                 sample_rate_hz: 1000
             }]
         );
+        assert_eq!(s[0].1, Message::Stop, "the motor stopped before the re-arm");
+        p.on_frame(&ack(s[0].0, msg_type::STOP), t + 25);
+        let (s, n) = drain(&mut p);
+        assert!(n.is_empty());
         assert!(matches!(s[0].1, Message::Arm(_)));
         p.on_frame(&ack(s[0].0, msg_type::ARM), t + 30);
         let (s, n) = drain(&mut p);
