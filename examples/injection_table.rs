@@ -81,7 +81,9 @@ fn main() {
          the tolerance (dead time ±1 sample, sinusoid 1 % on the frequency and 25 % on the \
          amplitude, drift 25 %, supply sag 30 %); error = median |parameter error| of the found \
          draws (samples for the dead time, relative otherwise); also = other effects named in \
-         the injected log but not in the clean one (count over the draws).\n"
+         the injected log but not in the clean one (count over the draws). The supply sag scales \
+         the output, so it is injected only where the output is zero at rest (not the tanks' \
+         water level).\n"
     );
     println!("| effect | log | found | within | median error | also named |");
     println!("|---|---|---|---|---|---|");

@@ -71,7 +71,7 @@ fn hidden_effect_is_found(effect: &str, logs: &[&str], draws: u64) {
 
 /// Silverbox and the tanks. Not the robot arm: its sine sweep runs through its own lightly
 /// damped 12.7 Hz mode (ζ ≈ 0.005), and a sinusoid drawn near that mode is absorbed by the
-/// baseline's `fn`/`ζ` (7 of 10 found in docs/injection.md).
+/// baseline's `fn`/`ζ` (its found rate is in docs/injection.md).
 #[test]
 fn a_sinusoid_hidden_in_real_logs_is_found_with_its_frequency_and_amplitude() {
     hidden_effect_is_found("periodic_disturbance", &["silverbox", "cascaded_tanks"], 2);

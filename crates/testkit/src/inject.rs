@@ -38,6 +38,16 @@ pub struct Log {
     pub output: Option<&'static str>,
     /// Sample rate, Hz, for a file without a time column.
     pub fs_hz: Option<f64>,
+    /// The output is zero at rest (a thrust, a centred signal), so that scaling it is the
+    /// model's voltage-scaled input: the supply sag is injected only then (module doc).
+    pub zero_at_rest: bool,
+}
+
+impl Log {
+    /// Whether `effect` can be injected in this log as the module table says.
+    pub fn takes(&self, effect: &str) -> bool {
+        effect != "supply_sag" || self.zero_at_rest
+    }
 }
 
 /// Logs copied into the repository (`tests/data`, see its README): the Silverbox slice (an
@@ -50,6 +60,7 @@ pub const REPO_LOGS: [Log; 3] = [
         input: Some("V1"),
         output: Some("V2"),
         fs_hz: Some(610.35),
+        zero_at_rest: true,
     },
     Log {
         name: "robot_arm",
@@ -57,6 +68,7 @@ pub const REPO_LOGS: [Log; 3] = [
         input: Some("u_torque"),
         output: Some("y_accel"),
         fs_hz: Some(100.0),
+        zero_at_rest: true,
     },
     Log {
         name: "cascaded_tanks",
@@ -64,6 +76,8 @@ pub const REPO_LOGS: [Log; 3] = [
         input: Some("uEst"),
         output: Some("yEst"),
         fs_hz: Some(0.25),
+        // A water level: the tank is never empty at rest.
+        zero_at_rest: false,
     },
 ];
 
@@ -75,6 +89,7 @@ pub const SHARED_LOGS: [Log; 2] = [
         input: None,
         output: None,
         fs_hz: None,
+        zero_at_rest: true,
     },
     Log {
         name: "dantonio ramp",
@@ -82,6 +97,7 @@ pub const SHARED_LOGS: [Log; 2] = [
         input: None,
         output: None,
         fs_hz: None,
+        zero_at_rest: true,
     },
 ];
 
