@@ -88,7 +88,7 @@ fn main() {
     println!("| effect | log | found | within | median error | also named |");
     println!("|---|---|---|---|---|---|");
     for effect in EFFECTS {
-        for (path, log) in &logs {
+        for (path, log) in logs.iter().filter(|(_, l)| l.takes(effect)) {
             let Some(s) = samples(path, log) else {
                 continue;
             };
