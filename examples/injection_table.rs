@@ -7,7 +7,8 @@
 //! table (found rate, within-tolerance rate, median parameter error) that
 //! `scripts/injection_table.sh` writes to `docs/injection.md` for README.
 //!
-//! Usage: `cargo run --release --example injection_table -- BIN DRAWS [SHARED_DIR]`
+//! Usage: `cargo run --release --example injection_table -- BIN DRAWS [SHARED_DIR]` (every
+//! miss is told on stderr with its draw and the findings).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -115,6 +116,13 @@ fn main() {
                 };
                 let got = findings(&bin, &file, &inject(&s, &inj)).unwrap_or_default();
                 let o = judge(&inj, &clean, &got);
+                if !o.within(&inj) {
+                    eprintln!(
+                        "miss: {}: {inj:?} → {o:?}; findings {}",
+                        log.name,
+                        named(&got).join(", ")
+                    );
+                }
                 found += usize::from(o.found);
                 within += usize::from(o.within(&inj));
                 errors.extend(o.error.filter(|e| e.is_finite()).map(f64::abs));
