@@ -161,6 +161,24 @@ fn tyto_export_is_read_from_its_command_in_its_units() {
         assert!((f(&l["mean"]) / want - 1.0).abs() < 0.01, "{l} vs {want} N");
     }
     assert_eq!(v["static_map"]["thrust"]["unit"], "N");
+    // Its power map T = k·max(u − u0, 0)^e predicts every level above 15 % of full thrust
+    // within 12 % (issue 11, "How we will know"): full thrust = the top level's mean.
+    let power = &v["static_map"]["thrust"]["power"];
+    let (k, u0, e) = (f(&power["k"]), f(&power["u0"]), f(&power["exponent"]));
+    let full = levels.iter().map(|l| f(&l["mean"])).fold(0.0, f64::max);
+    let mut checked = 0;
+    for l in levels {
+        let (x, mean) = (f(&l["throttle"]), f(&l["mean"]));
+        if mean > 0.15 * full {
+            let predicted = k * (x - u0).max(0.0).powf(e);
+            assert!(
+                (predicted / mean - 1.0).abs() < 0.12,
+                "{l}: power map {power} predicts {predicted} N"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 4, "{checked} levels above 15 % of {full} N");
     assert_eq!(
         v["static_map"]["rpm"]["levels"].as_array().unwrap().len(),
         6

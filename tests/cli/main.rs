@@ -2,6 +2,7 @@
 
 mod demo_cli;
 mod diagnose_cli;
+mod diagnose_injected;
 mod diagnose_model_keys;
 mod diagnose_sim;
 mod host_faults_cli;

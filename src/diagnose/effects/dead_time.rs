@@ -11,8 +11,22 @@ use crate::diagnose::model::{Core, Signals};
 
 /// The published name.
 pub const NAME: &str = "dead_time";
-/// Longest dead time searched, seconds.
+/// Longest dead time searched, seconds (ESC update, filtering and logging of a motor stand).
 pub const MAX_DELAY_S: f64 = 0.15;
+/// Yet never fewer delays than this are searched: a slowly sampled log counts its delay in its
+/// own samples (a 45 Hz stand export holds and buffers a sample or two in its logger on top of
+/// the ESC's delay, a process logged every 4 s has its transport delay in samples of 4 s), and
+/// 0.15 s is there only a few samples (6 at 43 Hz) or none (at 0.25 Hz).
+pub const MIN_DELAY_SAMPLES: usize = 16;
+
+/// The longest delay searched, samples: [`MAX_DELAY_S`] but at least [`MIN_DELAY_SAMPLES`],
+/// and at most 80 samples and a tenth of the `est_len` estimation samples (≥ 1).
+pub fn max_delay_samples(dt_s: f64, est_len: usize) -> usize {
+    let cap = (est_len / 10).clamp(1, 80);
+    ((MAX_DELAY_S / dt_s).round() as usize)
+        .max(MIN_DELAY_SAMPLES)
+        .clamp(1, cap)
+}
 
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
@@ -39,14 +53,12 @@ impl Effect for DeadTime {
         NAME
     }
 
-    /// At most 0.15 s, 80 samples and a tenth of the estimation part (≥ 1 sample). A coarse
+    /// Delays up to [`max_delay_samples`]. A coarse
     /// grid (every 4th delay) with a short refit of every parameter at each delay (the
     /// baseline's `fn` and `ζ` have absorbed part of the delay), then every delay around the
     /// best with a longer refit.
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
-        let dt = ctx.sig.dt_s;
-        let cap = (ctx.est.len() / 10).clamp(1, 80);
-        let dmax = ((MAX_DELAY_S / dt).round() as usize).clamp(1, cap);
+        let dmax = max_delay_samples(ctx.sig.dt_s, ctx.est.len());
         let lm_at = |d: usize, iters: usize| {
             let start = cur.model.with(DeadTimeParams { delay_samples: d });
             ctx.lm(&start, iters)
@@ -118,6 +130,20 @@ impl DeadTimeParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_longest_delay_is_0_15_s_but_never_under_16_samples() {
+        // The simulated stand at 500 Hz: 0.15 s.
+        assert_eq!(max_delay_samples(0.002, 8400), 75);
+        // 1 kHz: the 80-sample cap.
+        assert_eq!(max_delay_samples(0.001, 8400), 80);
+        // A 43 Hz stand export and the cascaded tanks at 0.25 Hz: 16 samples.
+        assert_eq!(max_delay_samples(1.0 / 43.0, 700), 16);
+        assert_eq!(max_delay_samples(4.0, 717), 16);
+        // A short record: a tenth of its estimation part.
+        assert_eq!(max_delay_samples(4.0, 90), 9);
+        assert_eq!(max_delay_samples(4.0, 5), 1);
+    }
 
     #[test]
     fn the_input_is_shifted_and_the_first_sample_held() {
