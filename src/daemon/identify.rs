@@ -18,9 +18,11 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
 use super::config::Config;
+use super::live::{self, LiveWindow};
 use super::window::WindowView;
 use super::DaemonError;
 use propid_numerics::pulses::PulseInput;
+use propid_numerics::stabilization::StabOptions;
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
 use propid_numerics::{IdentError, ModelReport};
@@ -35,6 +37,14 @@ pub trait Identifier: Send {
     fn identify(&mut self, view: &WindowView<'_>) -> Result<(), IdentifyError>;
     /// The model of the last successful [`Identifier::identify`] (allocates).
     fn report(&self) -> Result<ModelReport, IdentifyError>;
+    /// What the web page draws of the window just identified: its measured pulse responses
+    /// with the model's, and the stabilization diagram (allocates; with `--http` only).
+    fn live(&mut self, _v: &WindowView<'_>) -> LiveWindow {
+        LiveWindow {
+            response: None,
+            stabilization: None,
+        }
+    }
 }
 
 /// Why a complete window gave no model (published as an `identification_failed` warning whose
@@ -314,6 +324,29 @@ impl Identifier for CoreIdentifier {
             return Err(IdentifyError::NoModel);
         }
         Ok(self.ws.to_report())
+    }
+
+    fn live(&mut self, v: &WindowView<'_>) -> LiveWindow {
+        if !self.ok {
+            return LiveWindow {
+                response: None,
+                stabilization: None,
+            };
+        }
+        let model = self.ws.model().state_space();
+        let lags = self.ws.markov().len();
+        let response = live::response(
+            self.ws.ensemble(),
+            v.output,
+            v.missing,
+            lags,
+            Some(&model),
+            v.dt_s,
+        );
+        LiveWindow {
+            response: Some(response),
+            stabilization: self.ws.stabilization(&StabOptions::default()).ok(),
+        }
     }
 }
 
