@@ -18,7 +18,8 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
 use super::config::Config;
-use super::live::{self, LiveWindow};
+use super::live::{self, ResponseLine};
+use propid_numerics::stabilization::Stabilization;
 use super::window::WindowView;
 use super::DaemonError;
 use propid_numerics::pulses::PulseInput;
@@ -37,13 +38,15 @@ pub trait Identifier: Send {
     fn identify(&mut self, view: &WindowView<'_>) -> Result<(), IdentifyError>;
     /// The model of the last successful [`Identifier::identify`] (allocates).
     fn report(&self) -> Result<ModelReport, IdentifyError>;
-    /// What the web page draws of the window just identified: its measured pulse responses
-    /// with the model's, and the stabilization diagram (allocates; with `--http` only).
-    fn live(&mut self, _v: &WindowView<'_>) -> LiveWindow {
-        LiveWindow {
-            response: None,
-            stabilization: None,
-        }
+    /// For the web page (allocates; with `--http` only), inside the window's callback: the
+    /// window's measured pulse responses with the model's.
+    fn response(&mut self, _v: &WindowView<'_>) -> Option<ResponseLine> {
+        None
+    }
+    /// For the web page, after the model line is published (the workspace still holds the
+    /// last identification): its stabilization diagram.
+    fn stabilization(&mut self) -> Option<Stabilization> {
+        None
     }
 }
 
@@ -326,27 +329,27 @@ impl Identifier for CoreIdentifier {
         Ok(self.ws.to_report())
     }
 
-    fn live(&mut self, v: &WindowView<'_>) -> LiveWindow {
+    fn response(&mut self, v: &WindowView<'_>) -> Option<ResponseLine> {
         if !self.ok {
-            return LiveWindow {
-                response: None,
-                stabilization: None,
-            };
+            return None;
         }
         let model = self.ws.model().state_space();
         let lags = self.ws.markov().len();
-        let response = live::response(
+        Some(live::response(
             self.ws.ensemble(),
             v.output,
             v.missing,
             lags,
             Some(&model),
             v.dt_s,
-        );
-        LiveWindow {
-            response: Some(response),
-            stabilization: self.ws.stabilization(&StabOptions::default()).ok(),
+        ))
+    }
+
+    fn stabilization(&mut self) -> Option<Stabilization> {
+        if !self.ok {
+            return None;
         }
+        self.ws.stabilization(&StabOptions::default()).ok()
     }
 }
 

@@ -148,15 +148,6 @@ pub struct StabilizationLine {
     pub diagram: Stabilization,
 }
 
-/// What the identifier adds for the page after a model: the responses and the diagram.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LiveWindow {
-    /// The measured and model pulse responses (window facts filled in by the worker).
-    pub response: Option<ResponseLine>,
-    /// The stabilization diagram.
-    pub stabilization: Option<Stabilization>,
-}
-
 /// The measured pulse responses of the ensemble's kept pulses, over `lags` lags, per unit
 /// throttle: for pulse `i` at `start` with amplitude `a` and baseline `b` (the ensemble's own
 /// pulses and baselines: the identification's, not a second pulse finder),

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 pub use super::identify::{Identifier, IdentifyError};
 use super::item::{Item, SampleItem};
 use super::line::{Event, Line, ScheduleRow, Warning, WindowFacts, WindowModel};
-use super::live::{LiveWindow, SampleDigest, StabilizationLine};
+use super::live::{ResponseLine, SampleDigest, StabilizationLine};
 use super::publish::Publisher;
 use super::quality;
 use super::recorder::RecordNote;
@@ -62,7 +62,16 @@ struct Live {
     digest: SampleDigest,
     started: Instant,
     last_stats: Instant,
+    /// When the last response and diagram were published.
+    last_window: Option<Instant>,
+    /// The latest window's, not yet published (windows come faster than [`LIVE_WINDOW`]);
+    /// the workspace still holds its identification while this is set.
+    pending: Option<(WindowFacts, Option<ResponseLine>)>,
 }
+
+/// The response and diagram of at most one window per this long are drawn (a replay identifies
+/// windows far faster than a browser draws them): the latest, always the last one.
+const LIVE_WINDOW: Duration = Duration::from_millis(250);
 
 /// How often a `live_stats` line is published.
 const LIVE_STATS: Duration = Duration::from_millis(500);
@@ -91,6 +100,8 @@ impl<I: Identifier> Worker<I> {
                 digest: SampleDigest::default(),
                 started: Instant::now(),
                 last_stats: Instant::now(),
+                last_window: None,
+                pending: None,
             });
         }
         self
@@ -162,6 +173,7 @@ impl<I: Identifier> Worker<I> {
         if let Some(line) = self.live.as_mut().and_then(|l| l.digest.take()) {
             self.emit_live(&Line::Samples(&line));
         }
+        self.flush_live_window();
         self.publish_schedule();
         self.latencies_s.sort_by(f64::total_cmp);
         WorkerOutcome {
@@ -237,16 +249,36 @@ impl<I: Identifier> Worker<I> {
         }
     }
 
-    /// The web page's response and stabilization lines of a window's model.
-    fn publish_live_window(&mut self, facts: &WindowFacts, extras: Option<LiveWindow>) {
-        let Some(x) = extras else { return };
-        if let Some(mut r) = x.response {
+    /// The web page's response and stabilization lines of a window's model (after its model
+    /// line: they add nothing to its latency).
+    fn publish_live_window(&mut self, facts: &WindowFacts, response: Option<ResponseLine>) {
+        let Some(live) = self.live.as_mut() else {
+            return;
+        };
+        if live.last_window.is_some_and(|t| t.elapsed() < LIVE_WINDOW) {
+            live.pending = Some((*facts, response));
+            return;
+        }
+        live.last_window = Some(Instant::now());
+        live.pending = None;
+        self.emit_live_window(facts, response);
+    }
+
+    /// The latest window's response and diagram if they are still pending (at the end).
+    fn flush_live_window(&mut self) {
+        if let Some((facts, response)) = self.live.as_mut().and_then(|l| l.pending.take()) {
+            self.emit_live_window(&facts, response);
+        }
+    }
+
+    fn emit_live_window(&mut self, facts: &WindowFacts, response: Option<ResponseLine>) {
+        if let Some(mut r) = response {
             r.t_s = facts.t_s;
             r.operating_point = facts.operating_point;
             r.level = facts.level;
             self.emit_live(&Line::Response(&r));
         }
-        if let Some(diagram) = x.stabilization {
+        if let Some(diagram) = self.identifier.stabilization() {
             let line = StabilizationLine {
                 t_s: facts.t_s,
                 operating_point: facts.operating_point,
@@ -258,8 +290,9 @@ impl<I: Identifier> Worker<I> {
     }
 
     fn publish_model(&mut self, d: Done) {
-        if d.result.is_ok() {
-            self.publish_live_window(&d.facts, d.live);
+        if let Some(live) = self.live.as_mut() {
+            // a new identification: the workspace no longer holds the pending one's
+            live.pending = None;
         }
         let report = match d.result.and_then(|()| self.identifier.report()) {
             Ok(r) => r,
@@ -286,6 +319,7 @@ impl<I: Identifier> Worker<I> {
                 reasons: &flaws,
             }));
             self.stats.models_unreliable += 1;
+            self.publish_live_window(&d.facts, d.live);
             return;
         }
         self.emit(&Line::Model(&model));
@@ -295,6 +329,7 @@ impl<I: Identifier> Worker<I> {
                 self.latencies_s.push(t.elapsed().as_secs_f64());
             }
         }
+        self.publish_live_window(&d.facts, d.live);
         let level = model.window.level;
         match self.schedule.iter_mut().find(|e| e.0 == level) {
             // the operating point stays the one first published for this number
@@ -345,15 +380,19 @@ impl<I: Identifier> Worker<I> {
 struct Done {
     facts: WindowFacts,
     result: Result<(), IdentifyError>,
-    /// The web page's responses and diagram (`live` only).
-    live: Option<LiveWindow>,
+    /// The web page's pulse responses (`live` only).
+    live: Option<ResponseLine>,
 }
 
 /// The hot call and the facts needed to publish it later (no allocation); with `live` (an
 /// HTTP sink) also what the web page draws of the window, which allocates.
 fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>, live: bool) -> Done {
     let result = id.identify(v);
-    let live = (live && result.is_ok()).then(|| id.live(v));
+    let live = if live && result.is_ok() {
+        id.response(v)
+    } else {
+        None
+    };
     Done {
         facts: WindowFacts::from(v),
         result,
