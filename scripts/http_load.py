@@ -9,7 +9,8 @@ time at 1 kHz) through `propid replay`:
            connects and never reads (it must be dropped, counted, and slow nothing).
 Each RUNS times; prints the median run time (the stats line's elapsed_s), its ratio to `none`,
 the models published (must be equal in every mode), the clients dropped and what the readers
-received. The replay runs ~500x faster than real time, so each reader takes ~15 MB/s and the
+received, and the daemon's CPU time (user + system, all its threads: the server's included).
+The replay runs ~500x faster than real time, so each reader takes ~15 MB/s and the
 readers' own CPU shares the machine with the daemon: the worst case.
 
 Then in real time, `propid demo --json` (the simulated stand on a pty, ~10 s) without and with
@@ -82,13 +83,15 @@ def run(rec, mode):
             break
     if mode != "none":
         p.send_signal(signal.SIGINT)  # the replay keeps its page up until Ctrl-C
-    p.wait()
+    _, _, ru = os.wait4(p.pid, 0)
+    p.returncode = 0
+    cpu = ru.ru_utime + ru.ru_stime
     stop.set()
     for t in threads:
         t.join()
     if idle:
         idle.close()
-    return stats["elapsed_s"], models, stats.get("dropped_clients", 0), sum(got), stats
+    return stats["elapsed_s"], models, stats.get("dropped_clients", 0), sum(got), stats, cpu
 
 
 def main():
@@ -106,13 +109,16 @@ def main():
             for m in res:
                 res[m].append(run(rec, m))
         base = statistics.median(r[0] for r in res["none"])
-        print(f"{'mode':<8} {'median s':>9} {'ratio':>6} {'models':>7} {'dropped':>8} {'MB read/client':>15}")
+        print(f"{'mode':<8} {'median s':>9} {'ratio':>6} {'CPU s':>6} {'ratio':>6} {'models':>7} "
+              f"{'dropped':>8} {'MB read/client':>15}")
+        cbase = statistics.median(r[5] for r in res["none"])
         for m, rs in res.items():
             t = statistics.median(r[0] for r in rs)
+            c = statistics.median(r[5] for r in rs)
             models = sorted({r[1] for r in rs})
             dropped = statistics.median(r[2] for r in rs)
             mb = statistics.median(r[3] for r in rs) / READERS / 1e6 if m == "http+51" else 0
-            print(f"{m:<8} {t:>9.3f} {t / base:>6.2f} {','.join(map(str, models)):>7} "
+            print(f"{m:<8} {t:>9.3f} {t / base:>6.2f} {c:>6.2f} {c / cbase:>6.2f} {','.join(map(str, models)):>7} "
                   f"{dropped:>8.0f} {mb:>15.1f}")
         print("\nreal time (propid demo):")
         live = {m: [] for m in ("none", "http+51")}

@@ -19,11 +19,11 @@ use std::thread::JoinHandle;
 
 use super::config::Config;
 use super::live::{self, ResponseLine};
-use propid_numerics::stabilization::Stabilization;
 use super::window::WindowView;
 use super::DaemonError;
 use propid_numerics::pulses::PulseInput;
 use propid_numerics::stabilization::StabOptions;
+use propid_numerics::stabilization::Stabilization;
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
 use propid_numerics::{IdentError, ModelReport};

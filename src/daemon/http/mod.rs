@@ -300,24 +300,38 @@ fn stream(mut w: Box<dyn Write + Send>, rx: &Receiver<Arc<str>>) {
     {
         return;
     }
+    let mut ev = String::new();
     loop {
-        let r = match rx.recv_timeout(KEEP_ALIVE) {
+        ev.clear();
+        match rx.recv_timeout(KEEP_ALIVE) {
             Ok(line) => {
-                let mut ev = String::with_capacity(line.len() + 8);
-                ev.push_str("data: ");
-                ev.push_str(&line);
-                ev.push_str("\n\n");
-                w.write_all(ev.as_bytes()).and_then(|_| w.flush())
+                push_event(&mut ev, &line);
+                // what else is queued goes in the same write (fewer system calls when lines
+                // come fast, as in a replay)
+                while ev.len() < BATCH_BYTES {
+                    match rx.try_recv() {
+                        Ok(line) => push_event(&mut ev, &line),
+                        Err(_) => break,
+                    }
+                }
             }
-            Err(RecvTimeoutError::Timeout) => {
-                w.write_all(b": keep-alive\n\n").and_then(|_| w.flush())
-            }
+            Err(RecvTimeoutError::Timeout) => ev.push_str(": keep-alive\n\n"),
             Err(RecvTimeoutError::Disconnected) => return,
-        };
-        if r.is_err() {
+        }
+        if w.write_all(ev.as_bytes()).and_then(|_| w.flush()).is_err() {
             return;
         }
     }
+}
+
+/// Queued lines written at once, at most about this many bytes.
+const BATCH_BYTES: usize = 64 * 1024;
+
+/// Appends one server-sent event carrying `line` (one JSON line: no newline inside).
+fn push_event(ev: &mut String, line: &str) {
+    ev.push_str("data: ");
+    ev.push_str(line);
+    ev.push_str("\n\n");
 }
 
 #[cfg(test)]
