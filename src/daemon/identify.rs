@@ -548,4 +548,32 @@ mod tests {
         assert_eq!(err, IdentifyError::Core(want));
         assert_eq!(id.report(), Err(IdentifyError::NoModel));
     }
+
+    /// The web page's response of a window: the four pulses' measured responses per unit
+    /// throttle (the alternating ±0.1 pulses give the same curve), their mean within the noise
+    /// of the model's response to the same one-sample pulse; and its stabilization diagram
+    /// holds the model's order.
+    #[test]
+    fn the_pages_response_is_the_pulses_mean_beside_the_models() {
+        let (u, y, starts) = window();
+        let missing = vec![false; u.len()];
+        let cfg = Config::default();
+        let mut id = CoreIdentifier::new(&cfg).unwrap();
+        let v = view(&u, &y, &missing, &starts);
+        assert!(id.response(&v).is_none(), "nothing before a model");
+        id.identify(&v).unwrap();
+        let r = id.response(&v).unwrap();
+        assert_eq!((r.pulses, r.width, r.dt_s), (4, 1, 1e-3));
+        assert_eq!(r.mean.len(), r.model.len());
+        let peak = r.model.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        assert!(peak > 0.01, "{peak}");
+        for k in 0..r.mean.len() {
+            // noise 1e-3 / amplitude 0.1 = 1e-2 per pulse, and the baselines' share
+            assert!((r.mean[k] - r.model[k]).abs() < 0.02, "lag {k}: {r:?}");
+            assert!(r.spread[k] < 0.03, "lag {k}: {}", r.spread[k]);
+        }
+        let st = id.stabilization().unwrap();
+        assert!(st.orders.iter().any(|o| o.order == 2));
+        assert!(st.singular_values.len() >= 2);
+    }
 }
