@@ -34,6 +34,11 @@ pub struct Args {
     /// Print the daemon's JSON lines instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Serve the live web page on ADDR (a port or `:PORT`: 127.0.0.1 only; another interface
+    /// only when its address is given, e.g. `0.0.0.0:8080`; port 0: any free port, printed); the page stays
+    /// up after the demo, with its final state, until Ctrl-C.
+    #[arg(long, value_name = "ADDR", value_parser = super::http_arg)]
+    pub http: Option<std::net::SocketAddr>,
 }
 
 /// The demo's stand: the default plant sampled at 250 Hz (one-sample pulses carry more energy
@@ -72,7 +77,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         Some(p) => SimConfig::load(p)?,
         None => demo_sim(),
     };
-    let cfg = demo_config(&sim);
+    let mut cfg = demo_config(&sim);
+    cfg.publish.http = args.http;
+    cfg.publish.http_hold = args.http.is_some();
     let shutdown = Shutdown::install()?;
     let handle =
         SimHandle::spawn(sim.clone(), RunOptions::default()).map_err(CliError::SimulatedStand)?;

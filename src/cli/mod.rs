@@ -216,6 +216,13 @@ fn daemon_message(e: &DaemonError) -> String {
     }
 }
 
+/// Parses `--http ADDR` ([`crate::daemon::config::http_address`]).
+pub fn http_arg(text: &str) -> Result<std::net::SocketAddr, String> {
+    crate::daemon::config::http_address(text).ok_or_else(|| {
+        format!("{text:?}: a port (8080, :8080: 127.0.0.1) or an address (0.0.0.0:8080)")
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -26,11 +26,20 @@ pub struct Args {
     /// Deliver the recording in reads of at most this many bytes (1 = byte at a time).
     #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u64).range(1..=16_777_216))]
     pub chunk: u64,
+    /// Serve the live web page on ADDR (a port or `:PORT`: 127.0.0.1 only; another interface
+    /// only when its address is given, e.g. `0.0.0.0:8080`; port 0: any free port, printed); the page stays
+    /// up after the replay, with its final state, until Ctrl-C.
+    #[arg(long, value_name = "ADDR", value_parser = super::http_arg)]
+    pub http: Option<std::net::SocketAddr>,
 }
 
 /// Runs `propid replay`.
 pub fn run(args: Args) -> Result<(), CliError> {
-    let cfg = load_config(args.config.as_ref())?;
+    let mut cfg = load_config(args.config.as_ref())?;
+    if let Some(a) = args.http {
+        cfg.publish.http = Some(a);
+    }
+    cfg.publish.http_hold = cfg.publish.http.is_some();
     let shutdown = Shutdown::install()?;
     let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
     // unreadable: exit 7; empty, too large or (below) nothing decoded: exit 3, as identify

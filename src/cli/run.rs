@@ -32,6 +32,10 @@ pub struct Args {
     /// (overrides `daemon.record_max_bytes`; 0 = no limit).
     #[arg(long, value_name = "BYTES")]
     pub record_max_bytes: Option<u64>,
+    /// Serve the live web page on ADDR (a port or `:PORT`: 127.0.0.1 only; another interface
+    /// only when its address is given, e.g. `0.0.0.0:8080`; port 0: any free port, printed).
+    #[arg(long, value_name = "ADDR", value_parser = super::http_arg)]
+    pub http: Option<std::net::SocketAddr>,
 }
 
 /// Loads the configuration (defaults without a file).
@@ -47,6 +51,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut cfg = load_config(args.config.as_ref())?;
     if let Some(p) = args.port {
         cfg.device.port = p;
+    }
+    if let Some(a) = args.http {
+        cfg.publish.http = Some(a);
     }
     if let Some(r) = args.record {
         cfg.daemon.record = Some(r);

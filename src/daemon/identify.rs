@@ -18,9 +18,12 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
 use super::config::Config;
+use super::live::{self, ResponseLine};
 use super::window::WindowView;
 use super::DaemonError;
 use propid_numerics::pulses::PulseInput;
+use propid_numerics::stabilization::StabOptions;
+use propid_numerics::stabilization::Stabilization;
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
 use propid_numerics::{IdentError, ModelReport};
@@ -35,6 +38,16 @@ pub trait Identifier: Send {
     fn identify(&mut self, view: &WindowView<'_>) -> Result<(), IdentifyError>;
     /// The model of the last successful [`Identifier::identify`] (allocates).
     fn report(&self) -> Result<ModelReport, IdentifyError>;
+    /// For the web page (allocates; with `--http` only), inside the window's callback: the
+    /// window's measured pulse responses with the model's.
+    fn response(&mut self, _v: &WindowView<'_>) -> Option<ResponseLine> {
+        None
+    }
+    /// For the web page, after the model line is published (the workspace still holds the
+    /// last identification): its stabilization diagram.
+    fn stabilization(&mut self) -> Option<Stabilization> {
+        None
+    }
 }
 
 /// Why a complete window gave no model (published as an `identification_failed` warning whose
@@ -315,6 +328,29 @@ impl Identifier for CoreIdentifier {
         }
         Ok(self.ws.to_report())
     }
+
+    fn response(&mut self, v: &WindowView<'_>) -> Option<ResponseLine> {
+        if !self.ok {
+            return None;
+        }
+        let model = self.ws.model().state_space();
+        let lags = self.ws.markov().len();
+        Some(live::response(
+            self.ws.ensemble(),
+            v.output,
+            v.missing,
+            lags,
+            Some(&model),
+            v.dt_s,
+        ))
+    }
+
+    fn stabilization(&mut self) -> Option<Stabilization> {
+        if !self.ok {
+            return None;
+        }
+        self.ws.stabilization(&StabOptions::default()).ok()
+    }
 }
 
 #[cfg(test)]
@@ -511,5 +547,33 @@ mod tests {
         let want = ws.identify(&input, &id.opts).unwrap_err();
         assert_eq!(err, IdentifyError::Core(want));
         assert_eq!(id.report(), Err(IdentifyError::NoModel));
+    }
+
+    /// The web page's response of a window: the four pulses' measured responses per unit
+    /// throttle (the alternating ±0.1 pulses give the same curve), their mean within the noise
+    /// of the model's response to the same one-sample pulse; and its stabilization diagram
+    /// holds the model's order.
+    #[test]
+    fn the_pages_response_is_the_pulses_mean_beside_the_models() {
+        let (u, y, starts) = window();
+        let missing = vec![false; u.len()];
+        let cfg = Config::default();
+        let mut id = CoreIdentifier::new(&cfg).unwrap();
+        let v = view(&u, &y, &missing, &starts);
+        assert!(id.response(&v).is_none(), "nothing before a model");
+        id.identify(&v).unwrap();
+        let r = id.response(&v).unwrap();
+        assert_eq!((r.pulses, r.width, r.dt_s), (4, 1, 1e-3));
+        assert_eq!(r.mean.len(), r.model.len());
+        let peak = r.model.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        assert!(peak > 0.01, "{peak}");
+        for k in 0..r.mean.len() {
+            // noise 1e-3 / amplitude 0.1 = 1e-2 per pulse, and the baselines' share
+            assert!((r.mean[k] - r.model[k]).abs() < 0.02, "lag {k}: {r:?}");
+            assert!(r.spread[k] < 0.03, "lag {k}: {}", r.spread[k]);
+        }
+        let st = id.stabilization().unwrap();
+        assert!(st.orders.iter().any(|o| o.order == 2));
+        assert!(st.singular_values.len() >= 2);
     }
 }

@@ -9,6 +9,9 @@
 //! - At the end `{"type":"schedule", "models":[...]}` ([`ScheduleRow`]): the last model per
 //!   operating point (the gain schedule a flight controller needs), ordered by operating point;
 //!   then `{"type":"stats", ...}` ([`StatsLine`]).
+//! - With `--http` only: `{"type":"event","kind":"http","url"}` first, and the lines only the
+//!   web page's clients get ([`super::live`]: `samples`, `response`, `stabilization`,
+//!   `live_stats`, and a `schedule` after every model).
 //!
 //! **Serialised once, keys sorted.** [`Publisher::publish_line`](super::publish::Publisher)
 //! turns a line into its bytes in one place ([`Line::to_json`]): through a
@@ -24,6 +27,7 @@ use std::time::Instant;
 
 use super::identify::IdentifyError;
 use super::item::{EventItem, Notice, PlanNote};
+use super::live::{ResponseLine, SamplesLine, StabilizationLine};
 use super::quality::{Flaw, HINT};
 use super::stats::StatsLine;
 use super::window::{Reason, WindowView};
@@ -188,6 +192,11 @@ pub enum Event {
         /// The file's path.
         path: String,
     },
+    /// The live web page is served at this URL (`--http`; its bound port when 0 was asked).
+    Http {
+        /// `http://ADDRESS:PORT/`.
+        url: String,
+    },
     /// Device event ARMED.
     Armed(DeviceEvent),
     /// Device event DISARMED.
@@ -342,6 +351,14 @@ pub enum Line<'a> {
     Schedule(&'a [ScheduleRow]),
     /// `"stats"`: the run's counters, last.
     Stats(&'a StatsLine<'a>),
+    /// `"samples"` (the web page's only, [`super::live`]).
+    Samples(&'a SamplesLine),
+    /// `"response"` (the web page's only).
+    Response(&'a ResponseLine),
+    /// `"stabilization"` (the web page's only).
+    Stabilization(&'a StabilizationLine),
+    /// `"live_stats"`: the counters so far (the web page's only).
+    LiveStats(&'a StatsLine<'a>),
 }
 
 impl Line<'_> {
@@ -447,6 +464,10 @@ impl Serialize for Line<'_> {
                 models: &'l [ScheduleRow],
             },
             Stats(&'l StatsLine<'l>),
+            Samples(&'l SamplesLine),
+            Response(&'l ResponseLine),
+            Stabilization(&'l StabilizationLine),
+            LiveStats(&'l StatsLine<'l>),
         }
         match self {
             Line::Model(m) => Shape::Model(m),
@@ -457,6 +478,10 @@ impl Serialize for Line<'_> {
             },
             Line::Schedule(models) => Shape::Schedule { models },
             Line::Stats(st) => Shape::Stats(st),
+            Line::Samples(l) => Shape::Samples(l),
+            Line::Response(l) => Shape::Response(l),
+            Line::Stabilization(l) => Shape::Stabilization(l),
+            Line::LiveStats(st) => Shape::LiveStats(st),
         }
         .serialize(s)
     }

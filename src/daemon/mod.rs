@@ -18,9 +18,11 @@ pub mod config;
 pub mod csv_link;
 #[cfg(test)]
 mod fixtures;
+pub mod http;
 pub mod identify;
 pub mod item;
 pub mod line;
+pub mod live;
 pub mod plan;
 pub mod publish;
 pub mod quality;

@@ -37,6 +37,8 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use super::config::PublishConfig;
+use super::http::{HttpSink, Kind};
+use super::line::Event;
 use super::line::{Line, Warning};
 use super::DaemonError;
 
@@ -77,6 +79,8 @@ pub struct Publisher {
     capture: Option<Arc<Mutex<Vec<String>>>>,
     tap: Option<Tap>,
     lines: u64,
+    /// The live web page's server (`--http`), when configured.
+    http: Option<HttpSink>,
 }
 
 impl Publisher {
@@ -98,6 +102,10 @@ impl Publisher {
             Some(p) => Some(SocketSink::bind(p, cfg)?),
             None => None,
         };
+        let http = match cfg.http {
+            Some(a) => Some(HttpSink::bind(a, cfg.client_queue_lines, cfg.max_clients)?),
+            None => None,
+        };
         Ok(Publisher {
             stdout: cfg.stdout,
             stdout_error: None,
@@ -106,6 +114,7 @@ impl Publisher {
             capture: None,
             tap: None,
             lines: 0,
+            http,
         })
     }
 
@@ -120,6 +129,7 @@ impl Publisher {
             capture: Some(lines.clone()),
             tap: None,
             lines: 0,
+            http: None,
         };
         (p, lines)
     }
@@ -138,6 +148,9 @@ impl Publisher {
         }
         let had_failed = self.stdout_error.is_some();
         self.publish(&text)?;
+        if let Some(h) = &self.http {
+            h.send(http_kind(line), &text);
+        }
         if let (false, Some(e)) = (had_failed, &self.stdout_error) {
             let message = e.to_string();
             let warning = Line::Warning(Warning::OutputFailed {
@@ -145,9 +158,33 @@ impl Publisher {
                 path: None,
                 message: &message,
             });
-            self.publish(&warning.to_json().map_err(DaemonError::Serialize)?)?;
+            let text = warning.to_json().map_err(DaemonError::Serialize)?;
+            self.publish(&text)?;
+            if let Some(h) = &self.http {
+                h.send(Kind::Log, &text);
+            }
         }
         Ok(())
+    }
+
+    /// Publishes a line to the web page's clients only ([`super::live`]); nothing without an
+    /// HTTP sink (check [`Publisher::is_live`] before building one).
+    pub fn publish_live(&mut self, line: &Line<'_>) -> Result<(), DaemonError> {
+        if let Some(h) = &self.http {
+            let text = line.to_json().map_err(DaemonError::Serialize)?;
+            h.send(http_kind(line), &text);
+        }
+        Ok(())
+    }
+
+    /// Whether a web page is served (the worker then builds the [`super::live`] lines).
+    pub fn is_live(&self) -> bool {
+        self.http.is_some()
+    }
+
+    /// The web page's URL, when it is served.
+    pub fn http_url(&self) -> Option<String> {
+        self.http.as_ref().map(HttpSink::url)
     }
 
     /// The failure of an output that the run went on without (stdout, not a closed pipe), once.
@@ -196,18 +233,26 @@ impl Publisher {
         self.lines
     }
 
-    /// Socket clients dropped because they fell behind.
+    /// Socket and web-page clients dropped because they fell behind.
     pub fn dropped_clients(&self) -> u64 {
         self.socket
             .as_ref()
             .map_or(0, |s| s.shared.dropped_clients.load(Ordering::Relaxed))
+            + self.http.as_ref().map_or(0, HttpSink::dropped_clients)
     }
 
-    /// Socket clients refused because `max_clients` were connected (`None` without a socket).
+    /// Socket and web-page clients refused because `max_clients` were connected (`None`
+    /// without a socket or a web page).
     pub fn clients_refused(&self) -> Option<u64> {
-        self.socket
+        let socket = self
+            .socket
             .as_ref()
-            .map(|s| s.shared.clients_refused.load(Ordering::Relaxed))
+            .map(|s| s.shared.clients_refused.load(Ordering::Relaxed));
+        let http = self.http.as_ref().map(HttpSink::clients_refused);
+        match (socket, http) {
+            (None, None) => None,
+            (a, b) => Some(a.unwrap_or(0) + b.unwrap_or(0)),
+        }
     }
 
     /// Flushes every sink and closes the socket (queued lines are still delivered).
@@ -218,6 +263,24 @@ impl Publisher {
         if let Some(s) = self.socket.take() {
             s.close();
         }
+        if let Some(h) = self.http.take() {
+            h.close();
+        }
+    }
+}
+
+/// How the web page's history keeps a line.
+fn http_kind(line: &Line<'_>) -> Kind {
+    match line {
+        Line::Model(_) => Kind::State("model"),
+        Line::Schedule(_) => Kind::State("schedule"),
+        Line::Stats(_) => Kind::State("stats"),
+        Line::LiveStats(_) => Kind::State("live_stats"),
+        Line::Response(_) => Kind::State("response"),
+        Line::Stabilization(_) => Kind::State("stabilization"),
+        Line::Event(Event::Http { .. }) => Kind::State("http"),
+        Line::Samples(_) => Kind::Samples,
+        Line::Event(_) | Line::Warning(_) => Kind::Log,
     }
 }
 
@@ -411,6 +474,8 @@ mod tests {
             client_queue_lines: q,
             max_clients: 64,
             socket_group: None,
+            http: None,
+            http_hold: false,
         }
     }
 

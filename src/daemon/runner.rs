@@ -91,7 +91,20 @@ pub fn run<I: Identifier + 'static>(
         channel,
     );
     let (tx, rx) = bounded(cfg.daemon.queue_capacity);
-    let worker = Worker::new(window, parts.identifier, parts.publisher);
+    let mut publisher = parts.publisher;
+    let shutdown = parts.shutdown.clone();
+    let live_link = publisher.http_url().map(|url| {
+        eprintln!("propid: the live page is at {url}");
+        let line = Line::Event(super::line::Event::Http { url });
+        if let Err(e) = publisher.publish_line(&line) {
+            eprintln!("propid: {e}");
+        }
+        std::sync::Arc::new(std::sync::Mutex::new(LinkStats::default()))
+    });
+    let mut worker = Worker::new(window, parts.identifier, publisher);
+    if let Some(link) = &live_link {
+        worker = worker.with_live(link.clone());
+    }
     let worker = std::thread::Builder::new()
         .name("propid-worker".into())
         .spawn(move || worker.run(rx))
@@ -113,6 +126,10 @@ pub fn run<I: Identifier + 'static>(
             stall_timeout: cfg.device.stall_timeout,
         },
     );
+    let sampler = match live_link {
+        Some(link) => sampler.with_live_stats(link),
+        None => sampler,
+    };
     let sampler = std::thread::Builder::new()
         .name("propid-sampler".into())
         .spawn(move || sampler.run())
@@ -136,6 +153,12 @@ pub fn run<I: Identifier + 'static>(
     stats.clients_refused = publisher.clients_refused();
     publisher.publish_line(&Line::Stats(&stats))?;
     let output_error = publisher.take_error();
+    if publisher.is_live() && cfg.publish.http_hold {
+        eprintln!("propid: the run is over; the page stays up until Ctrl-C");
+        while !shutdown.requested() {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+    }
     publisher.close();
     if let Some(e) = sampled.error.or(worked.error) {
         return Err(e);

@@ -130,6 +130,11 @@ pub struct PublishConfig {
     pub max_clients: usize,
     /// Group (gid) given the socket, mode 0660 (None: owner only, 0600).
     pub socket_group: Option<u32>,
+    /// Serve the live web page on this address (None: off); see [`http_address`].
+    pub http: Option<std::net::SocketAddr>,
+    /// After the run, keep serving the page (its final state) until a stop is requested
+    /// (`replay` and `demo` with `--http`; not from the file).
+    pub http_hold: bool,
 }
 
 /// Validated CSV-bench settings.
@@ -160,6 +165,20 @@ pub struct Config {
     pub csv: CsvConfig,
     /// `[experiment]` table, validated by the experiment plan.
     pub experiment: toml::Table,
+}
+
+/// `[publish] http` / `--http ADDR`: a bare port (`8080`) or `:PORT` binds the loopback
+/// `127.0.0.1`; any other interface only when its address is written out (`0.0.0.0:8080`,
+/// `[::1]:8080`). `localhost:PORT` is the loopback too. Port 0 asks the OS for a free port.
+pub fn http_address(text: &str) -> Option<std::net::SocketAddr> {
+    use std::net::{Ipv4Addr, SocketAddr};
+    let t = text.trim();
+    let port = t.strip_prefix(':').unwrap_or(t);
+    let port = port.strip_prefix("localhost:").unwrap_or(port);
+    if let Ok(p) = port.parse::<u16>() {
+        return Some(SocketAddr::from((Ipv4Addr::LOCALHOST, p)));
+    }
+    t.parse().ok()
 }
 
 /// Smallest `daemon.record_max_bytes` other than 0 (a file holds at least 64 KiB).

@@ -82,6 +82,8 @@ pub struct RawPublish {
     pub max_clients: Option<usize>,
     /// Group (name or number) that may connect to the socket (mode 0660).
     pub socket_group: Option<String>,
+    /// Serve the live web page on this address (`8080`, `:8080`, `127.0.0.1:8080`).
+    pub http: Option<String>,
 }
 
 /// `[csv]` as written: how a CSV bench (PROTOCOL.md §6) is read.
@@ -344,6 +346,15 @@ impl RawPublish {
                 4_096,
                 "1..=4096 clients",
             )?,
+            http: match non_empty(self.http) {
+                None => None,
+                Some(a) => Some(super::http_address(&a).ok_or(ConfigError::OutOfRange {
+                    key: "publish.http",
+                    value: format!("{a:?}"),
+                    expected: "a port (8080, :8080: loopback) or an address (127.0.0.1:8080)",
+                })?),
+            },
+            http_hold: false,
             socket_group: match non_empty(self.socket_group) {
                 None => None,
                 Some(g) => Some(group_id(&g).ok_or(ConfigError::OutOfRange {

@@ -124,3 +124,27 @@ fn empty_strings_mean_unset() {
     assert_eq!(c.publish.file, None);
     assert_eq!(c.publish.socket, None);
 }
+
+/// `[publish] http`: off by default; a bare port or `:PORT` is the loopback; another interface
+/// only when written out; anything else is refused with the key named.
+#[test]
+fn http_address_is_loopback_unless_written_out() {
+    assert_eq!(Config::default().publish.http, None);
+    let addr = |t: &str| {
+        Config::parse(&format!("[publish]\nhttp = \"{t}\"\n"), "t")
+            .unwrap()
+            .publish
+            .http
+            .map(|a| a.to_string())
+    };
+    assert_eq!(addr("8080").as_deref(), Some("127.0.0.1:8080"));
+    assert_eq!(addr(":0").as_deref(), Some("127.0.0.1:0"));
+    assert_eq!(addr("localhost:81").as_deref(), Some("127.0.0.1:81"));
+    assert_eq!(addr("0.0.0.0:8080").as_deref(), Some("0.0.0.0:8080"));
+    assert_eq!(addr("[::1]:9").as_deref(), Some("[::1]:9"));
+    assert_eq!(addr(""), None);
+    let e = Config::parse("[publish]\nhttp = \"example.org:80\"\n", "t")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("publish.http"), "{e}");
+}

@@ -38,6 +38,7 @@ mod handler;
 mod link;
 
 use crossbeam_channel::Sender;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use super::config::WireProtocol;
@@ -160,7 +161,12 @@ pub struct Sampler {
     plan_halted: bool,
     /// When the plan was first seen over on a fault.
     halted_at: Option<Instant>,
+    /// The web page's copy of the link counters, refreshed every [`LIVE_STATS`] (`--http`).
+    live: Option<(Arc<Mutex<LinkStats>>, Instant)>,
 }
+
+/// How often the web page's copy of the link counters is refreshed.
+const LIVE_STATS: Duration = Duration::from_millis(500);
 
 impl Sampler {
     /// A sampler over `source`, queueing to `tx`, optionally driving `plan` and recording.
@@ -200,6 +206,29 @@ impl Sampler {
             plan_started: false,
             plan_halted: false,
             halted_at: None,
+            live: None,
+        }
+    }
+
+    /// Also keeps `slot` a copy of the link counters, every [`LIVE_STATS`] (never waiting for
+    /// the lock: a busy slot is skipped until the next turn).
+    pub fn with_live_stats(mut self, slot: Arc<Mutex<LinkStats>>) -> Sampler {
+        self.live = Some((slot, Instant::now()));
+        self
+    }
+
+    /// Refreshes the live copy of the counters when it is due.
+    fn share_stats(&mut self) {
+        let due = matches!(&self.live, Some((_, at)) if at.elapsed() >= LIVE_STATS);
+        if !due {
+            return;
+        }
+        self.finish_stats();
+        if let Some((slot, at)) = &mut self.live {
+            if let Ok(mut s) = slot.try_lock() {
+                s.clone_from(&self.handler.stats);
+                *at = Instant::now();
+            }
         }
     }
 
@@ -241,6 +270,7 @@ impl Sampler {
         }
         loop {
             self.forward_record_notes();
+            self.share_stats();
             if self.shutdown.requested() || self.time_up() {
                 if live {
                     self.stop_device()?;

@@ -12,14 +12,17 @@
 //! and the replay of its recording publish identical model lines.
 
 use crossbeam_channel::Receiver;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 pub use super::identify::{Identifier, IdentifyError};
 use super::item::{Item, SampleItem};
 use super::line::{Event, Line, ScheduleRow, Warning, WindowFacts, WindowModel};
+use super::live::{ResponseLine, SampleDigest, StabilizationLine};
 use super::publish::Publisher;
 use super::quality;
 use super::recorder::RecordNote;
-use super::stats::WorkStats;
+use super::stats::{LinkStats, StatsLine, WorkStats};
 use super::window::{Window, WindowView};
 use super::DaemonError;
 
@@ -48,7 +51,30 @@ pub struct Worker<I: Identifier> {
     schedule: Vec<(u32, ScheduleRow)>,
     latencies_s: Vec<f64>,
     error: Option<DaemonError>,
+    /// The web page's lines ([`super::live`]), with an HTTP sink only.
+    live: Option<Live>,
 }
+
+/// What the worker keeps for the web page's lines.
+struct Live {
+    /// The sampler's copy of the link counters.
+    link: Arc<Mutex<LinkStats>>,
+    digest: SampleDigest,
+    started: Instant,
+    last_stats: Instant,
+    /// When the last response and diagram were published.
+    last_window: Option<Instant>,
+    /// The latest window's, not yet published (windows come faster than [`LIVE_WINDOW`]);
+    /// the workspace still holds its identification while this is set.
+    pending: Option<(WindowFacts, Option<ResponseLine>)>,
+}
+
+/// The response and diagram of at most one window per this long are drawn (a replay identifies
+/// windows far faster than a browser draws them): the latest, always the last one.
+const LIVE_WINDOW: Duration = Duration::from_millis(250);
+
+/// How often a `live_stats` line is published.
+const LIVE_STATS: Duration = Duration::from_millis(500);
 
 impl<I: Identifier> Worker<I> {
     /// A worker with its window (allocated here, once) and identifier.
@@ -61,7 +87,24 @@ impl<I: Identifier> Worker<I> {
             schedule: Vec::new(),
             latencies_s: Vec::with_capacity(LATENCY_CAP),
             error: None,
+            live: None,
         }
+    }
+
+    /// Also publishes the web page's lines ([`super::live`]) when the publisher serves it;
+    /// `link` is the sampler's copy of the link counters.
+    pub fn with_live(mut self, link: Arc<Mutex<LinkStats>>) -> Worker<I> {
+        if self.publisher.is_live() {
+            self.live = Some(Live {
+                link,
+                digest: SampleDigest::default(),
+                started: Instant::now(),
+                last_stats: Instant::now(),
+                last_window: None,
+                pending: None,
+            });
+        }
+        self
     }
 
     /// Drains the queue until the sampler closes it, then publishes the schedule.
@@ -83,8 +126,9 @@ impl<I: Identifier> Worker<I> {
             Item::Segment { boot_id } => {
                 let mut done = None;
                 let identifier = &mut self.identifier;
+                let live = self.live.is_some();
                 self.window
-                    .on_segment(|v| done = Some(identify_one(identifier, v)));
+                    .on_segment(|v| done = Some(identify_one(identifier, v, live)));
                 if let Some(d) = done {
                     self.publish_model(d);
                 }
@@ -120,11 +164,16 @@ impl<I: Identifier> Worker<I> {
     pub fn finish(mut self) -> WorkerOutcome {
         let mut done = None;
         let identifier = &mut self.identifier;
+        let live = self.live.is_some();
         self.window
-            .finish(|v| done = Some(identify_one(identifier, v)));
+            .finish(|v| done = Some(identify_one(identifier, v, live)));
         if let Some(d) = done {
             self.publish_model(d);
         }
+        if let Some(line) = self.live.as_mut().and_then(|l| l.digest.take()) {
+            self.emit_live(&Line::Samples(&line));
+        }
+        self.flush_live_window();
         self.publish_schedule();
         self.latencies_s.sort_by(f64::total_cmp);
         WorkerOutcome {
@@ -139,11 +188,15 @@ impl<I: Identifier> Worker<I> {
         // Hot path: bookkeeping and identification only; reports are built after.
         let mut done: Option<Done> = None;
         let identifier = &mut self.identifier;
+        let live = self.live.is_some();
         let outcome = self
             .window
-            .on_sample(s, |v| done = Some(identify_one(identifier, v)));
+            .on_sample(s, |v| done = Some(identify_one(identifier, v, live)));
         if outcome.pulse {
             self.stats.pulses += 1;
+        }
+        if live {
+            self.on_live_sample(s, outcome.pulse);
         }
         if outcome.unannounced_lost > 0 {
             // Only the sampler's full queue drops samples without a gap notice.
@@ -162,7 +215,85 @@ impl<I: Identifier> Worker<I> {
         }
     }
 
+    /// The web page's samples and counters (with an HTTP sink only).
+    fn on_live_sample(&mut self, s: &SampleItem, pulse: bool) {
+        let Some(live) = self.live.as_mut() else {
+            return;
+        };
+        let Some(line) = live.digest.push(s, pulse) else {
+            return;
+        };
+        self.emit_live(&Line::Samples(&line));
+        let Some(live) = self.live.as_mut() else {
+            return;
+        };
+        if live.last_stats.elapsed() < LIVE_STATS {
+            return;
+        }
+        live.last_stats = Instant::now();
+        let link = live.link.lock().map(|l| l.clone()).unwrap_or_default();
+        let elapsed_s = live.started.elapsed().as_secs_f64();
+        let mut sorted = self.latencies_s.clone();
+        sorted.sort_by(f64::total_cmp);
+        let mut stats = StatsLine::new(
+            &link,
+            &self.stats,
+            self.publisher.dropped_clients(),
+            elapsed_s,
+            &sorted,
+        );
+        stats.clients_refused = self.publisher.clients_refused();
+        let line = Line::LiveStats(&stats);
+        if let Err(e) = self.publisher.publish_live(&line) {
+            self.error.get_or_insert(e);
+        }
+    }
+
+    /// The web page's response and stabilization lines of a window's model (after its model
+    /// line: they add nothing to its latency).
+    fn publish_live_window(&mut self, facts: &WindowFacts, response: Option<ResponseLine>) {
+        let Some(live) = self.live.as_mut() else {
+            return;
+        };
+        if live.last_window.is_some_and(|t| t.elapsed() < LIVE_WINDOW) {
+            live.pending = Some((*facts, response));
+            return;
+        }
+        live.last_window = Some(Instant::now());
+        live.pending = None;
+        self.emit_live_window(facts, response);
+    }
+
+    /// The latest window's response and diagram if they are still pending (at the end).
+    fn flush_live_window(&mut self) {
+        if let Some((facts, response)) = self.live.as_mut().and_then(|l| l.pending.take()) {
+            self.emit_live_window(&facts, response);
+        }
+    }
+
+    fn emit_live_window(&mut self, facts: &WindowFacts, response: Option<ResponseLine>) {
+        if let Some(mut r) = response {
+            r.t_s = facts.t_s;
+            r.operating_point = facts.operating_point;
+            r.level = facts.level;
+            self.emit_live(&Line::Response(&r));
+        }
+        if let Some(diagram) = self.identifier.stabilization() {
+            let line = StabilizationLine {
+                t_s: facts.t_s,
+                operating_point: facts.operating_point,
+                level: facts.level,
+                diagram,
+            };
+            self.emit_live(&Line::Stabilization(&line));
+        }
+    }
+
     fn publish_model(&mut self, d: Done) {
+        if let Some(live) = self.live.as_mut() {
+            // a new identification: the workspace no longer holds the pending one's
+            live.pending = None;
+        }
         let report = match d.result.and_then(|()| self.identifier.report()) {
             Ok(r) => r,
             Err(error) => {
@@ -188,6 +319,7 @@ impl<I: Identifier> Worker<I> {
                 reasons: &flaws,
             }));
             self.stats.models_unreliable += 1;
+            self.publish_live_window(&d.facts, d.live);
             return;
         }
         self.emit(&Line::Model(&model));
@@ -197,6 +329,7 @@ impl<I: Identifier> Worker<I> {
                 self.latencies_s.push(t.elapsed().as_secs_f64());
             }
         }
+        self.publish_live_window(&d.facts, d.live);
         let level = model.window.level;
         match self.schedule.iter_mut().find(|e| e.0 == level) {
             // the operating point stays the one first published for this number
@@ -206,17 +339,34 @@ impl<I: Identifier> Worker<I> {
                 ScheduleRow::new(model.window.operating_point, &model.report),
             )),
         }
+        if self.live.is_some() {
+            // the schedule so far, for the page (the final one is published to every sink)
+            let rows = self.schedule_rows();
+            self.emit_live(&Line::Schedule(&rows));
+        }
     }
 
-    fn publish_schedule(&mut self) {
-        let mut rows = std::mem::take(&mut self.schedule);
+    /// The gain schedule, ordered by operating point (then by number).
+    fn schedule_rows(&self) -> Vec<ScheduleRow> {
+        let mut rows: Vec<&(u32, ScheduleRow)> = self.schedule.iter().collect();
         rows.sort_by(|a, b| {
             a.1.operating_point
                 .total_cmp(&b.1.operating_point)
                 .then(a.0.cmp(&b.0))
         });
-        let models: Vec<ScheduleRow> = rows.into_iter().map(|(_, row)| row).collect();
+        rows.into_iter().map(|(_, row)| row.clone()).collect()
+    }
+
+    fn publish_schedule(&mut self) {
+        let models = self.schedule_rows();
+        self.schedule.clear();
         self.emit(&Line::Schedule(&models));
+    }
+
+    fn emit_live(&mut self, line: &Line<'_>) {
+        if let Err(e) = self.publisher.publish_live(line) {
+            self.error.get_or_insert(e);
+        }
     }
 
     fn emit(&mut self, line: &Line<'_>) {
@@ -230,13 +380,23 @@ impl<I: Identifier> Worker<I> {
 struct Done {
     facts: WindowFacts,
     result: Result<(), IdentifyError>,
+    /// The web page's pulse responses (`live` only).
+    live: Option<ResponseLine>,
 }
 
-/// The hot call and the facts needed to publish it later (no allocation).
-fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>) -> Done {
+/// The hot call and the facts needed to publish it later (no allocation); with `live` (an
+/// HTTP sink) also what the web page draws of the window, which allocates.
+fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>, live: bool) -> Done {
+    let result = id.identify(v);
+    let live = if live && result.is_ok() {
+        id.response(v)
+    } else {
+        None
+    };
     Done {
         facts: WindowFacts::from(v),
-        result: id.identify(v),
+        result,
+        live,
     }
 }
 

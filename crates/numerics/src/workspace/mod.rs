@@ -169,6 +169,12 @@ impl Workspace {
         &self.markov
     }
 
+    /// The pulses, baselines and average of the last pulse identification (the pulses each
+    /// response window starts at; for plots of the measured responses around the model).
+    pub fn ensemble(&self) -> &crate::pulses::PulseEnsemble {
+        &self.ensemble
+    }
+
     /// The allocating report of the last model.
     pub fn to_report(&self) -> super::ModelReport {
         self.engine.model.to_report()
