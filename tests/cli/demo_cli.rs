@@ -37,11 +37,20 @@ fn demo_of_the_motor_prints_models_beside_the_linearised_truth_and_the_gain_grow
             panic!("{r:?} in {out}")
         };
         assert_eq!(throttle, level, "{out}");
-        assert!((gain / truth - 1.0).abs() <= 0.15, "gain {gain} vs {truth}: {out}");
+        assert!(
+            (gain / truth - 1.0).abs() <= 0.15,
+            "gain {gain} vs {truth}: {out}"
+        );
         assert!((100.0 * (gain / truth - 1.0) - off).abs() < 0.06, "{r:?}");
-        assert!(tau >= 0.8 * up && tau <= 1.2 * down, "tau {tau} vs {up}/{down}: {out}");
+        assert!(
+            tau >= 0.8 * up && tau <= 1.2 * down,
+            "tau {tau} vs {up}/{down}: {out}"
+        );
         assert!(up < down, "spin-down slower: {r:?}");
-        assert!((dead - dead_truth).abs() <= 6.0, "dead {dead} vs {dead_truth}: {out}");
+        assert!(
+            (dead - dead_truth).abs() <= 6.0,
+            "dead {dead} vs {dead_truth}: {out}"
+        );
         assert!(gain > last_gain && truth > 1.15 * last_truth, "{out}");
         (last_gain, last_truth) = (gain, truth);
     }
@@ -49,7 +58,10 @@ fn demo_of_the_motor_prints_models_beside_the_linearised_truth_and_the_gain_grow
     let schedule: Vec<&str> = out.lines().filter(|l| l.ends_with("| yes")).collect();
     assert_eq!(schedule.len(), 3, "{out}");
     assert!(out.contains("spin-down is slower than spin-up"), "{out}");
-    assert!(out.contains(", 0 lost, 0 frames dropped, 3 models"), "{out}");
+    assert!(
+        out.contains(", 0 lost, 0 frames dropped, 3 models"),
+        "{out}"
+    );
 }
 
 /// The demo's three models checked against the simulator's 2nd-order plant.

@@ -4,8 +4,10 @@
 //! the same serial source as with a real stand), runs the daemon against it for about ten
 //! seconds — handshake, arm, three operating points, one-sample pulses of alternating sign,
 //! identification after every K pulses — and prints each published model beside the
-//! simulator's true parameters, then the gain schedule. `--json` prints the daemon's JSON lines
-//! instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
+//! simulator's truth, then the gain schedule. The built-in stand is the motor plant, whose
+//! truth is its linearisation at each level ([`truth`], with how far spin-down being slower
+//! than spin-up keeps any linear model from it); a `--sim-config` of the 2nd-order plant has
+//! one truth everywhere. `--json` prints the daemon's JSON lines instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
 //! they are published, and their bytes; nothing is parsed back.
 
 mod table;
@@ -25,9 +27,9 @@ use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::SerialSource;
 use crate::daemon::{Config, Publisher, Shutdown};
 use propid_sim::plant::{PlantConfig, PlantKind};
-use table::MotorRow;
 use propid_sim::pty::{RunOptions, SimHandle};
 use propid_sim::SimConfig;
+use table::MotorRow;
 
 /// Arguments of `propid demo`.
 #[derive(Debug, clap::Args)]
@@ -40,8 +42,8 @@ pub struct Args {
     pub json: bool,
 }
 
-/// The demo's stand: the default plant sampled at 250 Hz (one-sample pulses carry more energy
-/// at a lower rate, so ten seconds give tight models).
+/// The demo's stand: the motor plant (`config/sim.toml`'s) sampled at 250 Hz (one-sample
+/// pulses carry more energy at a lower rate, so ten seconds give tight models).
 fn demo_sim() -> SimConfig {
     let mut s = SimConfig::default();
     s.plant.kind = PlantKind::Motor;

@@ -182,7 +182,9 @@ pub fn motor_schedule(t: &mut String, rows: &[MotorRow], p: &PlantConfig) {
             }
         );
     }
-    let dt_ms = rows.first().map_or(f64::NAN, |r| r.expected.truth.dt_s * 1e3);
+    let dt_ms = rows
+        .first()
+        .map_or(f64::NAN, |r| r.expected.truth.dt_s * 1e3);
     let _ = writeln!(
         t,
         "spin-down is slower than spin-up: a linear model averages the two directions, so even \

@@ -83,7 +83,12 @@ pub fn markov(r: &ModelReport, len: usize) -> Vec<f64> {
     let mut x = DVector::from_iterator(n, (0..n).map(|i| b[i * p]));
     let c = DVector::from_row_slice(&c[..n]);
     let mut out = Vec::with_capacity(len);
-    out.push(r.d.first().and_then(|row| row.first()).copied().unwrap_or(0.0));
+    out.push(
+        r.d.first()
+            .and_then(|row| row.first())
+            .copied()
+            .unwrap_or(0.0),
+    );
     while out.len() < len {
         out.push(c.dot(&x));
         x = &a * x;
@@ -150,8 +155,8 @@ mod tests {
     #[test]
     fn first_order_plus_dead_time_figures_are_read_back() {
         // Y_k = g (1 − a) a^(k − 1 − d) from k = d + 1: θ = d dt, τ = −dt / ln a
-        let (dt, tau, d, g) = (0.004, 0.04, 2usize, 10.0);
-        let a: f64 = (-dt / tau).exp();
+        let (dt, tau, d, g): (f64, f64, usize, f64) = (0.004, 0.04, 2, 10.0);
+        let a = (-dt / tau).exp();
         let h: Vec<f64> = (0..300)
             .map(|k| {
                 if k > d {
@@ -164,7 +169,10 @@ mod tests {
         let f = figures(&h, dt);
         assert!((f.gain - g).abs() < 1e-6, "{f:?}");
         assert!((f.tau_s.unwrap() / tau - 1.0).abs() < 0.02, "{f:?}");
-        assert!((f.dead_time_s.unwrap() - d as f64 * dt).abs() < 0.2 * dt, "{f:?}");
+        assert!(
+            (f.dead_time_s.unwrap() - d as f64 * dt).abs() < 0.2 * dt,
+            "{f:?}"
+        );
     }
 
     #[test]
@@ -173,7 +181,10 @@ mod tests {
         let t = e.truth;
         let f = e.linear_fit;
         assert!((f.gain / t.gain_n_per_throttle - t.pulse_gain_factor).abs() < 1e-9);
-        assert!(t.pulse_gain_factor > 1.0 && t.pulse_gain_factor < 1.1, "{t:?}");
+        assert!(
+            t.pulse_gain_factor > 1.0 && t.pulse_gain_factor < 1.1,
+            "{t:?}"
+        );
         let tau = f.tau_s.unwrap();
         assert!(tau > t.tau_up_s && tau < t.tau_down_s, "{f:?} {t:?}");
         assert!(within(&f, &t), "{f:?} {t:?}");

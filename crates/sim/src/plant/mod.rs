@@ -55,5 +55,5 @@ mod tests;
 pub(crate) use config::check;
 pub use config::{PlantConfig, PlantError, PlantKind};
 pub use linearise::{equilibrium, Equilibrium, MotorLinear};
-pub use motor::MotorConfig;
 pub use model::{Measurement, Plant};
+pub use motor::MotorConfig;

@@ -67,7 +67,10 @@ impl MotorConfig {
     /// Checks every value; the error names the first bad key.
     pub fn validate(&self) -> Result<(), PlantError> {
         let positive = [
-            (self.thrust_at_reference_n, "plant.motor.thrust_at_reference_n"),
+            (
+                self.thrust_at_reference_n,
+                "plant.motor.thrust_at_reference_n",
+            ),
             (self.tau_up_s, "plant.motor.tau_up_s"),
             (self.tau_down_s, "plant.motor.tau_down_s"),
         ];
@@ -76,7 +79,12 @@ impl MotorConfig {
         }
         let g = self.tau_speed_exponent;
         let key = "plant.motor.tau_speed_exponent";
-        check(g.is_finite() && (0.0..=2.0).contains(&g), key, g, "must be in [0, 2]")?;
+        check(
+            g.is_finite() && (0.0..=2.0).contains(&g),
+            key,
+            g,
+            "must be in [0, 2]",
+        )?;
         let d = self.dead_time_s;
         let ok = d.is_finite() && (0.0..=1.0).contains(&d);
         check(ok, "plant.motor.dead_time_s", d, "must be in [0, 1] s")
@@ -94,7 +102,8 @@ impl MotorConfig {
 
     /// Steady-state speed `n_ss(u, V)`, rev/min.
     pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
-        plant.rpm_at_reference * (u.max(0.0) / plant.reference_throttle)
+        plant.rpm_at_reference
+            * (u.max(0.0) / plant.reference_throttle)
             * (voltage_v / plant.battery_v)
     }
 

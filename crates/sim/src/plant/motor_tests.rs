@@ -79,7 +79,10 @@ fn small_steps_follow_the_linearised_time_constant_of_their_direction() {
         let y0 = p.step(0.45).thrust_n;
         let y: Vec<f64> = (0..400).map(|_| p.step(0.45 + du).thrust_n - y0).collect();
         let fin = y[399];
-        assert!((fin / (lin.gain_n_per_throttle * du) - 1.0).abs() < 0.01, "{fin}");
+        assert!(
+            (fin / (lin.gain_n_per_throttle * du) - 1.0).abs() < 0.01,
+            "{fin}"
+        );
         // dead time d samples, then the sampled lag: y_k = fin (1 − a^(k − d)), a = e^(−dt/τ)
         let d = lin.dead_time_samples;
         assert_eq!(d, 2);
@@ -112,14 +115,18 @@ fn the_pulse_average_is_what_pulses_of_both_signs_give() {
     assert!((sum / (lin.gain_n_per_throttle * lin.pulse_gain_factor) - 1.0).abs() < 1e-3);
     let peak = h.iter().cloned().fold(0.0, f64::max);
     for k in 0..200 {
-        assert!((avg[k] - h[k]).abs() < 0.01 * peak, "k={k} {} vs {}", avg[k], h[k]);
+        assert!(
+            (avg[k] - h[k]).abs() < 0.01 * peak,
+            "k={k} {} vs {}",
+            avg[k],
+            h[k]
+        );
     }
 }
 
 #[test]
 fn motor_keys_are_checked_and_parse_from_toml() {
-    let cfg: PlantConfig =
-        toml::from_str("kind = \"motor\"\n[motor]\ntau_up_s = 0.02\n").unwrap();
+    let cfg: PlantConfig = toml::from_str("kind = \"motor\"\n[motor]\ntau_up_s = 0.02\n").unwrap();
     assert_eq!(cfg.kind, PlantKind::Motor);
     assert_eq!(cfg.motor.tau_up_s, 0.02);
     assert_eq!(cfg.motor.tau_down_s, MotorConfig::default().tau_down_s);

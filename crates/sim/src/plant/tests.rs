@@ -165,4 +165,3 @@ fn config_parses_from_toml_and_refuses_unknown_keys() {
     );
     assert!(toml::from_str::<PlantConfig>("fn_hz = 9.5\nfoo = 1\n").is_err());
 }
-
