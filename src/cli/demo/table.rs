@@ -141,7 +141,7 @@ pub fn motor_schedule(t: &mut String, rows: &[MotorRow], p: &PlantConfig) {
     );
     let _ = writeln!(
         t,
-        "{:>8} {:>8} {:>8} {:>8} {:>8} | {:>7} {:>13} {:>7} | {:>7} {:>6} {:>6} | {}",
+        "{:>8} {:>8} {:>8} {:>8} {:>8} | {:>7} {:>13} {:>7} | {:>7} {:>6} {:>6} | within",
         "throttle",
         "gain",
         "truth",
@@ -153,7 +153,6 @@ pub fn motor_schedule(t: &mut String, rows: &[MotorRow], p: &PlantConfig) {
         "dead_ms",
         "truth",
         "fit",
-        "within"
     );
     for r in rows {
         let (tr, fit) = (&r.expected.truth, &r.expected.linear_fit);
