@@ -11,8 +11,9 @@ const BIN: &str = env!("CARGO_BIN_EXE_propid");
 /// A clean simulated-stand recording (4 s) in `dir`.
 fn recording(dir: &Path) -> std::path::PathBuf {
     let rec = dir.join("rec.tsp");
+    let cfg = crate::support::second_order_sim(dir);
     let out = Command::new(BIN)
-        .args(["sim", "--seconds", "4", "--record"])
+        .args(["sim", "--config", &cfg, "--seconds", "4", "--record"])
         .arg(&rec)
         .output()
         .unwrap();

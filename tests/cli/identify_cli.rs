@@ -251,27 +251,20 @@ fn tsp1_binary_recording_is_identified() {
 fn simulated_stand_recording_takes_the_pulse_path() {
     let dir = tempfile::tempdir().unwrap();
     let rec = dir.path().join("run.tsp");
-    let config = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sim.toml");
-    let cfg = config.to_str().unwrap();
+    // the 2nd-order plant named (config/sim.toml is the motor, whose fn/zeta vary)
+    let cfg = crate::support::second_order_sim(dir.path());
     let (code, _, err) = propid(&[
         "sim",
         "--config",
-        cfg,
+        &cfg,
         "--record",
         rec.to_str().unwrap(),
         "--seconds",
         "20",
     ]);
     assert_eq!(code, 0, "{err}");
-    let text = std::fs::read_to_string(&config).unwrap();
-    let value = |key: &str| -> f64 {
-        let line = text
-            .lines()
-            .find(|l| l.trim_start().starts_with(key))
-            .unwrap();
-        line.split('=').nth(1).unwrap().trim().parse().unwrap()
-    };
-    let (fn_true, zeta_true) = (value("fn_hz"), value("zeta"));
+    let plant = propid_sim::plant::PlantConfig::default();
+    let (fn_true, zeta_true) = (plant.fn_hz, plant.zeta);
     let v = json(&["identify", rec.to_str().unwrap(), "--json"]);
     assert_eq!(v["source"]["path"], "pulse");
     let m = &v["model"];

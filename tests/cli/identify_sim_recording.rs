@@ -2,7 +2,7 @@
 //! IMPULSE_START events and 500 ms ramps between three operating points), and the audit's bad
 //! inputs: an absurd `--order`, an absurd `--fs`, `--esc-us MIN,MAX`, non-finite models.
 
-use crate::support::propid;
+use crate::support::{propid, second_order_sim};
 use std::path::Path;
 
 use propid_numerics::identify::{check_finite, identify_any, AnyError, AnyInput, PathTaken};
@@ -10,14 +10,15 @@ use propid_numerics::okid::OkidOptions;
 use propid_numerics::IdentOptions;
 use serde_json::Value;
 
-/// The plant of config/sim.toml.
+/// The 2nd-order plant (`kind = "second_order"`, the code's default).
 const FN_HZ: f64 = 12.0;
 const ZETA: f64 = 0.7;
 const GAIN: f64 = 12.0;
 
 fn record(dir: &Path, name: &str, extra: &[&str]) -> String {
     let f = dir.join(name).to_str().unwrap().to_owned();
-    let mut args = vec!["sim", "--record", &f, "--seconds", "20"];
+    let cfg = second_order_sim(dir);
+    let mut args = vec!["sim", "--config", &cfg, "--record", &f, "--seconds", "20"];
     args.extend_from_slice(extra);
     let (code, _, err) = propid(&args);
     assert_eq!(code, 0, "sim --record: {err}");

@@ -14,3 +14,11 @@ pub fn propid(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// A simulator configuration in `dir` that names the 2nd-order plant (`config/sim.toml`, read by
+/// `propid sim` without `--config`, is the motor): its path, for `propid sim --config`.
+pub fn second_order_sim(dir: &std::path::Path) -> String {
+    let path = dir.join("sim-second-order.toml");
+    std::fs::write(&path, "[plant]\nkind = \"second_order\"\n").expect("write sim config");
+    path.to_str().expect("utf-8 path").to_owned()
+}

@@ -269,10 +269,14 @@ impl Drop for KillOnDrop {
 }
 
 /// Starts `propid sim --seconds S --link LINK ARGS` as its own process (as in deployment) and
-/// waits for the link to appear.
+/// waits for the link to appear. The stand is the 2nd-order plant, named in a configuration
+/// beside the link (`config/sim.toml`, read without `--config`, is the motor).
 pub fn sim_process(link: &Path, seconds: f64, args: &[&str]) -> KillOnDrop {
+    let cfg = link.with_extension("sim.toml");
+    std::fs::write(&cfg, "[plant]\nkind = \"second_order\"\n").unwrap();
     let child = Command::new(BIN)
-        .args(["sim", "--seconds", &seconds.to_string()])
+        .args(["sim", "--seconds", &seconds.to_string(), "--config"])
+        .arg(&cfg)
         .args(args)
         .arg("--link")
         .arg(link)

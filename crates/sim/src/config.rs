@@ -438,5 +438,10 @@ mod tests {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
         let cfg = SimConfig::load(&path).unwrap();
         assert_eq!(cfg.stand.protocol, WireProtocol::Tsp);
+        // the motor, every other key at its default
+        assert_eq!(cfg.plant.kind, crate::plant::PlantKind::Motor);
+        let mut default = SimConfig::default();
+        default.plant.kind = crate::plant::PlantKind::Motor;
+        assert_eq!(cfg, default);
     }
 }

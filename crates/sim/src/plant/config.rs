@@ -3,6 +3,7 @@
 
 use serde::Deserialize;
 
+use super::motor::MotorConfig;
 use crate::effects::EffectsConfig;
 
 /// A plant parameter that cannot be simulated.
@@ -20,11 +21,28 @@ pub enum PlantError {
     },
 }
 
+/// Which plant steps: the `kind` key of `[plant]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PlantKind {
+    /// The linear 2nd-order thrust response (`fn_hz`, `zeta`, `gain_n_per_throttle`): the same
+    /// dynamics at every throttle. The default of the code and of the tests.
+    #[default]
+    SecondOrder,
+    /// The motor ([`super::motor`], `[plant.motor]`): thrust ∝ speed², a first-order speed lag
+    /// slower down than up, dead time, supply sag. `config/sim.toml` and `propid demo` use it.
+    Motor,
+}
+
 /// Configuration of the simulated plant (the `[plant]` table of `config/sim.toml`).
 /// Every key has its unit in its name or its doc; unknown keys are refused.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PlantConfig {
+    /// Which plant steps (`"second_order"`, the default, or `"motor"`).
+    pub kind: PlantKind,
+    /// The motor plant's parameters (`[plant.motor]`; used when `kind = "motor"`).
+    pub motor: MotorConfig,
     /// Natural frequency of the thrust response, Hz (> 0, below the Nyquist frequency).
     pub fn_hz: f64,
     /// Damping ratio of the thrust response (> 0; above 1 the poles are real, overdamped).
@@ -62,6 +80,8 @@ pub struct PlantConfig {
 impl Default for PlantConfig {
     fn default() -> Self {
         PlantConfig {
+            kind: PlantKind::SecondOrder,
+            motor: MotorConfig::default(),
             fn_hz: 12.0,
             zeta: 0.7,
             gain_n_per_throttle: 12.0,
@@ -144,11 +164,23 @@ impl PlantConfig {
         for (v, key) in non_negative {
             check(v.is_finite() && v >= 0.0, key, v, "must be >= 0")?;
         }
+        self.motor.validate()?;
         self.effects.validate(dt_s)
     }
 
-    /// Thrust at the reference throttle in steady state, newtons (the clean static map).
+    /// Thrust at the reference throttle in steady state, newtons (the clean static map; for the
+    /// motor, with the battery unloaded).
     pub fn reference_thrust_n(&self) -> f64 {
-        self.gain_n_per_throttle * self.reference_throttle
+        match self.kind {
+            PlantKind::SecondOrder => self.gain_n_per_throttle * self.reference_throttle,
+            PlantKind::Motor => self.motor.thrust_at_reference_n,
+        }
+    }
+
+    /// Supply current at true thrust `t_n` (momentum theory, see the module doc of
+    /// [`super`]): `idle_current_a + current_at_reference_a · (T / T_ref)^{3/2}`.
+    pub fn current_a(&self, t_n: f64) -> f64 {
+        let r = t_n.max(0.0) / self.reference_thrust_n();
+        self.idle_current_a + self.current_at_reference_a * r.powf(1.5)
     }
 }

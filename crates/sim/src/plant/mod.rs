@@ -1,10 +1,14 @@
-//! The simulated motor + propeller + load cell: a discrete 2nd-order thrust response to the
-//! throttle, with seeded noise, quantisation and physically plausible derived channels (torque,
-//! rotor speed, battery voltage and current). Effects that real benches show (dead time, a static
+//! The simulated motor + propeller + load cell, of one of two kinds (`[plant] kind`):
+//! `"second_order"` (the default of the code and the tests), a discrete 2nd-order thrust
+//! response with the same dynamics at every throttle, described below; or `"motor"`
+//! ([`motor`]: thrust ∝ speed², a first-order speed lag slower down than up, dead time, supply
+//! sag; linearised per operating point in [`MotorLinear`]), the stand of `config/sim.toml` and
+//! `propid demo`. Both have seeded noise, quantisation and physically plausible derived
+//! channels (torque, rotor speed, battery voltage and current). Effects that real benches show (dead time, a static
 //! map, an extra mode, drift, a periodic disturbance, supply sag, saturation) are switched on in
 //! [`EffectsConfig`](super::effects::EffectsConfig) and applied around the linear core.
 //!
-//! # The linear core
+//! # The 2nd-order core
 //! Thrust `T` follows the throttle `u` (fraction 0..1) as
 //!
 //! ```text
@@ -21,7 +25,7 @@
 //! `k + 1` on, as the Markov convention of `propid_numerics::markov` expects (`Y_0 = D = 0`,
 //! `Y_1 = C B`).
 //!
-//! # Derived channels (noise-free thrust `T ≥ 0` drives them)
+//! # Derived channels (noise-free thrust `T ≥ 0` drives them; the motor's rpm is its state)
 //! - torque: `Q = torque_m · T` (the ratio of the propeller's torque and thrust coefficients,
 //!   `C_Q D / C_T`, in metres);
 //! - rotor speed: `T = k_T n²`, so `rpm = rpm_at_reference · sqrt(T / T_ref)` where `T_ref` is the
@@ -36,13 +40,20 @@
 //! [`Measurement::adc_saturated`]).
 
 // `config.rs`: the `[plant]` table, its defaults and range checks; `model.rs`: the plant that
-// steps (linear core, effects around it, derived channels, noise, quantisation, saturation).
+// steps (its core, effects around it, derived channels, noise, quantisation, saturation);
+// `motor.rs`: the motor core and `[plant.motor]`; `linearise.rs`: the motor's linearisation.
 mod config;
+mod linearise;
 mod model;
+pub mod motor;
 
+#[cfg(test)]
+mod motor_tests;
 #[cfg(test)]
 mod tests;
 
 pub(crate) use config::check;
-pub use config::{PlantConfig, PlantError};
+pub use config::{PlantConfig, PlantError, PlantKind};
+pub use linearise::{equilibrium, Equilibrium, MotorLinear};
 pub use model::{Measurement, Plant};
+pub use motor::MotorConfig;

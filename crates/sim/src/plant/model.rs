@@ -1,6 +1,6 @@
-//! The plant that steps: the exactly discretised linear core, the effects applied around it,
-//! the derived channels and the load cell's noise, quantisation and saturation (formulas in the
-//! module doc of [`super`]).
+//! The plant that steps: its core (the exactly discretised 2nd-order response, or the motor of
+//! [`super::motor`]), the effects applied around it, the derived channels and the load cell's
+//! noise, quantisation and saturation (formulas in the module doc of [`super`]).
 
 use nalgebra::{Matrix2, Vector2};
 use propid_numerics::discretise::discretise_second_order;
@@ -8,7 +8,8 @@ use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
-use super::{PlantConfig, PlantError};
+use super::motor::Motor;
+use super::{PlantConfig, PlantError, PlantKind};
 use crate::effects::EffectState;
 
 /// One sample of every channel the stand measures.
@@ -28,14 +29,25 @@ pub struct Measurement {
     pub adc_saturated: bool,
 }
 
+/// What produces the true thrust from the input the effects hand on.
+#[derive(Debug, Clone)]
+enum Core {
+    /// The 2nd-order response: `x = [T, T']`, `x_{k+1} = A x_k + B u_k`.
+    SecondOrder {
+        a: Matrix2<f64>,
+        b: Vector2<f64>,
+        x: Vector2<f64>,
+    },
+    /// The motor (speed lag, dead time, thrust ∝ speed²).
+    Motor(Motor),
+}
+
 /// The simulated plant. Create it with [`Plant::new`], drive it with [`Plant::step`].
 #[derive(Debug, Clone)]
 pub struct Plant {
     cfg: PlantConfig,
     dt_s: f64,
-    a: Matrix2<f64>,
-    b: Vector2<f64>,
-    x: Vector2<f64>,
+    core: Core,
     k: u64,
     noise: Option<Normal<f64>>,
     rng: StdRng,
@@ -48,7 +60,18 @@ impl Plant {
     /// a generator seeded by `seed` (same seed, same inputs ⇒ same measurements).
     pub fn new(cfg: &PlantConfig, dt_s: f64, seed: u64) -> Result<Plant, PlantError> {
         cfg.validate(dt_s)?;
-        let (a, b) = discretise_second_order(cfg.fn_hz, cfg.zeta, cfg.gain_n_per_throttle, dt_s);
+        let core = match cfg.kind {
+            PlantKind::SecondOrder => {
+                let (a, b) =
+                    discretise_second_order(cfg.fn_hz, cfg.zeta, cfg.gain_n_per_throttle, dt_s);
+                Core::SecondOrder {
+                    a,
+                    b,
+                    x: Vector2::zeros(),
+                }
+            }
+            PlantKind::Motor => Core::Motor(Motor::new(cfg, dt_s)?),
+        };
         let noise = if cfg.noise_rms_n > 0.0 {
             Some(
                 Normal::new(0.0, cfg.noise_rms_n).map_err(|_| PlantError::InvalidParameter {
@@ -64,9 +87,7 @@ impl Plant {
         Ok(Plant {
             cfg: cfg.clone(),
             dt_s,
-            a,
-            b,
-            x: Vector2::zeros(),
+            core,
             k: 0,
             noise,
             rng: StdRng::seed_from_u64(seed),
@@ -90,20 +111,38 @@ impl Plant {
         self.k as f64 * self.dt_s
     }
 
-    /// The discrete linear core `(A, B, C)` with state `[T, T']`, `C = [1, 0]`, `D = 0`.
-    pub fn linear_core(&self) -> (Matrix2<f64>, Vector2<f64>) {
-        (self.a, self.b)
+    /// The discrete linear core `(A, B, C)` with state `[T, T']`, `C = [1, 0]`, `D = 0`, of the
+    /// 2nd-order plant; `None` for the motor (see [`PlantConfig::linearise`]).
+    pub fn linear_core(&self) -> Option<(Matrix2<f64>, Vector2<f64>)> {
+        match &self.core {
+            Core::SecondOrder { a, b, .. } => Some((*a, *b)),
+            Core::Motor(_) => None,
+        }
+    }
+
+    /// True thrust of the core's state, newtons.
+    fn thrust_true(&self) -> f64 {
+        match &self.core {
+            Core::SecondOrder { x, .. } => x[0],
+            Core::Motor(m) => m.thrust_n(&self.cfg),
+        }
     }
 
     /// Puts the plant in steady state at `throttle` (as if it had been held there for ever),
     /// without advancing time. Effects with memory (delay lines, extra mode) settle too.
     pub fn settle(&mut self, throttle: f64) {
+        let throttle = throttle.clamp(0.0, 1.0);
         let u = self
             .effects
-            .input_map(throttle.clamp(0.0, 1.0), self.cfg.battery_v, &self.cfg);
-        self.x = Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0);
-        self.effects.settle(throttle.clamp(0.0, 1.0), self.x[0]);
-        self.last_current_a = self.current_a(self.x[0]);
+            .input_map(throttle, self.cfg.battery_v, &self.cfg);
+        let t_s = self.time_s();
+        match &mut self.core {
+            Core::SecondOrder { x, .. } => *x = Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0),
+            Core::Motor(m) => m.settle(&self.cfg, throttle, u, t_s),
+        }
+        let thrust = self.thrust_true();
+        self.effects.settle(throttle, thrust);
+        self.last_current_a = self.cfg.current_a(thrust);
     }
 
     /// Advances one sample with `throttle` (0..1; NaN counts as 0, out-of-range values are
@@ -116,8 +155,8 @@ impl Plant {
             0.0
         };
         let t_s = self.time_s();
-        let thrust_true = self.x[0];
-        let current_a = self.current_a(thrust_true);
+        let thrust_true = self.thrust_true();
+        let current_a = self.cfg.current_a(thrust_true);
         let voltage_v = self.cfg.battery_v
             - self.cfg.discharge_v_per_s * t_s
             - self.cfg.internal_resistance_ohm * current_a;
@@ -133,28 +172,35 @@ impl Plant {
             saturated = true;
         }
         let thrust = quantise(thrust.clamp(-fs, fs), self.cfg.quantum_n);
-        // Input path: dead time, then the static map and supply sag, then the linear core.
+        // Input path: dead time, then the static map and supply sag, then the core (the motor
+        // delays the throttle by its ESC's dead time first).
         let delayed = self.effects.delay(throttle);
-        let u = self.effects.input_map(delayed, voltage_v, &self.cfg);
-        self.x = self.a * self.x + self.b * u;
+        let rpm = match &mut self.core {
+            Core::SecondOrder { a, b, x } => {
+                let u = self.effects.input_map(delayed, voltage_v, &self.cfg);
+                *x = *a * *x + *b * u;
+                let t_ref = self.cfg.reference_thrust_n();
+                self.cfg.rpm_at_reference * (thrust_true.max(0.0) / t_ref).sqrt()
+            }
+            Core::Motor(m) => {
+                let rpm = m.speed_rpm();
+                let esc = m.delay(delayed);
+                let u = self.effects.input_map(esc, voltage_v, &self.cfg);
+                m.advance(&self.cfg, u, voltage_v);
+                rpm
+            }
+        };
         self.k += 1;
         self.last_current_a = current_a;
         let t_pos = thrust_true.max(0.0);
-        let t_ref = self.cfg.reference_thrust_n();
         Measurement {
             thrust_n: thrust,
             torque_nm: self.cfg.torque_m * t_pos,
-            rpm: self.cfg.rpm_at_reference * (t_pos / t_ref).sqrt(),
+            rpm,
             voltage_v,
             current_a,
             adc_saturated: saturated,
         }
-    }
-
-    /// Supply current at true thrust `t_n` (momentum theory, see the module doc).
-    fn current_a(&self, t_n: f64) -> f64 {
-        let r = t_n.max(0.0) / self.cfg.reference_thrust_n();
-        self.cfg.idle_current_a + self.cfg.current_at_reference_a * r.powf(1.5)
     }
 
     /// The current drawn at the last step, amperes.

@@ -4,9 +4,14 @@
 //! the same serial source as with a real stand), runs the daemon against it for about ten
 //! seconds — handshake, arm, three operating points, one-sample pulses of alternating sign,
 //! identification after every K pulses — and prints each published model beside the
-//! simulator's true parameters, then the gain schedule. `--json` prints the daemon's JSON lines
-//! instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
+//! simulator's truth, then the gain schedule. The built-in stand is the motor plant, whose
+//! truth is its linearisation at each level ([`truth`], with how far spin-down being slower
+//! than spin-up keeps any linear model from it); a `--sim-config` of the 2nd-order plant has
+//! one truth everywhere. `--json` prints the daemon's JSON lines instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
 //! they are published, and their bytes; nothing is parsed back.
+
+mod table;
+mod truth;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -15,15 +20,16 @@ use std::time::Duration;
 
 use super::{stdout, CliError};
 use crate::daemon::identify::CoreIdentifier;
-use crate::daemon::line::{Line, ScheduleRow, WindowModel};
+use crate::daemon::line::{Line, ScheduleRow};
 use crate::daemon::plan;
 use crate::daemon::publish::Tap;
 use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::SerialSource;
 use crate::daemon::{Config, Publisher, Shutdown};
-use propid_sim::plant::PlantConfig;
+use propid_sim::plant::{PlantConfig, PlantKind};
 use propid_sim::pty::{RunOptions, SimHandle};
 use propid_sim::SimConfig;
+use table::MotorRow;
 
 /// Arguments of `propid demo`.
 #[derive(Debug, clap::Args)]
@@ -41,10 +47,11 @@ pub struct Args {
     pub http: Option<std::net::SocketAddr>,
 }
 
-/// The demo's stand: the default plant sampled at 250 Hz (one-sample pulses carry more energy
-/// at a lower rate, so ten seconds give tight models).
+/// The demo's stand: the motor plant (`config/sim.toml`'s) sampled at 250 Hz (one-sample
+/// pulses carry more energy at a lower rate, so ten seconds give tight models).
 fn demo_sim() -> SimConfig {
     let mut s = SimConfig::default();
+    s.plant.kind = PlantKind::Motor;
     s.stand.sample_rate_hz = 250;
     s.experiment = demo_experiment(&s);
     s
@@ -92,17 +99,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
         .map_err(CliError::Serial)?;
     let publisher = Publisher::open(&cfg.publish)?;
     if !args.json {
-        stdout::line(&format!(
-            "{:>6} {:>8} {:>22} {:>20} {:>22}",
-            "t_s", "throttle", "fn_hz (true)", "zeta (true)", "dc_gain N (true)"
-        ))?;
+        stdout::line(&table::header(&sim.plant))?;
     }
-    let schedule = Arc::new(Mutex::new(None));
+    let kept = Arc::new(Mutex::new(Kept::default()));
     let failed = Arc::new(Mutex::new(None));
     let publisher = publisher.with_tap(printer(
         args.json,
         sim.plant.clone(),
-        schedule.clone(),
+        kept.clone(),
         failed.clone(),
     ));
     let parts = RunParts {
@@ -123,8 +127,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
         return Ok(());
     }
     let mut t = String::new();
-    if let Some(rows) = schedule.lock().ok().and_then(|mut s| s.take()) {
-        schedule_table(&mut t, &rows, &sim.plant);
+    if let Ok(mut k) = kept.lock() {
+        match (sim.plant.kind, k.schedule.take()) {
+            (PlantKind::Motor, _) => table::motor_schedule(&mut t, &k.motor, &sim.plant),
+            (PlantKind::SecondOrder, Some(rows)) => {
+                table::second_order_schedule(&mut t, &rows, &sim.plant)
+            }
+            (PlantKind::SecondOrder, None) => {}
+        }
     }
     let _ = writeln!(
         t,
@@ -141,25 +151,37 @@ pub fn run(args: Args) -> Result<(), CliError> {
 /// Where the printer keeps the first stdout write error (printing stops there).
 type Failed = Arc<Mutex<Option<std::io::Error>>>;
 
-/// Prints each line as it is published (models as table rows, or every line's JSON with
-/// `--json`) and keeps the gain schedule for the end. The first write error stops the printing
-/// and is kept in `failed`: the run goes on, and `run` reports it as [`CliError::Stdout`].
-fn printer(
-    json: bool,
-    plant: PlantConfig,
-    schedule: Arc<Mutex<Option<Vec<ScheduleRow>>>>,
-    failed: Failed,
-) -> Tap {
+/// What the printer keeps for the end: the daemon's gain schedule, and the motor's rows (the
+/// last per level, in level order).
+#[derive(Debug, Default)]
+struct Kept {
+    schedule: Option<Vec<ScheduleRow>>,
+    motor: Vec<MotorRow>,
+}
+
+/// Prints each line as it is published (models as table rows beside the truth, or every line's
+/// JSON with `--json`) and keeps the gain schedule for the end. The first write error stops
+/// the printing and is kept in `failed`: the run goes on, and `run` reports it as
+/// [`CliError::Stdout`].
+fn printer(json: bool, plant: PlantConfig, kept: Arc<Mutex<Kept>>, failed: Failed) -> Tap {
     Box::new(move |line: &Line<'_>, text: &str| {
-        let printed = match line {
-            _ if json => Some(text.to_string()),
-            Line::Model(m) => Some(model_row(m, &plant)),
-            _ => None,
-        };
-        if let Line::Schedule(rows) = line {
-            if let Ok(mut s) = schedule.lock() {
-                *s = Some(rows.to_vec());
+        let mut printed = None;
+        if json {
+            printed = Some(text.to_string());
+        }
+        if let (Line::Model(m), Ok(mut k)) = (line, kept.lock()) {
+            match MotorRow::of(m, &plant) {
+                Some(row) => {
+                    k.motor.retain(|r| r.level != row.level);
+                    k.motor.push(row);
+                    k.motor.sort_by(|a, b| a.level.total_cmp(&b.level));
+                    printed = printed.or_else(|| Some(table::motor_row(&row)));
+                }
+                None => printed = printed.or_else(|| Some(table::second_order_row(m, &plant))),
             }
+        }
+        if let (Line::Schedule(rows), Ok(mut k)) = (line, kept.lock()) {
+            k.schedule = Some(rows.to_vec());
         }
         let Some(printed) = printed else { return };
         let Ok(mut failed) = failed.lock() else {
@@ -171,53 +193,4 @@ fn printer(
             }
         }
     })
-}
-
-/// `value ± sd`, the sd when it is known.
-fn with_sd(x: f64, sd: f64) -> String {
-    if sd.is_finite() {
-        format!("{x:.3} ± {sd:.3}")
-    } else {
-        format!("{x:.3}")
-    }
-}
-
-/// One table row: identified values beside the true ones.
-fn model_row(m: &WindowModel, p: &PlantConfig) -> String {
-    let (r, u) = (&m.report, &m.report.uncertainty);
-    format!(
-        "{:>6.2} {:>8.3} {:>14} ({:>5.2}) {:>12} ({:>5.3}) {:>14} ({:>5.2})",
-        m.window.t_s,
-        m.window.operating_point,
-        with_sd(r.fn_hz, u.fn_hz),
-        p.fn_hz,
-        with_sd(r.zeta, u.zeta),
-        p.zeta,
-        with_sd(r.dc_gain.get(0), u.dc_gain.get(0)),
-        p.gain_n_per_throttle,
-    )
-}
-
-/// The gain schedule (the last model per operating point), appended to `t`.
-fn schedule_table(t: &mut String, rows: &[ScheduleRow], p: &PlantConfig) {
-    let _ = writeln!(
-        t,
-        "\ngain schedule (true plant: fn {} Hz, zeta {}, gain {} N per unit throttle):",
-        p.fn_hz, p.zeta, p.gain_n_per_throttle
-    );
-    let _ = writeln!(
-        t,
-        "{:>8} {:>8} {:>8} {:>10}",
-        "throttle", "fn_hz", "zeta", "dc_gain"
-    );
-    for m in rows {
-        let _ = writeln!(
-            t,
-            "{:>8.3} {:>8.3} {:>8.3} {:>10.3}",
-            m.operating_point,
-            m.fn_hz,
-            m.zeta,
-            m.dc_gain.get(0)
-        );
-    }
 }

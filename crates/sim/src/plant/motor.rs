@@ -1,0 +1,182 @@
+//! The motor plant (`[plant] kind = "motor"`): rotor speed as a first-order lag of the throttle
+//! with a direction- and speed-dependent time constant, an ESC dead time, thrust ∝ speed² and a
+//! supply that sags with the current drawn. Its linearisation at an operating point is in
+//! [`super::linearise`].
+//!
+//! # The model
+//! Rotor speed `n` (rev/min) follows the throttle `u` (0..1) held during each sample as
+//!
+//! ```text
+//!   n' = (n_ss(u, V) − n) / τ(n, dir)
+//!   n_ss(u, V) = n_ref · (u / u_ref) · (V / V₀)         (the ESC applies u·V to the motor)
+//!   τ(n, dir)  = τ_dir · (n_ref / max(n, n_ref/10))^γ    (dir = up when n_ss ≥ n, else down)
+//!   T = k_T n²,   k_T = T_ref / n_ref²                    (propeller momentum theory)
+//! ```
+//!
+//! with `u_ref = reference_throttle`, `n_ref = rpm_at_reference` (at the open-circuit voltage
+//! `V₀ = battery_v`), `T_ref = thrust_at_reference_n`, `τ_up = tau_up_s`,
+//! `τ_down = tau_down_s` (spin-down is slower: the ESC brakes less than it drives) and
+//! `γ = tau_speed_exponent` (the propeller's drag grows with speed, so the rotor answers faster
+//! at speed; `γ = 0`, the default: one τ per direction). The supply is the plant's battery:
+//! `V = battery_v − discharge_v_per_s · t − internal_resistance_ohm · I`, with the current
+//! `I = idle_current_a + current_at_reference_a · (T / T_ref)^{3/2}` (shaft power ∝ `n³`).
+//!
+//! Over one sample `dt` the direction and `τ` are frozen at the sample's start and the lag is
+//! integrated exactly: `n_{k+1} = n_ss + (n_k − n_ss) · e^{−dt/τ}`. The throttle reaches the
+//! motor `d = round(dead_time_s / dt)` samples late (ESC update and commutation latency), and,
+//! as with the 2nd-order plant, the throttle held during sample `k` shows in the thrust from
+//! sample `k + 1 + d` on.
+
+use std::collections::VecDeque;
+
+use serde::Deserialize;
+
+use super::config::check;
+use super::{PlantConfig, PlantError};
+
+/// The `[plant.motor]` table: the motor plant's own parameters (the battery, the current model,
+/// `reference_throttle` and `rpm_at_reference` are the `[plant]` keys).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MotorConfig {
+    /// Thrust at `reference_throttle` in steady state with the battery unloaded, newtons (> 0).
+    pub thrust_at_reference_n: f64,
+    /// Spin-up time constant at `rpm_at_reference`, seconds (> 0).
+    pub tau_up_s: f64,
+    /// Spin-down time constant at `rpm_at_reference`, seconds (> 0).
+    pub tau_down_s: f64,
+    /// Exponent `γ` of the time constant's fall with speed, `τ ∝ (n_ref / n)^γ` (0..=2).
+    pub tau_speed_exponent: f64,
+    /// ESC dead time, seconds (0..=1; rounded to whole samples).
+    pub dead_time_s: f64,
+}
+
+impl Default for MotorConfig {
+    fn default() -> Self {
+        MotorConfig {
+            thrust_at_reference_n: 6.0,
+            tau_up_s: 0.030,
+            tau_down_s: 0.040,
+            tau_speed_exponent: 0.0,
+            dead_time_s: 0.008,
+        }
+    }
+}
+
+impl MotorConfig {
+    /// Checks every value; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), PlantError> {
+        let positive = [
+            (
+                self.thrust_at_reference_n,
+                "plant.motor.thrust_at_reference_n",
+            ),
+            (self.tau_up_s, "plant.motor.tau_up_s"),
+            (self.tau_down_s, "plant.motor.tau_down_s"),
+        ];
+        for (v, key) in positive {
+            check(v.is_finite() && v > 0.0, key, v, "must be > 0")?;
+        }
+        let g = self.tau_speed_exponent;
+        let key = "plant.motor.tau_speed_exponent";
+        check(
+            g.is_finite() && (0.0..=2.0).contains(&g),
+            key,
+            g,
+            "must be in [0, 2]",
+        )?;
+        let d = self.dead_time_s;
+        let ok = d.is_finite() && (0.0..=1.0).contains(&d);
+        check(ok, "plant.motor.dead_time_s", d, "must be in [0, 1] s")
+    }
+
+    /// The thrust coefficient `k_T = T_ref / n_ref²`, N per (rev/min)².
+    pub fn k_t(&self, plant: &PlantConfig) -> f64 {
+        self.thrust_at_reference_n / (plant.rpm_at_reference * plant.rpm_at_reference)
+    }
+
+    /// Dead time in whole samples of `dt_s`.
+    pub fn dead_time_samples(&self, dt_s: f64) -> usize {
+        (self.dead_time_s / dt_s).round() as usize
+    }
+
+    /// Steady-state speed `n_ss(u, V)`, rev/min.
+    pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
+        plant.rpm_at_reference
+            * (u.max(0.0) / plant.reference_throttle)
+            * (voltage_v / plant.battery_v)
+    }
+
+    /// The time constant `τ(n, dir)` at speed `n` (rev/min), seconds.
+    pub fn tau_s(&self, plant: &PlantConfig, n: f64, up: bool) -> f64 {
+        let base = if up { self.tau_up_s } else { self.tau_down_s };
+        let floor = plant.rpm_at_reference / 10.0;
+        base * (plant.rpm_at_reference / n.max(floor)).powf(self.tau_speed_exponent)
+    }
+}
+
+/// The motor's state: rotor speed and the ESC's delay line.
+#[derive(Debug, Clone)]
+pub(crate) struct Motor {
+    cfg: MotorConfig,
+    dt_s: f64,
+    /// Rotor speed, rev/min.
+    n: f64,
+    delay: VecDeque<f64>,
+    delay_samples: usize,
+}
+
+impl Motor {
+    /// A motor at rest sampled every `dt_s` seconds.
+    pub(crate) fn new(plant: &PlantConfig, dt_s: f64) -> Result<Motor, PlantError> {
+        plant.motor.validate()?;
+        let delay_samples = plant.motor.dead_time_samples(dt_s);
+        Ok(Motor {
+            cfg: plant.motor.clone(),
+            dt_s,
+            n: 0.0,
+            delay: VecDeque::with_capacity(delay_samples + 1),
+            delay_samples,
+        })
+    }
+
+    /// Rotor speed, rev/min.
+    pub(crate) fn speed_rpm(&self) -> f64 {
+        self.n
+    }
+
+    /// Thrust `k_T n²`, newtons.
+    pub(crate) fn thrust_n(&self, plant: &PlantConfig) -> f64 {
+        self.cfg.k_t(plant) * self.n * self.n
+    }
+
+    /// The ESC's delay line: pushes `u`, returns the throttle of `d` samples ago (0 before the
+    /// line is full, the settled throttle after [`Motor::settle`]).
+    pub(crate) fn delay(&mut self, u: f64) -> f64 {
+        if self.delay_samples == 0 {
+            return u;
+        }
+        self.delay.push_back(u);
+        if self.delay.len() > self.delay_samples {
+            self.delay.pop_front().unwrap_or(0.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// Advances one sample with the (delayed, mapped) throttle `u` held and supply `voltage_v`.
+    pub(crate) fn advance(&mut self, plant: &PlantConfig, u: f64, voltage_v: f64) {
+        let target = self.cfg.speed_ss(plant, u, voltage_v);
+        let tau = self.cfg.tau_s(plant, self.n, target >= self.n);
+        self.n = target + (self.n - target) * (-self.dt_s / tau).exp();
+    }
+
+    /// Steady state at throttle `throttle` (the ESC's line full of it) and mapped throttle `u`,
+    /// with the supply sag solved as in [`super::linearise`].
+    pub(crate) fn settle(&mut self, plant: &PlantConfig, throttle: f64, u: f64, t_s: f64) {
+        self.delay.clear();
+        self.delay
+            .extend(std::iter::repeat(throttle).take(self.delay_samples));
+        self.n = super::linearise::equilibrium(plant, u, t_s).speed_rpm;
+    }
+}

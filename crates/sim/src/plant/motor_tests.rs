@@ -1,0 +1,146 @@
+//! The motor plant against its own formulas: the static map (thrust ∝ throttle² with the supply
+//! sag), the linearisation against finite differences of the simulated plant, the direction of
+//! the time constant, the dead time, and the pulse average an exact linear fit sees.
+
+use super::*;
+
+fn motor() -> PlantConfig {
+    PlantConfig {
+        kind: PlantKind::Motor,
+        noise_rms_n: 0.0,
+        quantum_n: 0.0,
+        discharge_v_per_s: 0.0,
+        ..PlantConfig::default()
+    }
+}
+
+const DT: f64 = 0.004;
+
+/// Thrust of the settled plant at `u` (no noise, no quantisation).
+fn settled(cfg: &PlantConfig, u: f64) -> f64 {
+    let mut p = Plant::new(cfg, DT, 1).unwrap();
+    p.settle(u);
+    p.step(u).thrust_n
+}
+
+#[test]
+fn thrust_grows_with_the_square_of_speed_and_the_supply_sags() {
+    let cfg = motor();
+    let mut p = Plant::new(&cfg, DT, 1).unwrap();
+    p.settle(0.5);
+    let m = p.step(0.5);
+    let eq = equilibrium(&cfg, 0.5, 0.0);
+    assert!((m.thrust_n - eq.thrust_n).abs() < 1e-9, "{m:?} {eq:?}");
+    // T = k_T n², the speed 2.5 % below rpm_at_reference with the loaded battery
+    let k_t = cfg.motor.k_t(&cfg);
+    assert!((m.thrust_n - k_t * m.rpm * m.rpm).abs() < 1e-9);
+    assert!(m.rpm < cfg.rpm_at_reference && m.rpm > 0.95 * cfg.rpm_at_reference);
+    assert!((m.voltage_v - eq.voltage_v).abs() < 1e-9);
+    // the static map is about quadratic: twice the throttle, about four times the thrust
+    let r = settled(&cfg, 0.6) / settled(&cfg, 0.3);
+    assert!(r > 3.5 && r < 4.0, "{r}");
+    // and without internal resistance exactly quadratic
+    let stiff = PlantConfig {
+        internal_resistance_ohm: 0.0,
+        ..motor()
+    };
+    let r = settled(&stiff, 0.6) / settled(&stiff, 0.3);
+    assert!((r - 4.0).abs() < 1e-9, "{r}");
+}
+
+#[test]
+fn the_linearised_gain_is_the_slope_of_the_static_map_and_grows_with_throttle() {
+    let cfg = motor();
+    let mut last = 0.0;
+    for u in [0.3, 0.45, 0.6] {
+        let lin = cfg.linearise(u, DT, 0.0).unwrap();
+        let h = 1e-5;
+        let slope = (settled(&cfg, u + h) - settled(&cfg, u - h)) / (2.0 * h);
+        assert!(
+            (lin.gain_n_per_throttle / slope - 1.0).abs() < 1e-6,
+            "{u}: {lin:?} vs {slope}"
+        );
+        // ∝ u₀ without sag; the sag (more at more current) takes some of it back
+        assert!(lin.gain_n_per_throttle > 1.15 * last, "{u}: {lin:?}");
+        last = lin.gain_n_per_throttle;
+        assert!(lin.sag > 0.0 && lin.sag < 0.2, "{lin:?}");
+        assert!(lin.tau_down_s > lin.tau_up_s);
+    }
+    assert!(PlantConfig::default().linearise(0.5, DT, 0.0).is_none());
+}
+
+#[test]
+fn small_steps_follow_the_linearised_time_constant_of_their_direction() {
+    let cfg = motor();
+    let lin = cfg.linearise(0.45, DT, 0.0).unwrap();
+    for (du, tau) in [(0.002, lin.tau_up_s), (-0.002, lin.tau_down_s)] {
+        let mut p = Plant::new(&cfg, DT, 1).unwrap();
+        p.settle(0.45);
+        let y0 = p.step(0.45).thrust_n;
+        let y: Vec<f64> = (0..400).map(|_| p.step(0.45 + du).thrust_n - y0).collect();
+        let fin = y[399];
+        assert!(
+            (fin / (lin.gain_n_per_throttle * du) - 1.0).abs() < 0.01,
+            "{fin}"
+        );
+        // dead time d samples, then the sampled lag: y_k = fin (1 − a^(k − d)), a = e^(−dt/τ)
+        let d = lin.dead_time_samples;
+        assert_eq!(d, 2);
+        assert!(y[d].abs() < 1e-9 && y[d + 1].abs() > 1e-4, "{:?}", &y[..4]);
+        let k = d + 10;
+        let est = -(10.0 * DT) / (1.0 - y[k] / fin).ln();
+        assert!((est / tau - 1.0).abs() < 0.02, "{est} vs {tau}");
+    }
+}
+
+#[test]
+fn the_pulse_average_is_what_pulses_of_both_signs_give() {
+    let cfg = motor();
+    let lin = cfg.linearise(0.45, DT, 0.0).unwrap();
+    let h = lin.pulse_average(200);
+    let mut avg = vec![0.0; 200];
+    for a in [0.01, -0.01] {
+        let mut p = Plant::new(&cfg, DT, 1).unwrap();
+        p.settle(0.45);
+        let base = p.step(0.45).thrust_n;
+        let y: Vec<f64> = (0..200)
+            .map(|k| p.step(if k == 0 { 0.45 + a } else { 0.45 }).thrust_n - base)
+            .collect();
+        // y[k] is measured at the start of sample k, the pulse held during sample 0: Y_k
+        for k in 0..200 {
+            avg[k] += y[k] / a / 2.0;
+        }
+    }
+    let sum: f64 = h.iter().sum();
+    assert!((sum / (lin.gain_n_per_throttle * lin.pulse_gain_factor) - 1.0).abs() < 1e-3);
+    let peak = h.iter().cloned().fold(0.0, f64::max);
+    for k in 0..200 {
+        assert!(
+            (avg[k] - h[k]).abs() < 0.01 * peak,
+            "k={k} {} vs {}",
+            avg[k],
+            h[k]
+        );
+    }
+}
+
+#[test]
+fn motor_keys_are_checked_and_parse_from_toml() {
+    let cfg: PlantConfig = toml::from_str("kind = \"motor\"\n[motor]\ntau_up_s = 0.02\n").unwrap();
+    assert_eq!(cfg.kind, PlantKind::Motor);
+    assert_eq!(cfg.motor.tau_up_s, 0.02);
+    assert_eq!(cfg.motor.tau_down_s, MotorConfig::default().tau_down_s);
+    assert!(toml::from_str::<PlantConfig>("kind = \"jet\"\n").is_err());
+    assert!(toml::from_str::<PlantConfig>("[motor]\ntau = 1.0\n").is_err());
+    let bad = PlantConfig {
+        motor: MotorConfig {
+            tau_down_s: 0.0,
+            ..MotorConfig::default()
+        },
+        ..motor()
+    };
+    match Plant::new(&bad, DT, 0) {
+        Err(PlantError::InvalidParameter { key, .. }) => assert_eq!(key, "plant.motor.tau_down_s"),
+        other => panic!("{other:?}"),
+    }
+}
