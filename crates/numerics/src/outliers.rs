@@ -19,14 +19,19 @@
 //! Hampel 1974), or `1.2533 ·` the mean absolute deviation when the MAD is 0 (a quantised
 //! channel that mostly holds one value). Sample `k` is an **isolated outlier** when
 //!
-//! 1. `|r_k| > OUTLIER_SIGMAS · max(σ_r, δ)` ([`OUTLIER_SIGMAS`] = 10: a Gaussian false alarm
-//!    has a probability of ~10⁻²³ per sample; `δ` the channel's resolution, the smallest
-//!    non-zero step between neighbours, so that a load cell flickering by one count is never
-//!    an outlier), and
-//! 2. it is a spike, not an edge: `|r_k| ≥ SPIKE_RATIO · max(|r_{k−1}|, |r_{k+1}|)`
-//!    ([`SPIKE_RATIO`] = 1.5). One wrong sample of height `h` gives `r = h` at `k` and `−h/2`
-//!    at both neighbours (ratio 2); a step gives `±h/2` on two neighbours (ratio 1), so a step
-//!    of the response is never an outlier, however large; and
+//! 1. it stands out of the noise: `|r_k| > OUTLIER_SIGMAS · max(σ_r, σ_loc, δ)`
+//!    ([`OUTLIER_SIGMAS`] = 10: a Gaussian false alarm has a probability of ~10⁻²³ per
+//!    sample). `σ_loc = 1.4826 · median |r_j|` over the [`LOCAL_HALF_WIDTH`] = 8 samples either
+//!    side, the three around `k` excepted (the Hampel filter's local scale): inside an
+//!    oscillation or a fast transient every residual is large, so none is an outlier. `δ` is
+//!    the channel's resolution, the smallest non-zero step between neighbours, so that a load
+//!    cell flickering by one count is never an outlier;
+//! 2. it is a spike, not an edge or a corner: its neighbours agree with each other,
+//!    `|y_{k+1} − y_{k−1}| ≤ NEIGHBOUR_AGREEMENT · |r_k|` ([`NEIGHBOUR_AGREEMENT`] = ½). One
+//!    wrong sample of height `h` gives `|r_k| = h` between neighbours that differ by the noise
+//!    only; a step of the response (`|y_{k+1} − y_{k−1}| = h`, `|r| = h/2`) or the corner where
+//!    a response starts rising after its dead time (`|r| = slope/2`, neighbours a slope apart)
+//!    never passes, however large; and
 //! 3. the command does not change from `k − 2` to `k + 2` ([`COMMAND_GUARD`]): a command
 //!    pulse and the first samples of its response (a direct feed-through makes a one-sample
 //!    pulse look like a spike) are never outliers.
@@ -36,8 +41,10 @@
 
 /// Residuals larger than this many robust standard deviations are outliers.
 pub const OUTLIER_SIGMAS: f64 = 10.0;
-/// A spike's residual is at least this multiple of both neighbours' residuals.
-pub const SPIKE_RATIO: f64 = 1.5;
+/// Samples either side of `k` whose residuals give the local scale.
+pub const LOCAL_HALF_WIDTH: usize = 8;
+/// A spike's neighbours differ by at most this fraction of its residual.
+pub const NEIGHBOUR_AGREEMENT: f64 = 0.5;
 /// Samples either side of a command change that are never judged.
 pub const COMMAND_GUARD: usize = 2;
 
@@ -67,19 +74,32 @@ pub fn isolated_outliers(y: &[f64], missing: &[bool], command: &[f64]) -> Vec<us
     };
     let sigma = sigma.max(resolution(y));
     let changes = command_changes(command, n);
-    let abs = |k: usize| {
-        r.get(k)
-            .map_or(0.0, |v| if v.is_finite() { v.abs() } else { 0.0 })
-    };
     (1..n.saturating_sub(1))
         .filter(|&k| {
-            let rk = r[k];
+            let rk = r[k].abs();
             rk.is_finite()
-                && rk.abs() > OUTLIER_SIGMAS * sigma
-                && rk.abs() >= SPIKE_RATIO * abs(k - 1).max(abs(k + 1))
+                && rk > OUTLIER_SIGMAS * sigma
+                && (y[k + 1] - y[k - 1]).abs() <= NEIGHBOUR_AGREEMENT * rk
                 && !changes[k]
+                && rk > OUTLIER_SIGMAS * local_sd(&r, k)
         })
         .collect()
+}
+
+/// `1.4826 · median |r_j|` for the finite `r_j`, `j` within [`LOCAL_HALF_WIDTH`] of `k` but
+/// not `k − 1 ..= k + 1` (0 when there is none).
+fn local_sd(r: &[f64], k: usize) -> f64 {
+    let lo = k.saturating_sub(LOCAL_HALF_WIDTH);
+    let hi = (k + LOCAL_HALF_WIDTH).min(r.len() - 1);
+    let mut v: Vec<f64> = (lo..=hi)
+        .filter(|&j| j + 1 < k || j > k + 1)
+        .map(|j| r[j].abs())
+        .filter(|x| x.is_finite())
+        .collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    MAD_TO_SD * median(&mut v)
 }
 
 /// Robust standard deviation of the finite values of `r`: `1.4826 · MAD`, or `1.2533 ·` the
@@ -213,6 +233,29 @@ mod tests {
         y[600] = f64::NAN;
         missing[600] = true;
         assert!(isolated_outliers(&y, &missing, &u).is_empty());
+    }
+
+    #[test]
+    fn corners_and_oscillations_are_not_outliers() {
+        // a step response after a dead time, sampled coarsely (a bench log at 45 Hz): the
+        // corner where it starts rising has one large residual, but its neighbours are a
+        // slope apart (measured on vanderploeg 90PERCENT: 0.014, 0.031, 0.381, 0.621)
+        let mut y = vec![0.02; 60];
+        let rise = [0.031, 0.381, 0.621, 0.685, 0.702, 0.703];
+        for (k, v) in rise.iter().enumerate() {
+            y[30 + k] = *v;
+        }
+        y[36..].iter_mut().for_each(|v| *v = 0.703);
+        add_noise(&mut y, 0.004, 5);
+        assert!(isolated_outliers(&y, &[], &[]).is_empty());
+        // a disturbance at a quarter of the sample rate: every peak stands out of its two
+        // agreeing neighbours, as does every other peak (the local scale)
+        let mut y = vec![1.0; 400];
+        for (k, v) in y.iter_mut().enumerate() {
+            *v += 0.5 * (std::f64::consts::FRAC_PI_2 * k as f64).sin();
+        }
+        add_noise(&mut y, 0.01, 6);
+        assert!(isolated_outliers(&y, &[], &[]).is_empty());
     }
 
     #[test]
