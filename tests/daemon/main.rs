@@ -5,5 +5,6 @@ mod daemon_e2e;
 mod daemon_e2e_gaps;
 mod daemon_live;
 mod daemon_proc;
+mod daemon_rate;
 mod daemon_replay;
 mod host_faults;

@@ -34,7 +34,7 @@ use crate::order::HankelSize;
 use crate::pulses::PulseInput;
 use crate::segment::{Command, SegmentRules};
 use crate::stabilization::{StabOptions, Stabilization};
-use crate::workspace::{IdentOptions, Limits, Workspace};
+use crate::workspace::{IdentOptions, Limits, Workspace, AUTO_MAX_BLOCKS};
 use crate::{IdentError, ModelReport};
 
 /// Which way the Markov parameters were obtained.
@@ -225,8 +225,9 @@ fn pulse_count(input: &AnyInput<'_>, max_width: usize) -> usize {
 }
 
 /// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs, `pulses`
-/// pulses ([`pulse_count`]) and the Hankel `size`. Automatic sizing keeps the default block caps; a square or explicit Hankel raises
-/// them to what it needs (square: at most `n / 2` blocks each way, since `r + c ≤ L − 1 < n`).
+/// pulses ([`pulse_count`]) and the Hankel `size`. Automatic sizing may take up to half the
+/// record each way, at least the default block caps and at most [`AUTO_MAX_BLOCKS`] (the span
+/// itself is the noise floor's); a square or explicit Hankel raises them to what it needs (square: at most `n / 2` blocks each way, since `r + c ≤ L − 1 < n`).
 /// With a given order and a sized Hankel, `max_order` is that order: the singular-vector
 /// buffers hold `rows × (max_order + 4)` doubles, which at 50 000 rows is what keeps the
 /// process within O(N) memory of a few MB per buffer.
@@ -240,7 +241,10 @@ fn limits_for(
 ) -> Limits {
     let d = Limits::default();
     let (max_block_rows, max_block_cols) = match size {
-        HankelSize::Auto => (d.max_block_rows, d.max_block_cols),
+        HankelSize::Auto => {
+            let m = (n / 2).clamp(d.max_block_rows, AUTO_MAX_BLOCKS);
+            (m, m)
+        }
         HankelSize::Square => ((n / 2).max(1), (n / 2).max(1)),
         HankelSize::Blocks(r, c) => (r.max(1), c.max(1)),
     };
