@@ -118,7 +118,6 @@ impl CoreIdentifier {
             max_order: cfg.identify.order.unwrap_or(8).max(8),
             // the window holds K pulses when identified; room for a few more is free
             max_pulses: cfg.identify.pulses_per_model as usize + 2,
-            ..Limits::default()
         };
         let ws = Workspace::new(&limits).map_err(DaemonError::Identify)?;
         let opts = IdentOptions {
