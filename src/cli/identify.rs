@@ -11,6 +11,14 @@
 //! where the data allows) and `"stabilization"` the stabilization diagram of the model's Hankel
 //! SVD ([`propid_numerics::stabilization`]; null when it cannot be realised).
 //!
+//! `"quality"` says whether the model passed the checks of [`propid_numerics::quality`] (the
+//! daemon's rule: no pole with `Re(s) ≥ 0`, a DC gain larger than its jackknife scatter); a
+//! rejected model is still printed, with `"accepted": false`, its `"flaws"` and a `"hint"`, and
+//! `identify` exits 4 (the data do not support an identification), as the daemon publishes it
+//! as a `model_unreliable` warning instead of a model. Isolated outlier samples of the outputs
+//! ([`propid_numerics::outliers`]) are left out (marked missing) before identification and
+//! counted in `"source"."outliers"`.
+//!
 //! `--report DIR` writes `stabilization.svg` (the diagram) and `identify.md` into `DIR`.
 //!
 //! `--hankel` sizes ERA's Hankel matrix: `auto` (default) from the noise floor, `square` the
@@ -111,7 +119,8 @@ fn parse_hankel(s: &str) -> Result<HankelSize, String> {
 
 /// Runs `propid identify`.
 pub fn run(args: Args) -> Result<(), CliError> {
-    let loaded = load::load(&args)?;
+    let mut loaded = load::load(&args)?;
+    load::leave_out_outliers(&mut loaded);
     let ident = IdentOptions {
         order: args.order,
         svd: args.svd,
@@ -151,9 +160,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
     }
     if args.json {
-        super::stdout::line(&out.json().map_err(CliError::Json)?)
+        super::stdout::line(&out.json().map_err(CliError::Json)?)?;
     } else {
-        super::stdout::write(&out.human())
+        super::stdout::write(&out.human())?;
+    }
+    if out.quality.accepted {
+        Ok(())
+    } else {
+        Err(CliError::ModelRejected {
+            flaws: out.quality.names(),
+        })
     }
 }
 

@@ -44,6 +44,15 @@ pub enum CliError {
     #[error(transparent)]
     Identify(#[from] AnyError),
     /// A file without an input column is too short to find steps in.
+    /// The model (printed) failed the quality checks of `propid_numerics::quality`.
+    #[error(
+        "the identified model fails the quality checks ({flaws}): it is not the plant's model \
+         (printed for inspection with \"quality\")"
+    )]
+    ModelRejected {
+        /// The checks it failed, by name.
+        flaws: String,
+    },
     #[error("{file}: too short to find steps in")]
     StepsTooShort {
         /// The file as given.
@@ -154,6 +163,7 @@ impl CliError {
             CliError::Diagnose(e) if diagnose::is_input_error(e) => ExitClass::Input,
             CliError::Identify(_)
             | CliError::StepsTooShort { .. }
+            | CliError::ModelRejected { .. }
             | CliError::NoInput { .. }
             | CliError::Diagnose(_)
             | CliError::Walkthrough(_) => ExitClass::Identification,

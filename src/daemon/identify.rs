@@ -19,13 +19,13 @@ use std::thread::JoinHandle;
 
 use super::config::Config;
 use super::live::{self, ResponseLine};
-use super::window::WindowView;
+use super::window::{window_capacity, WindowView};
 use super::DaemonError;
 use propid_numerics::pulses::PulseInput;
 use propid_numerics::stabilization::StabOptions;
 use propid_numerics::stabilization::Stabilization;
 use propid_numerics::svd::SvdChoice;
-use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
+use propid_numerics::workspace::{IdentOptions, Limits, Workspace, AUTO_MAX_BLOCKS};
 use propid_numerics::{IdentError, ModelReport};
 
 /// Identifies one window: the worker's seam to the identification core.
@@ -114,17 +114,23 @@ struct Helper {
 }
 
 impl CoreIdentifier {
-    /// Sizes the workspace for the configured window length and pulses per model (and the
-    /// helper's twin workspace when the jackknife is on).
+    /// Sizes the workspace for the window ([`window_capacity`]: the plan's windows at the
+    /// fastest rate), Hankel matrices over whole pulse responses, and the pulses per model (and
+    /// the helper's twin workspace when the jackknife is on).
     pub fn new(cfg: &Config) -> Result<CoreIdentifier, DaemonError> {
+        let cap = window_capacity(cfg);
+        // The Hankel may span the whole pulse response (half the window each way): at 20 kHz
+        // a 12 Hz plant's response takes ~2 000 lags, far past the default 128 blocks.
+        let blocks = (cap / 2).clamp(Limits::default().max_block_rows, AUTO_MAX_BLOCKS);
         let limits = Limits {
-            max_samples: cfg.identify.max_window_samples,
+            max_samples: cap,
+            max_block_rows: blocks,
+            max_block_cols: blocks,
             max_outputs: 1,
             max_inputs: 1,
             max_order: cfg.identify.order.unwrap_or(8).max(8),
             // the window holds K pulses when identified; room for a few more is free
             max_pulses: cfg.identify.pulses_per_model as usize + 2,
-            ..Limits::default()
         };
         let ws = Workspace::new(&limits).map_err(DaemonError::Identify)?;
         let opts = IdentOptions {
@@ -134,8 +140,7 @@ impl CoreIdentifier {
         };
         let helper = if opts.jackknife && opts.order == Some(2) {
             let twin = Workspace::new(&limits).map_err(DaemonError::Identify)?;
-            let cap = cfg.identify.max_window_samples.max(4);
-            Helper::spawn(twin, cap, limits.max_pulses + 1, opts)
+            Helper::spawn(twin, cap.max(4), limits.max_pulses + 1, opts)
         } else {
             None
         };

@@ -85,7 +85,7 @@ pub fn run<I: Identifier + 'static>(
     let start = Instant::now();
     let channel = OutputChannel::from_name(&cfg.identify.output).unwrap_or(OutputChannel::Thrust);
     let window = Window::new(
-        cfg.identify.max_window_samples,
+        super::window::window_capacity(cfg),
         cfg.identify.pulses_per_model as usize,
         cfg.identify.level_tolerance,
         channel,

@@ -7,6 +7,7 @@ mod diagnose_model_keys;
 mod diagnose_sim;
 mod host_faults_cli;
 mod identify_cli;
+mod identify_quality;
 mod identify_real_data;
 mod identify_sim_recording;
 mod identify_square_hankel;

@@ -7,6 +7,7 @@ mod daemon_e2e_gaps;
 mod daemon_http;
 mod daemon_live;
 mod daemon_proc;
+mod daemon_rate;
 mod daemon_replay;
 mod host_faults;
 mod link_faults;

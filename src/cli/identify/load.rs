@@ -10,6 +10,7 @@ use crate::cli::CliError;
 use crate::ingest::csv_file::{ColumnUnit, CsvSource};
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
+use propid_numerics::outliers::isolated_outliers;
 use propid_wire::protocol::detect::WireFormat;
 use propid_wire::record::names;
 
@@ -60,8 +61,11 @@ pub struct Source {
     pub rate_hz: f64,
     /// Samples in the record.
     pub samples: usize,
-    /// Samples marked missing.
+    /// Samples marked missing by the file (lost, empty cells).
     pub missing: usize,
+    /// Isolated outlier samples of the outputs, left out (marked missing, not counted in
+    /// `missing`; [`propid_numerics::outliers`]).
+    pub outliers: usize,
     /// `"pulse"` or `"okid"` (filled in after identification).
     pub path: &'static str,
     /// TSP/1 decoding counters (binary recordings).
@@ -186,6 +190,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
             rate_hz,
             samples: rec.len(),
             missing: rec.missing_count(),
+            outliers: 0,
             path: "",
             tsp1,
             csv,
@@ -193,6 +198,40 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
             okid: None,
         },
     })
+}
+
+/// Leaves out the isolated outlier samples of every output ([`propid_numerics::outliers`],
+/// the command's changes guarded when the input is a command): each is marked missing and
+/// NaN in the outputs and the stand's channels, never replaced. Returns how many samples.
+pub fn leave_out_outliers(loaded: &mut Loaded) -> usize {
+    let command: &[f64] = if loaded.commanded { &loaded.input } else { &[] };
+    let mut flagged = vec![false; loaded.missing.len().max(loaded.input.len())];
+    for y in &loaded.outputs {
+        for k in isolated_outliers(y, &loaded.missing, command) {
+            if let Some(f) = flagged.get_mut(k) {
+                *f = true;
+            }
+        }
+    }
+    let count = flagged.iter().filter(|&&f| f).count();
+    if count == 0 {
+        return 0;
+    }
+    if loaded.missing.len() < flagged.len() {
+        loaded.missing.resize(flagged.len(), false);
+    }
+    for (k, _) in flagged.iter().enumerate().filter(|(_, &f)| f) {
+        loaded.missing[k] = true;
+        let channels = loaded.outputs.iter_mut().map(Vec::as_mut_slice);
+        let stand = loaded.stand.iter_mut().map(|(_, _, y)| y.as_mut_slice());
+        for y in channels.chain(stand) {
+            if let Some(v) = y.get_mut(k) {
+                *v = f64::NAN;
+            }
+        }
+    }
+    loaded.source.outliers = count;
+    count
 }
 
 fn step_out(s: &FoundStep, t0: f64, dt: f64) -> StepOut {

@@ -7,6 +7,7 @@ use serde::Serialize;
 use super::load::{Loaded, Source};
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
+use propid_numerics::quality::{judge, Flaw};
 use propid_numerics::report::Gain;
 use propid_numerics::stabilization::Stabilization;
 use propid_numerics::stand::StandFigures;
@@ -27,6 +28,49 @@ pub struct Output<'a> {
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
     /// The stabilization diagram of the model's Hankel SVD (null when it cannot be realised).
     pub stabilization: Option<&'a Stabilization>,
+    /// The quality checks of the model ([`propid_numerics::quality`], the daemon's rule).
+    pub quality: Quality,
+}
+
+/// `"quality"` in the JSON output: whether the model passed the checks a plant's model always
+/// passes, and if not why (`unstable_pole`, `dc_gain_uncertain`). A rejected model is printed
+/// for inspection and `identify` exits 4.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Quality {
+    /// The model passed every check.
+    pub accepted: bool,
+    /// The checks it failed.
+    pub flaws: Vec<Flaw>,
+    /// What to do about it (rejected models only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hint: Option<&'static str>,
+}
+
+/// Hint printed with a rejected model.
+pub const HINT: &str = "not the plant's model: the pulse responses are not resolved above the \
+    noise, or the record holds what a model around one operating point cannot (a start-up \
+    transient, a drift); use a record that starts settled, wider or larger pulses, more pulses";
+
+impl Quality {
+    /// The verdict on `model`.
+    pub fn of(model: &propid_numerics::ModelReport) -> Quality {
+        let flaws = judge(model);
+        let accepted = flaws.is_empty();
+        Quality {
+            accepted,
+            flaws,
+            hint: (!accepted).then_some(HINT),
+        }
+    }
+
+    /// The flaws by name, comma separated.
+    pub fn names(&self) -> String {
+        self.flaws
+            .iter()
+            .map(|f| f.name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 impl<'a> Output<'a> {
@@ -47,6 +91,7 @@ impl<'a> Output<'a> {
             steps: &stand.steps,
             static_map: &stand.static_map,
             stabilization: model.stabilization.as_ref(),
+            quality: Quality::of(&model.report),
         }
     }
 
@@ -80,6 +125,13 @@ impl<'a> Output<'a> {
             "rate      {:.4} Hz, {} samples ({} missing)",
             s.rate_hz, s.samples, s.missing
         );
+        if s.outliers > 0 {
+            let _ = writeln!(
+                o,
+                "outliers  {} isolated sample(s) left out (marked missing)",
+                s.outliers
+            );
+        }
         if let Some(j) = s.csv.as_ref().and_then(|c| c.jitter.as_ref()) {
             let _ = writeln!(
                 o,
@@ -124,6 +176,14 @@ impl<'a> Output<'a> {
         let _ = writeln!(o, "zeta      {:.4}", m.zeta);
         let _ = writeln!(o, "tau       {}", taus(&m.time_constants_s));
         let _ = writeln!(o, "dc gain   {}", gain(&m.dc_gain));
+        match &self.quality {
+            q if q.accepted => {
+                let _ = writeln!(o, "quality   accepted");
+            }
+            q => {
+                let _ = writeln!(o, "quality   REJECTED ({}): {}", q.names(), HINT);
+            }
+        }
         if let Some(st) = self.stabilization {
             let line = crate::plot::stabilization::summary_line(st, m.fn_hz, m.zeta);
             let _ = writeln!(o, "stability {line}");

@@ -1,6 +1,7 @@
 //! The worker's fixed-size window of samples at one operating point, and when to identify.
 //!
-//! All buffers are allocated once ([`Window::new`]) with the capacity `max_window_samples`;
+//! All buffers are allocated once ([`Window::new`]) with the capacity [`window_capacity`] (the
+//! plan's windows at the fastest rate, or `max_window_samples` when larger);
 //! pushing, gaps and restarts never allocate (restarts move the kept tail with `copy_within`).
 //!
 //! # Rules (data-driven, so a live run and the replay of its recording decide identically)
@@ -28,8 +29,10 @@
 //!   with holes still counts, nothing is interpolated) and the model says how many samples
 //!   were missing (`missing_samples`).
 
+mod sizing;
 mod view;
 
+pub use sizing::{plan_samples, window_capacity, PLAN_MAX_SAMPLES, PLAN_RATE_HZ};
 pub use view::{Outcome, OutputChannel, Reason, WindowView};
 
 use std::time::Instant;

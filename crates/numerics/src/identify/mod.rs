@@ -32,8 +32,9 @@ use crate::order::hankel_size::square_blocks;
 use crate::order::model_order::check_order;
 use crate::order::HankelSize;
 use crate::pulses::PulseInput;
+use crate::segment::{Command, SegmentRules};
 use crate::stabilization::{StabOptions, Stabilization};
-use crate::workspace::{IdentOptions, Limits, Workspace};
+use crate::workspace::{IdentOptions, Limits, Workspace, AUTO_MAX_BLOCKS};
 use crate::{IdentError, ModelReport};
 
 /// Which way the Markov parameters were obtained.
@@ -152,7 +153,8 @@ pub fn identify_any_with(
         }
     }
     if input.u.len() == 1 && looks_like_pulses(input, ident.max_pulse_width) {
-        let limits = limits_for(n, q, 1, ident, size);
+        let pulses = pulse_count(input, ident.max_pulse_width);
+        let limits = limits_for(n, q, 1, pulses, ident, size);
         let mut ws = Workspace::new(&limits)?;
         let pulse = PulseInput {
             dt_s: input.dt_s,
@@ -204,16 +206,45 @@ pub fn identify_any_with(
     identify_okid_with(input, ident, okid_opts, size, stab)
 }
 
-/// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs and the Hankel
-/// `size`. Automatic sizing keeps the default block caps; a square or explicit Hankel raises
-/// them to what it needs (square: at most `n / 2` blocks each way, since `r + c ≤ L − 1 < n`).
+/// Pulses the pulse path will look at in `input`: the device's pulse starts, or the
+/// segmentation's pulses of the input (the rule [`crate::pulses`] applies). The workspace is
+/// sized from this count, so a record holds as many pulses as it has (a 5 000-pulse recording
+/// is identified, not refused at a fixed limit).
+fn pulse_count(input: &AnyInput<'_>, max_width: usize) -> usize {
+    match (input.pulse_starts, input.u.first()) {
+        (Some(starts), _) if !starts.is_empty() => starts.len(),
+        (_, Some(u)) => {
+            let rules = SegmentRules {
+                max_pulse_samples: max_width,
+                ..SegmentRules::DEFAULT
+            };
+            crate::segment::pulses(Command::with_missing(u, input.missing), &rules).count()
+        }
+        (_, None) => 0,
+    }
+}
+
+/// Workspace limits for `n` samples (or Markov blocks), `q` outputs, `p` inputs, `pulses`
+/// pulses ([`pulse_count`]) and the Hankel `size`. Automatic sizing may take up to half the
+/// record each way, at least the default block caps and at most [`AUTO_MAX_BLOCKS`] (the span
+/// itself is the noise floor's); a square or explicit Hankel raises them to what it needs (square: at most `n / 2` blocks each way, since `r + c ≤ L − 1 < n`).
 /// With a given order and a sized Hankel, `max_order` is that order: the singular-vector
 /// buffers hold `rows × (max_order + 4)` doubles, which at 50 000 rows is what keeps the
 /// process within O(N) memory of a few MB per buffer.
-fn limits_for(n: usize, q: usize, p: usize, ident: &IdentOptions, size: HankelSize) -> Limits {
+fn limits_for(
+    n: usize,
+    q: usize,
+    p: usize,
+    pulses: usize,
+    ident: &IdentOptions,
+    size: HankelSize,
+) -> Limits {
     let d = Limits::default();
     let (max_block_rows, max_block_cols) = match size {
-        HankelSize::Auto => (d.max_block_rows, d.max_block_cols),
+        HankelSize::Auto => {
+            let m = (n / 2).clamp(d.max_block_rows, AUTO_MAX_BLOCKS);
+            (m, m)
+        }
         HankelSize::Square => ((n / 2).max(1), (n / 2).max(1)),
         HankelSize::Blocks(r, c) => (r.max(1), c.max(1)),
     };
@@ -226,7 +257,7 @@ fn limits_for(n: usize, q: usize, p: usize, ident: &IdentOptions, size: HankelSi
         max_outputs: q.max(1),
         max_inputs: p.max(1),
         max_order,
-        max_pulses: (n / 4).clamp(1, 4096),
+        max_pulses: pulses.max(1),
         max_block_rows,
         max_block_cols,
     }

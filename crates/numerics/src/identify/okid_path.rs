@@ -123,7 +123,7 @@ pub fn identify_okid_with(
     };
     let markov = MarkovSeq::from_data(r.q, r.p, r.markov.clone())?;
     check_order(ident.order, r.len, r.q, r.p, size)?;
-    let limits = limits_for(r.len, r.q, r.p, ident, size);
+    let limits = limits_for(r.len, r.q, r.p, 1, ident, size);
     let mut ws = Workspace::new(&limits)?;
     let mut opts = *ident;
     match size {

@@ -54,6 +54,14 @@ pub struct Limits {
     pub max_pulses: usize,
 }
 
+/// Most Hankel block rows (and columns) a workspace sized from its data is given for an
+/// automatically sized Hankel (`propid identify` from the record, the daemon from its window):
+/// the automatic span covers the pulse response above the noise ([`crate::order`]), which at
+/// 20 kHz is ~2 000 lags for a 12 Hz plant, far past the default 128 blocks (a Hankel over the
+/// first 12.8 ms of a 100 ms response gave fn 8 Hz ± 7 Hz for 12 Hz). The cap bounds the
+/// singular-vector buffers (`blocks × (order + 4)` doubles each: 1 MB at 8192 blocks).
+pub const AUTO_MAX_BLOCKS: usize = 8192;
+
 impl Default for Limits {
     fn default() -> Self {
         Self {
