@@ -4,6 +4,7 @@ mod demo_cli;
 mod diagnose_cli;
 mod diagnose_model_keys;
 mod diagnose_sim;
+mod diagnose_staircase;
 mod host_faults_cli;
 mod identify_cli;
 mod identify_real_data;
