@@ -128,8 +128,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let stab = StabOptions::default();
     let okid = OkidOptions::default();
-    let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab))?;
-    let ops = operating_points(&input, &ident, &OpOptions::default());
+    let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab));
     let stand = if loaded.commanded {
         stand_figures(
             Command::with_missing(&loaded.input, &loaded.missing),
@@ -145,6 +144,24 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else {
         StandFigures::default()
     };
+    let model = match model {
+        Ok(m) => m,
+        Err(e) => {
+            // The steps and the static map do not need a model: print them with the failure
+            // stated, and keep exit 4 (no identification) so that a script never takes the
+            // figures for a model.
+            if !(stand.steps.is_empty() && stand.static_map.is_empty()) {
+                let partial = summary::Partial::new(&loaded, &e, &stand);
+                if args.json {
+                    super::stdout::line(&partial.json().map_err(CliError::Json)?)?;
+                } else {
+                    super::stdout::write(&partial.human())?;
+                }
+            }
+            return Err(e.into());
+        }
+    };
+    let ops = operating_points(&input, &ident, &OpOptions::default());
     let out = summary::Output::new(&loaded, &model, &ops, &stand);
     if let Some(dir) = &args.report {
         report::write(dir, &out)
