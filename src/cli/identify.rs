@@ -23,6 +23,8 @@ mod report;
 mod stand;
 mod summary;
 
+pub use stand::brief as stand_brief;
+
 use std::path::PathBuf;
 
 use super::CliError;
@@ -129,21 +131,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let stab = StabOptions::default();
     let okid = OkidOptions::default();
     let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab));
-    let stand = if loaded.commanded {
-        stand_figures(
-            Command::with_missing(&loaded.input, &loaded.missing),
-            loaded.dt_s,
-            &SegmentRules::DEFAULT,
-            loaded.outputs.first().map_or(&[][..], Vec::as_slice),
-            &loaded
-                .stand
-                .iter()
-                .map(|(key, unit, y)| OutputChannel { key, unit, y })
-                .collect::<Vec<_>>(),
-        )
-    } else {
-        StandFigures::default()
-    };
+    let stand = stand_for(&loaded);
     let model = match model {
         Ok(m) => m,
         Err(e) => {
@@ -172,6 +160,30 @@ pub fn run(args: Args) -> Result<(), CliError> {
     } else {
         super::stdout::write(&out.human())
     }
+}
+
+/// The step figures and static maps of `args.file` as `identify` computes them (they need no
+/// model): for the real-data tables.
+pub fn stand_of(args: &Args) -> Result<StandFigures, CliError> {
+    Ok(stand_for(&load::load(args)?))
+}
+
+/// The step figures and static maps of a loaded file (none when its input is not a command).
+fn stand_for(loaded: &load::Loaded) -> StandFigures {
+    if !loaded.commanded {
+        return StandFigures::default();
+    }
+    stand_figures(
+        Command::with_missing(&loaded.input, &loaded.missing),
+        loaded.dt_s,
+        &SegmentRules::DEFAULT,
+        loaded.outputs.first().map_or(&[][..], Vec::as_slice),
+        &loaded
+            .stand
+            .iter()
+            .map(|(key, unit, y)| OutputChannel { key, unit, y })
+            .collect::<Vec<_>>(),
+    )
 }
 
 #[cfg(test)]
