@@ -20,9 +20,9 @@ use propid::ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
 use propid::ingest::steps::find_steps;
 use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
+use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
 use propid_numerics::svd::SvdChoice;
-use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::workspace::IdentOptions;
 use propid_numerics::ModelReport;
 

@@ -23,12 +23,7 @@ fn validate(ctx: &Ctx, f: &Fit, sim: &mut Vec<f64>) -> f64 {
 }
 
 /// The diagnosis from the search's result and the core's model (when it gave one).
-pub fn assemble(
-    ctx: &Ctx,
-    folds: &Folds,
-    searched: Searched,
-    era: Option<&EraStart>,
-) -> Diagnosis {
+pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraStart>) -> Diagnosis {
     let dt = ctx.sig.dt_s;
     let effects = searched.effects();
     let Searched {

@@ -155,7 +155,11 @@ pub fn fit_percent_about(
     range: Range<usize>,
     mean: f64,
 ) -> (f64, f64, usize) {
-    let ok = || range.clone().filter(|&k| y[k].is_finite() && yhat[k].is_finite());
+    let ok = || {
+        range
+            .clone()
+            .filter(|&k| y[k].is_finite() && yhat[k].is_finite())
+    };
     let m = ok().count();
     let e2: f64 = ok().map(|k| (y[k] - yhat[k]).powi(2)).sum();
     let d2: f64 = ok().map(|k| (y[k] - mean).powi(2)).sum();

@@ -45,7 +45,7 @@ use ctx::Ctx;
 pub use error::DiagnoseError;
 use model::{Core, Signals};
 use propid_wire::record::{names, Record};
-pub use result::{Diagnosis, Extended, FoldFit, Finding, Gain, Split, Stage, Traces, Validation};
+pub use result::{Diagnosis, Extended, Finding, FoldFit, Gain, Split, Stage, Traces, Validation};
 pub use summary::ModelSummary;
 
 /// Longest sample period diagnosed, s: above it the highest frequency a mode may take
@@ -196,7 +196,12 @@ pub fn diagnose(
             core: era.as_ref().err().cloned(),
         }
     })?;
-    Ok(assemble::assemble(&ctx, &folds, searched, era.as_ref().ok()))
+    Ok(assemble::assemble(
+        &ctx,
+        &folds,
+        searched,
+        era.as_ref().ok(),
+    ))
 }
 
 fn check_varies(x: &[f64], what: &'static str) -> Result<(), DiagnoseError> {

@@ -216,7 +216,11 @@ mod tests {
     #[test]
     fn the_strongest_candidate_that_raises_the_held_out_figure_is_taken() {
         // (score, name, held-out figure); the current model's figure is 50.
-        let c = vec![(100.0, ("a", 49.0)), (300.0, ("b", 48.0)), (200.0, ("c", 55.0))];
+        let c = vec![
+            (100.0, ("a", 49.0)),
+            (300.0, ("b", 48.0)),
+            (200.0, ("c", 55.0)),
+        ];
         let mut tried = Vec::new();
         let got = select(c, 50.0, |&(name, fig)| {
             tried.push(name);
@@ -230,7 +234,10 @@ mod tests {
     #[test]
     fn an_addition_that_does_not_raise_the_held_out_figure_is_not_taken() {
         let c = vec![(500.0, 50.0), (90.0, 49.9)];
-        assert!(select(c, 50.0, |&fig| (fig, ())).is_none(), "equal is not better");
+        assert!(
+            select(c, 50.0, |&fig| (fig, ())).is_none(),
+            "equal is not better"
+        );
         assert!(select(Vec::<(f64, f64)>::new(), 0.0, |&f| (f, ())).is_none());
     }
 

@@ -71,12 +71,18 @@ fn a_sag_on_the_last_level_only_is_found_by_blocked_cross_validation_over_steps(
         .find(|f| f["effect"] == "supply_sag")
         .unwrap_or_else(|| panic!("no supply_sag: {v}"));
     let g = sag["gain_per_volt"].as_f64().unwrap();
-    assert!((g - GAIN_PER_VOLT).abs() < 0.25 * GAIN_PER_VOLT, "gain/V {g}");
+    assert!(
+        (g - GAIN_PER_VOLT).abs() < 0.25 * GAIN_PER_VOLT,
+        "gain/V {g}"
+    );
     for f in findings {
         assert!(f["cv_gain_pp"].as_f64().unwrap() > 0.0, "{f}");
     }
     let gain = v["gain"]["fit_percent_points"].as_f64().unwrap();
     assert!(gain > 5.0, "held-out gain {gain} pp: {val}");
     assert_eq!(v["extended"]["fit_percent"], val["mean_fit_percent"]);
-    assert_eq!(v["baseline"]["fit_percent"], val["baseline_mean_fit_percent"]);
+    assert_eq!(
+        v["baseline"]["fit_percent"],
+        val["baseline_mean_fit_percent"]
+    );
 }
