@@ -436,7 +436,7 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
     let r = &model.report;
     if let propid_numerics::report::Gain::Scalar(g) = r.dc_gain {
         if g <= 0.0 {
-            notes.push("warning: DC gain ≤ 0 (implausible for a thrust stand)".into());
+            notes.push("warning: DC gain ≤ 0 (the output falls as the input rises)".into());
         }
     }
     let path_name = match model.path {
