@@ -107,7 +107,7 @@ impl Validation {
                     })
                     .collect();
                 format!(
-                    "blocked cross-validation over {} folds of whole steps (each refitted without \
+                    "blocked cross-validation over {} folds cut at the command's steps (each refitted without \
                      it and scored on it; baseline → final model): {}",
                     self.folds.len(),
                     folds.join(", ")
