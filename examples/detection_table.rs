@@ -13,7 +13,10 @@
 use std::path::{Path, PathBuf};
 
 use propid::cli::diagnose::{load, Args};
+use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs};
 use propid::diagnose::{self, Diagnosis};
+use propid_numerics::order::HankelSize;
+use propid_numerics::svd::SvdChoice;
 use propid_sim::plant::PlantConfig;
 use propid_sim::synth;
 
@@ -215,7 +218,12 @@ fn params_text(f: &diagnose::Finding) -> String {
             None => format!("{k} {}", v.as_str().unwrap_or("")),
         })
         .collect();
-    format!("`{}` ({})", f.effect, v.join(", "))
+    format!(
+        "`{}` ({}; held-out {:+.1} pp)",
+        f.effect,
+        v.join(", "),
+        f.cv_gain_pp
+    )
 }
 
 fn real_data(dir: &Path) {
@@ -228,14 +236,30 @@ fn real_data(dir: &Path) {
         eprintln!("real data skipped: {} absent", dir.display());
         return;
     }
-    println!("| dataset | file | input → output | samples, rate | baseline fit | effects found | extended fit | gain |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("| dataset | file | input → output | samples, rate | validation | baseline fit | effects found | extended fit | gain | static map | steps |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for c in REAL {
         let path: PathBuf = dir.join(c.folder).join(c.file);
         if !path.exists() {
-            println!("| {} | {} | | | missing | | | |", c.folder, c.file);
+            println!("| {} | {} | | | | missing | | | | | |", c.folder, c.file);
             continue;
         }
+        let (map, steps) = stand_of(&IdentifyArgs {
+            file: path.clone(),
+            order: None,
+            json: true,
+            report: None,
+            input: c.input.map(str::to_string),
+            output: c.output.map(str::to_string).into_iter().collect(),
+            fs: c.fs,
+            svd: SvdChoice::default(),
+            hankel: HankelSize::default(),
+            columns: c.columns.map(|v| v.iter().map(|s| s.to_string()).collect()),
+            esc_us: None,
+            input_range: (c.columns == Some(BLCTRL)).then(|| vec![0.0, 255.0]),
+            poles: None,
+        })
+        .map_or_else(|_| ("–".into(), "–".into()), |f| stand_brief(&f));
         let args = Args {
             file: path,
             json: false,
@@ -266,8 +290,14 @@ fn real_data(dir: &Path) {
                     ),
                     _ => ("–".to_string(), "–".to_string()),
                 };
+                let validation = match d.validation.method {
+                    diagnose::folds::Method::BlockedCv => {
+                        format!("blocked CV, {} folds", d.validation.folds.len())
+                    }
+                    diagnose::folds::Method::Holdout => "hold-out tail".to_string(),
+                };
                 println!(
-                    "| {} | {} | {} → {}{} | {}, {:.4} Hz | {:.1} % | {} | {} | {} |",
+                    "| {} | {} | {} → {}{} | {}, {:.4} Hz | {validation} | {:.1} % | {} | {} | {} | {map} | {steps} |",
                     c.folder,
                     c.file,
                     s.input_name,
@@ -290,7 +320,7 @@ fn real_data(dir: &Path) {
                 );
             }
             Err(e) => println!(
-                "| {} | {} | | | not diagnosed: {} | | | |",
+                "| {} | {} | | | | not diagnosed: {} | | | | {map} | {steps} |",
                 c.folder,
                 c.file,
                 e.replace('|', "/")

@@ -15,11 +15,14 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
+use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs};
 use propid::ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
 use propid::ingest::steps::find_steps;
 use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
+use propid_numerics::order::HankelSize;
+use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
 use propid_numerics::ModelReport;
 
@@ -49,6 +52,26 @@ const CASES: &[Case] = &[
         fs: None,
         columns: None,
         excitation: "ESC staircase (5 levels)",
+    },
+    Case {
+        folder: "vanderploeg-rcbenchmark-steps",
+        file: "StepsTestV2_2024-07-17_181904.csv",
+        input: None,
+        input_range: None,
+        outputs: &[],
+        fs: None,
+        columns: None,
+        excitation: "steady averages per ESC step (static map only)",
+    },
+    Case {
+        folder: "vanderploeg-rcbenchmark-steps",
+        file: "RampTest_2024-07-21_144641.csv",
+        input: None,
+        input_range: None,
+        outputs: &[],
+        fs: None,
+        columns: None,
+        excitation: "ESC ramp at ~2 Hz (static map)",
     },
     Case {
         folder: "krull-thrust-steps",
@@ -272,10 +295,11 @@ fn main() {
     let mut md = String::from(HEADER);
     for case in CASES {
         let path = data.join(case.folder).join(case.file);
-        let row = match run_case(case, &path) {
+        let (map, steps) = stand_columns(case, &path);
+        let row = match run_case(case, &path, &map, &steps) {
             Ok(r) => r,
             Err(e) => format!(
-                "| {} | {} | – | {} | – | – | – | – | – | – | – | {} |\n",
+                "| {} | {} | – | {} | – | – | – | – | – | – | – | {map} | {steps} | {} |\n",
                 case.folder,
                 case.file,
                 case.excitation,
@@ -302,10 +326,15 @@ first two thirds of the record and scored on the last third (free-run simulation
 state; fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) on the held-out samples; 100 is perfect, 0 is no better
 than the mean, negative is worse; *diverges*: below −1000 %, an unstable or drifting model).
 Order chosen automatically. Rates in Hz; `τ` are the time
-constants of the real poles; `fn`/`ζ` of the dominant oscillatory pair (– if none).
+constants of the real poles; `fn`/`ζ` of the dominant oscillatory pair (– if none). *Static
+map* and *steps* are `propid identify`'s `static_map` and `steps` of the whole record (they
+need no model, so they are shown when the identification fails too): the power law
+`T = k·max(u − u0, 0)^e` of the first output (throttle 0..1), the flight-controller blend
+`expo a`, the number of levels; the number of clean command steps with the median dead time and
+time constant (s) of those that resolve them.
 
-| dataset | file | rate | excitation | path | order | fn (Hz) | ζ | τ (s) | DC gain | held-out fit (%) | notes |
-|---|---|---|---|---|---|---|---|---|---|---|---|
+| dataset | file | rate | excitation | path | order | fn (Hz) | ζ | τ (s) | DC gain | held-out fit (%) | static map | steps | notes |
+|---|---|---|---|---|---|---|---|---|---|---|---|---|---|
 ";
 
 const FOOTER: &str = "
@@ -316,7 +345,33 @@ thrust-stand staircases is the nonlinearity of the propeller (gain grows with th
 closed-loop flight data it is feedback. `propid diagnose` names such effects.
 ";
 
-fn run_case(case: &Case, path: &Path) -> Result<String, String> {
+/// The static-map and step columns from `propid identify`'s own figures
+/// ([`propid::cli::identify::stand_of`], the same reader and options as the row).
+fn stand_columns(case: &Case, path: &Path) -> (String, String) {
+    let args = IdentifyArgs {
+        file: path.to_path_buf(),
+        order: None,
+        json: true,
+        report: None,
+        input: case.input.map(str::to_string),
+        output: case.outputs.iter().map(|s| s.to_string()).collect(),
+        fs: case.fs,
+        svd: SvdChoice::default(),
+        hankel: HankelSize::default(),
+        columns: case
+            .columns
+            .map(|c| c.iter().map(|s| s.to_string()).collect()),
+        esc_us: None,
+        input_range: case.input_range.map(|(a, b)| vec![a, b]),
+        poles: None,
+    };
+    match stand_of(&args) {
+        Ok(f) => stand_brief(&f),
+        Err(_) => ("–".into(), "–".into()),
+    }
+}
+
+fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, String> {
     let text = std::fs::read(path).map_err(|e| format!("absent ({e})"))?;
     let text = String::from_utf8_lossy(&text);
     let opts = CsvFileOptions {
@@ -379,6 +434,11 @@ fn run_case(case: &Case, path: &Path) -> Result<String, String> {
     }
     let fit = held_out_fit(&model.report, &u, &ys, n_est);
     let r = &model.report;
+    if let propid_numerics::report::Gain::Scalar(g) = r.dc_gain {
+        if g <= 0.0 {
+            notes.push("warning: DC gain ≤ 0 (the output falls as the input rises)".into());
+        }
+    }
     let path_name = match model.path {
         PathTaken::Pulse => "pulse",
         PathTaken::Okid => "okid",
@@ -386,7 +446,7 @@ fn run_case(case: &Case, path: &Path) -> Result<String, String> {
     let mut row = String::new();
     let _ = writeln!(
         row,
-        "| {} | {} | {:.4} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+        "| {} | {} | {:.4} | {} | {} | {} | {} | {} | {} | {} | {} | {map} | {steps} | {} |",
         case.folder,
         case.file,
         1.0 / rec.dt_s,

@@ -117,11 +117,7 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         s.u.len(),
         s.dt_s
     );
-    let _ = writeln!(
-        t,
-        "estimation samples {}..{}, validation samples {}..{}",
-        d.split.estimation[0], d.split.estimation[1], d.split.validation[0], d.split.validation[1]
-    );
+    let _ = writeln!(t, "{}", d.validation.describe(&d.split));
     let _ = writeln!(
         t,
         "baseline 2nd order: fn {:.3} Hz, zeta {:.3}, dc gain {:.4}; validation fit {:.2} %",
@@ -146,7 +142,11 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         let _ = writeln!(t, "no effect in the catalogue found");
     }
     for f in &d.findings {
-        let _ = writeln!(t, "- {} (score {:.0}): {}", f.effect, f.score, f.evidence);
+        let _ = writeln!(
+            t,
+            "- {} (score {:.0}, held-out gain {:+.2} points): {}",
+            f.effect, f.score, f.cv_gain_pp, f.evidence
+        );
     }
     if let (Some(e), Some(g)) = (&d.extended, &d.gain) {
         let _ = writeln!(

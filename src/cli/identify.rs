@@ -31,6 +31,8 @@ mod report;
 mod stand;
 mod summary;
 
+pub use stand::brief as stand_brief;
+
 use std::path::PathBuf;
 
 use super::CliError;
@@ -137,23 +139,26 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let stab = StabOptions::default();
     let okid = OkidOptions::default();
-    let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab))?;
-    let ops = operating_points(&input, &ident, &OpOptions::default());
-    let stand = if loaded.commanded {
-        stand_figures(
-            Command::with_missing(&loaded.input, &loaded.missing),
-            loaded.dt_s,
-            &SegmentRules::DEFAULT,
-            loaded.outputs.first().map_or(&[][..], Vec::as_slice),
-            &loaded
-                .stand
-                .iter()
-                .map(|(key, unit, y)| OutputChannel { key, unit, y })
-                .collect::<Vec<_>>(),
-        )
-    } else {
-        StandFigures::default()
+    let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab));
+    let stand = stand_for(&loaded);
+    let model = match model {
+        Ok(m) => m,
+        Err(e) => {
+            // The steps and the static map do not need a model: print them with the failure
+            // stated, and keep exit 4 (no identification) so that a script never takes the
+            // figures for a model.
+            if !(stand.steps.is_empty() && stand.static_map.is_empty()) {
+                let partial = summary::Partial::new(&loaded, &e, &stand);
+                if args.json {
+                    super::stdout::line(&partial.json().map_err(CliError::Json)?)?;
+                } else {
+                    super::stdout::write(&partial.human())?;
+                }
+            }
+            return Err(e.into());
+        }
     };
+    let ops = operating_points(&input, &ident, &OpOptions::default());
     let out = summary::Output::new(&loaded, &model, &ops, &stand);
     if let Some(dir) = &args.report {
         report::write(dir, &out)
@@ -171,6 +176,30 @@ pub fn run(args: Args) -> Result<(), CliError> {
             flaws: out.quality.names(),
         })
     }
+}
+
+/// The step figures and static maps of `args.file` as `identify` computes them (they need no
+/// model): for the real-data tables.
+pub fn stand_of(args: &Args) -> Result<StandFigures, CliError> {
+    Ok(stand_for(&load::load(args)?))
+}
+
+/// The step figures and static maps of a loaded file (none when its input is not a command).
+fn stand_for(loaded: &load::Loaded) -> StandFigures {
+    if !loaded.commanded {
+        return StandFigures::default();
+    }
+    stand_figures(
+        Command::with_missing(&loaded.input, &loaded.missing),
+        loaded.dt_s,
+        &SegmentRules::DEFAULT,
+        loaded.outputs.first().map_or(&[][..], Vec::as_slice),
+        &loaded
+            .stand
+            .iter()
+            .map(|(key, unit, y)| OutputChannel { key, unit, y })
+            .collect::<Vec<_>>(),
+    )
 }
 
 #[cfg(test)]

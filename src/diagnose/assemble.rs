@@ -1,56 +1,42 @@
-//! The published diagnosis: each model simulated over the whole record and measured on the
-//! held-out validation samples (`100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)` and the residual RMS), the gain of
-//! the extension, and the traces for the report.
+//! The published diagnosis: each model's held-out figures from the search
+//! ([`super::folds`]: each fold's fit, their mean, the RMS of the held-out residuals), the gain
+//! of the extension, and the traces for the report (each model fitted on the estimation
+//! samples, simulated over the whole record).
 
 use super::ctx::Ctx;
 use super::era_start::{self, EraStart};
 use super::fit::Fit;
+use super::folds::{fit_percent, Folds};
 use super::model::{simulate, Model};
 use super::noise;
-use super::result::{Diagnosis, Extended, Gain, Split, Stage, Traces};
+use super::result::{Diagnosis, Extended, FoldFit, Gain, Split, Stage, Traces, Validation};
 use super::search::Searched;
 use super::summary::ModelSummary;
 use super::verdict::{self, Residual};
 
-/// Validation fit percent and residual RMS of a fit; its simulation over the whole record is
-/// left in `sim`.
-fn validate(ctx: &Ctx, f: &Fit, sim: &mut Vec<f64>) -> (f64, f64) {
+/// Fit percent of a fit on the validation samples (`ctx.val`); its simulation over the whole
+/// record is left in `sim`.
+fn validate(ctx: &Ctx, f: &Fit, sim: &mut Vec<f64>) -> f64 {
     sim.resize(ctx.sig.u.len(), 0.0);
     simulate(&f.model, &ctx.sig, sim);
-    let ys: Vec<f64> = ctx
-        .val
-        .clone()
-        .filter(|&k| ctx.sig.y[k].is_finite())
-        .map(|k| ctx.sig.y[k])
-        .collect();
-    let mean = ys.iter().sum::<f64>() / ys.len().max(1) as f64;
-    let mut e2 = 0.0;
-    let mut d2 = 0.0;
-    let mut m = 0usize;
-    for k in ctx.val.clone() {
-        let yk = ctx.sig.y[k];
-        if yk.is_finite() {
-            e2 += (yk - sim[k]).powi(2);
-            d2 += (yk - mean).powi(2);
-            m += 1;
-        }
-    }
-    let fit = 100.0 * (1.0 - (e2 / d2.max(1e-300)).sqrt());
-    (fit, (e2 / m.max(1) as f64).sqrt())
+    fit_percent(ctx.sig.y, sim, ctx.val.clone()).0
 }
 
 /// The diagnosis from the search's result and the core's model (when it gave one).
-pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagnosis {
+pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraStart>) -> Diagnosis {
     let dt = ctx.sig.dt_s;
     let effects = searched.effects();
     let Searched {
         base,
+        base_cv,
         extended: cur,
+        extended_cv,
         findings,
     } = searched;
-    let mut sim_b = Vec::new();
+    let mut sim_b = vec![0.0; ctx.sig.u.len()];
     let mut sim_e = Vec::new();
-    let (fit_b, rms_b) = validate(ctx, &base, &mut sim_b);
+    simulate(&base.model, &ctx.sig, &mut sim_b);
+    let (fit_b, rms_b) = (base_cv.mean, base_cv.rms);
     let core = era.map(|e| &e.report);
     let core_model = era.map(|e| {
         let q = era_start::with_offset(ctx, &e.core);
@@ -59,7 +45,7 @@ pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagno
             sse: 0.0,
             n: 0,
         };
-        let (fit, _) = validate(ctx, &f, &mut sim_e);
+        let fit = validate(ctx, &f, &mut sim_e);
         era_start::summary(&q, e.path, fit)
     });
     let baseline = Stage {
@@ -71,7 +57,9 @@ pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagno
         sim_e = sim_b.clone();
         (None, None, None)
     } else {
-        let (fit_e, rms_e) = validate(ctx, &cur, &mut sim_e);
+        sim_e.resize(ctx.sig.u.len(), 0.0);
+        simulate(&cur.model, &ctx.sig, &mut sim_e);
+        let (fit_e, rms_e) = (extended_cv.mean, extended_cv.rms);
         let ext = Extended {
             effects,
             model: ModelSummary::from_fit(&cur, dt, core),
@@ -102,6 +90,21 @@ pub fn assemble(ctx: &Ctx, searched: Searched, era: Option<&EraStart>) -> Diagno
         split: Split {
             estimation: [ctx.est.start, ctx.est.end],
             validation: [ctx.val.start, ctx.val.end],
+        },
+        validation: Validation {
+            method: folds.method,
+            folds: folds
+                .folds
+                .iter()
+                .zip(base_cv.fits.iter().zip(&extended_cv.fits))
+                .map(|(r, (&b, &e))| FoldFit {
+                    samples: [r.start, r.end],
+                    baseline_fit_percent: b,
+                    fit_percent: e,
+                })
+                .collect(),
+            baseline_mean_fit_percent: base_cv.mean,
+            mean_fit_percent: extended_cv.mean,
         },
         noise_floor,
         residual,

@@ -4,7 +4,7 @@
 
 use std::ops::Range;
 
-use super::fit::{levenberg_marquardt, linear_refit, sse, Fit};
+use super::fit::{levenberg_marquardt, linear_refit, Fit};
 use super::model::{simulate, Core, Model, Signals};
 
 /// The data, the estimation range and the validation range.
@@ -19,12 +19,6 @@ pub struct Ctx<'a> {
 }
 
 impl Ctx<'_> {
-    /// SSE of a fit on the validation samples.
-    pub fn val_sse(&self, f: &Fit) -> f64 {
-        let mut buf = Vec::new();
-        sse(&f.model, &self.sig, self.val.clone(), &mut buf).0
-    }
-
     /// Levenberg–Marquardt on the estimation samples from `start`, at most `iters` steps.
     pub fn lm(&self, start: &Model, iters: usize) -> Fit {
         levenberg_marquardt(start, &self.sig, self.est.clone(), iters)

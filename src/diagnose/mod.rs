@@ -2,18 +2,22 @@
 //! measurement, name the physical cause, extend the model with it and measure the gain on data
 //! the models were not fitted on.
 //!
-//! 1. **Split.** The first 70 % of the samples are the estimation part, the rest is held out
-//!    for validation ([`Split`]).
+//! 1. **Validation** ([`folds`]). A command with steps (at least 3 levels of the
+//!    segmentation): blocked cross-validation, folds of whole levels, every model fitted on all
+//!    samples and, for its held-out figure, refitted without each fold and scored on it (the
+//!    mean of the folds' fits). A command without steps: the first 70 % of the samples
+//!    (`estimation_fraction`) are fitted, the rest is held out ([`Split`], [`Validation`]).
 //! 2. **Baseline.** A 2nd-order output-error model `T'' + 2ζωn T' + ωn² T = ωn² K u` plus an
 //!    offset, exactly discretised (ZOH), fitted by least squares on the simulation error
-//!    ([`fit`], [`search::baseline`]); simulated over the whole record from the input alone,
-//!    its fit on the validation part is `100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)` ([`assemble`]).
+//!    ([`fit`], [`search::baseline`]); simulated from the input alone, its fit on held-out
+//!    samples is `100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)`.
 //! 3. **Catalogue** ([`effects`], one file per effect behind the [`effect::Effect`] and
-//!    [`effect::Term`] traits): each effect extends the model ([`model`]); its score is a
-//!    likelihood ratio; the forward search ([`search`]) names the effects that pass the
-//!    threshold.
-//! 4. **Extended model**: the model with every effect found, validated on the same samples;
-//!    the gain is the difference of fit percentages and the ratio of residual RMS.
+//!    [`effect::Term`] traits): each effect extends the model ([`model`]), fitted jointly with
+//!    every term already in it; its score is a likelihood ratio; the forward selection
+//!    ([`search`]) adds the effects that pass the threshold and raise the held-out figure,
+//!    one at a time, each with its held-out gain (`cv_gain_pp`).
+//! 4. **Extended model**: the model with every effect found, validated on the same folds;
+//!    the gain is the difference of held-out figures and the ratio of held-out residual RMS.
 //!
 //! The detector sees only the measured signals (input, output, and the supply voltage when the
 //! record has one), never the simulator's configuration.
@@ -25,6 +29,7 @@ pub mod effects;
 pub mod era_start;
 pub mod error;
 pub mod fit;
+pub mod folds;
 pub mod model;
 pub mod noise;
 pub mod report;
@@ -40,7 +45,7 @@ use ctx::Ctx;
 pub use error::DiagnoseError;
 use model::{Core, Signals};
 use propid_wire::record::{names, Record};
-pub use result::{Diagnosis, Extended, Finding, Gain, Split, Stage, Traces};
+pub use result::{Diagnosis, Extended, Finding, FoldFit, Gain, Split, Stage, Traces, Validation};
 pub use summary::ModelSummary;
 
 /// Longest sample period diagnosed, s: above it the highest frequency a mode may take
@@ -50,7 +55,8 @@ pub const MAX_SAMPLE_PERIOD_S: f64 = 0.49 / 1e-6;
 /// Options of a diagnosis.
 #[derive(Debug, Clone)]
 pub struct Options {
-    /// Share of the samples (from the start) used for estimation; the rest is validation.
+    /// Share of the samples (from the start) used for estimation when the command has no steps;
+    /// the rest is validation ([`folds`]).
     pub estimation_fraction: f64,
     /// Most effects named.
     pub max_effects: usize,
@@ -158,11 +164,13 @@ pub fn diagnose(
             index: k,
         });
     }
-    let frac = opts.estimation_fraction.clamp(0.3, 0.9);
-    let n_est = ((n as f64) * frac).round() as usize;
-    let est = 0..n_est;
-    let val = n_est..n;
     let (u, y) = (&u[..n], &y[..n]);
+    let folds = folds::Folds::from_input(u, y, opts.estimation_fraction);
+    let est = folds.estimation.clone();
+    let val = match folds.method {
+        folds::Method::Holdout => est.end..n,
+        folds::Method::BlockedCv => 0..n,
+    };
     check_varies(&u[est.clone()], "input")?;
     check_varies(&y[est.clone()], "output")?;
     if y[val.clone()].iter().filter(|v| v.is_finite()).count() < 10 {
@@ -183,12 +191,17 @@ pub fn diagnose(
     let ctx = Ctx { sig, est, val };
     let era = era_start::era_start(&ctx);
     let starts: Vec<Core> = era.iter().map(|e| e.core).collect();
-    let searched = search::search(&ctx, &starts, opts.max_effects).ok_or_else(|| {
+    let searched = search::search(&ctx, &folds, &starts, opts.max_effects).ok_or_else(|| {
         DiagnoseError::FitFailed {
             core: era.as_ref().err().cloned(),
         }
     })?;
-    Ok(assemble::assemble(&ctx, searched, era.as_ref().ok()))
+    Ok(assemble::assemble(
+        &ctx,
+        &folds,
+        searched,
+        era.as_ref().ok(),
+    ))
 }
 
 fn check_varies(x: &[f64], what: &'static str) -> Result<(), DiagnoseError> {
@@ -254,6 +267,8 @@ mod tests {
         )
         .unwrap();
         let text = serde_json::to_string(&d).unwrap();
+        assert!(d.validation.folds.len() >= folds::MIN_FOLDS);
+        let folds = "samples baseline_fit_percent fit_percent ".repeat(d.validation.folds.len());
         let model = "order dt_s fn_hz zeta dc_gain time_constants_s poles_s poles_z a b c d \
                      singular_values indicators msv mac emac mpc cmi msv mac emac mpc cmi \
                      uncertainty fn_hz zeta dc_gain pulses pulses_skipped missing_samples noise_rms \
@@ -261,9 +276,10 @@ mod tests {
         let want = format!(
             "baseline model {model} gain offset fit_percent \
              core_model path fn_hz zeta dc_gain fit_percent \
-             findings effect score evidence delay_s delay_samples \
+             findings effect score cv_gain_pp evidence delay_s delay_samples \
              extended effects model {model} delay_s delay_samples gain offset fit_percent \
              gain fit_percent_points rms_ratio split estimation validation \
+             validation method folds {folds}baseline_mean_fit_percent mean_fit_percent \
              noise_floor rms from samples residual baseline_rms extended_rms \
              verdict kind unexplained_share reason warnings"
         );

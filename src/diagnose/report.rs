@@ -263,11 +263,7 @@ fn markdown(title: &str, d: &Diagnosis, pulses: usize, sv: &[f64]) -> String {
     let mut s = String::new();
     let b = &d.baseline;
     let _ = writeln!(s, "# propid diagnose: {title}\n");
-    let _ = writeln!(
-        s,
-        "Estimation samples {}..{}, validation (held out) samples {}..{}.\n",
-        d.split.estimation[0], d.split.estimation[1], d.split.validation[0], d.split.validation[1]
-    );
+    let _ = writeln!(s, "Validation: {}.\n", d.validation.describe(&d.split));
     let _ = writeln!(
         s,
         "**Baseline** (2nd order, output-error fit): fn = {:.3} Hz, ζ = {:.3}, DC gain = {:.4}; validation fit **{:.2} %**.\n",

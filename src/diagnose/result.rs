@@ -11,10 +11,13 @@ use super::summary::ModelSummary;
 pub struct Stage {
     /// The model.
     pub model: ModelSummary,
-    /// `100 (1 − ‖y − ŷ‖ / ‖y − mean y‖)` on the validation samples.
+    /// The held-out figure: the mean over the validation folds of
+    /// `100 (1 − ‖y − ŷ‖ / ‖y − mean y‖)` on each fold ([`Validation`]).
     pub fit_percent: f64,
     /// The identification core's own model of the estimation part (ERA / OKID, what
-    /// `propid identify` publishes) and its validation fit; absent when the core refused.
+    /// `propid identify` publishes) and its fit on the validation samples (in-sample under
+    /// blocked cross-validation: the core is not refitted per fold); absent when the core
+    /// refused.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub core_model: Option<super::era_start::EraBaseline>,
 }
@@ -26,7 +29,7 @@ pub struct Extended {
     pub effects: Vec<String>,
     /// The model.
     pub model: ModelSummary,
-    /// Validation fit, percent.
+    /// The held-out figure (as the baseline's), percent.
     pub fit_percent: f64,
 }
 
@@ -37,6 +40,10 @@ pub struct Finding {
     pub effect: String,
     /// Test statistic `n ln(SSE_before / SSE_after)` (larger is stronger evidence).
     pub score: f64,
+    /// Held-out gain of this addition: the held-out figure ([`Validation`]) of the model with
+    /// it minus that of the model before it, percentage points (> 0 for every effect added by
+    /// the search; an effect read straight from the data reports its gain, whatever its sign).
+    pub cv_gain_pp: f64,
     /// The evidence in words.
     pub evidence: String,
     /// The effect's parameter estimates (`delay_s`, `exponent`, `fn_hz`, ...).
@@ -47,20 +54,78 @@ pub struct Finding {
 /// What the extension gained on the validation samples.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Gain {
-    /// `fit_extended − fit_baseline`, percentage points.
+    /// `fit_extended − fit_baseline` (held-out figures), percentage points.
     pub fit_percent_points: f64,
-    /// `RMS(residual extended) / RMS(residual baseline)`, both residuals of the simulation
-    /// over the same held-out validation samples (missing outputs skipped).
+    /// `RMS(residual extended) / RMS(residual baseline)`, both held-out residuals over the
+    /// same samples (each fold's prediction by the model refitted without it; missing outputs
+    /// skipped).
     pub rms_ratio: f64,
 }
 
 /// Which samples were used for what (half-open ranges of sample indices).
 #[derive(Debug, Clone, Serialize)]
 pub struct Split {
-    /// Samples the models were fitted on, `[first, end)`.
+    /// Samples the published models were fitted on, `[first, end)` (every sample under
+    /// blocked cross-validation).
     pub estimation: [usize; 2],
-    /// Held-out samples the fits are measured on, `[first, end)`.
+    /// Samples held out, `[first, end)`: the tail under `holdout`; every sample (each in one
+    /// fold) under `blocked_cv`.
     pub validation: [usize; 2],
+}
+
+/// How the held-out figures were measured ([`super::folds`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct Validation {
+    /// `blocked_cv` (folds of whole command levels) or `holdout` (one tail: no steps).
+    pub method: super::folds::Method,
+    /// Each fold, in order.
+    pub folds: Vec<FoldFit>,
+    /// Mean of the folds' baseline fits: the baseline's `fit_percent`.
+    pub baseline_mean_fit_percent: f64,
+    /// Mean of the folds' fits of the final model (the extended one, else the baseline).
+    pub mean_fit_percent: f64,
+}
+
+impl Validation {
+    /// One line for the human summary and the report: how the figure was measured, given
+    /// the estimation samples `split`.
+    pub fn describe(&self, split: &Split) -> String {
+        match self.method {
+            super::folds::Method::Holdout => format!(
+                "estimation samples {}..{}, validation samples {}..{}",
+                split.estimation[0], split.estimation[1], split.validation[0], split.validation[1]
+            ),
+            super::folds::Method::BlockedCv => {
+                let folds: Vec<String> = self
+                    .folds
+                    .iter()
+                    .map(|f| {
+                        format!(
+                            "{}..{}: {:.1} → {:.1} %",
+                            f.samples[0], f.samples[1], f.baseline_fit_percent, f.fit_percent
+                        )
+                    })
+                    .collect();
+                format!(
+                    "blocked cross-validation over {} folds cut at the command's steps (each refitted without \
+                     it and scored on it; baseline → final model): {}",
+                    self.folds.len(),
+                    folds.join(", ")
+                )
+            }
+        }
+    }
+}
+
+/// One fold of the validation.
+#[derive(Debug, Clone, Serialize)]
+pub struct FoldFit {
+    /// Its held-out samples, `[first, end)`.
+    pub samples: [usize; 2],
+    /// Fit of the baseline refitted without the fold, scored on it, percent.
+    pub baseline_fit_percent: f64,
+    /// Fit of the final model refitted without the fold, scored on it, percent.
+    pub fit_percent: f64,
 }
 
 /// The whole diagnosis (`propid diagnose --json`).
@@ -76,6 +141,8 @@ pub struct Diagnosis {
     pub gain: Option<Gain>,
     /// Estimation and validation samples.
     pub split: Split,
+    /// The held-out figures fold by fold.
+    pub validation: Validation,
     /// The noise floor measured from the data (null when none could be measured).
     pub noise_floor: Option<super::noise::NoiseFloor>,
     /// Residual RMS of the models on the validation samples.

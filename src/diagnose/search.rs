@@ -6,20 +6,24 @@
 //! asymptotically χ² with as many degrees of freedom as `e` adds (1–3), so a threshold of 40
 //! puts the false-alarm probability per test below 1e-7 in theory; real residuals are coloured,
 //! which is why the threshold was set on measured clean cases (see `docs/diagnose.md`) and why
-//! an effect must also lower the residual RMS by at least 1 % and improve the held-out
-//! validation error.
+//! an effect must also lower the residual RMS by at least 1 % and improve the held-out figure.
 //!
-//! **Search.** Effects recognised straight from the data ([`Effect::detect`], e.g. a sensor
-//! clip) are named first and kept in every model. Then forward stepwise: every effect not yet in
-//! the model is fitted on top of it ([`Effect::extend`]); the one with the largest score is
-//! taken if it passes and its fitted term is plausible
-//! ([`Term::plausible`](super::effect::Term::plausible)); repeat (at most
-//! `max_effects` effects in all).
+//! **Search: forward selection on a joint fit.** Effects recognised straight from the data
+//! ([`Effect::detect`], e.g. a sensor clip) are named first and kept in every model. Then
+//! forward stepwise: every effect not yet in the model is fitted on top of it
+//! ([`Effect::extend`]: every parameter of the model, the core's, the earlier effects' and the
+//! new one's, fitted together); the candidates that pass the score, the RMS drop and
+//! plausibility ([`Term::plausible`](super::effect::Term::plausible)) are tried in order of
+//! score, and the first whose **held-out figure** ([`super::folds`]: the mean fit of the blocked
+//! cross-validation folds, or the hold-out tail) is higher than the current model's is taken;
+//! its gain in percentage points is the finding's `cv_gain_pp`. An addition that does not
+//! improve the held-out figure is not taken. Repeat (at most `max_effects` effects in all).
 
 use super::ctx::Ctx;
 use super::effect::Effect;
 use super::effects::REGISTRY;
 use super::fit::Fit;
+use super::folds::{cross_validate, Folds, Scores};
 use super::model::{Core, Model};
 use super::result::Finding;
 
@@ -28,13 +32,20 @@ pub const SCORE_THRESHOLD: f64 = 40.0;
 /// Smallest accepted relative drop of the estimation residual RMS.
 pub const MIN_RMS_DROP: f64 = 0.01;
 
+/// Smallest held-out gain of an addition, percentage points (the figure must rise).
+pub const MIN_CV_GAIN_PP: f64 = 0.0;
+
 /// What the search found.
 #[derive(Debug, Clone)]
 pub struct Searched {
     /// The 2nd-order baseline (no effect).
     pub base: Fit,
+    /// Its held-out scores.
+    pub base_cv: Scores,
     /// The model with every effect found.
     pub extended: Fit,
+    /// Its held-out scores (equal to the baseline's when nothing was found).
+    pub extended_cv: Scores,
     /// The findings, in the order found.
     pub findings: Vec<Finding>,
 }
@@ -74,34 +85,43 @@ pub fn baseline(ctx: &Ctx, template: &Model, extra_starts: &[Core]) -> Fit {
     }
 }
 
-/// Runs the search (module doc) with the core's model as an extra start of the baseline;
-/// `None` when the baseline cannot be fitted (non-finite SSE or no sample counted).
-pub fn search(ctx: &Ctx, era_starts: &[Core], max_effects: usize) -> Option<Searched> {
-    let mut template = Model::default();
-    let mut findings = Vec::new();
-    for e in REGISTRY {
-        if let Some(d) = e.detect(ctx) {
-            findings.push(Finding {
-                effect: e.name().to_string(),
-                score: d.score,
-                evidence: d.term.evidence(&template.core, ctx, ""),
-                params: d.term.finding_params(ctx.sig.dt_s),
-            });
-            template = template.with_boxed(d.term);
-        }
-    }
+/// Runs the search (module doc) with the core's model as an extra start of the baseline and
+/// `folds` for the held-out figure; `None` when the baseline cannot be fitted (non-finite SSE
+/// or no sample counted).
+pub fn search(
+    ctx: &Ctx,
+    folds: &Folds,
+    era_starts: &[Core],
+    max_effects: usize,
+) -> Option<Searched> {
+    let cv = |f: &Fit| cross_validate(ctx, folds, f);
     let base = baseline(ctx, &Model::default(), era_starts);
     if !base.sse.is_finite() || base.n == 0 {
         return None;
     }
-    let mut cur = if findings.is_empty() {
-        base.clone()
-    } else {
-        baseline(ctx, &template, era_starts)
-    };
+    let base_cv = cv(&base);
+    let mut template = Model::default();
+    let mut findings = Vec::new();
+    let (mut cur, mut cur_cv) = (base.clone(), base_cv.clone());
+    for e in REGISTRY {
+        if let Some(d) = e.detect(ctx) {
+            let evidence = d.term.evidence(&template.core, ctx, "");
+            let params = d.term.finding_params(ctx.sig.dt_s);
+            template = template.with_boxed(d.term);
+            let f = baseline(ctx, &template, era_starts);
+            let f_cv = cv(&f);
+            findings.push(Finding {
+                effect: e.name().to_string(),
+                score: d.score,
+                cv_gain_pp: f_cv.mean - cur_cv.mean,
+                evidence,
+                params,
+            });
+            (cur, cur_cv) = (f, f_cv);
+        }
+    }
     while findings.len() < max_effects {
-        let val_cur = ctx.val_sse(&cur);
-        let mut best: Option<(f64, &dyn Effect, Fit)> = None;
+        let mut candidates: Vec<(f64, (&dyn Effect, Fit))> = Vec::new();
         for &e in REGISTRY {
             if findings.iter().any(|f| f.effect == e.name()) {
                 continue;
@@ -119,26 +139,56 @@ pub fn search(ctx: &Ctx, era_starts: &[Core], max_effects: usize) -> Option<Sear
             }
             let score = f.n as f64 * (cur.sse / f.sse).ln();
             let rms_drop = 1.0 - (f.sse / cur.sse).sqrt();
-            let passes =
-                score >= SCORE_THRESHOLD && rms_drop >= MIN_RMS_DROP && ctx.val_sse(&f) < val_cur;
-            if passes && best.as_ref().map_or(true, |b| score > b.0) {
-                best = Some((score, e, f));
+            if score >= SCORE_THRESHOLD && rms_drop >= MIN_RMS_DROP {
+                candidates.push((score, (e, f)));
             }
         }
-        let Some((score, e, f)) = best else { break };
-        findings.push(finding(e, score, &cur, &f, ctx));
-        cur = f;
+        let taken = select(candidates, cur_cv.mean, |(_, f)| {
+            let s = cv(f);
+            (s.mean, s)
+        });
+        let Some((score, (e, f), f_cv)) = taken else {
+            break;
+        };
+        findings.push(finding(e, score, f_cv.mean - cur_cv.mean, &cur, &f, ctx));
+        (cur, cur_cv) = (f, f_cv);
     }
     Some(Searched {
         base,
+        base_cv,
         extended: cur,
+        extended_cv: cur_cv,
         findings,
+    })
+}
+
+/// The selection rule (module doc): `candidates` (score, item) that passed the score and RMS
+/// tests are tried in order of decreasing score (ties: the first listed); the first whose
+/// held-out figure (`figure` gives it and what comes with it) exceeds `current` by more than
+/// [`MIN_CV_GAIN_PP`] is taken, with its score and what `figure` gave. `None`: no addition
+/// improves the held-out figure. `figure` runs only until one is taken.
+pub fn select<T, S>(
+    mut candidates: Vec<(f64, T)>,
+    current: f64,
+    mut figure: impl FnMut(&T) -> (f64, S),
+) -> Option<(f64, T, S)> {
+    candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
+    candidates.into_iter().find_map(|(score, item)| {
+        let (fig, extra) = figure(&item);
+        (fig - current > MIN_CV_GAIN_PP).then_some((score, item, extra))
     })
 }
 
 /// The finding for effect `e` fitted on top of `before`: parameters from the extended fit,
 /// evidence in words.
-fn finding(e: &dyn Effect, score: f64, before: &Fit, after: &Fit, ctx: &Ctx) -> Finding {
+fn finding(
+    e: &dyn Effect,
+    score: f64,
+    cv_gain_pp: f64,
+    before: &Fit,
+    after: &Fit,
+    ctx: &Ctx,
+) -> Finding {
     let rms = |f: &Fit| (f.sse / f.n.max(1) as f64).sqrt();
     let drop = format!(
         "the estimation residual RMS falls from {:.4} to {:.4} ({:.0} % lower)",
@@ -150,10 +200,50 @@ fn finding(e: &dyn Effect, score: f64, before: &Fit, after: &Fit, ctx: &Ctx) -> 
     Finding {
         effect: e.name().to_string(),
         score,
+        cv_gain_pp,
         evidence: term.map_or_else(
             || drop.clone(),
             |t| t.evidence(&after.model.core, ctx, &drop),
         ),
         params: term.map_or_else(Default::default, |t| t.finding_params(ctx.sig.dt_s)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_strongest_candidate_that_raises_the_held_out_figure_is_taken() {
+        // (score, name, held-out figure); the current model's figure is 50.
+        let c = vec![
+            (100.0, ("a", 49.0)),
+            (300.0, ("b", 48.0)),
+            (200.0, ("c", 55.0)),
+        ];
+        let mut tried = Vec::new();
+        let got = select(c, 50.0, |&(name, fig)| {
+            tried.push(name);
+            (fig, name)
+        });
+        // b has the largest score but lowers the figure: not taken; c is next and raises it.
+        assert_eq!(got.map(|g| (g.0, g.2)), Some((200.0, "c")));
+        assert_eq!(tried, ["b", "c"], "a is never scored once c is taken");
+    }
+
+    #[test]
+    fn an_addition_that_does_not_raise_the_held_out_figure_is_not_taken() {
+        let c = vec![(500.0, 50.0), (90.0, 49.9)];
+        assert!(
+            select(c, 50.0, |&fig| (fig, ())).is_none(),
+            "equal is not better"
+        );
+        assert!(select(Vec::<(f64, f64)>::new(), 0.0, |&f| (f, ())).is_none());
+    }
+
+    #[test]
+    fn ties_in_score_go_to_the_first_listed() {
+        let c = vec![(10.0, "first"), (10.0, "second")];
+        assert_eq!(select(c, 0.0, |_| (1.0, ())).map(|g| g.1), Some("first"));
     }
 }

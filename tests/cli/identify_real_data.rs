@@ -203,3 +203,62 @@ fn diagnose_does_not_call_the_90_percent_staircase_explained() {
     assert!(!text.contains("explains the data to the noise"), "{text}");
     assert!(text.contains("verdict: UNEXPLAINED"), "{text}");
 }
+
+/// Issue 11, items 4 and 5: under blocked cross-validation over its steps the 90 % staircase
+/// names a hardening static map, the supply sag of its top step and a dead time of 2–4
+/// samples, each with a positive held-out gain, and the extended model is clearly better
+/// held-out.
+#[test]
+fn diagnose_names_the_90_percent_staircases_three_effects_held_out() {
+    let Some(dir) = shared("vanderploeg-rcbenchmark-steps") else {
+        return;
+    };
+    let file = dir.join("90PERCENT_2024-08-13_185523.csv");
+    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .arg("diagnose")
+        .arg(&file)
+        .arg("--json")
+        .output()
+        .expect("run propid");
+    assert!(out.status.success());
+    let v: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(v["validation"]["method"], "blocked_cv");
+    let findings = v["findings"].as_array().unwrap();
+    let get = |name: &str| {
+        findings
+            .iter()
+            .find(|x| x["effect"] == name)
+            .unwrap_or_else(|| panic!("{name} not named: {findings:?}"))
+    };
+    assert_eq!(get("static_nonlinearity")["curvature"], "hardens");
+    let d = get("dead_time")["delay_samples"].as_u64().unwrap();
+    assert!((2..=4).contains(&d), "delay {d} samples");
+    assert!(f(&get("supply_sag")["gain_per_volt"]) > 0.0);
+    for x in findings {
+        assert!(f(&x["cv_gain_pp"]) > 0.0, "{x}");
+    }
+    assert!(f(&v["gain"]["fit_percent_points"]) > 20.0, "{}", v["gain"]);
+}
+
+/// Issue 11, item 4: a record whose identification fails (a handful of steady averages per
+/// ESC step) still prints its static map, with the failure stated, and exits 4.
+#[test]
+fn a_failed_identification_still_prints_the_static_map() {
+    let Some(dir) = shared("vanderploeg-rcbenchmark-steps") else {
+        return;
+    };
+    let file = dir.join("StepsTestV2_2024-07-17_181904.csv");
+    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .arg("identify")
+        .arg(&file)
+        .arg("--json")
+        .output()
+        .expect("run propid");
+    assert_eq!(out.status.code(), Some(4));
+    let v: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert!(v["model"].is_null());
+    assert!(!v["error"].as_str().unwrap().is_empty());
+    let thrust = &v["static_map"]["thrust"];
+    assert!(thrust["levels"].as_array().unwrap().len() >= 3, "{v}");
+    assert!(!String::from_utf8_lossy(&out.stderr).is_empty());
+}

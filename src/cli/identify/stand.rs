@@ -29,6 +29,53 @@ fn pm(v: f64, sd: Option<f64>) -> String {
     }
 }
 
+/// Two table cells (the real-data tables): the static map of thrust (else of the first output)
+/// — number of levels, power law `k`, `u0`, exponent `e`, `expo a`, unit — and the steps —
+/// how many, the median dead time and time constant (s) of those that resolve them; `–` for
+/// none.
+pub fn brief(f: &StandFigures) -> (String, String) {
+    let map = f
+        .static_map
+        .get("thrust")
+        .or_else(|| f.static_map.values().next())
+        .map_or_else(
+            || "–".to_string(),
+            |m| {
+                let mut t = format!("{} levels", m.levels.len());
+                if let Some(p) = &m.power {
+                    let _ = write!(
+                        t,
+                        "; k {}, u0 {:.3}, e {:.2}",
+                        pm(p.k, None),
+                        p.u0,
+                        p.exponent
+                    );
+                }
+                if let Some(e) = &m.expo {
+                    let _ = write!(t, "; expo a {:.2}", e.a);
+                }
+                format!("{t} ({})", m.unit)
+            },
+        );
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        num(v.get(v.len() / 2).copied(), 3)
+    };
+    let steps = if f.steps.is_empty() {
+        "–".to_string()
+    } else {
+        let dead: Vec<f64> = f.steps.iter().filter_map(|s| s.dead_time_s).collect();
+        let tau: Vec<f64> = f.steps.iter().filter_map(|s| s.time_constant_s).collect();
+        format!(
+            "{}: dead {}, τ {}",
+            f.steps.len(),
+            median(dead),
+            median(tau)
+        )
+    };
+    (map, steps)
+}
+
 /// Appends the step table and the static maps to `o` (nothing when the record has neither).
 pub fn write_tables(o: &mut String, f: &StandFigures) {
     if !f.steps.is_empty() {

@@ -224,6 +224,57 @@ impl<'a> Output<'a> {
     }
 }
 
+/// What `identify` prints when the identification failed but the record has steps or a static
+/// map (exit 4 all the same): `{"model": null, "error": "...", "source": {...}, "steps": [...],
+/// "static_map": {...}}`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Partial<'a> {
+    /// Always null: no model.
+    pub model: Option<&'a ModelReport>,
+    /// Why the identification failed.
+    pub error: String,
+    /// Where the data came from.
+    pub source: Source,
+    /// Step figures, one per clean command step.
+    pub steps: &'a [propid_numerics::step_response::StepFigures],
+    /// Steady levels and fitted curves per output.
+    pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
+    /// All the figures (for the human tables).
+    #[serde(skip)]
+    stand: &'a StandFigures,
+}
+
+impl<'a> Partial<'a> {
+    /// The figures of `stand` with the failure `error`.
+    pub fn new(loaded: &Loaded, error: &impl std::fmt::Display, stand: &'a StandFigures) -> Self {
+        Self {
+            model: None,
+            error: error.to_string(),
+            source: loaded.source.clone(),
+            steps: &stand.steps,
+            static_map: &stand.static_map,
+            stand,
+        }
+    }
+
+    /// Exactly one JSON object.
+    pub fn json(&self) -> serde_json::Result<String> {
+        serde_json::to_string(self)
+    }
+
+    /// The human summary: the source, the failure, the step and static-map tables.
+    pub fn human(&self) -> String {
+        let s = &self.source;
+        let mut o = String::new();
+        let _ = writeln!(o, "file      {} ({})", s.file, s.format);
+        let _ = writeln!(o, "input     {}", s.input);
+        let _ = writeln!(o, "identification failed: {}", self.error);
+        let _ = writeln!(o, "(the step figures and the static map need no model:)");
+        super::stand::write_tables(&mut o, self.stand);
+        o
+    }
+}
+
 fn path_name(p: PathTaken) -> &'static str {
     match p {
         PathTaken::Pulse => "pulse",

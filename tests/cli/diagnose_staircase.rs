@@ -1,0 +1,88 @@
+//! Issue 11 item 4: a staircase whose top level appears only at the end, with a supply sag only
+//! on that level (as a stand whose supply current-limits at full power). A 70/30 split would
+//! score the top level on pure extrapolation and could never see the sag in its estimation
+//! part; the blocked cross-validation over steps fits every level and names the sag with a
+//! positive held-out gain. (The measured vanderploeg log that shows this may not be copied
+//! into the repository, see `../shared/data/README.md`; this record is built from the
+//! simulated plant.)
+
+use std::path::Path;
+
+use propid_sim::plant::{Plant, PlantConfig};
+
+use super::support::propid;
+
+const DT_S: f64 = 0.005;
+const LEVELS: [f64; 5] = [0.3, 0.4, 0.5, 0.6, 0.75];
+/// Relative gain change per volt of the hidden sag.
+const GAIN_PER_VOLT: f64 = 0.08;
+
+/// Writes the staircase (1.5 s per level) as a §6 CSV with the supply voltage: 16.8 V, then
+/// 14.0 V on the top level. The plant sees `u (1 + g (V − 16.8))`; the file holds `u`.
+fn write_staircase(path: &Path) {
+    let cfg = PlantConfig {
+        noise_rms_n: 0.01,
+        ..PlantConfig::default()
+    };
+    let mut plant = Plant::new(&cfg, DT_S, 7).unwrap();
+    plant.settle(LEVELS[0]);
+    let per = (1.5 / DT_S) as usize;
+    let mut s = String::from("t_us,throttle,thrust_N,voltage_V\n");
+    for (i, &u) in LEVELS.iter().enumerate() {
+        let volt = if i + 1 == LEVELS.len() { 14.0 } else { 16.8 };
+        for k in 0..per {
+            let n = i * per + k;
+            let m = plant.step(u * (1.0 + GAIN_PER_VOLT * (volt - 16.8)));
+            let t_us = (n as f64 * DT_S * 1e6).round() as u64;
+            let thr = (u * 10000.0).round() as u64;
+            s.push_str(&format!("{t_us},{thr},{:.5},{volt:.3}\n", m.thrust_n));
+        }
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn a_sag_on_the_last_level_only_is_found_by_blocked_cross_validation_over_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("staircase.csv");
+    write_staircase(&csv);
+    let (code, out, err) = propid(&["diagnose", csv.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let val = &v["validation"];
+    assert_eq!(val["method"], "blocked_cv", "{val}");
+    let folds = val["folds"].as_array().unwrap();
+    assert!(folds.len() >= 3, "{val}");
+    // The folds tile the record at steps; each has its own fit; the figure is their mean.
+    let n = v["split"]["estimation"][1].as_u64().unwrap();
+    assert_eq!(folds[0]["samples"][0], 0);
+    assert_eq!(folds.last().unwrap()["samples"][1].as_u64(), Some(n));
+    let fits: Vec<f64> = folds
+        .iter()
+        .map(|f| f["fit_percent"].as_f64().unwrap())
+        .collect();
+    let mean = fits.iter().sum::<f64>() / fits.len() as f64;
+    assert!((mean - val["mean_fit_percent"].as_f64().unwrap()).abs() < 1e-9);
+    // The sag is named, with its parameter and a positive held-out gain; the extended model
+    // is clearly better held-out.
+    let findings = v["findings"].as_array().unwrap();
+    let sag = findings
+        .iter()
+        .find(|f| f["effect"] == "supply_sag")
+        .unwrap_or_else(|| panic!("no supply_sag: {v}"));
+    let g = sag["gain_per_volt"].as_f64().unwrap();
+    assert!(
+        (g - GAIN_PER_VOLT).abs() < 0.25 * GAIN_PER_VOLT,
+        "gain/V {g}"
+    );
+    for f in findings {
+        assert!(f["cv_gain_pp"].as_f64().unwrap() > 0.0, "{f}");
+    }
+    let gain = v["gain"]["fit_percent_points"].as_f64().unwrap();
+    assert!(gain > 5.0, "held-out gain {gain} pp: {val}");
+    assert_eq!(v["extended"]["fit_percent"], val["mean_fit_percent"]);
+    assert_eq!(
+        v["baseline"]["fit_percent"],
+        val["baseline_mean_fit_percent"]
+    );
+}
