@@ -4,6 +4,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 use propid_numerics::discretise::discretise_second_order;
+use propid_numerics::nonlinear_core::NonlinearCore;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -41,7 +42,13 @@ pub struct Plant {
     rng: StdRng,
     effects: EffectState,
     last_current_a: f64,
+    /// The core with a nonlinear law (`asymmetric_dynamics`, `stiffness_nonlinearity`);
+    /// `None`: the exact linear step `a`, `b`.
+    nonlinear: Option<NonlinearCore>,
 }
+
+/// Steps per sample of a nonlinear core in the plant (finer than the models `diagnose` fits).
+pub const NONLINEAR_SUBSTEPS: usize = 8;
 
 impl Plant {
     /// A plant at rest (throttle 0, thrust 0) sampled every `dt_s` seconds, with noise drawn from
@@ -61,6 +68,17 @@ impl Plant {
             None
         };
         let effects = EffectState::new(&cfg.effects, cfg, dt_s, seed)?;
+        let law = cfg.effects.core_law();
+        let nonlinear = (!law.is_linear()).then(|| {
+            NonlinearCore::new(
+                cfg.fn_hz,
+                cfg.zeta,
+                cfg.gain_n_per_throttle,
+                dt_s,
+                law,
+                NONLINEAR_SUBSTEPS,
+            )
+        });
         Ok(Plant {
             cfg: cfg.clone(),
             dt_s,
@@ -72,6 +90,7 @@ impl Plant {
             rng: StdRng::seed_from_u64(seed),
             effects,
             last_current_a: cfg.idle_current_a,
+            nonlinear,
         })
     }
 
@@ -101,7 +120,10 @@ impl Plant {
         let u = self
             .effects
             .input_map(throttle.clamp(0.0, 1.0), self.cfg.battery_v, &self.cfg);
-        self.x = Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0);
+        self.x = match &self.nonlinear {
+            Some(core) => core.settle(u),
+            None => Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0),
+        };
         self.effects.settle(throttle.clamp(0.0, 1.0), self.x[0]);
         self.last_current_a = self.current_a(self.x[0]);
     }
@@ -136,7 +158,10 @@ impl Plant {
         // Input path: dead time, then the static map and supply sag, then the linear core.
         let delayed = self.effects.delay(throttle);
         let u = self.effects.input_map(delayed, voltage_v, &self.cfg);
-        self.x = self.a * self.x + self.b * u;
+        self.x = match &self.nonlinear {
+            Some(core) => core.step(self.x, u),
+            None => self.a * self.x + self.b * u,
+        };
         self.k += 1;
         self.last_current_a = current_a;
         let t_pos = thrust_true.max(0.0);
