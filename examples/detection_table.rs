@@ -319,6 +319,18 @@ fn param_error(name: &str, cfg: &PlantConfig, d: &Diagnosis) -> Option<f64> {
         ),
         "supply_sag" => rel(get("gain_per_volt")?, e.supply_sag.as_ref()?.gain_per_volt),
         "saturation" => (get("level")? - e.saturation.as_ref()?.level).abs(),
+        "asymmetric_dynamics" => {
+            let a = e.asymmetric_dynamics.as_ref()?;
+            rel(get("down_over_up")?, a.down_scale / a.up_scale)
+        }
+        "stiffness_nonlinearity" => {
+            let truth = e.stiffness_nonlinearity.as_ref()?.k3_per_k1;
+            let curvature = f.params.get("curvature").and_then(|v| v.as_str());
+            if curvature != Some(if truth > 0.0 { "hardens" } else { "softens" }) {
+                return Some(f64::INFINITY);
+            }
+            rel(get("k3_per_k1")?, truth)
+        }
         _ => return None,
     })
 }

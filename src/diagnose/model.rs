@@ -7,6 +7,8 @@
 //!                                                      min(v_k, L), u_r (v_k/u_r)^p, ...
 //!   x_{k+1} = A x_k + B K v_k,  T_k = x_k[0]           2nd-order core, exact ZOH of
 //!                                                      T'' + 2ζωn T' + ωn² T = ωn² K v
+//!                                                      (a Core term: the nonlinear law of
+//!                                                      propid_numerics::nonlinear_core)
 //!   s_k = T_k, then the series terms                   e.g. an extra mode (4th order)
 //!   ŷ_k = c + s_k, then the output terms               e.g. drift r t_k, a sinusoid, a clip
 //! ```
@@ -18,6 +20,7 @@
 
 use nalgebra::Vector2;
 use propid_numerics::discretise::discretise_second_order;
+use propid_numerics::nonlinear_core::{CoreLaw, NonlinearCore};
 
 use super::effect::{Place, Scale, Term};
 use super::effects;
@@ -167,6 +170,9 @@ pub struct Signals<'a> {
     pub v_ref: f64,
 }
 
+/// Steps per sample of a core with a nonlinear law (exponential midpoint rule in each).
+pub const CORE_SUBSTEPS: usize = 2;
+
 /// Largest frequency a fitted mode may take, Hz (just below Nyquist).
 pub fn max_freq_hz(dt_s: f64) -> f64 {
     0.49 / dt_s
@@ -201,10 +207,25 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
     for x in v.iter_mut() {
         *x *= m.core.gain;
     }
-    let mut x = Vector2::new(v[0], 0.0);
-    for (o, &vk) in out.iter_mut().zip(&v) {
-        *o = x[0];
-        x = a * x + b * vk;
+    let mut law = CoreLaw::default();
+    for t in m.at(Place::Core) {
+        t.core_law(&mut law);
+    }
+    if law.is_linear() {
+        let mut x = Vector2::new(v[0], 0.0);
+        for (o, &vk) in out.iter_mut().zip(&v) {
+            *o = x[0];
+            x = a * x + b * vk;
+        }
+    } else {
+        let fn_hz = m.core.fn_hz.clamp(1e-6, fmax);
+        let zeta = m.core.zeta.clamp(1e-4, 50.0);
+        let core = NonlinearCore::new(fn_hz, zeta, 1.0, sig.dt_s, law, CORE_SUBSTEPS);
+        let mut x = core.settle(v[0]);
+        for (o, &vk) in out.iter_mut().zip(&v) {
+            *o = x[0];
+            x = core.step(x, vk);
+        }
     }
     for t in m.at(Place::Series) {
         t.filter(out, sig.dt_s);
