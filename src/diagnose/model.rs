@@ -325,6 +325,73 @@ mod tests {
     }
 
     #[test]
+    fn core_terms_reproduce_the_plants_nonlinear_core() {
+        use crate::diagnose::effects::asymmetric_dynamics::AsymmetricDynamicsParams;
+        use crate::diagnose::effects::stiffness_nonlinearity::StiffnessNonlinearityParams;
+        use propid_sim::effects::{AsymmetricDynamics, EffectsConfig, StiffnessNonlinearity};
+        let effects = EffectsConfig {
+            asymmetric_dynamics: Some(AsymmetricDynamics {
+                up_scale: 0.7,
+                down_scale: 1.4,
+            }),
+            stiffness_nonlinearity: Some(StiffnessNonlinearity { k3_per_k1: 0.004 }),
+            ..EffectsConfig::default()
+        };
+        let cfg = PlantConfig {
+            noise_rms_n: 0.0,
+            quantum_n: 0.0,
+            effects,
+            ..PlantConfig::default()
+        };
+        let mut plant = Plant::new(&cfg, 2e-3, 1).unwrap();
+        let u: Vec<f64> = (0..600)
+            .map(|k| if (k / 50) % 2 == 0 { 0.4 } else { 0.65 })
+            .collect();
+        plant.settle(u[0]);
+        let y: Vec<f64> = u.iter().map(|&x| plant.step(x).thrust_n).collect();
+        // The plant's time scales 0.7 and 1.4 are the model's 1/√2 and √2 (down/up = 2)
+        // around a core at fn / √(0.7 · 1.4).
+        let m = Model::new(Core {
+            fn_hz: cfg.fn_hz / (0.7f64 * 1.4).sqrt(),
+            zeta: cfg.zeta,
+            gain: cfg.gain_n_per_throttle,
+            offset: 0.0,
+        })
+        .with(AsymmetricDynamicsParams {
+            log_ratio: 2f64.ln(),
+        })
+        .with(StiffnessNonlinearityParams {
+            k3_per_k1: 0.004,
+            scale_sq: 1.0,
+        });
+        let sig = Signals {
+            dt_s: 2e-3,
+            u: &u,
+            y: &y,
+            voltage: None,
+            u_ref: 0.5,
+            v_ref: 0.0,
+        };
+        let mut out = vec![0.0; u.len()];
+        simulate(&m, &sig, &mut out);
+        let span =
+            y.iter().fold(0.0f64, |a, &b| a.max(b)) - y.iter().fold(9e9f64, |a, &b| a.min(b));
+        for (k, (a, b)) in out.iter().zip(&y).enumerate() {
+            // 2 substeps against the plant's 8: the same law; the direction switches on a coarser grid.
+            assert!((a - b).abs() < 1e-2 * span, "k {k}: {a} vs {b}");
+        }
+        // Without the terms the core is the linear one: the asymmetry and the spring show.
+        let mut lin = vec![0.0; u.len()];
+        simulate(&Model::new(m.core), &sig, &mut lin);
+        let dev = lin
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(dev > 0.05 * span, "{dev}");
+    }
+
+    #[test]
     fn baseline_model_reproduces_the_clean_plant_exactly() {
         let cfg = PlantConfig {
             noise_rms_n: 0.0,

@@ -181,7 +181,7 @@ mod tests {
         let text = |m: &Map<String, Value>| serde_json::to_string(m).unwrap();
         assert_eq!(
             text(&p.finding_params(0.002)),
-            r#"{"curvature":"hardens","k3_per_k1":0.5,"stiffening_pct_at_rms":15.000000000000002}"#
+            r#"{"curvature":"hardens","k3_per_k1":0.5,"stiffening_pct_at_rms":15.0}"#
         );
         let mut terms = Map::new();
         p.terms(0.002, &mut terms);
