@@ -524,6 +524,48 @@ mod tests {
     }
 
     #[test]
+    fn asymmetric_dynamics_and_a_hardening_spring_act_in_the_core() {
+        let text = "[effects.asymmetric_dynamics]\nup_scale = 1.0\ndown_scale = 3.0\n";
+        let cfg: PlantConfig = toml::from_str(text).unwrap();
+        assert_eq!(cfg.effects.names(), vec!["asymmetric_dynamics"]);
+        let cfg = clean(cfg.effects);
+        // Time to 63 % of a step up and of the same step down: three times longer down.
+        let t63 = |from: f64, to: f64| {
+            let y = run(&cfg, |k| if k >= 1 { to } else { from }, 3000);
+            let target = y[0] + 0.632 * (y[2999] - y[0]);
+            y.iter()
+                .position(|&v| (v - target) * (to - from).signum() >= 0.0)
+                .unwrap() as f64
+                - 1.0
+        };
+        // Whole samples (about 20 up): ±1 sample on each.
+        let ratio = t63(0.6, 0.4) / t63(0.4, 0.6);
+        assert!((ratio - 3.0).abs() < 0.2, "{ratio}");
+        // A spring with ε T² = 0.5 at the linear thrust: T + ε T³ = K u holds in steady state.
+        let lin = clean(EffectsConfig::default());
+        let t_lin = run(&lin, |_| 0.5, 1)[0];
+        let e = EffectsConfig {
+            stiffness_nonlinearity: Some(StiffnessNonlinearity {
+                k3_per_k1: 0.5 / (t_lin * t_lin),
+            }),
+            ..Default::default()
+        };
+        let y = run(&clean(e), |_| 0.5, 2000);
+        let eps = 0.5 / (t_lin * t_lin);
+        assert!((y[1999] + eps * y[1999].powi(3) - t_lin).abs() < 1e-9);
+        assert!(y[1999] < 0.9 * t_lin);
+        let bad = EffectsConfig {
+            asymmetric_dynamics: Some(AsymmetricDynamics {
+                up_scale: 0.0,
+                down_scale: 1.0,
+            }),
+            ..Default::default()
+        };
+        let err = Plant::new(&clean(bad), 1e-3, 0).unwrap_err().to_string();
+        assert!(err.contains("asymmetric_dynamics.up_scale"), "{err}");
+    }
+
+    #[test]
     fn effects_parse_from_toml_and_bad_values_are_named() {
         let text = "[effects.dead_time]\ndelay_s = 0.02\n[effects.saturation]\nlevel = 0.7\n";
         let cfg: PlantConfig = toml::from_str(text).unwrap();
