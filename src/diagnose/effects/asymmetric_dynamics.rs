@@ -32,6 +32,11 @@ use propid_numerics::step_response::{step_figures, Step};
 pub const NAME: &str = "asymmetric_dynamics";
 /// Largest plausible ratio of the two time scales.
 pub const MAX_RATIO: f64 = 10.0;
+/// Least share of the input's movement each direction must have in the estimation part
+/// (`Σ max(Δu, 0)` against `Σ max(−Δu, 0)`): a time scale of falling back cannot be told from
+/// a record whose command (almost) never falls, nor one of rising from a command that never
+/// rises — there the "asymmetry" would only reshape the settling after one kind of step.
+pub const MIN_DIRECTION_SHARE: f64 = 0.2;
 
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
@@ -60,11 +65,13 @@ impl Effect for AsymmetricDynamics {
         NAME
     }
 
-    /// Needs a throttle-like input (never negative). Starts at `down / up` = 1/2.5, 1/1.6, 1.6
+    /// Needs a throttle-like input (never negative) that both rises and falls in the
+    /// estimation part ([`MIN_DIRECTION_SHARE`]). Starts at `down / up` = 1/2.5, 1/1.6, 1.6
     /// and 2.5; Levenberg–Marquardt from the two best.
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
-        let throttle_like = ctx.sig.u[ctx.est.clone()].iter().all(|&x| x >= 0.0);
-        if !throttle_like {
+        let u = &ctx.sig.u[ctx.est.clone()];
+        let throttle_like = u.iter().all(|&x| x >= 0.0);
+        if !throttle_like || !both_directions(u) {
             return None;
         }
         let starts = [1.0 / 2.5, 1.0 / 1.6, 1.6, 2.5].map(|ratio: f64| {
@@ -154,6 +161,21 @@ impl AsymmetricDynamicsParams {
     }
 }
 
+/// Whether the input moves both ways: each direction's total movement at least
+/// [`MIN_DIRECTION_SHARE`] of the other's.
+pub fn both_directions(u: &[f64]) -> bool {
+    let (mut rise, mut fall) = (0.0, 0.0);
+    for w in u.windows(2) {
+        let d = w[1] - w[0];
+        if d > 0.0 {
+            rise += d;
+        } else {
+            fall -= d;
+        }
+    }
+    rise > 0.0 && fall >= MIN_DIRECTION_SHARE * rise && rise >= MIN_DIRECTION_SHARE * fall
+}
+
 /// The time constant of the unit step response of `T'' + 2ζωn T' + ωn² T = ωn² v`, seconds,
 /// by the two-point fit of [`step_figures`] (sampled 200 times per `1/fn`, for 10 time
 /// constants of its slowest pole); `None` when it does not resolve.
@@ -206,6 +228,16 @@ mod tests {
         let mut terms = Map::new();
         p.terms(0.002, &mut terms);
         assert_eq!(terms.keys().collect::<Vec<_>>(), ["down", "up"]);
+    }
+
+    #[test]
+    fn a_staircase_that_only_rises_has_no_fall_to_time() {
+        let stairs: Vec<f64> = (0..100).map(|k| 0.1 + 0.01 * (k / 10) as f64).collect();
+        assert!(!both_directions(&stairs));
+        let mut pulses = stairs.clone();
+        pulses.extend((0..10).map(|k| 0.5 - 0.04 * k as f64));
+        assert!(both_directions(&pulses));
+        assert!(!both_directions(&[0.3; 10]));
     }
 
     #[test]
