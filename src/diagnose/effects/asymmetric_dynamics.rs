@@ -96,9 +96,19 @@ impl Term for AsymmetricDynamicsParams {
         Box::new(*self)
     }
 
-    /// A ratio within 1/10..10.
-    fn plausible(&self, _ctx: &Ctx, model: &Model) -> bool {
-        !model.has_nan() && self.log_ratio.abs() <= MAX_RATIO.ln()
+    /// A ratio within 1/10..10, and step time constants up and down (of the fitted core,
+    /// [`time_constant_s`]) that differ by at least one sample period: a smaller difference is
+    /// below what the record resolves (as `identify` calls a time constant below one sample
+    /// unresolvable).
+    fn plausible(&self, ctx: &Ctx, model: &Model) -> bool {
+        if model.has_nan() || self.log_ratio.abs() > MAX_RATIO.ln() {
+            return false;
+        }
+        let tau = |scale: f64| time_constant_s(model.core.fn_hz / scale, model.core.zeta);
+        match (tau(self.up()), tau(self.down())) {
+            (Some(up), Some(down)) => (down - up).abs() >= ctx.sig.dt_s,
+            _ => false,
+        }
     }
 
     fn core_law(&self, law: &mut CoreLaw) {

@@ -147,14 +147,18 @@ impl Term for StiffnessNonlinearityParams {
     }
 }
 
-/// `x` with four significant digits.
+/// `x` with four significant digits (in scientific notation outside 0.001..100 000).
 fn sig4(x: f64) -> String {
     let mag = if x == 0.0 || !x.is_finite() {
         0
     } else {
         x.abs().log10().floor() as i32
     };
-    format!("{x:.*}", (3 - mag).clamp(0, 12) as usize)
+    if (-3..5).contains(&mag) {
+        format!("{x:.*}", (3 - mag).max(0) as usize)
+    } else {
+        format!("{x:.3e}")
+    }
 }
 
 impl StiffnessNonlinearityParams {
