@@ -211,6 +211,8 @@ fn params_text(f: &diagnose::Finding) -> String {
         .params
         .iter()
         .map(|(k, v)| match v.as_f64() {
+            // Four decimals; tiny coefficients (a cubic stiffness in eRPM⁻²) in scientific form.
+            Some(x) if x != 0.0 && x.abs() < 1e-3 => format!("{k} {x:.3e}"),
             Some(x) => format!("{k} {x:.4}"),
             None => format!("{k} {}", v.as_str().unwrap_or("")),
         })
