@@ -214,6 +214,8 @@ fn params_text(f: &diagnose::Finding) -> String {
         .params
         .iter()
         .map(|(k, v)| match v.as_f64() {
+            // Four decimals; tiny coefficients (a cubic stiffness in eRPM⁻²) in scientific form.
+            Some(x) if x != 0.0 && x.abs() < 1e-3 => format!("{k} {x:.3e}"),
             Some(x) => format!("{k} {x:.4}"),
             None => format!("{k} {}", v.as_str().unwrap_or("")),
         })
@@ -349,6 +351,18 @@ fn param_error(name: &str, cfg: &PlantConfig, d: &Diagnosis) -> Option<f64> {
         ),
         "supply_sag" => rel(get("gain_per_volt")?, e.supply_sag.as_ref()?.gain_per_volt),
         "saturation" => (get("level")? - e.saturation.as_ref()?.level).abs(),
+        "asymmetric_dynamics" => {
+            let a = e.asymmetric_dynamics.as_ref()?;
+            rel(get("down_over_up")?, a.down_scale / a.up_scale)
+        }
+        "stiffness_nonlinearity" => {
+            let truth = e.stiffness_nonlinearity.as_ref()?.k3_per_k1;
+            let curvature = f.params.get("curvature").and_then(|v| v.as_str());
+            if curvature != Some(if truth > 0.0 { "hardens" } else { "softens" }) {
+                return Some(f64::INFINITY);
+            }
+            rel(get("k3_per_k1")?, truth)
+        }
         _ => return None,
     })
 }

@@ -13,6 +13,7 @@
 //! search scores a fitted extension generically (`n ln(SSE_M / SSE_{M+e})`, see
 //! [`super::search`]); an effect read off the data brings its own score ([`Detected`]).
 
+use propid_numerics::nonlinear_core::CoreLaw;
 use serde::Serialize;
 use serde_json::{Map, Value};
 
@@ -25,8 +26,8 @@ use super::summary::LinearPart;
 /// terms at the same place in registry order:
 ///
 /// ```text
-///   u → InputShift → InputLimit → InputMap → InputScale → × K → core → Series
-///     → + offset → OutputAdd → OutputLimit → ŷ
+///   u → InputShift → InputLimit → InputMap → InputScale → × K → core (with the Core
+///     terms' law) → Series → + offset → OutputAdd → OutputLimit → ŷ
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Place {
@@ -38,6 +39,9 @@ pub enum Place {
     InputMap,
     /// Scales the input by another measured signal.
     InputScale,
+    /// Changes the core's own law (a cubic restoring term, a time scale per direction):
+    /// [`Term::core_law`].
+    Core,
     /// A linear element in series after the core (adds states to the linear part).
     Series,
     /// A term added to the output.
@@ -48,11 +52,12 @@ pub enum Place {
 
 impl Place {
     /// Every place, in signal-path order.
-    pub const ALL: [Place; 7] = [
+    pub const ALL: [Place; 8] = [
         Place::InputShift,
         Place::InputLimit,
         Place::InputMap,
         Place::InputScale,
+        Place::Core,
         Place::Series,
         Place::OutputAdd,
         Place::OutputLimit,
@@ -60,7 +65,7 @@ impl Place {
 
     /// True for the places before the core's gain.
     pub fn is_input(self) -> bool {
-        self < Place::Series
+        self < Place::Core
     }
 }
 
@@ -120,6 +125,10 @@ pub trait Term: std::fmt::Debug + Send + Sync {
     /// Input places: transforms the input path `v` (one value per sample, the throttle before
     /// the core's gain) in place.
     fn shape_input(&self, _v: &mut [f64], _sig: &Signals) {}
+
+    /// [`Place::Core`]: sets this term's part of the core's law (its cubic stiffness or its
+    /// time scale per direction; [`propid_numerics::nonlinear_core`]).
+    fn core_law(&self, _law: &mut CoreLaw) {}
 
     /// [`Place::Series`]: filters the core's output `s` in place.
     fn filter(&self, _s: &mut [f64], _dt_s: f64) {}

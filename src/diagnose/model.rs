@@ -7,6 +7,8 @@
 //!                                                      min(v_k, L), u_r (v_k/u_r)^p, ...
 //!   x_{k+1} = A x_k + B K v_k,  T_k = x_k[0]           2nd-order core, exact ZOH of
 //!                                                      T'' + 2ζωn T' + ωn² T = ωn² K v
+//!                                                      (a Core term: the nonlinear law of
+//!                                                      propid_numerics::nonlinear_core)
 //!   s_k = T_k, then the series terms                   e.g. an extra mode (4th order)
 //!   ŷ_k = c + s_k, then the output terms               e.g. drift r t_k, a sinusoid, a clip
 //! ```
@@ -18,6 +20,7 @@
 
 use nalgebra::Vector2;
 use propid_numerics::discretise::discretise_second_order;
+use propid_numerics::nonlinear_core::{CoreLaw, NonlinearCore};
 
 use super::effect::{Place, Scale, Term};
 use super::effects;
@@ -167,6 +170,9 @@ pub struct Signals<'a> {
     pub v_ref: f64,
 }
 
+/// Steps per sample of a core with a nonlinear law (exponential midpoint rule in each).
+pub const CORE_SUBSTEPS: usize = 2;
+
 /// Largest frequency a fitted mode may take, Hz (just below Nyquist).
 pub fn max_freq_hz(dt_s: f64) -> f64 {
     0.49 / dt_s
@@ -201,10 +207,25 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
     for x in v.iter_mut() {
         *x *= m.core.gain;
     }
-    let mut x = Vector2::new(v[0], 0.0);
-    for (o, &vk) in out.iter_mut().zip(&v) {
-        *o = x[0];
-        x = a * x + b * vk;
+    let mut law = CoreLaw::default();
+    for t in m.at(Place::Core) {
+        t.core_law(&mut law);
+    }
+    if law.is_linear() {
+        let mut x = Vector2::new(v[0], 0.0);
+        for (o, &vk) in out.iter_mut().zip(&v) {
+            *o = x[0];
+            x = a * x + b * vk;
+        }
+    } else {
+        let fn_hz = m.core.fn_hz.clamp(1e-6, fmax);
+        let zeta = m.core.zeta.clamp(1e-4, 50.0);
+        let core = NonlinearCore::new(fn_hz, zeta, 1.0, sig.dt_s, law, CORE_SUBSTEPS);
+        let mut x = core.settle(v[0]);
+        for (o, &vk) in out.iter_mut().zip(&v) {
+            *o = x[0];
+            x = core.step(x, vk);
+        }
     }
     for t in m.at(Place::Series) {
         t.filter(out, sig.dt_s);
@@ -301,6 +322,73 @@ mod tests {
         simulate_places(&m, &signals(&u, &y), &mut without, false);
         assert!(with.iter().all(|&v| v == 1.5));
         assert!(without.iter().all(|&v| (v - 2.0).abs() < 1e-12));
+    }
+
+    #[test]
+    fn core_terms_reproduce_the_plants_nonlinear_core() {
+        use crate::diagnose::effects::asymmetric_dynamics::AsymmetricDynamicsParams;
+        use crate::diagnose::effects::stiffness_nonlinearity::StiffnessNonlinearityParams;
+        use propid_sim::effects::{AsymmetricDynamics, EffectsConfig, StiffnessNonlinearity};
+        let effects = EffectsConfig {
+            asymmetric_dynamics: Some(AsymmetricDynamics {
+                up_scale: 0.7,
+                down_scale: 1.4,
+            }),
+            stiffness_nonlinearity: Some(StiffnessNonlinearity { k3_per_k1: 0.004 }),
+            ..EffectsConfig::default()
+        };
+        let cfg = PlantConfig {
+            noise_rms_n: 0.0,
+            quantum_n: 0.0,
+            effects,
+            ..PlantConfig::default()
+        };
+        let mut plant = Plant::new(&cfg, 2e-3, 1).unwrap();
+        let u: Vec<f64> = (0..600)
+            .map(|k| if (k / 50) % 2 == 0 { 0.4 } else { 0.65 })
+            .collect();
+        plant.settle(u[0]);
+        let y: Vec<f64> = u.iter().map(|&x| plant.step(x).thrust_n).collect();
+        // The plant's time scales 0.7 and 1.4 are the model's 1/√2 and √2 (down/up = 2)
+        // around a core at fn / √(0.7 · 1.4).
+        let m = Model::new(Core {
+            fn_hz: cfg.fn_hz / (0.7f64 * 1.4).sqrt(),
+            zeta: cfg.zeta,
+            gain: cfg.gain_n_per_throttle,
+            offset: 0.0,
+        })
+        .with(AsymmetricDynamicsParams {
+            log_ratio: 2f64.ln(),
+        })
+        .with(StiffnessNonlinearityParams {
+            k3_per_k1: 0.004,
+            scale_sq: 1.0,
+        });
+        let sig = Signals {
+            dt_s: 2e-3,
+            u: &u,
+            y: &y,
+            voltage: None,
+            u_ref: 0.5,
+            v_ref: 0.0,
+        };
+        let mut out = vec![0.0; u.len()];
+        simulate(&m, &sig, &mut out);
+        let span =
+            y.iter().fold(0.0f64, |a, &b| a.max(b)) - y.iter().fold(9e9f64, |a, &b| a.min(b));
+        for (k, (a, b)) in out.iter().zip(&y).enumerate() {
+            // 2 substeps against the plant's 8: the same law; the direction switches on a coarser grid.
+            assert!((a - b).abs() < 1e-2 * span, "k {k}: {a} vs {b}");
+        }
+        // Without the terms the core is the linear one: the asymmetry and the spring show.
+        let mut lin = vec![0.0; u.len()];
+        simulate(&Model::new(m.core), &sig, &mut lin);
+        let dev = lin
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(dev > 0.05 * span, "{dev}");
     }
 
     #[test]

@@ -44,6 +44,7 @@ pub mod linalg;
 pub mod markov;
 pub mod modal;
 pub mod model;
+pub mod nonlinear_core;
 pub mod nullable;
 pub mod okid;
 pub mod operating_points;

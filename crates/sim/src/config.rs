@@ -430,7 +430,7 @@ mod tests {
         let uncommented: Vec<&str> = lines.map(|l| l.strip_prefix("# ").unwrap_or(l)).collect();
         let all = format!("{head}\n{}\n[experiment]{rest}", uncommented.join("\n"));
         let cfg = SimConfig::from_toml_str(&all, "uncommented").unwrap();
-        assert_eq!(cfg.plant.effects.names().len(), 7);
+        assert_eq!(cfg.plant.effects.names().len(), 9);
     }
 
     #[test]

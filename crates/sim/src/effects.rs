@@ -11,9 +11,12 @@
 //! | `periodic_disturbance` | `freq_hz`, `amplitude`, `phase_rad` | `+ amplitude · sin(2π f t + φ)`, N |
 //! | `supply_sag` | `gain_per_volt` | throttle scaled by `1 + gain_per_volt · (V − battery_v)` |
 //! | `saturation` | `level`, `signal` | throttle clipped at `level` (0..1), or the thrust sensor at `level` N |
+//! | `asymmetric_dynamics` | `up_scale`, `down_scale` | the core's time scale while the thrust is driven up / falls back (`ωn / scale`) |
+//! | `stiffness_nonlinearity` | `k3_per_k1` | a cubic restoring term in the core, `ωn² (T + ε T³)`, ε in 1/N² |
 //!
-//! Order in one step: delay → throttle clip → static map → supply sag → linear core → load-cell
-//! path (extra mode) → drift and disturbance → noise → sensor clip → quantisation.
+//! Order in one step: delay → throttle clip → static map → supply sag → core (with its
+//! direction-dependent time scale and cubic stiffness, [`propid_numerics::nonlinear_core`]) →
+//! load-cell path (extra mode) → drift and disturbance → noise → sensor clip → quantisation.
 
 use std::collections::VecDeque;
 
@@ -22,6 +25,7 @@ use serde::Deserialize;
 
 use super::plant::{check, PlantConfig, PlantError};
 use propid_numerics::discretise::discretise_second_order;
+use propid_numerics::nonlinear_core::CoreLaw;
 
 /// `dead_time`: a transport delay of the throttle (ESC update, filtering, logging).
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -111,6 +115,30 @@ pub struct Saturation {
     pub signal: SaturationSignal,
 }
 
+/// `asymmetric_dynamics`: spin-up and spin-down differ (the ESC drives the rotor up; without
+/// active braking only drag brings it down). The core runs with `ωn / up_scale` while the
+/// input drives the thrust up (`K u − T − ε T³ ≥ 0`) and with `ωn / down_scale` while it falls
+/// back: every time constant of the response is multiplied by that scale.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AsymmetricDynamics {
+    /// Time scale while the thrust is driven up (dimensionless, 0.05 ..= 20; 1 = the plant's).
+    pub up_scale: f64,
+    /// Time scale while the thrust falls back (dimensionless, 0.05 ..= 20).
+    pub down_scale: f64,
+}
+
+/// `stiffness_nonlinearity`: a hardening (`k3_per_k1 > 0`) or softening (`< 0`) spring in the
+/// core, `T'' + 2ζωn T' + ωn² (T + ε T³) = ωn² K u` (`m y'' + d y' + k1 y + k3 y³ = u`, the
+/// Silverbox benchmark, with `ε = k3/k1`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StiffnessNonlinearity {
+    /// `ε = k3 / k1`, per newton squared (finite; a softening spring must keep
+    /// `1 + 3 ε T² > 0` over the thrust it reaches, or the core has no steady state there).
+    pub k3_per_k1: f64,
+}
+
 /// The effects switched on; a table present in the config switches its effect on.
 #[derive(Debug, Clone, PartialEq, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -129,6 +157,10 @@ pub struct EffectsConfig {
     pub supply_sag: Option<SupplySag>,
     /// Throttle or sensor clip.
     pub saturation: Option<Saturation>,
+    /// Spin-up and spin-down on different time scales.
+    pub asymmetric_dynamics: Option<AsymmetricDynamics>,
+    /// Cubic stiffness in the core.
+    pub stiffness_nonlinearity: Option<StiffnessNonlinearity>,
 }
 
 impl EffectsConfig {
@@ -143,6 +175,11 @@ impl EffectsConfig {
             (self.periodic_disturbance.is_some(), "periodic_disturbance"),
             (self.supply_sag.is_some(), "supply_sag"),
             (self.saturation.is_some(), "saturation"),
+            (self.asymmetric_dynamics.is_some(), "asymmetric_dynamics"),
+            (
+                self.stiffness_nonlinearity.is_some(),
+                "stiffness_nonlinearity",
+            ),
         ];
         for (is_on, name) in on {
             if is_on {
@@ -220,7 +257,33 @@ impl EffectsConfig {
             let why = "must be in (0, 1) for the throttle, > 0 N for the sensor";
             check(ok, "plant.effects.saturation.level", s.level, why)?;
         }
+        if let Some(a) = &self.asymmetric_dynamics {
+            let ok = |v: f64| v.is_finite() && (0.05..=20.0).contains(&v);
+            let why = "must be in [0.05, 20]";
+            let key = "plant.effects.asymmetric_dynamics.up_scale";
+            check(ok(a.up_scale), key, a.up_scale, why)?;
+            let key = "plant.effects.asymmetric_dynamics.down_scale";
+            check(ok(a.down_scale), key, a.down_scale, why)?;
+        }
+        if let Some(s) = &self.stiffness_nonlinearity {
+            let key = "plant.effects.stiffness_nonlinearity.k3_per_k1";
+            check(s.k3_per_k1.is_finite(), key, s.k3_per_k1, "must be finite")?;
+        }
         Ok(())
+    }
+
+    /// The core's nonlinear law ([`CoreLaw`]): the linear core unless `asymmetric_dynamics` or
+    /// `stiffness_nonlinearity` is on.
+    pub fn core_law(&self) -> CoreLaw {
+        let mut law = CoreLaw::default();
+        if let Some(a) = &self.asymmetric_dynamics {
+            law.up_scale = a.up_scale;
+            law.down_scale = a.down_scale;
+        }
+        if let Some(s) = &self.stiffness_nonlinearity {
+            law.cubic = s.k3_per_k1;
+        }
+        law
     }
 }
 
@@ -458,6 +521,48 @@ mod tests {
         let y = run(&cfg, |_| 0.5, 2000);
         // After 2 s the supply is 2 V lower: the thrust is about 20 % lower.
         assert!((y[1999] / y[0] - 0.8).abs() < 0.01, "{}", y[1999] / y[0]);
+    }
+
+    #[test]
+    fn asymmetric_dynamics_and_a_hardening_spring_act_in_the_core() {
+        let text = "[effects.asymmetric_dynamics]\nup_scale = 1.0\ndown_scale = 3.0\n";
+        let cfg: PlantConfig = toml::from_str(text).unwrap();
+        assert_eq!(cfg.effects.names(), vec!["asymmetric_dynamics"]);
+        let cfg = clean(cfg.effects);
+        // Time to 63 % of a step up and of the same step down: three times longer down.
+        let t63 = |from: f64, to: f64| {
+            let y = run(&cfg, |k| if k >= 1 { to } else { from }, 3000);
+            let target = y[0] + 0.632 * (y[2999] - y[0]);
+            y.iter()
+                .position(|&v| (v - target) * (to - from).signum() >= 0.0)
+                .unwrap() as f64
+                - 1.0
+        };
+        // Whole samples (about 20 up): ±1 sample on each.
+        let ratio = t63(0.6, 0.4) / t63(0.4, 0.6);
+        assert!((ratio - 3.0).abs() < 0.2, "{ratio}");
+        // A spring with ε T² = 0.5 at the linear thrust: T + ε T³ = K u holds in steady state.
+        let lin = clean(EffectsConfig::default());
+        let t_lin = run(&lin, |_| 0.5, 1)[0];
+        let e = EffectsConfig {
+            stiffness_nonlinearity: Some(StiffnessNonlinearity {
+                k3_per_k1: 0.5 / (t_lin * t_lin),
+            }),
+            ..Default::default()
+        };
+        let y = run(&clean(e), |_| 0.5, 2000);
+        let eps = 0.5 / (t_lin * t_lin);
+        assert!((y[1999] + eps * y[1999].powi(3) - t_lin).abs() < 1e-9);
+        assert!(y[1999] < 0.9 * t_lin);
+        let bad = EffectsConfig {
+            asymmetric_dynamics: Some(AsymmetricDynamics {
+                up_scale: 0.0,
+                down_scale: 1.0,
+            }),
+            ..Default::default()
+        };
+        let err = Plant::new(&clean(bad), 1e-3, 0).unwrap_err().to_string();
+        assert!(err.contains("asymmetric_dynamics.up_scale"), "{err}");
     }
 
     #[test]

@@ -10,8 +10,8 @@ use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
 use crate::effects::{
-    BaselineDrift, DeadTime, EffectsConfig, ExtraMode, PeriodicDisturbance, Saturation,
-    SaturationSignal, StaticNonlinearity, SupplySag,
+    AsymmetricDynamics, BaselineDrift, DeadTime, EffectsConfig, ExtraMode, PeriodicDisturbance,
+    Saturation, SaturationSignal, StaticNonlinearity, StiffnessNonlinearity, SupplySag,
 };
 use crate::plant::{Plant, PlantConfig, PlantError};
 
@@ -136,6 +136,35 @@ pub fn hide_effect(cfg: &mut PlantConfig, name: &str, rng: &mut StdRng) {
             e.saturation = Some(Saturation {
                 level: rng.gen_range(0.6..0.7),
                 signal: SaturationSignal::Throttle,
+            });
+        }
+        "asymmetric_dynamics" => {
+            // Spin-down slower (drag only) or, every other draw, faster (active braking), by a
+            // ratio of 1.6..2.5, around a geometric mean time scale of 0.8..1.25.
+            let ratio: f64 = rng.gen_range(1.6..2.5);
+            let ratio = if rng.gen_bool(0.5) {
+                ratio
+            } else {
+                1.0 / ratio
+            };
+            let mean: f64 = rng.gen_range(0.8..1.25);
+            e.asymmetric_dynamics = Some(AsymmetricDynamics {
+                up_scale: mean / ratio.sqrt(),
+                down_scale: mean * ratio.sqrt(),
+            });
+        }
+        "stiffness_nonlinearity" => {
+            // ε T_r² (the relative stiffening at the reference thrust T_r = K/2): 0.08..0.25
+            // hardening, or −0.06..−0.03 softening (the core keeps a steady state up to the
+            // top of the experiment).
+            let s = if rng.gen_bool(0.5) {
+                rng.gen_range(0.08..0.25)
+            } else {
+                rng.gen_range(-0.06..-0.03)
+            };
+            let t_ref = cfg.reference_thrust_n();
+            e.stiffness_nonlinearity = Some(StiffnessNonlinearity {
+                k3_per_k1: s / (t_ref * t_ref),
             });
         }
         _ => {}

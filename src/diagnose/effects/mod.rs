@@ -4,12 +4,14 @@
 //! Adding an effect: a new file here implementing [`Effect`] and [`super::effect::Term`], and
 //! one line in [`REGISTRY`].
 
+pub mod asymmetric_dynamics;
 pub mod baseline_drift;
 pub mod dead_time;
 pub mod extra_mode;
 pub mod periodic_disturbance;
 pub mod saturation;
 pub mod static_nonlinearity;
+pub mod stiffness_nonlinearity;
 pub mod supply_sag;
 
 use super::effect::Effect;
@@ -25,6 +27,8 @@ pub static REGISTRY: &[&dyn Effect] = &[
     &periodic_disturbance::PeriodicDisturbance,
     &supply_sag::SupplySag,
     &saturation::Saturation,
+    &asymmetric_dynamics::AsymmetricDynamics,
+    &stiffness_nonlinearity::StiffnessNonlinearity,
 ];
 
 /// The published names of the effects, in catalogue order.
@@ -54,6 +58,8 @@ mod tests {
                 "periodic_disturbance",
                 "supply_sag",
                 "saturation",
+                "asymmetric_dynamics",
+                "stiffness_nonlinearity",
             ]
         );
         assert_eq!(position("extra_mode"), 2);

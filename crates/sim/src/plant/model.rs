@@ -2,6 +2,7 @@
 //! [`super::motor`]), the effects applied around it, the derived channels and the load cell's
 //! noise, quantisation and saturation (formulas in the module doc of [`super`]).
 
+use propid_numerics::nonlinear_core::NonlinearCore;
 use nalgebra::{Matrix2, Vector2};
 use propid_numerics::discretise::discretise_second_order;
 use rand::rngs::StdRng;
@@ -37,10 +38,16 @@ enum Core {
         a: Matrix2<f64>,
         b: Vector2<f64>,
         x: Vector2<f64>,
+        /// The core with a nonlinear law (`asymmetric_dynamics`, `stiffness_nonlinearity`);
+        /// `None`: the exact linear step `a`, `b`.
+        nonlinear: Option<NonlinearCore>,
     },
     /// The motor (speed lag, dead time, thrust ∝ speed²).
     Motor(Motor),
 }
+
+/// Steps per sample of a nonlinear core in the plant (finer than the models `diagnose` fits).
+pub const NONLINEAR_SUBSTEPS: usize = 8;
 
 /// The simulated plant. Create it with [`Plant::new`], drive it with [`Plant::step`].
 #[derive(Debug, Clone)]
@@ -64,10 +71,22 @@ impl Plant {
             PlantKind::SecondOrder => {
                 let (a, b) =
                     discretise_second_order(cfg.fn_hz, cfg.zeta, cfg.gain_n_per_throttle, dt_s);
+                let law = cfg.effects.core_law();
+                let nonlinear = (!law.is_linear()).then(|| {
+                    NonlinearCore::new(
+                        cfg.fn_hz,
+                        cfg.zeta,
+                        cfg.gain_n_per_throttle,
+                        dt_s,
+                        law,
+                        NONLINEAR_SUBSTEPS,
+                    )
+                });
                 Core::SecondOrder {
                     a,
                     b,
                     x: Vector2::zeros(),
+                    nonlinear,
                 }
             }
             PlantKind::Motor => Core::Motor(Motor::new(cfg, dt_s)?),
@@ -137,7 +156,12 @@ impl Plant {
             .input_map(throttle, self.cfg.battery_v, &self.cfg);
         let t_s = self.time_s();
         match &mut self.core {
-            Core::SecondOrder { x, .. } => *x = Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0),
+            Core::SecondOrder { x, nonlinear, .. } => {
+                *x = match nonlinear {
+                    Some(core) => core.settle(u),
+                    None => Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0),
+                }
+            }
             Core::Motor(m) => m.settle(&self.cfg, throttle, u, t_s),
         }
         let thrust = self.thrust_true();
@@ -176,9 +200,12 @@ impl Plant {
         // delays the throttle by its ESC's dead time first).
         let delayed = self.effects.delay(throttle);
         let rpm = match &mut self.core {
-            Core::SecondOrder { a, b, x } => {
+            Core::SecondOrder { a, b, x, nonlinear } => {
                 let u = self.effects.input_map(delayed, voltage_v, &self.cfg);
-                *x = *a * *x + *b * u;
+                *x = match nonlinear {
+                    Some(core) => core.step(*x, u),
+                    None => *a * *x + *b * u,
+                };
                 let t_ref = self.cfg.reference_thrust_n();
                 self.cfg.rpm_at_reference * (thrust_true.max(0.0) / t_ref).sqrt()
             }
