@@ -41,7 +41,12 @@ fn demo_of_the_motor_prints_models_beside_the_linearised_truth_and_the_gain_grow
             (gain / truth - 1.0).abs() <= 0.15,
             "gain {gain} vs {truth}: {out}"
         );
-        assert!((100.0 * (gain / truth - 1.0) - off).abs() < 0.06, "{r:?}");
+        // the printed truth has two decimals and the offset one: their rounding adds up to
+        // 100·0.005/truth + 0.05 percentage points
+        assert!(
+            (100.0 * (gain / truth - 1.0) - off).abs() <= 0.05 + 0.5 / truth + 1e-9,
+            "{r:?}"
+        );
         assert!(
             tau >= 0.8 * up && tau <= 1.2 * down,
             "tau {tau} vs {up}/{down}: {out}"
