@@ -78,6 +78,10 @@ pub struct RunOptions {
     pub link: Option<PathBuf>,
     /// Stop after this many seconds (None: until stopped or hung up for good).
     pub seconds: Option<f64>,
+    /// Inject faults only during the first this many seconds of the run (None: all along); the
+    /// rest is a clean tail, so that a host can read everything the faults touched before the
+    /// stand stops and its counts can be compared exactly (`scripts/soak.sh`).
+    pub faults_for: Option<f64>,
 }
 
 /// What the runner did; also available live from [`SimHandle::report`].
@@ -140,6 +144,10 @@ fn run_shared(
     let deadline = opts
         .seconds
         .map(|s| started + Duration::from_secs_f64(s.max(0.0)));
+    let faults_end = opts
+        .faults_for
+        .map(|s| started + Duration::from_secs_f64(s.max(0.0)));
+    let faults_on = || faults_end.map_or(true, |e| Instant::now() < e);
     let stopped = || {
         shared.stop.load(Ordering::Relaxed)
             || extra_stop.is_some_and(|s| s.load(Ordering::Relaxed))
@@ -161,7 +169,14 @@ fn run_shared(
             r.boot_id = id;
             r.slave_path = link.path.display().to_string();
         }
-        let hung_up = serve(&mut fw, &link, cfg, shared, &stopped, samples_before)?;
+        let hung_up = serve(
+            &mut fw,
+            &link,
+            cfg,
+            shared,
+            [&stopped, &faults_on],
+            samples_before,
+        )?;
         samples_before += fw.stats().samples;
         faults = fw.into_faults();
         if !hung_up {
@@ -204,13 +219,14 @@ fn update(shared: &Shared, fw: Option<FirmwareStats>, faults: &FaultInjector, sa
     r.faults = faults.stats();
 }
 
-/// Serves one boot on one pty. Returns true when it ended by a hang-up fault.
+/// Serves one boot on one pty. Returns true when it ended by a hang-up fault. `[stopped,
+/// faults_on]`: whether to stop, whether faults are injected now (with a host present).
 fn serve(
     fw: &mut Firmware<PlantDynamics>,
     link: &Link,
     cfg: &SimConfig,
     shared: &Shared,
-    stopped: &dyn Fn() -> bool,
+    [stopped, faults_on]: [&dyn Fn() -> bool; 2],
     samples_before: u64,
 ) -> Result<bool, SimError> {
     let fd = link.master.as_raw_fd();
@@ -235,7 +251,7 @@ fn serve(
             );
             return Ok(true);
         }
-        fw.faults_mut().set_enabled(reader_present);
+        fw.faults_mut().set_enabled(reader_present && faults_on());
         fw.advance(now);
         let before = backlog.len();
         fw.drain_output(now, &mut backlog);

@@ -12,6 +12,7 @@
 //! and the replay of its recording publish identical model lines.
 
 use crossbeam_channel::Receiver;
+use propid_wire::protocol::message::EventCode;
 
 pub use super::identify::{Identifier, IdentifyError};
 use super::item::{Item, SampleItem};
@@ -77,7 +78,17 @@ impl<I: Identifier> Worker<I> {
         match item {
             Item::Sample(s) => self.on_sample(&s),
             Item::Gap { before, count } => {
-                self.window.on_gap(count);
+                let mut done = None;
+                let identifier = &mut self.identifier;
+                let pulse = self
+                    .window
+                    .on_gap(count, |v| done = Some(identify_one(identifier, v)));
+                if let Some(d) = done {
+                    self.publish_model(d);
+                }
+                if pulse {
+                    self.stats.pulses += 1;
+                }
                 self.emit(&Line::Event(Event::Gap { before, count }));
             }
             Item::Segment { boot_id } => {
@@ -91,6 +102,9 @@ impl<I: Identifier> Worker<I> {
                 self.emit(&Line::Event(Event::Segment { boot_id }));
             }
             Item::Event(e) => {
+                if EventCode::from_u8(e.code) == EventCode::ImpulseStart {
+                    self.window.on_pulse_event(e.sample_index);
+                }
                 if let Some(line) = Line::device_event(&e) {
                     self.emit(&line);
                 }

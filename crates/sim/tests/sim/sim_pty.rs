@@ -183,6 +183,7 @@ fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
     let opts = RunOptions {
         link: Some(link.clone()),
         seconds: None,
+        faults_for: None,
     };
     let sim = SimHandle::spawn(cfg, opts).unwrap();
     assert_eq!(sim.path(), link.as_path());
