@@ -6,6 +6,7 @@
 #   <!-- BEGIN svd -->        ... <!-- END svd -->         from docs/svd.md (scripts/bench_vs_python_control.sh, scripts/svd_scale.sh)
 #   <!-- BEGIN loss -->       ... <!-- END loss -->        from docs/loss.md (scripts/loss_table.sh)
 #   <!-- BEGIN injection -->  ... <!-- END injection -->   from docs/injection.md (scripts/injection_table.sh)
+#   <!-- BEGIN soak -->       ... <!-- END soak -->        from docs/soak.md (scripts/soak.sh, by hand)
 # Each source section is the block of Markdown table lines (and the paragraph right above it)
 # that the generating script wrote. Run after the generating scripts.
 set -euo pipefail
@@ -48,6 +49,7 @@ readme = splice(readme, "detection", tables("docs/diagnose.md", 1))  # skip the 
 readme = splice(readme, "svd", tables("docs/svd.md"))
 readme = splice(readme, "loss", tables("docs/loss.md"))
 readme = splice(readme, "injection", tables("docs/injection.md"))
+readme = splice(readme, "soak", tables("docs/soak.md"))
 open("README.md", "w", encoding="utf-8").write(readme)
 print("README.md tables updated")
 PY

@@ -154,17 +154,22 @@ pub fn read_input(file: &Path) -> Result<Vec<u8>, CliError> {
 
 /// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
 pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
-    let name = file.display().to_string();
     let bytes = read_input(file)?;
+    load_bytes(file.display().to_string(), &bytes, req)
+}
+
+/// Reads the bytes of a file named `name` as `req` asks (what [`load`] does once the file is
+/// read; the fuzz harness calls it in memory).
+pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFile, CliError> {
     if bytes.is_empty() {
         return Err(LoadError::Empty { file: name }.into());
     }
-    match detect(&bytes, true) {
-        Detection::Format(WireFormat::Binary) => load_tsp(req, name, &bytes),
+    match detect(bytes, true) {
+        Detection::Format(WireFormat::Binary) => load_tsp(req, name, bytes),
         // A CSV stream is placed by the stream placer, as `replay` places it; any other CSV
         // file is an exported log, read by its own time column.
-        _ if req.columns.is_none() && is_csv_stream(&bytes) => load_tsp(req, name, &bytes),
-        _ => load_csv(req, name, &bytes),
+        _ if req.columns.is_none() && is_csv_stream(bytes) => load_tsp(req, name, bytes),
+        _ => load_csv(req, name, bytes),
     }
 }
 

@@ -134,6 +134,9 @@ pub enum UsageError {
     /// `--seconds` not a positive number.
     #[error("--seconds {0}: must be > 0")]
     Seconds(f64),
+    /// `--faults-for` not a positive number.
+    #[error("--faults-for {0}: must be > 0")]
+    FaultsFor(f64),
     /// `--record` without `--seconds`.
     #[error("--record needs --seconds S")]
     RecordNeedsSeconds,

@@ -29,6 +29,10 @@ pub struct Args {
     /// after the experiment plan is over if that comes first).
     #[arg(long, value_name = "S")]
     pub seconds: Option<f64>,
+    /// Inject the configured faults only during the first S seconds (on a pty; then a clean
+    /// tail, so that a host can read everything before the stand stops: scripts/soak.sh).
+    #[arg(long, value_name = "S")]
+    pub faults_for: Option<f64>,
     /// Write a recording (raw device bytes) of the experiment plan to FILE, faster than real
     /// time, instead of opening a pty. Needs --seconds.
     #[arg(long, value_name = "FILE")]
@@ -93,10 +97,12 @@ pub struct Overrides {
 /// Runs `propid sim`.
 pub fn run(args: Args) -> Result<(), CliError> {
     let cfg = load_config(&args)?;
-    if let Some(s) = args.seconds {
-        if !(s.is_finite() && s > 0.0) {
-            return Err(UsageError::Seconds(s).into());
-        }
+    let positive = |s: f64| s.is_finite() && s > 0.0;
+    if let Some(s) = args.seconds.filter(|&s| !positive(s)) {
+        return Err(UsageError::Seconds(s).into());
+    }
+    if let Some(s) = args.faults_for.filter(|&s| !positive(s)) {
+        return Err(UsageError::FaultsFor(s).into());
     }
     match &args.record {
         Some(file) => run_record(&cfg, file, &args),
@@ -173,6 +179,7 @@ fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {
     let opts = RunOptions {
         link: args.link.clone(),
         seconds: args.seconds,
+        faults_for: args.faults_for,
     };
     let mut print_err = None;
     let report = pty::run(cfg, &opts, &stop, |p, slave| {

@@ -227,6 +227,7 @@ pub fn sim_stand(rate: u32, tweak: impl FnOnce(&mut SimConfig)) -> SimHandle {
     let opts = RunOptions {
         link: None,
         seconds: Some(60.0),
+        faults_for: None,
     };
     SimHandle::spawn(cfg, opts).unwrap()
 }

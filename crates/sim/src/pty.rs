@@ -84,6 +84,10 @@ pub struct RunOptions {
     pub link: Option<PathBuf>,
     /// Stop after this many seconds (None: until stopped or hung up for good).
     pub seconds: Option<f64>,
+    /// Inject faults only during the first this many seconds of the run (None: all along); the
+    /// rest is a clean tail, so that a host can read everything the faults touched before the
+    /// stand stops and its counts can be compared exactly (`scripts/soak.sh`).
+    pub faults_for: Option<f64>,
 }
 
 /// What the runner did; also available live from [`SimHandle::report`].
@@ -146,6 +150,10 @@ fn run_shared(
     let deadline = opts
         .seconds
         .map(|s| started + Duration::from_secs_f64(s.max(0.0)));
+    let faults_end = opts
+        .faults_for
+        .map(|s| started + Duration::from_secs_f64(s.max(0.0)));
+    let faults_on = || faults_end.map_or(true, |e| Instant::now() < e);
     let stopped = || {
         shared.stop.load(Ordering::Relaxed)
             || extra_stop.is_some_and(|s| s.load(Ordering::Relaxed))
@@ -175,7 +183,7 @@ fn run_shared(
                 &link,
                 cfg,
                 shared,
-                &stopped,
+                [&stopped, &faults_on],
                 samples_before,
                 freeze,
             )?;
@@ -245,7 +253,7 @@ fn serve(
     link: &Link,
     cfg: &SimConfig,
     shared: &Shared,
-    stopped: &dyn Fn() -> bool,
+    [stopped, faults_on]: [&dyn Fn() -> bool; 2],
     samples_before: u64,
     freeze: bool,
 ) -> Result<End, SimError> {
@@ -283,7 +291,7 @@ fn serve(
             );
             return Ok(frozen(fd, stopped, &mut rx, shared));
         }
-        fw.faults_mut().set_enabled(reader_present);
+        fw.faults_mut().set_enabled(reader_present && faults_on());
         fw.advance(now);
         let before = backlog.len();
         fw.drain_output(now, &mut backlog);

@@ -12,7 +12,11 @@
 //!   ramp carries no RAMP_ACTIVE flag, and its steps next to a level fall within the tolerance
 //!   of it); "off level" is measured from where the window started.
 //! - A rising edge of IMPULSE_ACTIVE is a pulse start (the device sets the flag on exactly the
-//!   samples during which the pulse throttle was applied).
+//!   samples during which the pulse throttle was applied). A pulse whose first sample was lost
+//!   is still a pulse when the device's EVENT IMPULSE_START named its index
+//!   ([`Window::on_pulse_event`]): its start is the missing sample, so the window still closes
+//!   after the K pulses the plan fired (the core counts that pulse and leaves it out: its input
+//!   is not known), instead of taking the next level's share of pulses.
 //! - The window is identified when it holds K complete pulses: at the start of pulse K+1, or when
 //!   the level ends, the window fills, a new device segment starts, or the stream ends. A pulse is
 //!   complete when the next one starts or the level ends (the plan spaces pulses so the response
@@ -65,6 +69,8 @@ pub struct Window {
     last_received: Option<Instant>,
     /// Index the next sample must have (contiguity check); `None` before the first sample.
     next_index: Option<u64>,
+    /// A pulse start the device announced (EVENT IMPULSE_START) whose sample has not come yet.
+    announced_pulse: Option<u64>,
 }
 
 impl Window {
@@ -91,6 +97,7 @@ impl Window {
             in_pulse: false,
             last_received: None,
             next_index: None,
+            announced_pulse: None,
         }
     }
 
@@ -120,10 +127,14 @@ impl Window {
         match self.next_index {
             Some(next) if s.index > next => {
                 out.unannounced_lost = s.index - next;
-                self.on_gap(s.index - next);
+                out.pulse = self.on_gap(s.index - next, &mut identify);
             }
             Some(next) if s.index < next => self.close(Reason::Segment, &mut identify),
             _ => {}
+        }
+        if self.announced_pulse.is_some_and(|p| p <= s.index) {
+            // here (its flag marks it) or past
+            self.announced_pulse = None;
         }
         self.next_index = Some(s.index + 1);
         if s.has(flags::RAMP_ACTIVE) {
@@ -157,13 +168,7 @@ impl Window {
         }
         if pulse && !self.in_pulse {
             out.pulse = true;
-            if self.pulse_starts.len() >= self.k {
-                self.identify_now(Reason::Pulses, &mut identify);
-                self.restart_keeping_tail();
-            }
-            if self.pulse_starts.len() < self.pulse_starts.capacity() {
-                self.pulse_starts.push(self.input.len());
-            }
+            self.pulse_start(&mut identify);
         }
         self.in_pulse = pulse;
         if self.input.len() == self.cap {
@@ -176,31 +181,68 @@ impl Window {
         out
     }
 
+    /// The device announced a pulse starting at sample `index` (EVENT IMPULSE_START, sent before
+    /// that sample): if the sample is lost, the gap that covers it marks the pulse start there.
+    pub fn on_pulse_event(&mut self, index: u64) {
+        if self.next_index.map_or(true, |next| index >= next) {
+            self.announced_pulse = Some(index);
+        }
+    }
+
     /// `count` samples were lost before the next one: masked, or a restart if they do not fit.
-    pub fn on_gap(&mut self, count: u64) {
+    /// Returns true when an announced pulse started in the gap (a pulse start, as a rising
+    /// edge would be; `identify` is called first when the window already holds K pulses).
+    pub fn on_gap(&mut self, count: u64, mut identify: impl FnMut(&WindowView<'_>)) -> bool {
+        let from = self.next_index;
         if let Some(next) = self.next_index.as_mut() {
             *next = next.saturating_add(count);
         }
+        let lost_pulse = match (from, self.announced_pulse) {
+            (Some(a), Some(p)) if p >= a && p - a < count => {
+                self.announced_pulse = None;
+                Some(p - a)
+            }
+            _ => None,
+        };
         if self.level_raw.is_none() {
-            return;
+            return false;
         }
         if (self.input.len() as u64).saturating_add(count) >= self.cap as u64 {
             self.clear();
             self.level_raw = None;
-            return;
+            return false;
         }
         let t = self.t_us.last().copied().unwrap_or(0);
-        for _ in 0..count {
+        for i in 0..count {
+            if lost_pulse == Some(i) {
+                self.pulse_start(&mut identify);
+                // a wider pulse's next samples carry the flag: no second edge
+                self.in_pulse = true;
+            }
             self.input.push(f64::NAN);
             self.output.push(f64::NAN);
             self.missing.push(true);
             self.t_us.push(t);
+        }
+        lost_pulse.is_some()
+    }
+
+    /// A pulse starts at the next sample pushed: the window is identified first when it holds
+    /// K pulses already.
+    fn pulse_start(&mut self, identify: impl FnMut(&WindowView<'_>)) {
+        if self.pulse_starts.len() >= self.k {
+            self.identify_now(Reason::Pulses, identify);
+            self.restart_keeping_tail();
+        }
+        if self.pulse_starts.len() < self.pulse_starts.capacity() {
+            self.pulse_starts.push(self.input.len());
         }
     }
 
     /// A new device segment: what is complete is identified, the rest dropped.
     pub fn on_segment(&mut self, identify: impl FnMut(&WindowView<'_>)) {
         self.next_index = None;
+        self.announced_pulse = None;
         self.close(Reason::Segment, identify);
     }
 

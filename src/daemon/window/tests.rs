@@ -103,7 +103,7 @@ fn gaps_are_masked_not_bridged() {
     let mut seen = None;
     w.on_sample(&sample(0, 3000, 0), |_| {});
     w.on_sample(&sample(1, 3000, 0), |_| {});
-    w.on_gap(3);
+    assert!(!w.on_gap(3, |_| {}));
     w.on_sample(&sample(5, 3500, flags::IMPULSE_ACTIVE), |_| {});
     w.on_sample(&sample(6, 3000, 0), |_| {});
     w.finish(|v| {
@@ -139,10 +139,41 @@ fn unannounced_index_jump_is_masked_not_bridged() {
 }
 
 #[test]
+fn a_pulse_whose_sample_was_lost_still_counts_when_the_device_announced_it() {
+    // K = 2, pulses every 100 samples from 50; the sample of pulse 2 (index 150) is lost but its
+    // EVENT IMPULSE_START came: the window closes at pulse 3 with pulses 1 and 2, as without
+    // the loss (without the event, pulses 1 and 3 would make the first window).
+    let mut w = Window::new(10_000, 2, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    feed(&mut w, 0, 150, 3000, 50, 100, &mut log);
+    w.on_pulse_event(150);
+    assert!(w.on_gap(1, |_| panic!("one pulse held")));
+    feed(&mut w, 151, 99, 3000, 1000, 1000, &mut log);
+    assert!(log.is_empty());
+    let mut starts = Vec::new();
+    w.on_sample(&sample(250, 3500, flags::IMPULSE_ACTIVE), |v| {
+        starts = v.pulse_starts.to_vec();
+        assert!(v.missing[150]);
+    });
+    assert_eq!(starts, vec![50, 150]);
+    // an event whose sample arrives is the sample's flag's business: one edge, not two
+    w.on_pulse_event(350);
+    let mut n = 0;
+    feed(&mut w, 251, 200, 3000, 99, 1000, &mut log);
+    w.on_sample(&sample(451, 3500, flags::IMPULSE_ACTIVE), |v| {
+        n = v.pulse_starts.len();
+    });
+    assert_eq!(n, 2);
+    // an event for a sample beyond the gap stays pending, one before it is dropped
+    w.on_pulse_event(500);
+    assert!(!w.on_gap(10, |_| {}));
+}
+
+#[test]
 fn announced_gap_is_not_counted_twice() {
     let mut w = Window::new(10_000, 1, 0.005, OutputChannel::Thrust);
     w.on_sample(&sample(0, 3000, 0), |_| {});
-    w.on_gap(3);
+    assert!(!w.on_gap(3, |_| {}));
     let o = w.on_sample(&sample(4, 3000, 0), |_| {});
     assert_eq!(o.unannounced_lost, 0);
     assert_eq!(w.len(), 5);

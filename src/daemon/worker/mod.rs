@@ -12,6 +12,7 @@
 //! and the replay of its recording publish identical model lines.
 
 use crossbeam_channel::Receiver;
+use propid_wire::protocol::message::EventCode;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -120,7 +121,17 @@ impl<I: Identifier> Worker<I> {
         match item {
             Item::Sample(s) => self.on_sample(&s),
             Item::Gap { before, count } => {
-                self.window.on_gap(count);
+                let mut done = None;
+                let identifier = &mut self.identifier;
+                let pulse = self
+                    .window
+                    .on_gap(count, |v| done = Some(identify_one(identifier, v)));
+                if let Some(d) = done {
+                    self.publish_model(d);
+                }
+                if pulse {
+                    self.stats.pulses += 1;
+                }
                 self.emit(&Line::Event(Event::Gap { before, count }));
             }
             Item::Segment { boot_id } => {
@@ -135,6 +146,9 @@ impl<I: Identifier> Worker<I> {
                 self.emit(&Line::Event(Event::Segment { boot_id }));
             }
             Item::Event(e) => {
+                if EventCode::from_u8(e.code) == EventCode::ImpulseStart {
+                    self.window.on_pulse_event(e.sample_index);
+                }
                 if let Some(line) = Line::device_event(&e) {
                     self.emit(&line);
                 }

@@ -54,7 +54,11 @@ impl PulseEnsemble {
 
     pub(super) fn choose_length(&mut self, input: &PulseInput<'_>) {
         let pulses = &mut self.pulses[..self.count];
-        // L maximises (pulses with window >= L) * L: many pulses and a long response.
+        // L maximises (pulses with window >= L) * L over the lengths at least half the pulses
+        // reach: many pulses and a long response, never one long response instead of many (a
+        // pulse fired late, e.g. its command re-sent after a lost ACK, has a long window; it
+        // would otherwise leave every other pulse out).
+        let need = pulses.iter().filter(|p| p.kept).count().div_ceil(2);
         let mut len = 0;
         let mut best = 0;
         for cand in pulses
@@ -62,7 +66,11 @@ impl PulseEnsemble {
             .filter(|p| p.kept)
             .map(|p| p.window.min(self.max_samples))
         {
-            let score = pulses.iter().filter(|p| p.kept && p.window >= cand).count() * cand;
+            let reach = pulses.iter().filter(|p| p.kept && p.window >= cand).count();
+            if reach < need {
+                continue;
+            }
+            let score = reach * cand;
             if score > best || (score == best && cand > len) {
                 (best, len) = (score, cand);
             }

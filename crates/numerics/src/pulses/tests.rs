@@ -52,6 +52,30 @@ fn widths_signs_and_amplitudes_average_to_the_one_sample_response() {
 }
 
 #[test]
+fn one_late_pulse_does_not_leave_the_others_out() {
+    // Windows 100, 100, 100 and 650 samples (the last pulse fired late): (pulses reaching L)·L
+    // alone would take L = 650 with one pulse; at least half the pulses must reach L.
+    let mut u = vec![0.4; 1000];
+    for s in [50, 150, 250, 350] {
+        u[s] = 0.5;
+    }
+    let y = simulate(&u, 0.4);
+    let chans = [&y[..]];
+    let input = PulseInput {
+        dt_s: 0.01,
+        u: &u,
+        y: &chans,
+        missing: &[],
+        pulse_starts: None,
+    };
+    let mut ens = PulseEnsemble::new(1000, 1, 8);
+    let mut m = MarkovSeq::zeros(1, 1, 1000);
+    ens.build(&input, 16, &mut m).unwrap();
+    assert_eq!((ens.kept(), ens.skipped()), (4, 0), "{:?}", ens.pulses());
+    assert_eq!(m.len(), 100);
+}
+
+#[test]
 fn missing_sample_in_window_is_averaged_around_never_fatal() {
     let mut u = vec![0.3; 300];
     u[50] = 0.4;

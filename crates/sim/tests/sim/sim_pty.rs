@@ -174,6 +174,37 @@ fn injected_faults_match_what_the_host_counts() {
 }
 
 #[test]
+fn faults_stop_after_faults_for_and_the_tail_is_clean() {
+    let mut cfg = SimConfig::default();
+    cfg.faults.drop_sample_prob = 0.3;
+    cfg.faults.bit_flip_per_byte = 0.01;
+    let opts = RunOptions {
+        faults_for: Some(0.3),
+        ..RunOptions::default()
+    };
+    let sim = SimHandle::spawn(cfg, opts).unwrap();
+    let t0 = Instant::now();
+    let mut port = open(sim.path());
+    let mut dec = Decoder::new();
+    let _ = collect(&mut *port, &mut dec, Duration::from_millis(450), |_| false);
+    let during = sim.report();
+    assert!(t0.elapsed() >= Duration::from_millis(300));
+    let drops = dec.stats().dropped.total();
+    let tail = collect(&mut *port, &mut dec, Duration::from_millis(200), |_| false);
+    let after = sim.report();
+    assert!(during.faults.dropped_samples > 0, "{during:?}");
+    assert_eq!(after.faults, during.faults, "no fault after faults_for");
+    assert_eq!(dec.stats().dropped.total(), drops, "the tail decodes whole");
+    let idx = sample_indices(&tail);
+    assert!(idx.len() > 100, "the stand goes on: {} samples", idx.len());
+    assert!(
+        idx.windows(2).all(|w| w[1] == w[0] + 1),
+        "no sample lost in the tail"
+    );
+    drop(sim);
+}
+
+#[test]
 fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
     let dir = tempfile::tempdir().unwrap();
     let link = dir.path().join("stand");
@@ -183,6 +214,7 @@ fn hang_up_closes_the_port_and_reopens_as_a_new_boot_behind_the_link() {
     let opts = RunOptions {
         link: Some(link.clone()),
         seconds: None,
+        faults_for: None,
     };
     let sim = SimHandle::spawn(cfg, opts).unwrap();
     assert_eq!(sim.path(), link.as_path());
