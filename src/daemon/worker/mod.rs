@@ -309,6 +309,7 @@ impl<I: Identifier> Worker<I> {
         let model = WindowModel {
             window: d.facts,
             path: propid_numerics::identify::PathTaken::Pulse,
+            outliers: d.outliers,
             report,
         };
         let flaws = quality::judge(&model.report);
@@ -380,6 +381,8 @@ impl<I: Identifier> Worker<I> {
 struct Done {
     facts: WindowFacts,
     result: Result<(), IdentifyError>,
+    /// Isolated outlier samples left out of the window.
+    outliers: usize,
     /// The web page's pulse responses (`live` only).
     live: Option<ResponseLine>,
 }
@@ -396,6 +399,7 @@ fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>, live: bool) -> Do
     Done {
         facts: WindowFacts::from(v),
         result,
+        outliers: id.outliers(),
         live,
     }
 }
