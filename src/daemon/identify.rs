@@ -13,6 +13,12 @@
 //! [`Workspace::identify`] gives, to the bit. The window copy goes into buffers allocated at
 //! start-up, and the hand-over is a mutex and a condition variable: still no heap allocation.
 //! Other configurations (automatic order, the dense path) run the jackknife after the model.
+//!
+//! **Outliers.** Before identification, the isolated outlier samples of the window's output
+//! are left out (marked missing, never replaced) by the rule `propid identify` applies
+//! ([`propid_numerics::outliers`], the throttle's changes guarded), in buffers allocated at
+//! start-up: one answer for one window. They count in the model's `missing_samples` and are
+//! published as the model line's `outliers` ([`Identifier::outliers`]).
 
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
@@ -21,6 +27,7 @@ use super::config::Config;
 use super::live::{self, ResponseLine};
 use super::window::{window_capacity, WindowView};
 use super::DaemonError;
+use propid_numerics::outliers::{find_outliers, OutlierScratch};
 use propid_numerics::pulses::PulseInput;
 use propid_numerics::stabilization::StabOptions;
 use propid_numerics::stabilization::Stabilization;
@@ -48,6 +55,11 @@ pub trait Identifier: Send {
     fn stabilization(&mut self) -> Option<Stabilization> {
         None
     }
+    /// Isolated outlier samples of the output left out of the last identified window (they
+    /// are also in its model's `missing_samples`).
+    fn outliers(&self) -> usize {
+        0
+    }
 }
 
 /// Why a complete window gave no model (published as an `identification_failed` warning whose
@@ -68,6 +80,52 @@ pub struct CoreIdentifier {
     opts: IdentOptions,
     ok: bool,
     helper: Option<Helper>,
+    /// The window's output and mask with its outliers left out (allocated once).
+    clean: Cleaned,
+}
+
+/// A window's output and missing-sample mask with its isolated outliers left out, in buffers
+/// allocated once.
+#[derive(Default)]
+struct Cleaned {
+    y: Vec<f64>,
+    missing: Vec<bool>,
+    scratch: OutlierScratch,
+    outliers: usize,
+}
+
+impl Cleaned {
+    fn with_capacity(cap: usize) -> Cleaned {
+        Cleaned {
+            y: Vec::with_capacity(cap),
+            missing: Vec::with_capacity(cap),
+            scratch: OutlierScratch::with_capacity(cap),
+            outliers: 0,
+        }
+    }
+
+    /// Copies the window's output and mask and leaves out its isolated outliers (NaN, marked
+    /// missing), judged as `propid identify` judges them, the throttle as the command.
+    fn leave_out(&mut self, v: &WindowView<'_>) {
+        copy_into(&mut self.y, v.output);
+        copy_into(&mut self.missing, v.missing);
+        self.missing.resize(v.output.len(), false);
+        let found = find_outliers(v.output, v.missing, v.input, &mut self.scratch);
+        for &k in found {
+            self.y[k] = f64::NAN;
+            self.missing[k] = true;
+        }
+        self.outliers = found.len();
+    }
+
+    /// `v` with this output and mask.
+    fn view<'a>(&'a self, v: &WindowView<'a>) -> WindowView<'a> {
+        WindowView {
+            output: &self.y,
+            missing: &self.missing,
+            ..*v
+        }
+    }
 }
 
 /// A window copy for the helper, in buffers allocated once.
@@ -149,6 +207,7 @@ impl CoreIdentifier {
             opts,
             ok: false,
             helper,
+            clean: Cleaned::with_capacity(cap),
         })
     }
 
@@ -300,9 +359,9 @@ fn helper_loop(shared: &Shared, ws: &mut Workspace) {
     }
 }
 
-impl Identifier for CoreIdentifier {
-    fn identify(&mut self, v: &WindowView<'_>) -> Result<(), IdentifyError> {
-        self.ok = false;
+impl CoreIdentifier {
+    /// Identifies `v` as it is (its outliers already left out).
+    fn identify_view(&mut self, v: &WindowView<'_>) -> Result<(), IdentifyError> {
         let y = [v.output];
         let input = PulseInput {
             dt_s: v.dt_s,
@@ -323,8 +382,25 @@ impl Identifier for CoreIdentifier {
                 self.ws.identify(&input, &self.opts)?;
             }
         }
+        Ok(())
+    }
+}
+
+impl Identifier for CoreIdentifier {
+    fn identify(&mut self, v: &WindowView<'_>) -> Result<(), IdentifyError> {
+        self.ok = false;
+        // moved out and back (no allocation), so that the view borrows it beside `self`
+        let mut clean = std::mem::take(&mut self.clean);
+        clean.leave_out(v);
+        let result = self.identify_view(&clean.view(v));
+        self.clean = clean;
+        result?;
         self.ok = true;
         Ok(())
+    }
+
+    fn outliers(&self) -> usize {
+        self.clean.outliers
     }
 
     fn report(&self) -> Result<ModelReport, IdentifyError> {
@@ -340,6 +416,7 @@ impl Identifier for CoreIdentifier {
         }
         let model = self.ws.model().state_space();
         let lags = self.ws.markov().len();
+        let v = self.clean.view(v);
         Some(live::response(
             self.ws.ensemble(),
             v.output,
@@ -451,13 +528,16 @@ mod tests {
     /// `propid identify` gives for the same samples through `identify_any` with the same
     /// options: the same rule (average per lag over the pulses measured there, path "pulse"),
     /// the same numbers, the jackknife included, and both say how many samples were missing.
+    /// With an isolated outlier too (0.3 N on a 0.1 N response, in the second pulse's
+    /// response): both leave it out by the same rule, count it, and still agree.
     #[test]
     fn window_with_holes_gives_the_model_identify_gives() {
         use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
         use propid_numerics::okid::OkidOptions;
-        let (u, mut y, starts) = window();
+        use propid_numerics::outliers::isolated_outliers;
+        let (u, y, starts) = window();
         let mut missing = vec![false; u.len()];
-        let mut u = u;
+        let (mut u, mut y) = (u, y);
         for k in [60, 102, 433, 434, 790, 1111] {
             missing[k] = true;
             u[k] = f64::NAN;
@@ -465,39 +545,63 @@ mod tests {
         }
         let cfg = Config::default();
         let mut id = CoreIdentifier::new(&cfg).unwrap();
-        id.identify(&view(&u, &y, &missing, &starts)).unwrap();
-        let daemon = id.report().unwrap();
-        assert_eq!((daemon.pulses, daemon.pulses_skipped), (4, 0));
-        assert_eq!(daemon.missing_samples, 6);
-        let ins = [&u[..]];
-        let outs = [&y[..]];
-        let offline = identify_any(
-            &AnyInput {
-                dt_s: 1e-3,
-                u: &ins,
-                y: &outs,
-                missing: &missing,
-                pulse_starts: Some(&starts),
-            },
-            &id.opts,
-            &OkidOptions::default(),
-        )
-        .unwrap();
-        assert_eq!(offline.path, PathTaken::Pulse);
-        // The daemon's workspace is sized for its configuration (max order 8), identify's for
-        // the record (max order 12): the truncated SVD's Lanczos basis differs in size, so the
-        // numbers agree to rounding (1e-9 relative) and the singular values beyond the
-        // converged ones differ in count; everything else is equal.
-        let mut a = serde_json::to_value(&daemon).unwrap();
-        let mut b = serde_json::to_value(&offline.report).unwrap();
-        for v in [&mut a, &mut b] {
-            let sv = v["singular_values"].as_array_mut().unwrap();
-            sv.truncate(3);
+        for outlier in [None, Some(415)] {
+            let mut y = y.clone();
+            if let Some(k) = outlier {
+                y[k] += 0.3;
+            }
+            let v = view(&u, &y, &missing, &starts);
+            id.identify(&v).unwrap();
+            let daemon = id.report().unwrap();
+            assert_eq!((daemon.pulses, daemon.pulses_skipped), (4, 0));
+            let n_out = usize::from(outlier.is_some());
+            assert_eq!(id.outliers(), n_out, "{outlier:?}");
+            assert_eq!(daemon.missing_samples, 6 + n_out, "{outlier:?}");
+            // `propid identify`: the outliers its rule finds (the one put there) left out
+            let found = isolated_outliers(&y, &missing, &u);
+            assert_eq!(found, outlier.into_iter().collect::<Vec<_>>());
+            let (mut y_id, mut missing_id) = (y.clone(), missing.clone());
+            for &k in &found {
+                y_id[k] = f64::NAN;
+                missing_id[k] = true;
+            }
+            let offline = |y: &[f64], missing: &[bool]| {
+                let ins = [&u[..]];
+                let outs = [y];
+                identify_any(
+                    &AnyInput {
+                        dt_s: 1e-3,
+                        u: &ins,
+                        y: &outs,
+                        missing,
+                        pulse_starts: Some(&starts),
+                    },
+                    &id.opts,
+                    &OkidOptions::default(),
+                )
+                .unwrap()
+            };
+            let want = offline(&y_id, &missing_id);
+            assert_eq!(want.path, PathTaken::Pulse);
+            // The daemon's workspace is sized for its configuration (max order 8), identify's
+            // for the record (max order 12): the truncated SVD's Lanczos basis differs in
+            // size, so the numbers agree to rounding (1e-9 relative) and the singular values
+            // beyond the converged ones differ in count; everything else is equal.
+            let json = |r: &ModelReport| {
+                let mut v = serde_json::to_value(r).unwrap();
+                v["singular_values"].as_array_mut().unwrap().truncate(3);
+                v
+            };
+            assert_close(&json(&daemon), &json(&want.report), &format!("{outlier:?}"));
+            // and the clean tolerance holds: fn 12 Hz, ζ 0.6
+            assert!((daemon.fn_hz / 12.0 - 1.0).abs() < 0.01, "{}", daemon.fn_hz);
+            assert!((daemon.zeta / 0.6 - 1.0).abs() < 0.02, "{}", daemon.zeta);
+            if outlier.is_some() {
+                // left in, the outlier gives another model: the test sees the difference
+                let kept = offline(&y, &missing).report;
+                assert!((kept.zeta - daemon.zeta).abs() > 1e-6, "{}", kept.zeta);
+            }
         }
-        assert_close(&a, &b, "model");
-        // and the clean tolerance holds: fn 12 Hz, ζ 0.6, DC gain 0.5/(1 − a1 − a2)
-        assert!((daemon.fn_hz / 12.0 - 1.0).abs() < 0.01, "{}", daemon.fn_hz);
-        assert!((daemon.zeta / 0.6 - 1.0).abs() < 0.02, "{}", daemon.zeta);
     }
 
     /// `a == b` with numbers within 1e-9 relative (1e-12 absolute).

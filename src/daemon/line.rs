@@ -1,8 +1,9 @@
 //! The published lines, typed: what the daemon says, one [`Line`] per JSON line.
 //!
 //! - `{"type":"model", "t_s", "operating_point", "level", "first_sample", "samples", "reason",
-//!   "path", <the model fields of propid identify --json>}` ([`WindowModel`]): `t_s` is the device time
-//!   of the window's last sample (unwrapped, s), `operating_point` the throttle level (fraction).
+//!   "path", ["outliers"], <the model fields of propid identify --json>}` ([`WindowModel`]): `t_s`
+//!   is the device time of the window's last sample (unwrapped, s), `operating_point` the
+//!   throttle level (fraction), `outliers` the isolated outlier samples left out (when > 0).
 //! - `{"type":"event", "kind", ...}` ([`Event`]) and `{"type":"warning", "kind", ["message"],
 //!   ...}` ([`Warning`]); a model that fails the quality checks is a `model_unreliable`
 //!   warning with the model's fields and the `reasons`.
@@ -81,9 +82,17 @@ pub struct WindowModel {
     /// How the Markov parameters were obtained: always `"pulse"` (the daemon identifies
     /// windows of pulses; `propid identify` reports the same in `source.path`).
     pub path: PathTaken,
+    /// Isolated outlier samples of the window's output left out (marked missing, counted in
+    /// `missing_samples` too; `propid identify`'s `source.outliers`); absent when 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub outliers: usize,
     /// The model (the fields of `propid identify --json`'s `"model"`).
     #[serde(flatten)]
     pub report: ModelReport,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// One row of the gain schedule: an operating point and its last reliable model, in short.
@@ -563,10 +572,18 @@ mod tests {
                 last_received: None,
             },
             path: PathTaken::Pulse,
+            outliers: 0,
             report: report(json!({"fn_hz": null, "zeta": null, "dc_gain": null})),
         };
         let text = Line::Model(&model).to_json().unwrap();
         assert!(text.contains(r#""fn_hz":null"#), "{text}");
+        assert!(!text.contains("outliers"), "absent when 0: {text}");
+        let with = WindowModel {
+            outliers: 2,
+            ..model.clone()
+        };
+        let with = Line::Model(&with).to_json().unwrap();
+        assert!(with.contains(r#""outliers":2,"#), "{with}");
         assert!(text.contains(r#""reason":"window_full""#), "{text}");
         assert!(!text.contains("last_received"), "{text}");
         let v: serde_json::Value = serde_json::from_str(&text).unwrap();

@@ -55,64 +55,119 @@ const MEAN_AD_TO_SD: f64 = 1.2533;
 
 /// The isolated outliers of `y` (sample indices, ascending). `missing` (empty: none) marks
 /// samples that are not measured; `command` (empty: none) is the input whose changes and their
-/// first response samples are never judged.
+/// first response samples are never judged. Allocates its scratch; see [`find_outliers`] to
+/// reuse one.
 pub fn isolated_outliers(y: &[f64], missing: &[bool], command: &[f64]) -> Vec<usize> {
+    let mut scratch = OutlierScratch::with_capacity(y.len());
+    find_outliers(y, missing, command, &mut scratch).to_vec()
+}
+
+/// The buffers [`find_outliers`] works in: allocated once for records of up to `capacity`
+/// samples (the daemon's window), so that judging a window allocates nothing.
+#[derive(Debug, Clone, Default)]
+pub struct OutlierScratch {
+    /// `r[k]` (NaN where not judged).
+    r: Vec<f64>,
+    /// Values whose median is taken.
+    sel: Vec<f64>,
+    /// Their deviations from it.
+    dev: Vec<f64>,
+    /// The command guard.
+    guard: Vec<bool>,
+    /// The outliers found.
+    found: Vec<usize>,
+}
+
+impl OutlierScratch {
+    /// Scratch for records of up to `capacity` samples (a longer one only reallocates).
+    pub fn with_capacity(capacity: usize) -> OutlierScratch {
+        OutlierScratch {
+            r: Vec::with_capacity(capacity),
+            sel: Vec::with_capacity(capacity),
+            dev: Vec::with_capacity(capacity),
+            guard: Vec::with_capacity(capacity),
+            found: Vec::with_capacity(capacity),
+        }
+    }
+}
+
+/// [`isolated_outliers`] in caller-provided scratch: the same rule, the same indices
+/// (ascending), returned as a slice of `scratch`; no allocation when `y` fits its capacity.
+pub fn find_outliers<'s>(
+    y: &[f64],
+    missing: &[bool],
+    command: &[f64],
+    scratch: &'s mut OutlierScratch,
+) -> &'s [usize] {
     let n = y.len();
+    let OutlierScratch {
+        r,
+        sel,
+        dev,
+        guard,
+        found,
+    } = scratch;
+    found.clear();
     let measured = |k: usize| y[k].is_finite() && !missing.get(k).copied().unwrap_or(false);
     // r[k] for 1 <= k < n-1 with all three samples measured, NaN otherwise
-    let r: Vec<f64> = (0..n)
-        .map(|k| {
-            if k == 0 || k + 1 >= n || !(measured(k - 1) && measured(k) && measured(k + 1)) {
-                f64::NAN
-            } else {
-                y[k] - 0.5 * (y[k - 1] + y[k + 1])
-            }
-        })
-        .collect();
-    let Some(sigma) = robust_sd(&r) else {
-        return Vec::new();
+    r.clear();
+    r.extend((0..n).map(|k| {
+        if k == 0 || k + 1 >= n || !(measured(k - 1) && measured(k) && measured(k + 1)) {
+            f64::NAN
+        } else {
+            y[k] - 0.5 * (y[k - 1] + y[k + 1])
+        }
+    }));
+    let Some(sigma) = robust_sd(r, sel, dev) else {
+        return found;
     };
     let sigma = sigma.max(resolution(y));
-    let changes = command_changes(command, n);
-    (1..n.saturating_sub(1))
-        .filter(|&k| {
-            let rk = r[k].abs();
-            rk.is_finite()
-                && rk > OUTLIER_SIGMAS * sigma
-                && (y[k + 1] - y[k - 1]).abs() <= NEIGHBOUR_AGREEMENT * rk
-                && !changes[k]
-                && rk > OUTLIER_SIGMAS * local_sd(&r, k)
-        })
-        .collect()
+    command_changes(command, n, guard);
+    for k in 1..n.saturating_sub(1) {
+        let rk = r[k].abs();
+        if rk.is_finite()
+            && rk > OUTLIER_SIGMAS * sigma
+            && (y[k + 1] - y[k - 1]).abs() <= NEIGHBOUR_AGREEMENT * rk
+            && !guard[k]
+            && rk > OUTLIER_SIGMAS * local_sd(r, k, sel)
+        {
+            found.push(k);
+        }
+    }
+    found
 }
 
 /// `1.4826 · median |r_j|` for the finite `r_j`, `j` within [`LOCAL_HALF_WIDTH`] of `k` but
-/// not `k − 1 ..= k + 1` (0 when there is none).
-fn local_sd(r: &[f64], k: usize) -> f64 {
+/// not `k − 1 ..= k + 1` (0 when there is none); `v` is scratch.
+fn local_sd(r: &[f64], k: usize, v: &mut Vec<f64>) -> f64 {
     let lo = k.saturating_sub(LOCAL_HALF_WIDTH);
     let hi = (k + LOCAL_HALF_WIDTH).min(r.len() - 1);
-    let mut v: Vec<f64> = (lo..=hi)
-        .filter(|&j| j + 1 < k || j > k + 1)
-        .map(|j| r[j].abs())
-        .filter(|x| x.is_finite())
-        .collect();
+    v.clear();
+    v.extend(
+        (lo..=hi)
+            .filter(|&j| j + 1 < k || j > k + 1)
+            .map(|j| r[j].abs())
+            .filter(|x| x.is_finite()),
+    );
     if v.is_empty() {
         return 0.0;
     }
-    MAD_TO_SD * median(&mut v)
+    MAD_TO_SD * median(v)
 }
 
 /// Robust standard deviation of the finite values of `r`: `1.4826 · MAD`, or `1.2533 ·` the
 /// mean absolute deviation from the median when the MAD is 0; `None` when that is 0 too or
-/// fewer than 8 values are finite (nothing to judge against).
-fn robust_sd(r: &[f64]) -> Option<f64> {
-    let mut v: Vec<f64> = r.iter().copied().filter(|x| x.is_finite()).collect();
+/// fewer than 8 values are finite (nothing to judge against). `v`, `dev` are scratch.
+fn robust_sd(r: &[f64], v: &mut Vec<f64>, dev: &mut Vec<f64>) -> Option<f64> {
+    v.clear();
+    v.extend(r.iter().copied().filter(|x| x.is_finite()));
     if v.len() < 8 {
         return None;
     }
-    let med = median(&mut v);
-    let mut dev: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
-    let mad = MAD_TO_SD * median(&mut dev);
+    let med = median(v);
+    dev.clear();
+    dev.extend(v.iter().map(|x| (x - med).abs()));
+    let mad = MAD_TO_SD * median(dev);
     let sd = if mad > 0.0 {
         mad
     } else {
@@ -135,20 +190,26 @@ fn resolution(y: &[f64]) -> f64 {
     }
 }
 
-/// Median (sorts in place; `v` not empty).
+/// Median (reorders `v` in place, without allocating; `v` not empty).
 fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
     let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
+    let odd = v.len() % 2 == 1;
+    let (below, mid, _) = v.select_nth_unstable_by(m, f64::total_cmp);
+    let mid = *mid;
+    if odd {
+        mid
     } else {
-        0.5 * (v[m - 1] + v[m])
+        // the largest of the lower half
+        let lower = below.iter().copied().max_by(f64::total_cmp).unwrap_or(mid);
+        0.5 * (lower + mid)
     }
 }
 
-/// `guard[k]`: the command changes between `k − COMMAND_GUARD` and `k + COMMAND_GUARD`.
-fn command_changes(command: &[f64], n: usize) -> Vec<bool> {
-    let mut guard = vec![false; n];
+/// `guard[k]` (resized to `n`): the command changes between `k − COMMAND_GUARD` and
+/// `k + COMMAND_GUARD`.
+fn command_changes(command: &[f64], n: usize, guard: &mut Vec<bool>) {
+    guard.clear();
+    guard.resize(n, false);
     let changed = |j: usize| {
         j >= 1
             && j < command.len()
@@ -160,7 +221,6 @@ fn command_changes(command: &[f64], n: usize) -> Vec<bool> {
         let hi = (j + COMMAND_GUARD).min(n - 1);
         guard[lo..=hi].iter_mut().for_each(|g| *g = true);
     }
-    guard
 }
 
 #[cfg(test)]
@@ -256,6 +316,30 @@ mod tests {
         }
         add_noise(&mut y, 0.01, 6);
         assert!(isolated_outliers(&y, &[], &[]).is_empty());
+    }
+
+    #[test]
+    fn reused_scratch_finds_the_same_outliers_without_growing() {
+        let (u, y) = record(4000);
+        let mut scratch = OutlierScratch::with_capacity(4000);
+        let cap = scratch.r.capacity();
+        for (at, value) in [(1337, 10.0), (2000, 5.6), (0, 0.0)] {
+            let mut bad = y.clone();
+            bad[at] = value;
+            // a shorter record after a longer one, and the same again
+            for n in [4000, 2500, 4000] {
+                let want = isolated_outliers(&bad[..n], &[], &u[..n]);
+                assert_eq!(
+                    find_outliers(&bad[..n], &[], &u[..n], &mut scratch),
+                    &want[..]
+                );
+            }
+        }
+        assert_eq!(scratch.r.capacity(), cap);
+        // the median without sorting: odd, even, repeated values
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert_eq!(median(&mut [1.0, 1.0, 5.0, 1.0]), 1.0);
     }
 
     #[test]

@@ -10,7 +10,7 @@ use crate::cli::CliError;
 use crate::ingest::csv_file::{ColumnUnit, CsvSource};
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
-use propid_numerics::outliers::isolated_outliers;
+use propid_numerics::outliers::{find_outliers, OutlierScratch};
 use propid_wire::protocol::detect::WireFormat;
 use propid_wire::record::names;
 
@@ -206,8 +206,9 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
 pub fn leave_out_outliers(loaded: &mut Loaded) -> usize {
     let command: &[f64] = if loaded.commanded { &loaded.input } else { &[] };
     let mut flagged = vec![false; loaded.missing.len().max(loaded.input.len())];
+    let mut scratch = OutlierScratch::with_capacity(flagged.len());
     for y in &loaded.outputs {
-        for k in isolated_outliers(y, &loaded.missing, command) {
+        for &k in find_outliers(y, &loaded.missing, command, &mut scratch) {
             if let Some(f) = flagged.get_mut(k) {
                 *f = true;
             }

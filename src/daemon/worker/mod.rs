@@ -323,6 +323,7 @@ impl<I: Identifier> Worker<I> {
         let model = WindowModel {
             window: d.facts,
             path: propid_numerics::identify::PathTaken::Pulse,
+            outliers: d.outliers,
             report,
         };
         let flaws = quality::judge(&model.report);
@@ -394,6 +395,8 @@ impl<I: Identifier> Worker<I> {
 struct Done {
     facts: WindowFacts,
     result: Result<(), IdentifyError>,
+    /// Isolated outlier samples left out of the window.
+    outliers: usize,
     /// The web page's pulse responses (`live` only).
     live: Option<ResponseLine>,
 }
@@ -410,6 +413,7 @@ fn identify_one<I: Identifier>(id: &mut I, v: &WindowView<'_>, live: bool) -> Do
     Done {
         facts: WindowFacts::from(v),
         result,
+        outliers: id.outliers(),
         live,
     }
 }

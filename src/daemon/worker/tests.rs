@@ -35,6 +35,10 @@ impl Identifier for Fake {
             "pulses": p, "poles_s": [[re, 40.0], [re, -40.0]]}),
         ))
     }
+    /// One outlier in every other window.
+    fn outliers(&self) -> usize {
+        self.calls % 2
+    }
 }
 
 fn sample(index: u64, raw: u16, f: u16) -> Item {
@@ -104,6 +108,9 @@ fn publishes_models_per_level_and_the_schedule() {
     assert_eq!(models[1]["reason"], "level_end");
     assert_eq!(models[0]["pulses"], 2);
     assert_eq!(models[0]["order"], 2);
+    // the outliers left out, said only when there are some
+    assert_eq!(models[0]["outliers"], 1);
+    assert!(models[1].get("outliers").is_none(), "{}", models[1]);
     assert!(lines
         .iter()
         .any(|l| l["type"] == "warning" && l["kind"] == "watchdog_trip"));
