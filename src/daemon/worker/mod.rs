@@ -123,9 +123,10 @@ impl<I: Identifier> Worker<I> {
             Item::Gap { before, count } => {
                 let mut done = None;
                 let identifier = &mut self.identifier;
+                let live = self.live.is_some();
                 let pulse = self
                     .window
-                    .on_gap(count, |v| done = Some(identify_one(identifier, v)));
+                    .on_gap(count, |v| done = Some(identify_one(identifier, v, live)));
                 if let Some(d) = done {
                     self.publish_model(d);
                 }
