@@ -21,8 +21,9 @@ pub fn chromium() -> PathBuf {
 }
 
 /// Runs Chromium headless on `url` with `args` (a fresh profile, no network but the page's),
-/// up to 60 s; returns stdout.
-fn run(url: &str, args: &[&str]) -> String {
+/// waiting `page_ms` for the page before it acts (the event stream never ends), up to 60 s in
+/// all; returns stdout.
+fn run(url: &str, args: &[&str], page_ms: u32) -> String {
     let profile = tempfile::tempdir().unwrap();
     let mut child = Command::new(chromium())
         .args([
@@ -35,9 +36,9 @@ fn run(url: &str, args: &[&str]) -> String {
             "--disable-component-update",
             "--disable-sync",
             "--window-size=1400,1900",
-            // the event stream never ends: stop waiting for the page after this long
-            "--timeout=4000",
         ])
+        // the event stream never ends: stop waiting for the page after this long
+        .arg(format!("--timeout={page_ms}"))
         .arg(format!("--user-data-dir={}", profile.path().display()))
         .args(args)
         .arg(url)
@@ -58,7 +59,7 @@ fn run(url: &str, args: &[&str]) -> String {
 
 /// The page's DOM after its scripts ran (`--dump-dom`).
 pub fn dom(url: &str) -> String {
-    run(url, &["--dump-dom"])
+    run(url, &["--dump-dom"], 4000)
 }
 
 /// The DOM once `ready` holds of it (the page has drawn what the test waits for), retried.
@@ -73,12 +74,17 @@ pub fn dom_when(url: &str, ready: impl Fn(&str) -> bool) -> String {
     panic!("the page never showed what was waited for");
 }
 
-/// A screenshot of the page, saved at `png`.
+/// A screenshot of the page, saved at `png`. On a loaded machine Chromium may give up before
+/// the page has painted: tried three times, waiting longer each time.
 pub fn screenshot(url: &str, png: &Path) {
-    let _ = std::fs::remove_file(png);
-    run(url, &[&format!("--screenshot={}", png.display())]);
-    let size = std::fs::metadata(png).map(|m| m.len()).unwrap_or(0);
-    assert!(size > 10_000, "no screenshot at {}", png.display());
+    for page_ms in [4000, 8000, 15000] {
+        let _ = std::fs::remove_file(png);
+        run(url, &[&format!("--screenshot={}", png.display())], page_ms);
+        if std::fs::metadata(png).map(|m| m.len()).unwrap_or(0) > 10_000 {
+            return;
+        }
+    }
+    panic!("no screenshot at {} after three tries", png.display());
 }
 
 /// The value of attribute `attr` of the element whose opening tag contains `marker`.

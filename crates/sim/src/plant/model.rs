@@ -2,9 +2,9 @@
 //! [`super::motor`]), the effects applied around it, the derived channels and the load cell's
 //! noise, quantisation and saturation (formulas in the module doc of [`super`]).
 
-use propid_numerics::nonlinear_core::NonlinearCore;
 use nalgebra::{Matrix2, Vector2};
 use propid_numerics::discretise::discretise_second_order;
+use propid_numerics::nonlinear_core::NonlinearCore;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
