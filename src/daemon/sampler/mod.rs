@@ -46,7 +46,7 @@ use super::csv_link::CsvLinkOptions;
 use super::item::{Item, Notice, PlanNote};
 use super::recorder::Recorder;
 use super::shutdown::Shutdown;
-use super::source::{Source, SourceError};
+use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
 use super::tracker::Tracker;
 use super::wire::Wire;
@@ -155,6 +155,10 @@ pub struct Sampler {
     last_rx: Instant,
     /// A byte arrived since the link was (re)opened.
     heard_since_connect: bool,
+    /// A `link_stalled` warning was published and no byte has arrived since.
+    stalled: bool,
+    /// The backoff of the reopens of a link silent since a stall ([`link`]).
+    stall_backoff: Option<Backoff>,
     /// The plan was told the link is up.
     plan_started: bool,
     /// The plan ended on a fault.
@@ -203,6 +207,8 @@ impl Sampler {
             connected_at: Instant::now(),
             last_rx: Instant::now(),
             heard_since_connect: false,
+            stalled: false,
+            stall_backoff: None,
             plan_started: false,
             plan_halted: false,
             halted_at: None,
@@ -372,6 +378,7 @@ impl Sampler {
             r.write(&self.buf[..n]); // a failure is reported, never stops the stand
         }
         self.handler.stats.bytes += n as u64;
+        self.heard();
         self.last_rx = Instant::now();
         self.heard_since_connect = true;
         self.handler.now_us = self.now_us();
