@@ -279,7 +279,11 @@ fn a_device_that_keeps_resetting_is_rearmed_at_most_max_rearms_times_then_the_ru
     );
     let resets = kind(&lines, "device_reset");
     assert_eq!(resets.len(), 2, "{lines:#?}");
-    assert_eq!(resets[1]["rearm"], false);
+    assert_ne!(resets[1]["rearm"], true, "{}", resets[1]);
+    assert!(resets[1]["message"]
+        .as_str()
+        .unwrap()
+        .contains("will not re-arm"));
     let limit = kind(&lines, "rearm_limit_reached");
     assert_eq!(limit.len(), 1, "{lines:#?}");
     assert_eq!(limit[0]["type"], "warning");
@@ -305,32 +309,40 @@ fn a_passive_csv_bench_that_stops_streaming_is_stalled_once_reopened_with_backof
     std::fs::write(
         &cfg,
         "[device]\nprotocol = \"csv\"\nstall_timeout_ms = 300\nreconnect_initial_ms = 50\n\
-         reconnect_max_ms = 400\n[daemon]\nmax_run_s = 8.0\nstop_timeout_ms = 50\n",
+         reconnect_max_ms = 1600\n[daemon]\nmax_run_s = 20.0\nstop_timeout_ms = 50\n",
     )
     .unwrap();
     let rows = propid_testkit::csv_bench::rows(propid_testkit::csv_bench::PLANT, 4_000);
     let (mut master, slave) = serialport::TTYPort::pair().unwrap();
     let port = slave.name().unwrap();
     master.set_timeout(Duration::from_millis(5)).unwrap();
-    let d = Daemon::run(&cfg, &port, None);
+    let mut d = Daemon::run(&cfg, &port, None);
     // paced like a bench (20 rows every 10 ms); 1 500 rows, silence, the other 2 500 rows
     let bench = std::thread::spawn(move || {
         let mut sink = [0u8; 256];
-        let mut send = |chunk: &[String]| {
+        let mut send = |master: &mut serialport::TTYPort, chunk: &[String]| {
             let _ = master.write_all(chunk.concat().as_bytes());
-            let _ = std::io::Read::read(&mut master, &mut sink);
+            let _ = std::io::Read::read(master, &mut sink); // what the daemon writes
             std::thread::sleep(Duration::from_millis(10));
         };
         let _ = master.write_all(propid_testkit::csv_bench::HEADER.as_bytes());
-        rows[..1_500].chunks(20).for_each(&mut send);
+        for chunk in rows[..1_500].chunks(20) {
+            send(&mut master, chunk);
+        }
         let t = std::time::Instant::now();
         while t.elapsed() < PAUSE {
-            let _ = std::io::Read::read(&mut master, &mut sink); // what the daemon writes
+            send(&mut master, &[]);
         }
-        rows[1_500..].chunks(20).for_each(&mut send);
+        for chunk in rows[1_500..].chunks(20) {
+            send(&mut master, chunk);
+        }
         std::thread::sleep(Duration::from_secs(8));
     });
-    let (status, lines, err) = d.finish(20.0);
+    // rows again, and a model from them; stopped while the rows still flow
+    d.wait_for(15.0, |l| l["kind"] == "link_resumed");
+    d.wait_for(5.0, |l| l["type"] == "model");
+    d.signal(libc::SIGINT);
+    let (status, lines, err) = d.finish(5.0);
     drop(slave);
     drop(bench);
     assert!(status.success(), "{err}");
@@ -340,8 +352,8 @@ fn a_passive_csv_bench_that_stops_streaming_is_stalled_once_reopened_with_backof
     assert_eq!(st.len(), 1, "{lines:#?}");
     let s = stats(&lines);
     assert_eq!(s["stalls"], 1, "{s}");
-    // the reopens back off (50, 100, 200, 400 ms closed after each 300 ms of silence: about
-    // five in the pause; at a fixed 50 ms there would be eight or nine)
+    // the reopens back off (closed 50, 100, 200, 400, 800 ms after each 300 ms of silence:
+    // five by the end of the 3 s pause, measured 5; at a fixed 50 ms there would be eight)
     let reopens = s["reconnects"].as_u64().unwrap();
     assert!((1..=6).contains(&reopens), "{s}");
     // one `reconnected` announced, then said when the rows return
@@ -353,7 +365,6 @@ fn a_passive_csv_bench_that_stops_streaming_is_stalled_once_reopened_with_backof
     assert!(resumed[0]["silent_ms"].as_u64().unwrap() >= 2_500, "{}", resumed[0]);
     let back = position(&lines, "link_resumed");
     assert!(back > at);
-    assert!(models_after(&lines, back) >= 1, "identified again: {lines:#?}");
 }
 
 #[test]
