@@ -40,10 +40,7 @@ pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
 /// Builds the plan from an experiment configuration (validated here) for a run of the daemon
 /// with `cfg` (`propid demo`, whose stand brings its own plan): as [`from_config`], the stall
 /// watchdog of `cfg` decides what an unanswered command on a silent link is.
-pub fn from_experiment(
-    ecfg: ExperimentConfig,
-    cfg: &Config,
-) -> Result<Box<dyn Plan>, DaemonError> {
+pub fn from_experiment(ecfg: ExperimentConfig, cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
     let mut plan = ExperimentPlan::new(ecfg)?;
     plan.exp
         .set_stall_watchdog(cfg.device.stall_timeout.is_some());

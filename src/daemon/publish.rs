@@ -563,7 +563,8 @@ mod tests {
             let kind = matches!(line, Line::Event(Event::Reconnected { .. }));
             s2.lock().unwrap().push((kind, text.to_string()));
         }));
-        p.publish_line(&Line::Event(Event::Reconnected { device_node: None })).unwrap();
+        p.publish_line(&Line::Event(Event::Reconnected { device_node: None }))
+            .unwrap();
         p.publish_line(&Line::Event(Event::CsvLink)).unwrap();
         let seen = seen.lock().unwrap();
         assert_eq!(seen.len(), 2);

@@ -296,7 +296,11 @@ fn a_device_that_keeps_resetting_is_rearmed_at_most_max_rearms_times_then_the_ru
         "{}",
         limit[0]
     );
-    assert_eq!(kind(&lines, "arm_acknowledged").len(), 2, "never armed a third time");
+    assert_eq!(
+        kind(&lines, "arm_acknowledged").len(),
+        2,
+        "never armed a third time"
+    );
 }
 
 #[test]
@@ -362,7 +366,11 @@ fn a_passive_csv_bench_that_stops_streaming_is_stalled_once_reopened_with_backof
     let resumed = kind(&lines, "link_resumed");
     assert_eq!(resumed.len(), 1, "{lines:#?}");
     assert_eq!(resumed[0]["type"], "event");
-    assert!(resumed[0]["silent_ms"].as_u64().unwrap() >= 2_500, "{}", resumed[0]);
+    assert!(
+        resumed[0]["silent_ms"].as_u64().unwrap() >= 2_500,
+        "{}",
+        resumed[0]
+    );
     let back = position(&lines, "link_resumed");
     assert!(back > at);
 }

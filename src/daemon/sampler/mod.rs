@@ -27,9 +27,11 @@
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
 //! exponential backoff (a symlink is resolved again at every attempt); a link that stays open
 //! but silent for `[device] stall_timeout_ms` is *stalled*: STOP is tried, a `link_stalled`
-//! warning published, the port closed and reopened ([`link`]). After either the plan is told:
-//! it asks the device (HELLO_REQ) whether it is the same boot and goes on, or, reset, ends —
-//! or re-arms with `[experiment] rearm_on_reset`. A plan over on a fault (device reset, stall,
+//! warning published, the port closed and reopened, with backoff while it stays silent, and a
+//! `link_resumed` event when bytes return ([`link`]; a passive CSV bench too). After either
+//! the plan is told: it asks the device (HELLO_REQ) whether it is the same boot and goes on,
+//! or, reset, ends — or re-arms with `[experiment] rearm_on_reset`, at most `max_rearms`
+//! times. A plan over on a fault (device reset, stall,
 //! watchdog trip, refusal) ends the run 500 ms later (the link still read meanwhile), with
 //! [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms
 //! with the same seq) until the device acknowledges it or the stop timeout passes.

@@ -115,7 +115,13 @@ fn hangup_reconnects_and_counts_everything_once() {
             _ => None,
         })
         .collect();
-    assert_eq!(notices, vec![Notice::Disconnected, Notice::Reconnected { device_node: None }]);
+    assert_eq!(
+        notices,
+        vec![
+            Notice::Disconnected,
+            Notice::Reconnected { device_node: None }
+        ]
+    );
 }
 
 #[test]
