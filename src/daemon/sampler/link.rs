@@ -90,8 +90,13 @@ impl Sampler {
     /// reconnect loop takes over. `announce`: a `reconnected` event on success.
     fn reopen(&mut self, delay: Duration, announce: bool) -> Result<(), DaemonError> {
         self.source.close();
-        sleep_unless(&self.shutdown, delay);
-        if self.shutdown.requested() {
+        // never past the end of the run (`max_run_s`): the main loop then stops
+        let left = self
+            .cfg
+            .max_run
+            .map_or(delay, |m| m.saturating_sub(self.start.elapsed()));
+        sleep_unless(&self.shutdown, delay.min(left));
+        if self.shutdown.requested() || self.time_up() {
             return Ok(());
         }
         match self.source.reconnect() {
