@@ -67,12 +67,15 @@ pub struct EventItem {
 
 /// A fact about the link, published as an `"event"` or `"warning"` line
 /// ([`super::line::Line::notice`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Notice {
     /// The link dropped.
     Disconnected,
     /// The link was reopened.
-    Reconnected,
+    Reconnected {
+        /// The device node the configured path now is (a symlink resolved), when it resolves.
+        device_node: Option<String>,
+    },
     /// STOP was acknowledged at shutdown.
     Stopped,
     /// STOP was not acknowledged within the shutdown timeout.
@@ -90,6 +93,11 @@ pub enum Notice {
         silent_ms: u64,
         /// Whether the STOP was acknowledged.
         stop_acknowledged: bool,
+    },
+    /// Bytes arrive again after a [`Notice::LinkStalled`].
+    LinkResumed {
+        /// How long nothing was heard, ms.
+        silent_ms: u64,
     },
 }
 
@@ -141,6 +149,11 @@ pub enum PlanNote {
     LinkFailed {
         /// Protocol name of the command.
         command: &'static str,
+    },
+    /// The device reset or stalled once more after `max_rearms` re-arms; the plan is over.
+    RearmLimit {
+        /// Re-arms done.
+        rearms: u32,
     },
 }
 

@@ -190,7 +190,16 @@ pub enum Event {
     /// STOP acknowledged (the plan's).
     StopAcknowledged,
     /// The link was reopened.
-    Reconnected,
+    Reconnected {
+        /// The device node the configured path resolves to now (the udev symlink followed).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        device_node: Option<String>,
+    },
+    /// Bytes arrive again after a `link_stalled` warning.
+    LinkResumed {
+        /// How long nothing was heard, ms.
+        silent_ms: u64,
+    },
     /// The shutdown STOP was acknowledged.
     ShutdownStopAcknowledged,
     /// The link speaks the CSV fallback (PROTOCOL.md §6).
@@ -250,6 +259,12 @@ pub enum Warning<'a> {
         silent_ms: u64,
         /// Whether the device acknowledged the STOP.
         stop_acknowledged: bool,
+    },
+    /// The device reset or the link stalled once more after `experiment.max_rearms` re-arms;
+    /// the plan is over (exit 8).
+    RearmLimitReached {
+        /// Re-arms done.
+        rearms: u32,
     },
     /// The device watchdog stopped the motor; the plan is over.
     PlanHaltedWatchdog,
@@ -330,6 +345,10 @@ impl Warning<'_> {
                  sent, the port closed and reopened; the plan re-arms only with \
                  experiment.rearm_on_reset"
             }
+            Warning::RearmLimitReached { .. } => {
+                "the device reset or stalled again after experiment.max_rearms re-arms; the plan \
+                 is over and will not re-arm"
+            }
             Warning::PlanHaltedWatchdog => {
                 "the device watchdog stopped the motor; the plan is over"
             }
@@ -375,7 +394,7 @@ impl Line<'_> {
     pub fn notice(n: Notice) -> Line<'static> {
         match n {
             Notice::Disconnected => Line::Warning(Warning::Disconnected),
-            Notice::Reconnected => Line::Event(Event::Reconnected),
+            Notice::Reconnected { device_node } => Line::Event(Event::Reconnected { device_node }),
             Notice::Stopped => Line::Event(Event::ShutdownStopAcknowledged),
             Notice::StopUnacknowledged => Line::Warning(Warning::ShutdownStopUnacknowledged),
             Notice::CsvLink => Line::Event(Event::CsvLink),
@@ -388,6 +407,7 @@ impl Line<'_> {
                 silent_ms,
                 stop_acknowledged,
             }),
+            Notice::LinkResumed { silent_ms } => Line::Event(Event::LinkResumed { silent_ms }),
         }
     }
 
@@ -423,6 +443,7 @@ impl Line<'_> {
             PlanNote::WatchdogTripped => Line::Warning(Warning::PlanHaltedWatchdog),
             PlanNote::Refused { command } => Line::Warning(Warning::CommandRefused { command }),
             PlanNote::LinkFailed { command } => Line::Warning(Warning::LinkFailed { command }),
+            PlanNote::RearmLimit { rearms } => Line::Warning(Warning::RearmLimitReached { rearms }),
         })
     }
 
@@ -511,7 +532,10 @@ mod tests {
     fn every_notice_has_its_line() {
         let kinds: Vec<String> = [
             Notice::Disconnected,
-            Notice::Reconnected,
+            Notice::Reconnected { device_node: None },
+            Notice::Reconnected {
+                device_node: Some("/dev/ttyACM1".into()),
+            },
             Notice::Stopped,
             Notice::StopUnacknowledged,
             Notice::CsvLink,
@@ -521,6 +545,7 @@ mod tests {
                 silent_ms: 1200,
                 stop_acknowledged: false,
             },
+            Notice::LinkResumed { silent_ms: 2500 },
         ]
         .into_iter()
         .map(|n| Line::notice(n).to_json().unwrap())
@@ -530,6 +555,7 @@ mod tests {
             [
                 r#"{"kind":"disconnected","type":"warning"}"#,
                 r#"{"kind":"reconnected","type":"event"}"#,
+                r#"{"device_node":"/dev/ttyACM1","kind":"reconnected","type":"event"}"#,
                 r#"{"kind":"shutdown_stop_acknowledged","type":"event"}"#,
                 r#"{"kind":"shutdown_stop_unacknowledged","type":"warning"}"#,
                 r#"{"kind":"csv_link","type":"event"}"#,
@@ -541,6 +567,7 @@ mod tests {
                     r#"re-arms only with experiment.rearm_on_reset","silent_ms":1200,"#,
                     r#""stop_acknowledged":false,"type":"warning"}"#
                 ),
+                r#"{"kind":"link_resumed","silent_ms":2500,"type":"event"}"#,
             ]
         );
     }

@@ -34,15 +34,17 @@ pub fn from_config(cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
             source,
         })
     })?;
+    from_experiment(ecfg, cfg)
+}
+
+/// Builds the plan from an experiment configuration (validated here) for a run of the daemon
+/// with `cfg` (`propid demo`, whose stand brings its own plan): as [`from_config`], the stall
+/// watchdog of `cfg` decides what an unanswered command on a silent link is.
+pub fn from_experiment(ecfg: ExperimentConfig, cfg: &Config) -> Result<Box<dyn Plan>, DaemonError> {
     let mut plan = ExperimentPlan::new(ecfg)?;
     plan.exp
         .set_stall_watchdog(cfg.device.stall_timeout.is_some());
     Ok(Box::new(plan))
-}
-
-/// Builds the plan from an experiment configuration (validated here).
-pub fn from_experiment(ecfg: ExperimentConfig) -> Result<Box<dyn Plan>, DaemonError> {
-    Ok(Box::new(ExperimentPlan::new(ecfg)?))
 }
 
 impl ExperimentPlan {
@@ -73,6 +75,7 @@ fn note(n: &Notice) -> PlanNote {
         Notice::WatchdogTripped => PlanNote::WatchdogTripped,
         Notice::Refused { command, .. } => PlanNote::Refused { command },
         Notice::LinkFailed { command, .. } => PlanNote::LinkFailed { command },
+        Notice::RearmLimit { rearms } => PlanNote::RearmLimit { rearms },
     }
 }
 

@@ -560,10 +560,11 @@ mod tests {
         let s2 = seen.clone();
         let (p, lines) = Publisher::capture();
         let mut p = p.with_tap(Box::new(move |line, text| {
-            let kind = matches!(line, Line::Event(Event::Reconnected));
+            let kind = matches!(line, Line::Event(Event::Reconnected { .. }));
             s2.lock().unwrap().push((kind, text.to_string()));
         }));
-        p.publish_line(&Line::Event(Event::Reconnected)).unwrap();
+        p.publish_line(&Line::Event(Event::Reconnected { device_node: None }))
+            .unwrap();
         p.publish_line(&Line::Event(Event::CsvLink)).unwrap();
         let seen = seen.lock().unwrap();
         assert_eq!(seen.len(), 2);

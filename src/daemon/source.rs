@@ -61,6 +61,10 @@ pub trait Source: Send {
     fn is_live(&self) -> bool;
     /// A short description for messages (`/dev/ttyACM0`, `recording run.tsp`).
     fn describe(&self) -> String;
+    /// The device node the link's path is now (a symlink resolved), when it has one.
+    fn device_node(&self) -> Option<String> {
+        None
+    }
 }
 
 /// The error of a link used while it is closed.
@@ -165,6 +169,12 @@ impl Source for SerialSource {
 
     fn describe(&self) -> String {
         self.path.clone()
+    }
+
+    fn device_node(&self) -> Option<String> {
+        std::fs::canonicalize(&self.path)
+            .ok()
+            .map(|p| p.display().to_string())
     }
 }
 

@@ -4,6 +4,8 @@
 //! with its port open (the host's stall watchdog), a port that vanishes and comes back under a
 //! new name behind its udev-style symlink, and a recording whose disk fills mid-run (the file
 //! size limit RLIMIT_FSIZE of the daemon's process: writes fail with EFBIG, as on a full disk).
+//! Also: re-arms bounded by `[experiment] max_rearms`, a passive CSV bench that stops
+//! streaming (stalled, reopened with backoff, resumed), and `propid demo` on a frozen stand.
 //! Each runs a few seconds: short plans, short timeouts.
 
 use crate::daemon_proc;
@@ -164,7 +166,9 @@ fn a_port_that_vanishes_and_returns_under_a_new_name_is_followed_through_its_sym
     let b = sim_process(&b_link, 30.0, &["--seed", "2"]);
     let b_node = std::fs::read_link(&b_link).unwrap();
     point_link(&stable, &b_node).unwrap();
-    d.wait_for(10.0, |l| l["kind"] == "reconnected");
+    let back = d.wait_for(10.0, |l| l["kind"] == "reconnected");
+    // the event names the node the stable path now resolves to
+    assert_eq!(back["device_node"], b_node.to_str().unwrap(), "{back}");
     let reset = d.wait_for(5.0, |l| l["kind"] == "device_reset");
     assert_eq!(reset["rearm"], true);
     d.wait_for(10.0, |l| l["type"] == "model");
@@ -234,4 +238,160 @@ fn a_recording_whose_disk_fills_mid_run_is_a_counted_warning_and_nothing_publish
     assert_eq!(size, LIMIT);
     assert_eq!(s["record_bytes_written"], size, "{s}");
     assert!(s["bytes"].as_u64().unwrap() > 2 * LIMIT, "{s}");
+}
+
+#[test]
+fn a_device_that_keeps_resetting_is_rearmed_at_most_max_rearms_times_then_the_run_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let stable = dir.path().join("propid-stand");
+    let cfg = config(
+        dir.path(),
+        1000,
+        "",
+        "rearm_on_reset = true\nmax_rearms = 1\n",
+    );
+    // three boots of the stand behind the stable name: each a new boot id (its own seed)
+    let boot = |name: &str, seed: &str| {
+        let link = dir.path().join(name);
+        let sim = sim_process(&link, 30.0, &["--seed", seed]);
+        point_link(&stable, &std::fs::read_link(&link).unwrap()).unwrap();
+        sim
+    };
+    let a = boot("stand-a", "1");
+    let mut d = Daemon::run(&cfg, stable.to_str().unwrap(), None);
+    d.wait_for(10.0, |l| l["kind"] == "arm_acknowledged");
+    drop(a);
+    d.wait_for(5.0, |l| l["kind"] == "disconnected");
+    let b = boot("stand-b", "2");
+    let first = d.wait_for(10.0, |l| l["kind"] == "device_reset");
+    assert_eq!(first["rearm"], true, "{first}");
+    d.wait_for(5.0, |l| l["kind"] == "arm_acknowledged");
+    drop(b);
+    d.wait_for(5.0, |l| l["kind"] == "disconnected");
+    let c = boot("stand-c", "3");
+    // no signal: past the bound the plan is over and the run ends by itself
+    let (status, lines, err) = d.finish(15.0);
+    drop(c);
+    assert_eq!(status.code(), Some(8), "{err} {lines:#?}");
+    assert!(
+        err.contains("the experiment plan ended on a fault"),
+        "{err}"
+    );
+    let resets = kind(&lines, "device_reset");
+    assert_eq!(resets.len(), 2, "{lines:#?}");
+    assert_ne!(resets[1]["rearm"], true, "{}", resets[1]);
+    assert!(resets[1]["message"]
+        .as_str()
+        .unwrap()
+        .contains("will not re-arm"));
+    let limit = kind(&lines, "rearm_limit_reached");
+    assert_eq!(limit.len(), 1, "{lines:#?}");
+    assert_eq!(limit[0]["type"], "warning");
+    assert_eq!(limit[0]["rearms"], 1);
+    assert!(
+        limit[0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("experiment.max_rearms"),
+        "{}",
+        limit[0]
+    );
+    assert_eq!(
+        kind(&lines, "arm_acknowledged").len(),
+        2,
+        "never armed a third time"
+    );
+}
+
+#[test]
+fn a_passive_csv_bench_that_stops_streaming_is_stalled_once_reopened_with_backoff_and_resumed() {
+    use serialport::SerialPort;
+    use std::io::Write;
+    const PAUSE: Duration = Duration::from_secs(3);
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("passive.toml");
+    std::fs::write(
+        &cfg,
+        "[device]\nprotocol = \"csv\"\nstall_timeout_ms = 300\nreconnect_initial_ms = 50\n\
+         reconnect_max_ms = 1600\n[daemon]\nmax_run_s = 20.0\nstop_timeout_ms = 50\n",
+    )
+    .unwrap();
+    let rows = propid_testkit::csv_bench::rows(propid_testkit::csv_bench::PLANT, 4_000);
+    let (mut master, slave) = serialport::TTYPort::pair().unwrap();
+    let port = slave.name().unwrap();
+    master.set_timeout(Duration::from_millis(5)).unwrap();
+    let mut d = Daemon::run(&cfg, &port, None);
+    // paced like a bench (20 rows every 10 ms); 1 500 rows, silence, the other 2 500 rows
+    let bench = std::thread::spawn(move || {
+        let mut sink = [0u8; 256];
+        let mut send = |master: &mut serialport::TTYPort, chunk: &[String]| {
+            let _ = master.write_all(chunk.concat().as_bytes());
+            let _ = std::io::Read::read(master, &mut sink); // what the daemon writes
+            std::thread::sleep(Duration::from_millis(10));
+        };
+        let _ = master.write_all(propid_testkit::csv_bench::HEADER.as_bytes());
+        for chunk in rows[..1_500].chunks(20) {
+            send(&mut master, chunk);
+        }
+        let t = std::time::Instant::now();
+        while t.elapsed() < PAUSE {
+            send(&mut master, &[]);
+        }
+        for chunk in rows[1_500..].chunks(20) {
+            send(&mut master, chunk);
+        }
+        std::thread::sleep(Duration::from_secs(8));
+    });
+    // rows again, and a model from them; stopped while the rows still flow
+    d.wait_for(15.0, |l| l["kind"] == "link_resumed");
+    d.wait_for(5.0, |l| l["type"] == "model");
+    d.signal(libc::SIGINT);
+    let (status, lines, err) = d.finish(5.0);
+    drop(slave);
+    drop(bench);
+    assert!(status.success(), "{err}");
+    assert_eq!(kind(&lines, "passive_bench").len(), 1, "{lines:#?}");
+    // warned once, counted once
+    let st = kind(&lines, "link_stalled");
+    assert_eq!(st.len(), 1, "{lines:#?}");
+    let s = stats(&lines);
+    assert_eq!(s["stalls"], 1, "{s}");
+    // the reopens back off (closed 50, 100, 200, 400, 800 ms after each 300 ms of silence:
+    // five by the end of the 3 s pause, measured 5; at a fixed 50 ms there would be eight)
+    let reopens = s["reconnects"].as_u64().unwrap();
+    assert!((1..=6).contains(&reopens), "{s}");
+    // one `reconnected` announced, then said when the rows return
+    let at = position(&lines, "link_stalled");
+    assert_eq!(kind(&lines[at..], "reconnected").len(), 1, "{lines:#?}");
+    let resumed = kind(&lines, "link_resumed");
+    assert_eq!(resumed.len(), 1, "{lines:#?}");
+    assert_eq!(resumed[0]["type"], "event");
+    assert!(
+        resumed[0]["silent_ms"].as_u64().unwrap() >= 2_500,
+        "{}",
+        resumed[0]
+    );
+    let back = position(&lines, "link_resumed");
+    assert!(back > at);
+}
+
+#[test]
+fn demo_leaves_an_unanswered_command_on_a_silent_link_to_the_stall_watchdog_as_run_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim_cfg = dir.path().join("sim.toml");
+    // the stand freezes after 1 s with its port open (the default stall_timeout_ms is 1000)
+    std::fs::write(
+        &sim_cfg,
+        "[plant]\nkind = \"second_order\"\n[faults]\nfreeze_after_s = 1.0\n",
+    )
+    .unwrap();
+    let d = Daemon::start(&["demo", "--json", "--sim-config", sim_cfg.to_str().unwrap()]);
+    let (status, lines, err) = d.finish(30.0);
+    assert_eq!(status.code(), Some(8), "{err} {lines:#?}");
+    assert!(
+        kind(&lines, "link_failed").is_empty(),
+        "a stall, not a link failure: {lines:#?}"
+    );
+    assert_eq!(kind(&lines, "link_stalled").len(), 1, "{lines:#?}");
+    assert_eq!(stats(&lines)["stalls"], 1);
 }

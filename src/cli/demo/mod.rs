@@ -111,7 +111,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     ));
     let parts = RunParts {
         source: Box::new(source),
-        plan: Some(plan::from_experiment(sim.experiment.clone())?),
+        plan: Some(plan::from_experiment(sim.experiment.clone(), &cfg)?),
         identifier: CoreIdentifier::new(&cfg)?,
         publisher,
         record: None,

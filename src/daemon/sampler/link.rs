@@ -5,7 +5,8 @@
 //! the path is opened again with exponential backoff (`reconnect_initial_ms` doubling up to
 //! `reconnect_max_ms`) until it works; every attempt opens the configured path anew, so a
 //! symlink (the udev rule's `/dev/propid-stand`, `/dev/serial/by-id/...`) re-pointed to a new
-//! device node is followed. Each success is a `reconnected` event and counts in `reconnects`.
+//! device node is followed. Each success is a `reconnected` event naming the device node the
+//! path now resolves to (`device_node`) and counts in `reconnects`.
 //!
 //! **Stall** (`[device] stall_timeout_ms`): a live link that has spoken but then sends nothing
 //! — no sample, no ACK, no HELLO — for the timeout. The plan is told (it queues a STOP and stops
@@ -14,7 +15,11 @@
 //! was acknowledged, and the port is closed, left closed for `reconnect_initial_ms` (a board
 //! that resets when its port opens, as the DTR line resets an Arduino, gets to see it) and
 //! reopened; counted in `stalls` and `reconnects`. A link still silent after its reopen is
-//! reopened again every timeout, without another warning, until it speaks.
+//! reopened again after each further timeout, left closed for a delay that backs off as for a
+//! vanished port (`reconnect_initial_ms` doubling to `reconnect_max_ms`), without another
+//! warning, until it speaks; its first byte then is a `link_resumed` event (how long it was
+//! silent). The same holds for a passive CSV bench (no plan, nothing to stop but a STOP line
+//! it may ignore) that stops streaming: warned once, counted once, said when rows return.
 
 use std::time::{Duration, Instant};
 
@@ -41,7 +46,9 @@ impl Sampler {
             return Ok(());
         }
         if !self.heard_since_connect {
-            return self.reopen(false); // still silent since the last reopen
+            // still silent since the last reopen: again, after the next backoff delay
+            let delay = self.silent_backoff().next_delay();
+            return self.reopen(delay, false);
         }
         self.handler.stats.stalls += 1;
         let now = self.now_us();
@@ -54,15 +61,42 @@ impl Sampler {
             silent_ms,
             stop_acknowledged,
         }));
-        self.reopen(true)
+        self.stalled = true;
+        self.stall_backoff = None;
+        let delay = self.silent_backoff().next_delay();
+        self.reopen(delay, true)
     }
 
-    /// Closes the port and opens it again after `reconnect_initial_ms`; when it cannot be
-    /// opened, the reconnect loop takes over. `announce`: a `reconnected` event on success.
-    fn reopen(&mut self, announce: bool) -> Result<(), DaemonError> {
+    /// The backoff of the reopens of a link silent since a stall (`reconnect_initial_ms`
+    /// doubling to `reconnect_max_ms`); cleared by the link's next byte.
+    fn silent_backoff(&mut self) -> &mut Backoff {
+        let (initial, max) = (self.cfg.reconnect_initial, self.cfg.reconnect_max);
+        self.stall_backoff
+            .get_or_insert_with(|| Backoff::new(initial, max))
+    }
+
+    /// A byte arrived: after a stall, a `link_resumed` event (how long nothing was heard, from
+    /// the last byte before, [`Sampler::last_rx`] not yet updated); the reopen backoff is over.
+    pub(super) fn heard(&mut self) {
+        self.stall_backoff = None;
+        if std::mem::take(&mut self.stalled) {
+            let silent_ms = self.last_rx.elapsed().as_millis() as u64;
+            self.handler
+                .send(Item::Notice(Notice::LinkResumed { silent_ms }));
+        }
+    }
+
+    /// Closes the port and opens it again after `delay`; when it cannot be opened, the
+    /// reconnect loop takes over. `announce`: a `reconnected` event on success.
+    fn reopen(&mut self, delay: Duration, announce: bool) -> Result<(), DaemonError> {
         self.source.close();
-        sleep_unless(&self.shutdown, self.cfg.reconnect_initial);
-        if self.shutdown.requested() {
+        // never past the end of the run (`max_run_s`): the main loop then stops
+        let left = self
+            .cfg
+            .max_run
+            .map_or(delay, |m| m.saturating_sub(self.start.elapsed()));
+        sleep_unless(&self.shutdown, delay.min(left));
+        if self.shutdown.requested() || self.time_up() {
             return Ok(());
         }
         match self.source.reconnect() {
@@ -99,7 +133,9 @@ impl Sampler {
     fn reconnected(&mut self, announce: bool) {
         self.handler.stats.reconnects += 1;
         if announce {
-            self.handler.send(Item::Notice(Notice::Reconnected));
+            let device_node = self.source.device_node();
+            self.handler
+                .send(Item::Notice(Notice::Reconnected { device_node }));
         }
         self.connected_at = Instant::now();
         self.heard_since_connect = false;

@@ -27,9 +27,11 @@
 //! On disconnection (unplug) the sampler publishes a notice and reopens the same path with
 //! exponential backoff (a symlink is resolved again at every attempt); a link that stays open
 //! but silent for `[device] stall_timeout_ms` is *stalled*: STOP is tried, a `link_stalled`
-//! warning published, the port closed and reopened ([`link`]). After either the plan is told:
-//! it asks the device (HELLO_REQ) whether it is the same boot and goes on, or, reset, ends —
-//! or re-arms with `[experiment] rearm_on_reset`. A plan over on a fault (device reset, stall,
+//! warning published, the port closed and reopened, with backoff while it stays silent, and a
+//! `link_resumed` event when bytes return ([`link`]; a passive CSV bench too). After either
+//! the plan is told: it asks the device (HELLO_REQ) whether it is the same boot and goes on,
+//! or, reset, ends — or re-arms with `[experiment] rearm_on_reset`, at most `max_rearms`
+//! times. A plan over on a fault (device reset, stall,
 //! watchdog trip, refusal) ends the run 500 ms later (the link still read meanwhile), with
 //! [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms
 //! with the same seq) until the device acknowledges it or the stop timeout passes.
@@ -46,7 +48,7 @@ use super::csv_link::CsvLinkOptions;
 use super::item::{Item, Notice, PlanNote};
 use super::recorder::Recorder;
 use super::shutdown::Shutdown;
-use super::source::{Source, SourceError};
+use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
 use super::tracker::Tracker;
 use super::wire::Wire;
@@ -155,6 +157,10 @@ pub struct Sampler {
     last_rx: Instant,
     /// A byte arrived since the link was (re)opened.
     heard_since_connect: bool,
+    /// A `link_stalled` warning was published and no byte has arrived since.
+    stalled: bool,
+    /// The backoff of the reopens of a link silent since a stall ([`link`]).
+    stall_backoff: Option<Backoff>,
     /// The plan was told the link is up.
     plan_started: bool,
     /// The plan ended on a fault.
@@ -203,6 +209,8 @@ impl Sampler {
             connected_at: Instant::now(),
             last_rx: Instant::now(),
             heard_since_connect: false,
+            stalled: false,
+            stall_backoff: None,
             plan_started: false,
             plan_halted: false,
             halted_at: None,
@@ -372,6 +380,7 @@ impl Sampler {
             r.write(&self.buf[..n]); // a failure is reported, never stops the stand
         }
         self.handler.stats.bytes += n as u64;
+        self.heard();
         self.last_rx = Instant::now();
         self.heard_since_connect = true;
         self.handler.now_us = self.now_us();

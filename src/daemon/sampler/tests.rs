@@ -115,7 +115,13 @@ fn hangup_reconnects_and_counts_everything_once() {
             _ => None,
         })
         .collect();
-    assert_eq!(notices, vec![Notice::Disconnected, Notice::Reconnected]);
+    assert_eq!(
+        notices,
+        vec![
+            Notice::Disconnected,
+            Notice::Reconnected { device_node: None }
+        ]
+    );
 }
 
 #[test]
@@ -381,8 +387,11 @@ fn a_link_silent_past_the_stall_timeout_gets_stop_a_warning_and_a_reopen_each_ti
         _ => unreachable!(),
     }
     let (closes, reopens, written) = log.lock().unwrap().clone();
-    assert_eq!((closes as u64, reopens as u64), (n, n));
-    assert_eq!(out.stats.reconnects, n);
+    assert_eq!(closes as u64, n);
+    // the last stall may close the port with the run's time up: no reopen then
+    let reopens = reopens as u64;
+    assert!(reopens == n || reopens + 1 == n, "{reopens} {n}");
+    assert_eq!(out.stats.reconnects, reopens);
     // the STOP of our own (no plan), re-sent every 50 ms, before each reopen
     let stop = frame(STOP_SEQ, Message::Stop);
     let stops = written.windows(stop.len()).filter(|w| *w == stop).count() as u64;

@@ -55,7 +55,9 @@ fn pinned_run() -> Vec<String> {
     w.handle(Item::Segment { boot_id: 7 });
     for n in [
         Notice::Disconnected,
-        Notice::Reconnected,
+        Notice::Reconnected {
+            device_node: Some("/dev/ttyACM1".into()),
+        },
         Notice::Stopped,
         Notice::StopUnacknowledged,
         Notice::CsvLink,
@@ -65,6 +67,7 @@ fn pinned_run() -> Vec<String> {
             silent_ms: 1200,
             stop_acknowledged: false,
         },
+        Notice::LinkResumed { silent_ms: 2500 },
     ] {
         w.handle(Item::Notice(n));
     }
@@ -93,6 +96,7 @@ fn pinned_run() -> Vec<String> {
         PlanNote::WatchdogTripped,
         PlanNote::Refused { command: "ARM" },
         PlanNote::LinkFailed { command: "PULSE" },
+        PlanNote::RearmLimit { rearms: 3 },
     ] {
         w.handle(Item::Plan(n));
     }

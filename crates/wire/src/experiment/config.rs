@@ -51,6 +51,10 @@ pub struct ExperimentConfig {
     /// motor for: hand-shake, ARM again and resume at the interrupted operating point (`true`),
     /// or end the plan (`false`, the default: a supervisor decides; the daemon exits 8).
     pub rearm_on_reset: bool,
+    /// Most re-arms in one run (`rearm_on_reset`), 0..=100: a device that resets or stalls
+    /// once more after this many re-arms ends the plan ([`super::Notice::RearmLimit`]; the
+    /// daemon exits 8), so a stand that keeps resetting is not re-armed for ever.
+    pub max_rearms: u32,
 }
 
 impl Default for ExperimentConfig {
@@ -69,6 +73,7 @@ impl Default for ExperimentConfig {
             retry_ms: 50,
             max_retries: 3,
             rearm_on_reset: false,
+            max_rearms: 3,
         }
     }
 }
@@ -134,6 +139,7 @@ impl ExperimentConfig {
         }
         check_i("retry_ms", self.retry_ms as u64, 10, 1000)?;
         check_i("max_retries", self.max_retries as u64, 0, 10)?;
+        check_i("max_rearms", self.max_rearms as u64, 0, 100)?;
         Ok(())
     }
 

@@ -60,6 +60,12 @@ pub enum Notice {
         /// The plan re-arms (`rearm_on_reset`); else it is over.
         rearm: bool,
     },
+    /// The device reset or the link stalled once more after `max_rearms` re-arms
+    /// (`rearm_on_reset`): the plan is over instead of re-arming again.
+    RearmLimit {
+        /// Re-arms done (= `max_rearms`).
+        rearms: u32,
+    },
     /// The device's watchdog stopped the motor. The plan is over.
     WatchdogTripped,
     /// The device refused a command the plan cannot do without. The plan is over (a STOP is

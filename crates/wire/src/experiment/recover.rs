@@ -16,6 +16,9 @@
 //!   One STOP goes out untracked (a device that does not answer cannot acknowledge it: the
 //!   caller re-sends it for a bounded time) and the plan is over; with `rearm_on_reset` the next
 //!   [`Experiment::reconnected`] re-arms as after a reset.
+//! - Re-arms are bounded (`max_rearms`): a device that resets or stalls once more after that
+//!   many re-arms ends the plan with [`Notice::RearmLimit`] (after the `DeviceReset` notice,
+//!   which then says `rearm: false`).
 
 use super::plan::{Experiment, InFlight, Notice, Output, Phase};
 use crate::protocol::Message;
@@ -82,7 +85,18 @@ impl Experiment {
                 msg: Message::Stop,
             });
         }
-        self.rearm_pending = self.cfg.rearm_on_reset && resumable;
+        let wanted = self.cfg.rearm_on_reset && resumable;
+        self.rearm_pending = wanted && self.may_rearm();
+        if wanted && !self.rearm_pending {
+            self.notice(Notice::RearmLimit {
+                rearms: self.rearms,
+            });
+        }
+    }
+
+    /// Whether another re-arm is within `max_rearms`.
+    fn may_rearm(&self) -> bool {
+        self.rearms < self.cfg.max_rearms
     }
 
     /// True while the plan is over after a stall but re-arms at the next reconnect.
@@ -121,13 +135,20 @@ impl Experiment {
                     | Phase::Settling
                     | Phase::Pulsing
             );
-        let rearm = self.cfg.rearm_on_reset && working;
+        let wanted = self.cfg.rearm_on_reset && working;
+        let rearm = wanted && self.may_rearm();
         let n = Notice::DeviceReset {
             old_boot_id: old,
             new_boot_id: new,
             rearm,
         };
         if !rearm {
+            if wanted {
+                self.notice(n);
+                return self.halt(Notice::RearmLimit {
+                    rearms: self.rearms,
+                });
+            }
             return self.halt(n);
         }
         self.notice(n);
@@ -330,6 +351,46 @@ mod tests {
         };
         assert_eq!(level, crate::protocol::message::throttle_level(0.5));
         assert_eq!(p.rearms(), 1);
+    }
+
+    #[test]
+    fn rearms_stop_at_max_rearms_after_resets_and_after_stalls() {
+        // max_rearms = 1: the first reset re-arms, the second ends the plan and says why
+        let (mut p, _, t) = pulsing(true, 11);
+        p.cfg.max_rearms = 1;
+        p.on_frame(&hello(12), t);
+        let (s, _) = drain(&mut p);
+        assert_eq!(p.rearms(), 1);
+        p.on_frame(&hello(12), t + 10);
+        p.on_frame(&ack(s[0].0, msg_type::HELLO_REQ), t + 20);
+        drain(&mut p);
+        assert_eq!(p.phase(), Phase::Arming);
+        p.on_frame(&hello(13), t + 30);
+        let (s, n) = drain(&mut p);
+        assert!(s.is_empty(), "{s:?}");
+        assert_eq!(
+            n,
+            vec![
+                Notice::DeviceReset {
+                    old_boot_id: 12,
+                    new_boot_id: 13,
+                    rearm: false
+                },
+                Notice::RearmLimit { rearms: 1 }
+            ]
+        );
+        assert!(p.is_over());
+        // max_rearms = 0: a stall is not re-armed at all
+        let (mut p, _, t) = pulsing(true, 11);
+        p.cfg.max_rearms = 0;
+        p.link_stalled(t);
+        let (s, n) = drain(&mut p);
+        assert_eq!(s.len(), 1, "the STOP");
+        assert_eq!(n, vec![Notice::RearmLimit { rearms: 0 }]);
+        assert!(!p.rearm_pending());
+        p.reconnected(t + 1_000_000);
+        assert!(drain(&mut p).0.is_empty());
+        assert_eq!(p.phase(), Phase::Halted);
     }
 
     #[test]
