@@ -13,8 +13,15 @@ use std::time::{Duration, Instant};
 #[test]
 fn tiny_queue_overflows_are_counted_as_lost_samples_and_the_run_completes() {
     let dir = tempfile::tempdir().unwrap();
-    // the smallest queue the config allows (16 items)
-    let cfg = daemon_config(dir.path(), "[0.4]", 8, 4, "[daemon]\nqueue_capacity = 16\n");
+    // the smallest queue the config allows (16 items); the stand's 150 ms stalls may swallow
+    // a command's ACK: re-sends cover 1 s, not 200 ms (a loaded machine stretches a stall)
+    let cfg = daemon_config(
+        dir.path(),
+        "[0.4]",
+        8,
+        4,
+        "retry_ms = 100\nmax_retries = 10\n[daemon]\nqueue_capacity = 16\n",
+    );
     let rec = dir.path().join("run.tsp");
     // Stalls release 150 ms of samples at once: the sampler decodes a burst far faster than
     // the worker can take it from a 16-item queue.
