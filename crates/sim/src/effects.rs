@@ -18,7 +18,7 @@
 //! direction-dependent time scale and cubic stiffness, [`propid_numerics::nonlinear_core`]) →
 //! load-cell path (extra mode) → drift and disturbance → noise → sensor clip → quantisation.
 
-use std::collections::VecDeque;
+use crate::delay_line::DelayLine;
 
 use nalgebra::{Matrix2, Vector2};
 use serde::Deserialize;
@@ -291,8 +291,8 @@ impl EffectsConfig {
 #[derive(Debug, Clone)]
 pub(crate) struct EffectState {
     cfg: EffectsConfig,
-    delay: VecDeque<f64>,
-    delay_samples: usize,
+    /// The `dead_time` effect.
+    delay: DelayLine,
     mode: Option<(Matrix2<f64>, Vector2<f64>, Vector2<f64>)>,
 }
 
@@ -314,24 +314,15 @@ impl EffectState {
         });
         Ok(EffectState {
             cfg: cfg.clone(),
-            delay: VecDeque::with_capacity(delay_samples + 1),
-            delay_samples,
+            delay: DelayLine::new(delay_samples),
             mode,
         })
     }
 
-    /// Pushes `u` into the delay line and returns the throttle of `delay_samples` ago (0 before
+    /// Pushes `u` into the delay line and returns the throttle of the dead time ago (0 before
     /// the line is full, or the settled throttle after [`EffectState::settle`]).
     pub(crate) fn delay(&mut self, u: f64) -> f64 {
-        if self.delay_samples == 0 {
-            return u;
-        }
-        self.delay.push_back(u);
-        if self.delay.len() > self.delay_samples {
-            self.delay.pop_front().unwrap_or(0.0)
-        } else {
-            0.0
-        }
+        self.delay.push(u)
     }
 
     /// Throttle clip, static map and supply sag: the input the linear core sees.
@@ -354,9 +345,7 @@ impl EffectState {
 
     /// Steady state at throttle `u` and true thrust `thrust_n`.
     pub(crate) fn settle(&mut self, u: f64, thrust_n: f64) {
-        self.delay.clear();
-        self.delay
-            .extend(std::iter::repeat(u).take(self.delay_samples));
+        self.delay.settle(u);
         if let Some((_, _, x)) = &mut self.mode {
             *x = Vector2::new(thrust_n, 0.0);
         }

@@ -25,6 +25,7 @@
 pub mod config;
 pub mod csv;
 pub mod dedup;
+pub mod delay_line;
 pub mod dynamics;
 pub mod effects;
 mod execute;

@@ -27,7 +27,7 @@
 //! as with the 2nd-order plant, the throttle held during sample `k` shows in the thrust from
 //! sample `k + 1 + d` on.
 
-use std::collections::VecDeque;
+use crate::delay_line::DelayLine;
 
 use serde::Deserialize;
 
@@ -122,21 +122,19 @@ pub(crate) struct Motor {
     dt_s: f64,
     /// Rotor speed, rev/min.
     n: f64,
-    delay: VecDeque<f64>,
-    delay_samples: usize,
+    /// The ESC's dead time.
+    delay: DelayLine,
 }
 
 impl Motor {
     /// A motor at rest sampled every `dt_s` seconds.
     pub(crate) fn new(plant: &PlantConfig, dt_s: f64) -> Result<Motor, PlantError> {
         plant.motor.validate()?;
-        let delay_samples = plant.motor.dead_time_samples(dt_s);
         Ok(Motor {
             cfg: plant.motor.clone(),
             dt_s,
             n: 0.0,
-            delay: VecDeque::with_capacity(delay_samples + 1),
-            delay_samples,
+            delay: DelayLine::new(plant.motor.dead_time_samples(dt_s)),
         })
     }
 
@@ -153,15 +151,7 @@ impl Motor {
     /// The ESC's delay line: pushes `u`, returns the throttle of `d` samples ago (0 before the
     /// line is full, the settled throttle after [`Motor::settle`]).
     pub(crate) fn delay(&mut self, u: f64) -> f64 {
-        if self.delay_samples == 0 {
-            return u;
-        }
-        self.delay.push_back(u);
-        if self.delay.len() > self.delay_samples {
-            self.delay.pop_front().unwrap_or(0.0)
-        } else {
-            0.0
-        }
+        self.delay.push(u)
     }
 
     /// Advances one sample with the (delayed, mapped) throttle `u` held and supply `voltage_v`.
@@ -174,9 +164,7 @@ impl Motor {
     /// Steady state at throttle `throttle` (the ESC's line full of it) and mapped throttle `u`,
     /// with the supply sag solved as in [`super::linearise`].
     pub(crate) fn settle(&mut self, plant: &PlantConfig, throttle: f64, u: f64, t_s: f64) {
-        self.delay.clear();
-        self.delay
-            .extend(std::iter::repeat(throttle).take(self.delay_samples));
+        self.delay.settle(throttle);
         self.n = super::linearise::equilibrium(plant, u, t_s).speed_rpm;
     }
 }
