@@ -43,6 +43,8 @@ fn window_and_identification_allocate_nothing(svd: SvdChoice) {
                 thrust_n: s.thrust_n,
                 torque_nm: f32::NAN,
                 rpm: f32::NAN,
+                voltage_v: f32::NAN,
+                current_a: f32::NAN,
                 received: now,
             }),
             _ => None,
