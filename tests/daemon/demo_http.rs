@@ -26,13 +26,17 @@ fn lines_of(r: impl Read + Send + 'static) -> Receiver<String> {
     rx
 }
 
-/// Lines of `rx` until one contains `marker` (panics after `secs`); all of them, joined.
-fn until(rx: &Receiver<String>, marker: &str, secs: u64) -> String {
+/// Lines of `rx` until one contains `marker` (panics after `secs` or when the stream ends,
+/// with what it and `other`, the other stream, said); all of them, joined.
+fn until(rx: &Receiver<String>, marker: &str, secs: u64, other: &Receiver<String>) -> String {
     let mut seen = String::new();
     loop {
         let l = rx
             .recv_timeout(Duration::from_secs(secs))
-            .unwrap_or_else(|_| panic!("no {marker:?} in:\n{seen}"));
+            .unwrap_or_else(|e| {
+                let said: Vec<String> = other.try_iter().collect();
+                panic!("no {marker:?} ({e}) in:\n{seen}\nthe other stream:\n{said:#?}")
+            });
         seen.push_str(&l);
         seen.push('\n');
         if l.contains(marker) {
@@ -52,7 +56,7 @@ fn demo_over_http_prints_its_schedule_at_the_end_and_the_page_shows_the_truth() 
         .unwrap();
     let out = lines_of(child.stdout.take().unwrap());
     let err = lines_of(child.stderr.take().unwrap());
-    let at = until(&err, "the live page is at ", 20);
+    let at = until(&err, "the live page is at ", 20, &out);
     let url = at
         .rsplit("the live page is at ")
         .next()
@@ -60,13 +64,13 @@ fn demo_over_http_prints_its_schedule_at_the_end_and_the_page_shows_the_truth() 
         .trim()
         .to_string();
     // the schedule and the counters when the run ends, the page still served
-    let table = until(&out, " models in ", 60);
+    let table = until(&out, " models in ", 60, &err);
     assert_eq!(
         table.lines().filter(|l| l.ends_with("| yes")).count(),
         3,
         "{table}"
     );
-    until(&err, "stays up until Ctrl-C", 10);
+    until(&err, "stays up until Ctrl-C", 10, &out);
     assert!(child.try_wait().unwrap().is_none(), "the demo ended");
     // the page's history holds the truth of the three levels
     let rx = events(&url);
