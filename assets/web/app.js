@@ -31,7 +31,9 @@ function chart(id, width, height, series, opts = {}) {
   return new uPlot(o, data, $(id));
 }
 
-const samples = { t: [], thr: [], thrust: [], torque: [], rpm: [], pulses: [] };
+const samples = { t: [], thr: [], thrust: [], torque: [], rpm: [], volt: [], amp: [], pulses: [] };
+const SERIES = [["thr", "throttle"], ["thrust", "thrust_N"], ["torque", "torque_Nm"],
+  ["rpm", "rpm"], ["volt", "voltage_V"], ["amp", "current_A"]];
 
 function pulseMarks(u) {
   const ctx = u.ctx;
@@ -79,6 +81,20 @@ const cOther = chart(
     hooks: { draw: [pulseMarks] },
   }
 );
+const cPower = chart(
+  "chart-power",
+  W - 40,
+  160,
+  [
+    { label: "voltage V", stroke: "#8c564b", scale: "V" },
+    { label: "current A", stroke: "#e377c2", scale: "A" },
+  ],
+  {
+    axes: [{ label: "device time s" }, { scale: "V", label: "voltage V" },
+      { scale: "A", side: 1, label: "current A", grid: { show: false } }],
+    hooks: { draw: [pulseMarks] },
+  }
+);
 const cResp = chart(
   "chart-response",
   HALF,
@@ -92,12 +108,21 @@ const cResp = chart(
   { xlabel: "ms after the pulse start", ylabel: "per unit throttle" }
 );
 
+// bars drawn by hand stay inside the plot area
+function clipToPlot(u) {
+  const b = u.bbox;
+  u.ctx.beginPath();
+  u.ctx.rect(b.left, b.top, b.width, b.height);
+  u.ctx.clip();
+}
+
 // schedule charts: value vs throttle with ± sd bars
 const sched = { rows: [] };
 function errorBars(key) {
   return (u) => {
     const ctx = u.ctx;
     ctx.save();
+    clipToPlot(u);
     ctx.strokeStyle = "#444";
     for (const r of sched.rows) {
       const v = key === "dc_gain" ? first(r.dc_gain) : r[key];
@@ -118,14 +143,41 @@ function errorBars(key) {
 const SW = Math.floor((W - 60) / 4);
 const pts = { show: true, size: 7 };
 const withPad = { scales: { x: { time: false, range: (u, lo, hi) => [lo - 0.05, hi + 0.05] } } };
-const cFn = chart("chart-fn", SW, 200, [{ label: "fn Hz", stroke: "#1f77b4", points: pts }],
-  { xlabel: "throttle", ylabel: "fn Hz", hooks: { draw: [errorBars("fn_hz")] }, extra: withPad });
-const cZeta = chart("chart-zeta", SW, 200, [{ label: "ζ", stroke: "#ff7f0e", points: pts }],
-  { xlabel: "throttle", ylabel: "ζ", hooks: { draw: [errorBars("zeta")] }, extra: withPad });
-const cGain = chart("chart-gain", SW, 200, [{ label: "DC gain", stroke: "#2ca02c", points: pts }],
+// the simulator's truth (propid demo's "truth" line), drawn as markers
+const truthPts = { label: "truth", stroke: "#d62728", paths: () => null,
+  points: { show: true, size: 9, width: 2, fill: "#fff" } };
+const fitPts = { label: "exact linear fit", stroke: "#ff7f0e", paths: () => null,
+  points: { show: true, size: 7, fill: "#fff" } };
+const hide = { show: false };
+function tauBars(u) {
+  // the truth's τ between spin-up and spin-down, at each level
+  const ctx = u.ctx;
+  ctx.save();
+  clipToPlot(u);
+  ctx.strokeStyle = "#d62728";
+  ctx.lineWidth = 2;
+  for (const r of sched.rows) {
+    const t = truthAt(r.operating_point);
+    if (!t || t.tau_up_s === undefined) continue;
+    const x = u.valToPos(r.operating_point, "x", true);
+    const y0 = u.valToPos(t.tau_up_s, "y", true), y1 = u.valToPos(t.tau_down_s, "y", true);
+    ctx.beginPath();
+    ctx.moveTo(x + 6, y0); ctx.lineTo(x + 6, y1);
+    ctx.moveTo(x + 2, y0); ctx.lineTo(x + 10, y0);
+    ctx.moveTo(x + 2, y1); ctx.lineTo(x + 10, y1);
+    ctx.stroke();
+  }
+  ctx.restore();
+}
+const cGain = chart("chart-gain", SW, 220, [{ label: "DC gain", stroke: "#2ca02c", width: 2, points: pts }, truthPts, fitPts],
   { xlabel: "throttle", ylabel: "DC gain", hooks: { draw: [errorBars("dc_gain")] }, extra: withPad });
-const cTau = chart("chart-tau", SW, 200, [{ label: "τ s", stroke: "#9467bd", points: pts }],
-  { xlabel: "throttle", ylabel: "τ s (real poles)", extra: withPad });
+const cTau = chart("chart-tau", SW, 220, [{ label: "τ s", stroke: "#9467bd", width: 2, points: pts },
+  Object.assign({}, truthPts, { label: "truth up", points: hide }), Object.assign({}, truthPts, { label: "truth down", points: hide }), fitPts],
+  { xlabel: "throttle", ylabel: "τ s (longest)", hooks: { draw: [tauBars] }, extra: withPad });
+const cFn = chart("chart-fn", SW, 220, [{ label: "fn Hz", stroke: "#1f77b4", points: pts }, truthPts],
+  { xlabel: "throttle", ylabel: "fn Hz", hooks: { draw: [errorBars("fn_hz")] }, extra: withPad });
+const cZeta = chart("chart-zeta", SW, 220, [{ label: "ζ", stroke: "#ff7f0e", points: pts }, truthPts],
+  { xlabel: "throttle", ylabel: "ζ", hooks: { draw: [errorBars("zeta")] }, extra: withPad });
 
 // stabilization: frequency vs order, stable poles filled
 const stab = { modelFn: null };
@@ -160,12 +212,21 @@ const cSv = chart("chart-sv", HALF, 220,
 
 function onSamples(l) {
   const s = samples;
-  s.t.push(...l.t_s); s.thr.push(...l.throttle); s.thrust.push(...l.thrust_N);
-  s.torque.push(...l.torque_Nm); s.rpm.push(...l.rpm); s.pulses.push(...l.pulses);
+  const n = l.t_s.length;
+  s.t.push(...l.t_s); s.pulses.push(...l.pulses);
+  for (const [k, key] of SERIES) {
+    // a line without the channel (an older daemon): no values
+    const v = Array.isArray(l[key]) ? l[key] : new Array(n).fill(null);
+    s[k].push(...v);
+    const dd = $("now-" + key);
+    const last = v.length ? v[v.length - 1] : null;
+    dd.dataset.value = String(last);
+    dd.textContent = fmt(last, 4);
+  }
   const tmax = s.t[s.t.length - 1];
   let cut = 0;
   while (cut < s.t.length && s.t[cut] < tmax - SPAN_S) cut++;
-  if (cut > 0) for (const k of ["t", "thr", "thrust", "torque", "rpm"]) s[k].splice(0, cut);
+  if (cut > 0) for (const k of ["t"].concat(SERIES.map((x) => x[0]))) s[k].splice(0, cut);
   s.pulses = s.pulses.filter((t) => t >= tmax - SPAN_S);
   dirty.samples = true;
   if ($("link").dataset.state === "waiting") setLink("receiving");
@@ -191,6 +252,41 @@ function onModel(m) {
   setDd("pulses", m.pulses, String(m.pulses));
   document.body.dataset.models = String(Number(document.body.dataset.models || 0) + 1);
   stab.modelFn = m.fn_hz;
+  sched.latest = m.operating_point;
+  showTruthOfModel();
+}
+
+// ---- the simulator's truth (propid demo --http only) ----------------------------------------
+
+const truth = { plant: null, rows: [] };
+function truthAt(op) {
+  let best = null;
+  for (const t of truth.rows)
+    if (Math.abs(t.operating_point - op) < 0.02 && (!best ||
+      Math.abs(t.operating_point - op) < Math.abs(best.operating_point - op))) best = t;
+  return best;
+}
+const ms = (s) => (s === null || s === undefined ? "—" : fmt(s * 1000, 3) + " ms");
+function truthText(t) {
+  if (!t) return "—";
+  if (t.tau_up_s !== undefined)
+    return "gain " + fmt(t.gain) + ", τ " + ms(t.tau_up_s) + " up / " + ms(t.tau_down_s) +
+      " down, dead time " + ms(t.dead_time_s) + (t.within === undefined ? "" : t.within ? " (model within tolerance)" : " (model NOT within tolerance)");
+  return "gain " + fmt(t.gain) + ", fn " + fmt(t.fn_hz) + " Hz, ζ " + fmt(t.zeta);
+}
+function showTruthOfModel() {
+  if (sched.latest === undefined) return;
+  const t = truthAt(sched.latest);
+  const dd = $("model-truth");
+  dd.textContent = truthText(t);
+  dd.dataset.value = t ? String(t.gain) : "";
+}
+function onTruth(l) {
+  truth.plant = l.plant;
+  truth.rows = l.levels || [];
+  document.body.dataset.truth = l.plant;
+  showTruthOfModel();
+  onSchedule(sched.rows);
 }
 
 function onResponse(r) {
@@ -201,28 +297,47 @@ function onResponse(r) {
   cResp.setData([x, r.mean, hi, lo, model]);
 }
 
+const longest = (r) => (r.time_constants_s && r.time_constants_s.length ? Math.max(...r.time_constants_s) : null);
 function onSchedule(rows) {
   sched.rows = rows;
   const x = rows.map((r) => r.operating_point);
-  cFn.setData([x, rows.map((r) => r.fn_hz)]);
-  cZeta.setData([x, rows.map((r) => r.zeta)]);
-  cGain.setData([x, rows.map((r) => first(r.dc_gain))]);
-  cTau.setData([x, rows.map((r) => (r.time_constants_s && r.time_constants_s.length ? Math.max(...r.time_constants_s) : null))]);
+  const tr_ = rows.map((r) => truthAt(r.operating_point));
+  const tv = (f) => tr_.map((t) => (t && t[f] !== undefined ? t[f] : null));
+  const fit = (f) => tr_.map((t) => (t && t.linear_fit ? t.linear_fit[f] : null));
+  cGain.setData([x, rows.map((r) => first(r.dc_gain)), tv("gain"), fit("gain")]);
+  cTau.setData([x, rows.map(longest), tv("tau_up_s"), tv("tau_down_s"), fit("tau_s")]);
+  cFn.setData([x, rows.map((r) => r.fn_hz), tv("fn_hz")]);
+  cZeta.setData([x, rows.map((r) => r.zeta), tv("zeta")]);
+  $("realpoles").hidden = !(truth.plant === "motor" || rows.some((r) => r.zeta >= 1));
   const tb = $("schedule").tBodies[0];
   tb.replaceChildren();
-  for (const r of rows) {
+  const cell = (tr, text, cls) => {
+    const td = document.createElement("td");
+    td.textContent = text;
+    if (cls) td.className = cls;
+    tr.appendChild(td);
+  };
+  rows.forEach((r, i) => {
     const tr = document.createElement("tr");
     for (const k of ["operating_point", "order", "fn_hz", "zeta", "dc_gain", "time_constants_s", "pulses"]) {
       const v = r[k];
       tr.dataset[k] = Array.isArray(v) ? v.map(String).join(",") : String(v);
-      const td = document.createElement("td");
-      const sd = r.uncertainty && r.uncertainty[k] !== undefined ? first(r.uncertainty[k]) : null;
-      td.textContent = Array.isArray(v) ? v.map((y) => fmt(y, 3)).join(", ") :
-        typeof v === "number" && !Number.isInteger(v) ? fmt(v) + (sd === null ? "" : " ± " + fmt(sd, 2)) : String(v);
-      tr.appendChild(td);
     }
+    const u = r.uncertainty || {};
+    const pm = (v, sd) => fmt(v) + (sd === null || sd === undefined ? "" : " ± " + fmt(sd, 2));
+    const t = tr_[i];
+    if (t) tr.dataset.truth_gain = String(t.gain);
+    cell(tr, String(r.operating_point));
+    cell(tr, String(r.order));
+    cell(tr, pm(first(r.dc_gain), first(u.dc_gain)));
+    cell(tr, t ? fmt(t.gain) : "—", "truth");
+    cell(tr, (r.time_constants_s || []).map((y) => fmt(y, 3)).join(", ") || "—");
+    cell(tr, t && t.tau_up_s !== undefined ? fmt(t.tau_up_s, 3) + " / " + fmt(t.tau_down_s, 3) : "—", "truth");
+    cell(tr, pm(r.fn_hz, u.fn_hz));
+    cell(tr, pm(r.zeta, u.zeta));
+    cell(tr, String(r.pulses));
     tb.appendChild(tr);
-  }
+  });
 }
 
 function onStab(s) {
@@ -302,6 +417,7 @@ function handle(l) {
     case "model": onModel(l); break;
     case "response": onResponse(l); break;
     case "schedule": onSchedule(l.models); break;
+    case "truth": onTruth(l); break;
     case "stabilization": onStab(l); break;
     case "live_stats": onStats(l, false); break;
     case "stats": onStats(l, true); break;
@@ -318,6 +434,7 @@ setInterval(() => {
   const s = samples;
   cThrust.setData([s.t, s.thr, s.thrust]);
   cOther.setData([s.t, s.torque, s.rpm]);
+  cPower.setData([s.t, s.volt, s.amp]);
 }, 100);
 
 const es = new EventSource("/events");

@@ -36,6 +36,10 @@ pub struct SampleItem {
     pub torque_nm: f32,
     /// Rotor speed, rev/min (NaN if not valid).
     pub rpm: f32,
+    /// Supply voltage, V (NaN if not valid).
+    pub voltage_v: f32,
+    /// Current, A (NaN if not valid).
+    pub current_a: f32,
     /// When the sampler decoded it (for latency measurements only; never published).
     pub received: Instant,
 }

@@ -3,7 +3,8 @@
 //! ([`Publisher::publish_live`](super::publish::Publisher::publish_live)), so stdout, the file
 //! and the socket publish exactly what they did; built only when an HTTP sink is open.
 //!
-//! - `{"type":"samples", "t_s", "throttle", "thrust_N", "torque_Nm", "rpm", "pulses"}`
+//! - `{"type":"samples", "t_s", "throttle", "thrust_N", "torque_Nm", "rpm", "voltage_V",
+//!   "current_A", "pulses"}`
 //!   ([`SamplesLine`]): the samples of about the last 100 ms of device time, thinned to at most
 //!   one every [`KEEP_EVERY_US`] (a sample inside a pulse is always kept, so every pulse is
 //!   drawn), and the device times of the pulse starts among them.
@@ -52,6 +53,12 @@ pub struct SamplesLine {
     /// Rotor speed, rev/min.
     #[serde(with = "nullable::vec")]
     pub rpm: Vec<f64>,
+    /// Supply voltage, V (`null` when the stand does not send it).
+    #[serde(rename = "voltage_V", with = "nullable::vec")]
+    pub voltage_v: Vec<f64>,
+    /// Current, A (`null` when the stand does not send it).
+    #[serde(rename = "current_A", with = "nullable::vec")]
+    pub current_a: Vec<f64>,
     /// Device times of the pulse starts among these samples, s.
     pub pulses: Vec<f64>,
 }
@@ -83,6 +90,8 @@ impl SampleDigest {
         l.thrust_n.push(short(s.thrust_n));
         l.torque_nm.push(short(s.torque_nm));
         l.rpm.push(short(s.rpm));
+        l.voltage_v.push(short(s.voltage_v));
+        l.current_a.push(short(s.current_a));
         if s.t_us.saturating_sub(first) >= SAMPLES_LINE_US || s.t_us < first {
             return self.take();
         }
@@ -247,6 +256,8 @@ mod tests {
             thrust_n: 1.5,
             torque_nm: f32::NAN,
             rpm: 9_000.0,
+            voltage_v: 15.9,
+            current_a: f32::NAN,
             received: Instant::now(),
         }
     }
@@ -274,6 +285,8 @@ mod tests {
         assert_eq!(first.pulses, vec![0.05]);
         let text = serde_json::to_string(first).unwrap();
         assert!(text.contains(r#""torque_Nm":[null"#), "{text}");
+        assert!(text.contains(r#""voltage_V":[15.9,"#), "{text}");
+        assert!(text.contains(r#""current_A":[null"#), "{text}");
         assert!(d.take().is_some());
         assert!(d.take().is_none());
     }

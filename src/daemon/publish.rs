@@ -182,6 +182,12 @@ impl Publisher {
         self.http.is_some()
     }
 
+    /// A handle that sends lines to the web page's clients only, from outside the publisher
+    /// (`propid demo`'s `truth` line), when it is served.
+    pub fn live_sender(&self) -> Option<super::http::LiveSender> {
+        self.http.as_ref().map(HttpSink::sender)
+    }
+
     /// The web page's URL, when it is served.
     pub fn http_url(&self) -> Option<String> {
         self.http.as_ref().map(HttpSink::url)

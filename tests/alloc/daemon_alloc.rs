@@ -50,6 +50,8 @@ fn window_and_identification_allocate_nothing(svd: SvdChoice) {
                     },
                 torque_nm: f32::NAN,
                 rpm: f32::NAN,
+                voltage_v: f32::NAN,
+                current_a: f32::NAN,
                 received: now,
             }),
             _ => None,

@@ -15,7 +15,7 @@ use std::time::Duration;
 /// The same published number: the page's value (the browser parses the line's decimal text
 /// exactly) and the test's (serde_json's default parser may land one unit in the last place
 /// off the exact decimal) may differ in the last bit, never more.
-fn same(a: f64, b: f64) -> bool {
+pub(crate) fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= 4.0 * f64::EPSILON * a.abs().max(b.abs())
 }
 
@@ -26,7 +26,7 @@ fn url_of(d: &mut Daemon) -> String {
 }
 
 /// `host:port` of a URL `http://host:port/`.
-fn host(url: &str) -> &str {
+pub(crate) fn host(url: &str) -> &str {
     url.trim_start_matches("http://").trim_end_matches('/')
 }
 
@@ -47,7 +47,7 @@ fn request(url: &str, method: &str, path: &str) -> (u16, String) {
 }
 
 /// The event stream's `data:` lines, parsed, on a channel.
-fn events(url: &str) -> Receiver<Value> {
+pub(crate) fn events(url: &str) -> Receiver<Value> {
     let mut c = TcpStream::connect(host(url)).unwrap();
     write!(c, "GET /events HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
     let (tx, rx) = channel();
@@ -103,16 +103,19 @@ fn run_serves_the_page_and_its_stream_carries_the_published_lines() {
         }
     };
     assert_eq!(streamed, published);
-    // then the page's own lines of that window, and its samples and counters
-    while ![
-        "response",
-        "stabilization",
-        "schedule",
-        "samples",
-        "live_stats",
-    ]
-    .iter()
-    .all(|t| seen.contains(*t))
+    // then the page's own lines of that window, and its samples (with the stand's voltage
+    // and current) and counters
+    let mut volts = 0;
+    while volts == 0
+        || ![
+            "response",
+            "stabilization",
+            "schedule",
+            "samples",
+            "live_stats",
+        ]
+        .iter()
+        .all(|t| seen.contains(*t))
     {
         let v = rx
             .recv_timeout(Duration::from_secs(20))
@@ -125,6 +128,17 @@ fn run_serves_the_page_and_its_stream_carries_the_published_lines() {
                 v["model"].as_array().unwrap(),
             );
             assert!(mean.len() > 10 && model.len() == mean.len(), "{v}");
+        }
+        if v["type"] == "samples" {
+            let n = v["t_s"].as_array().unwrap().len();
+            for key in ["voltage_V", "current_A"] {
+                let xs = v[key].as_array().unwrap();
+                assert_eq!(xs.len(), n, "{v}");
+                assert!(xs.iter().all(|x| x.as_f64().is_some()), "{key}: {v}");
+            }
+            let first_v = v["voltage_V"][0].as_f64().unwrap();
+            assert!(first_v > 10.0 && first_v < 20.0, "{v}");
+            volts += 1;
         }
         if first && v["type"] == "stabilization" {
             assert_eq!(v["t_s"], published["t_s"]);
@@ -185,6 +199,14 @@ fn the_page_in_chromium_shows_the_published_model() {
     }
     assert_eq!(shown("order"), model["order"].to_string());
     assert_eq!(shown("pulses"), model["pulses"].to_string());
+    // the stand's supply voltage and current are drawn (their latest values shown)
+    for (key, lo, hi) in [("voltage_V", 10.0, 20.0), ("current_A", 0.0, 100.0)] {
+        let v: f64 = attr(&dom, &format!("id=\"now-{key}\""), "data-value")
+            .unwrap()
+            .parse()
+            .unwrap_or_else(|e| panic!("{key}: {e}"));
+        assert!(v > lo && v < hi, "{key} {v}");
+    }
     let png = Path::new(env!("CARGO_TARGET_TMPDIR")).join("web.png");
     browser::screenshot(&url, &png);
     eprintln!("screenshot of the live page: {}", png.display());

@@ -9,5 +9,6 @@ mod daemon_live;
 mod daemon_proc;
 mod daemon_rate;
 mod daemon_replay;
+mod demo_http;
 mod host_faults;
 mod link_faults;

@@ -7,9 +7,12 @@
 //! simulator's truth, then the gain schedule. The built-in stand is the motor plant, whose
 //! truth is its linearisation at each level ([`truth`], with how far spin-down being slower
 //! than spin-up keeps any linear model from it); a `--sim-config` of the 2nd-order plant has
-//! one truth everywhere. `--json` prints the daemon's JSON lines instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
+//! one truth everywhere. The schedule is printed when the run ends (at the final stats line),
+//! so with `--http` it is on the terminal while the page stays up until Ctrl-C; the page also
+//! gets each level's truth ([`live`]). `--json` prints the daemon's JSON lines instead. Both come from the publisher's tap ([`Publisher::with_tap`]): the typed lines as
 //! they are published, and their bytes; nothing is parsed back.
 
+mod live;
 mod table;
 mod truth;
 
@@ -19,12 +22,14 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::{stdout, CliError};
+use crate::daemon::http::{Kind, LiveSender};
 use crate::daemon::identify::CoreIdentifier;
 use crate::daemon::line::{Line, ScheduleRow};
 use crate::daemon::plan;
 use crate::daemon::publish::Tap;
 use crate::daemon::runner::{self, RunParts};
 use crate::daemon::source::SerialSource;
+use crate::daemon::stats::StatsLine;
 use crate::daemon::{Config, Publisher, Shutdown};
 use propid_sim::plant::{PlantConfig, PlantKind};
 use propid_sim::pty::{RunOptions, SimHandle};
@@ -101,12 +106,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if !args.json {
         stdout::line(&table::header(&sim.plant))?;
     }
-    let kept = Arc::new(Mutex::new(Kept::default()));
+    let kept = Mutex::new(Kept::default());
     let failed = Arc::new(Mutex::new(None));
+    let live = publisher.live_sender();
     let publisher = publisher.with_tap(printer(
         args.json,
         sim.plant.clone(),
-        kept.clone(),
+        live,
+        kept,
         failed.clone(),
     ));
     let parts = RunParts {
@@ -119,69 +126,97 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let result = runner::run(&cfg, parts);
     let _ = handle.stop();
-    let summary = result?;
+    result?;
     if let Some(e) = failed.lock().ok().and_then(|mut f| f.take()) {
         return Err(CliError::Stdout(e));
     }
-    if args.json {
-        return Ok(());
-    }
+    Ok(())
+}
+
+/// What the terminal shows when the run ends: the gain schedule (beside the truth) and the
+/// run's counters from the final stats line.
+fn final_text(k: &mut Kept, plant: &PlantConfig, s: &StatsLine<'_>) -> String {
     let mut t = String::new();
-    if let Ok(mut k) = kept.lock() {
-        match (sim.plant.kind, k.schedule.take()) {
-            (PlantKind::Motor, _) => table::motor_schedule(&mut t, &k.motor, &sim.plant),
-            (PlantKind::SecondOrder, Some(rows)) => {
-                table::second_order_schedule(&mut t, &rows, &sim.plant)
-            }
-            (PlantKind::SecondOrder, None) => {}
-        }
+    match (plant.kind, k.schedule.take()) {
+        (PlantKind::Motor, _) => table::motor_schedule(&mut t, &k.motor, plant),
+        (PlantKind::SecondOrder, Some(rows)) => table::second_order_schedule(&mut t, &rows, plant),
+        (PlantKind::SecondOrder, None) => {}
     }
-    let _ = writeln!(
+    let _ = write!(
         t,
         "\n{} samples, {} lost, {} frames dropped, {} models in {:.1} s",
-        summary.link.samples,
-        summary.link.samples_lost,
-        summary.link.frames_dropped.values().sum::<u64>(),
-        summary.work.models,
-        summary.elapsed_s
+        s.link.samples,
+        s.link.samples_lost,
+        s.link.frames_dropped.values().sum::<u64>(),
+        s.work.models,
+        s.elapsed_s
     );
-    stdout::write(&t)
+    t
 }
 
 /// Where the printer keeps the first stdout write error (printing stops there).
 type Failed = Arc<Mutex<Option<std::io::Error>>>;
 
-/// What the printer keeps for the end: the daemon's gain schedule, and the motor's rows (the
-/// last per level, in level order).
+/// What the printer keeps for the end: the daemon's gain schedule, the motor's rows (the
+/// last per level, in level order), and the page's truth rows.
 #[derive(Debug, Default)]
 struct Kept {
     schedule: Option<Vec<ScheduleRow>>,
     motor: Vec<MotorRow>,
+    truth: Vec<live::TruthRow>,
 }
 
 /// Prints each line as it is published (models as table rows beside the truth, or every line's
-/// JSON with `--json`) and keeps the gain schedule for the end. The first write error stops
-/// the printing and is kept in `failed`: the run goes on, and `run` reports it as
-/// [`CliError::Stdout`].
-fn printer(json: bool, plant: PlantConfig, kept: Arc<Mutex<Kept>>, failed: Failed) -> Tap {
+/// JSON with `--json`), keeps the gain schedule and prints it at the final stats line (before
+/// a page served with `--http` is held until Ctrl-C), and sends the page each level's truth
+/// (`live`: the page's sender). The first write error stops the printing and is kept in
+/// `failed`: the run goes on, and `run` reports it as [`CliError::Stdout`].
+fn printer(
+    json: bool,
+    plant: PlantConfig,
+    live: Option<LiveSender>,
+    kept: Mutex<Kept>,
+    failed: Failed,
+) -> Tap {
     Box::new(move |line: &Line<'_>, text: &str| {
         let mut printed = None;
         if json {
             printed = Some(text.to_string());
         }
         if let (Line::Model(m), Ok(mut k)) = (line, kept.lock()) {
-            match MotorRow::of(m, &plant) {
+            let truth = match MotorRow::of(m, &plant) {
                 Some(row) => {
                     k.motor.retain(|r| r.level != row.level);
                     k.motor.push(row);
                     k.motor.sort_by(|a, b| a.level.total_cmp(&b.level));
                     printed = printed.or_else(|| Some(table::motor_row(&row)));
+                    live::TruthRow::motor(&row)
                 }
-                None => printed = printed.or_else(|| Some(table::second_order_row(m, &plant))),
+                None => {
+                    printed = printed.or_else(|| Some(table::second_order_row(m, &plant)));
+                    live::TruthRow::second_order(m.window.operating_point, &plant)
+                }
+            };
+            live::keep(&mut k.truth, truth);
+            if let Some(sender) = &live {
+                let line = live::TruthLine {
+                    kind: "truth",
+                    plant: match plant.kind {
+                        PlantKind::Motor => "motor",
+                        PlantKind::SecondOrder => "second_order",
+                    },
+                    levels: &k.truth,
+                };
+                if let Ok(text) = serde_json::to_string(&line) {
+                    sender.send(Kind::State("truth"), &text);
+                }
             }
         }
         if let (Line::Schedule(rows), Ok(mut k)) = (line, kept.lock()) {
             k.schedule = Some(rows.to_vec());
+        }
+        if let (Line::Stats(s), false, Ok(mut k)) = (line, json, kept.lock()) {
+            printed = Some(final_text(&mut k, &plant, s));
         }
         let Some(printed) = printed else { return };
         let Ok(mut failed) = failed.lock() else {

@@ -133,21 +133,13 @@ impl HttpSink {
     /// Queues `line` to every event-stream client (never waits); a client whose queue is full
     /// is dropped and counted.
     pub fn send(&self, kind: Kind, line: &str) {
-        let text: Arc<str> = Arc::from(line);
-        let Ok(mut clients) = self.shared.clients.lock() else {
-            return;
-        };
-        if let Ok(mut h) = self.shared.history.lock() {
-            h.keep(kind, &text);
-        }
-        clients.retain(|tx| match tx.try_send(text.clone()) {
-            Ok(()) => true,
-            Err(TrySendError::Full(_)) => {
-                self.shared.dropped_clients.fetch_add(1, Ordering::Relaxed);
-                false
-            }
-            Err(TrySendError::Disconnected(_)) => false,
-        });
+        self.shared.send(kind, line);
+    }
+
+    /// A handle that sends lines to this sink's clients from another owner (e.g. `propid
+    /// demo`'s own `truth` line, sent from the publisher's tap).
+    pub fn sender(&self) -> LiveSender {
+        LiveSender(self.shared.clone())
     }
 
     /// Event-stream clients dropped for falling behind.
@@ -180,6 +172,40 @@ impl HttpSink {
 impl Drop for HttpSink {
     fn drop(&mut self) {
         self.shutdown();
+    }
+}
+
+/// Sends lines to an [`HttpSink`]'s clients, exactly as [`HttpSink::send`] (kept in the
+/// history, never waits); after the sink closed, nothing.
+#[derive(Clone)]
+pub struct LiveSender(Arc<Shared>);
+
+impl LiveSender {
+    /// Queues `line` to every event-stream client, as [`HttpSink::send`].
+    pub fn send(&self, kind: Kind, line: &str) {
+        if !self.0.closing.load(Ordering::Relaxed) {
+            self.0.send(kind, line);
+        }
+    }
+}
+
+impl Shared {
+    fn send(&self, kind: Kind, line: &str) {
+        let text: Arc<str> = Arc::from(line);
+        let Ok(mut clients) = self.clients.lock() else {
+            return;
+        };
+        if let Ok(mut h) = self.history.lock() {
+            h.keep(kind, &text);
+        }
+        clients.retain(|tx| match tx.try_send(text.clone()) {
+            Ok(()) => true,
+            Err(TrySendError::Full(_)) => {
+                self.dropped_clients.fetch_add(1, Ordering::Relaxed);
+                false
+            }
+            Err(TrySendError::Disconnected(_)) => false,
+        });
     }
 }
 

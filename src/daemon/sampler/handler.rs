@@ -77,6 +77,8 @@ impl Handler {
                     thrust_n: valid(s.thrust_n, s.flags.bits(), 1 << 1),
                     torque_nm: valid(s.torque_nm, s.flags.bits(), 1 << 2),
                     rpm: valid(s.rpm, s.flags.bits(), 1 << 3),
+                    voltage_v: valid(s.voltage_v, s.flags.bits(), 1 << 4),
+                    current_a: valid(s.current_a, s.flags.bits(), 1 << 5),
                     received: Instant::now(),
                 };
                 self.send(Item::Sample(item));

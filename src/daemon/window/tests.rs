@@ -11,6 +11,8 @@ fn sample(index: u64, throttle_raw: u16, flags: u16) -> SampleItem {
         thrust_n: 1.0,
         torque_nm: 0.1,
         rpm: 1000.0,
+        voltage_v: f32::NAN,
+        current_a: f32::NAN,
         received: Instant::now(),
     }
 }

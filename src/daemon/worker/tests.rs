@@ -50,6 +50,8 @@ fn sample(index: u64, raw: u16, f: u16) -> Item {
         thrust_n: 1.0,
         torque_nm: 0.0,
         rpm: 0.0,
+        voltage_v: f32::NAN,
+        current_a: f32::NAN,
         received: Instant::now(),
     })
 }
