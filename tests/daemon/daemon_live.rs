@@ -256,11 +256,13 @@ fn csv_link_faults_are_counted_and_the_live_counts_equal_the_replay_of_the_bytes
     assert_eq!(s["wire"], "csv");
     assert!(dropped_total(s) > 0, "{s}");
     assert!(s["samples_lost"].as_u64().unwrap() > 0, "{s}");
-    // every row the stand took is received or counted lost (the last few may be in flight)
+    // every row the stand took is received or counted lost; the stand keeps sampling until it
+    // is stopped after the daemon has exited, so the rows of that moment are in flight (64
+    // seen on a loaded 2-core machine: up to 0.25 s at 1 kHz allowed)
     let seen = s["samples"].as_u64().unwrap() + s["samples_lost"].as_u64().unwrap();
     assert!(seen <= report.firmware.samples, "{s} {:?}", report.firmware);
     assert!(
-        seen + 50 >= report.firmware.samples,
+        seen + 250 >= report.firmware.samples,
         "{s} {:?}",
         report.firmware
     );
