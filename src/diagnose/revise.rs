@@ -257,6 +257,80 @@ mod tests {
         assert_eq!(param_count(&m, "supply_sag"), 0);
     }
 
+    /// A lightly damped 2nd-order plant behind a dead time of 3 samples, driven by a staircase
+    /// with a small deterministic noise; the greedy model has an extra mode in place of the
+    /// delay. The revision must swap the mode for the delay (one parameter, and the mode adds
+    /// nothing once the delay is in) and find the delay's length.
+    #[test]
+    fn a_delay_fitted_as_an_extra_mode_is_swapped_back() {
+        use crate::diagnose::model::{simulate, Signals};
+        let dt = 0.01;
+        let levels = [0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65];
+        let u: Vec<f64> = levels
+            .iter()
+            .flat_map(|&l| std::iter::repeat(l).take(150))
+            .collect();
+        let truth = Model::new(Core {
+            fn_hz: 4.0,
+            zeta: 0.3,
+            gain: 2.0,
+            offset: 0.1,
+        })
+        .with(DeadTimeParams { delay_samples: 3 });
+        let mut y = vec![0.0; u.len()];
+        let sig0 = Signals {
+            dt_s: dt,
+            u: &u,
+            y: &y.clone(),
+            voltage: None,
+            u_ref: 0.5,
+            v_ref: 0.0,
+        };
+        simulate(&truth, &sig0, &mut y);
+        for (k, v) in y.iter_mut().enumerate() {
+            *v += 0.002 * ((k as f64 * 1.7).sin() + (k as f64 * 0.37).cos());
+        }
+        let folds = Folds::from_input(&u, &y, 0.7);
+        let mean = u.iter().sum::<f64>() / u.len() as f64;
+        let ctx = Ctx {
+            sig: Signals {
+                dt_s: dt,
+                u: &u,
+                y: &y,
+                voltage: None,
+                u_ref: mean,
+                v_ref: 0.0,
+            },
+            est: folds.estimation.clone(),
+            val: 0..u.len(),
+        };
+        let base = ctx.best_of(
+            [1.0, 2.0, 4.0, 8.0].map(|f| {
+                Model::new(Core {
+                    fn_hz: f,
+                    ..Core::default()
+                })
+            }),
+            2,
+        );
+        let greedy = crate::diagnose::effects::extra_mode::ExtraMode
+            .extend(&ctx, &base)
+            .expect("a mode can be fitted");
+        assert!(greedy.sse < base.sse, "the mode takes up part of the delay");
+        let cv = cross_validate(&ctx, &folds, &greedy);
+        let kept =
+            revise(&ctx, &folds, &greedy, &cv, &["extra_mode"], true).expect("a change is kept");
+        match kept.change {
+            Change::Swap { out, into, fit, .. } => {
+                assert_eq!((out, into), ("extra_mode", "dead_time"));
+                let d = fit.model.term("dead_time").map(|t| t.finding_params(dt));
+                assert_eq!(d.and_then(|p| p["delay_samples"].as_u64()), Some(3));
+            }
+            other => panic!("expected a swap, got {other:?}"),
+        }
+        assert!(kept.cv.mean >= cv.mean);
+    }
+
     #[test]
     fn without_drops_one_term_and_keeps_the_rest() {
         let m = without(&model(), "extra_mode");
