@@ -34,6 +34,7 @@ pub mod model;
 pub mod noise;
 pub mod report;
 pub mod result;
+pub mod revise;
 pub mod search;
 pub mod spectrum;
 pub mod summary;

@@ -18,6 +18,15 @@
 //! cross-validation folds, or the hold-out tail) is higher than the current model's is taken;
 //! its gain in percentage points is the finding's `cv_gain_pp`. An addition that does not
 //! improve the held-out figure is not taken. Repeat (at most `max_effects` effects in all).
+//!
+//! **Revision.** Greedy forward selection cannot undo a choice: a flexible effect taken first
+//! (a series mode whose phase lag imitates a dead time) leaves a simpler true one nothing to
+//! add. Each time the additions stop, [`super::revise`] tries, for every effect the search
+//! took, to remove it or to replace it by an untaken one with the model refitted jointly
+//! (same score and RMS thresholds; the simpler of two effects that each leave the other nothing
+//! to add is kept; the held-out figure must not fall), or to add an effect the taken one had
+//! absorbed; a kept change is applied and the forward search resumes (its module doc gives the
+//! rule and its reasoning).
 
 use super::ctx::Ctx;
 use super::effect::Effect;
@@ -26,6 +35,7 @@ use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Scores};
 use super::model::{Core, Model};
 use super::result::Finding;
+use super::revise::{passes, revise, Change, Kept, MAX_REVISIONS};
 
 /// Decision threshold on the score `n ln(SSE_M / SSE_{M+e})`.
 pub const SCORE_THRESHOLD: f64 = 40.0;
@@ -120,38 +130,29 @@ pub fn search(
             (cur, cur_cv) = (f, f_cv);
         }
     }
-    while findings.len() < max_effects {
-        let mut candidates: Vec<(f64, (&dyn Effect, Fit))> = Vec::new();
-        for &e in REGISTRY {
-            if findings.iter().any(|f| f.effect == e.name()) {
-                continue;
-            }
-            let Some(f) = e.extend(ctx, &cur) else {
-                continue;
+    let detected = findings.len();
+    let mut revisions = 0;
+    loop {
+        while findings.len() < max_effects {
+            let Some((score, e, f, f_cv)) = forward(ctx, &findings, &cur, cur_cv.mean, &cv) else {
+                break;
             };
-            let usable = f.sse.is_finite() && f.sse > 0.0 && cur.sse > 0.0;
-            let plausible = f
-                .model
-                .term(e.name())
-                .is_some_and(|t| t.plausible(ctx, &f.model));
-            if !(usable && plausible) {
-                continue;
-            }
-            let score = f.n as f64 * (cur.sse / f.sse).ln();
-            let rms_drop = 1.0 - (f.sse / cur.sse).sqrt();
-            if score >= SCORE_THRESHOLD && rms_drop >= MIN_RMS_DROP {
-                candidates.push((score, (e, f)));
-            }
+            findings.push(finding(e, score, f_cv.mean - cur_cv.mean, &cur, &f, ctx));
+            (cur, cur_cv) = (f, f_cv);
         }
-        let taken = select(candidates, cur_cv.mean, |(_, f)| {
-            let s = cv(f);
-            (s.mean, s)
-        });
-        let Some((score, (e, f), f_cv)) = taken else {
+        let searched: Vec<&'static str> = findings[detected..]
+            .iter()
+            .filter_map(|f| REGISTRY.iter().map(|e| e.name()).find(|n| *n == f.effect))
+            .collect();
+        if revisions >= MAX_REVISIONS || searched.is_empty() {
+            break;
+        }
+        let may_add = findings.len() < max_effects;
+        let Some(kept) = revise(ctx, folds, &cur, &cur_cv, &searched, may_add) else {
             break;
         };
-        findings.push(finding(e, score, f_cv.mean - cur_cv.mean, &cur, &f, ctx));
-        (cur, cur_cv) = (f, f_cv);
+        revisions += 1;
+        apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv);
     }
     Some(Searched {
         base,
@@ -160,6 +161,76 @@ pub fn search(
         extended_cv: cur_cv,
         findings,
     })
+}
+
+/// One forward step (module doc): every effect not in `findings` fitted on top of `cur`; the
+/// candidate the selection rule takes, with its score, fit and held-out scores.
+fn forward<'e>(
+    ctx: &Ctx,
+    findings: &[Finding],
+    cur: &Fit,
+    cur_figure: f64,
+    cv: &impl Fn(&Fit) -> Scores,
+) -> Option<(f64, &'e dyn Effect, Fit, Scores)> {
+    let mut candidates: Vec<(f64, (&dyn Effect, Fit))> = Vec::new();
+    for &e in REGISTRY {
+        if findings.iter().any(|f| f.effect == e.name()) {
+            continue;
+        }
+        let Some(f) = e.extend(ctx, cur) else {
+            continue;
+        };
+        if let Some(score) = passes(ctx, cur, &f, e.name()) {
+            candidates.push((score, (e, f)));
+        }
+    }
+    let (score, (e, f), f_cv) = select(candidates, cur_figure, |(_, f)| {
+        let s = cv(f);
+        (s.mean, s)
+    })?;
+    Some((score, e, f, f_cv))
+}
+
+/// Applies a change the revision kept ([`super::revise`]): a removed effect's finding goes, a
+/// swapped-in effect's finding takes the place of the one it replaces (its score and held-out
+/// gain measured against the model without the effect it replaces), an added one is appended.
+fn apply(ctx: &Ctx, kept: Kept, findings: &mut Vec<Finding>, cur: &mut Fit, cur_cv: &mut Scores) {
+    let effect = |name: &str| REGISTRY.iter().copied().find(|e| e.name() == name);
+    match kept.change {
+        Change::Remove { out, fit } => {
+            findings.retain(|f| f.effect != out);
+            *cur = fit;
+        }
+        Change::Swap {
+            out,
+            into,
+            fit,
+            score,
+            base,
+        } => {
+            let gain = kept.cv.mean - kept.base_cv.as_ref().map_or(cur_cv.mean, |s| s.mean);
+            if let (Some(e), Some(i)) =
+                (effect(into), findings.iter().position(|f| f.effect == out))
+            {
+                findings[i] = finding(e, score, gain, &base, &fit, ctx);
+            }
+            *cur = fit;
+        }
+        Change::Add { into, fit, score } => {
+            if let Some(e) = effect(into) {
+                findings.push(finding(
+                    e,
+                    score,
+                    kept.cv.mean - cur_cv.mean,
+                    cur,
+                    &fit,
+                    ctx,
+                ));
+            }
+            *cur = fit;
+        }
+    }
+    *cur_cv = kept.cv;
 }
 
 /// The selection rule (module doc): `candidates` (score, item) that passed the score and RMS

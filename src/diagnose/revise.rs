@@ -1,0 +1,341 @@
+//! Undoing a greedy choice of the forward search ([`super::search`]): the revision step run
+//! each time the forward additions stop.
+//!
+//! Forward selection takes the strongest candidate first, and a flexible effect can mimic a
+//! simpler one: a dead time of 2 samples in a lightly damped log is fitted first, and better,
+//! by an `extra_mode` (3 parameters: a series mode whose phase lag imitates the delay); once
+//! the mode is in, the delay adds nothing (its score is ≈ 0) and is never named. The greedy path
+//! cannot leave that corner. The revision tries, for every effect `X` the search took (effects
+//! read off the data stay), the model `R` without it (every other parameter refitted jointly)
+//! and every untaken effect `Y` fitted on `R` (`F = R + Y`); `Y` must pass the addition tests
+//! on `R` (score ≥ [`SCORE_THRESHOLD`], RMS drop ≥ [`MIN_RMS_DROP`], plausible). Then `X` is
+//! fitted afresh on `F` (`G = F + X`, from its own starts, not from the values that mimicked
+//! `Y`), and one of three changes is a candidate:
+//!
+//! - **swap** `X → Y` when `X` fails the addition tests on `F` (once `Y` is in, `X` explains
+//!   nothing more at the search's own level) and `Y` is the more parsimonious: fewer parameters
+//!   ([`param_count`]), or as many and a lower SSE. Two effects that each leave the other nothing
+//!   to add explain the same feature of the data; the likelihood-ratio test cannot tell them
+//!   apart (their difference is below the threshold), so the one with fewer parameters is kept —
+//!   the rule of an information criterion, with the search's own threshold as the price of the
+//!   extra parameters;
+//! - **add** `Y` (keeping a refitted `X`) when `X` passes on `F` and `G` passes the addition
+//!   tests against the current model: `Y` is a real addition that the greedy path could not
+//!   reach because `X`'s parameters had absorbed it;
+//! - **remove** `X` when `X` fails the addition tests on `R` (the later effects took over what
+//!   it explained).
+//!
+//! A change is kept only when the held-out figure ([`super::folds`]) agrees: not lower for a
+//! swap or a removal (the simpler model must predict the held-out steps as well), higher for an
+//! addition (as for a forward addition). The candidates are tried removal first, then swaps
+//! (fewest parameters, then lowest SSE), then additions (highest score); the first kept change is
+//! applied and the forward search resumes. Every change either drops parameters at equal
+//! evidence or adds a tested effect, and the search makes at most [`MAX_REVISIONS`] of them, so
+//! it ends.
+
+use super::ctx::Ctx;
+use super::effect::Effect;
+use super::effects::REGISTRY;
+use super::fit::Fit;
+use super::folds::{cross_validate, Folds, Scores};
+use super::model::Model;
+use super::search::{MIN_RMS_DROP, SCORE_THRESHOLD};
+
+/// Most revisions (changes kept) in one search.
+pub const MAX_REVISIONS: usize = 4;
+
+/// Parameters of a term: its free ones, and one for a term without any (a delay or a clip
+/// level searched on a grid is one parameter all the same).
+pub fn param_count(m: &Model, name: &str) -> usize {
+    m.term(name).map_or(0, |t| t.free().len().max(1))
+}
+
+/// `m` without the term of effect `name`.
+pub fn without(m: &Model, name: &str) -> Model {
+    m.terms()
+        .filter(|t| t.name() != name)
+        .fold(Model::new(m.core), |acc, t| acc.with_boxed(t.clone_box()))
+}
+
+/// The addition tests of the search for `after` = `before` + effect `name`: the score
+/// `n ln(SSE_before / SSE_after)` when it passes them (score, RMS drop, plausibility).
+pub fn passes(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Option<f64> {
+    let usable = after.sse.is_finite() && after.sse > 0.0 && before.sse > 0.0;
+    let plausible = after
+        .model
+        .term(name)
+        .is_some_and(|t| t.plausible(ctx, &after.model));
+    if !(usable && plausible) {
+        return None;
+    }
+    let score = after.n as f64 * (before.sse / after.sse).ln();
+    let rms_drop = 1.0 - (after.sse / before.sse).sqrt();
+    (score >= SCORE_THRESHOLD && rms_drop >= MIN_RMS_DROP).then_some(score)
+}
+
+/// A change of the model proposed by the revision (module doc).
+#[derive(Debug)]
+pub enum Change {
+    /// Effect `out` leaves; `fit` is the model without it.
+    Remove { out: &'static str, fit: Fit },
+    /// Effect `out` is replaced by `into`: `fit` is `R + into`, `score` and `base` are
+    /// `into`'s score on `R` and `R` itself.
+    Swap {
+        out: &'static str,
+        into: &'static str,
+        fit: Fit,
+        score: f64,
+        base: Fit,
+    },
+    /// Effect `into` joins (with `X` refitted afresh): `fit` is the new model, `score` its
+    /// score against the current one.
+    Add {
+        into: &'static str,
+        fit: Fit,
+        score: f64,
+    },
+}
+
+/// What the revision kept: the change, the new model's held-out scores, and (for a swap) the
+/// held-out scores of `R`.
+pub struct Kept {
+    /// The change.
+    pub change: Change,
+    /// Held-out scores of the changed model.
+    pub cv: Scores,
+    /// For a swap: held-out scores of the model without `out` (the gain of `into` is measured
+    /// against it).
+    pub base_cv: Option<Scores>,
+}
+
+/// The revision step (module doc) on the current fit `cur` (held-out scores `cur_cv`):
+/// `searched` are the effects the forward search took (in the model); additions are proposed
+/// only when `may_add` (the model has room for one more effect). The first change that the
+/// held-out figure keeps, or `None`.
+pub fn revise(
+    ctx: &Ctx,
+    folds: &Folds,
+    cur: &Fit,
+    cur_cv: &Scores,
+    searched: &[&'static str],
+    may_add: bool,
+) -> Option<Kept> {
+    let cv = |f: &Fit| cross_validate(ctx, folds, f);
+    let mut removals = Vec::new();
+    let mut swaps: Vec<(usize, f64, Change)> = Vec::new();
+    let mut adds: Vec<(f64, Change)> = Vec::new();
+    for &x_name in searched {
+        let Some(x) = REGISTRY.iter().find(|e| e.name() == x_name) else {
+            continue;
+        };
+        let reduced = without(&cur.model, x_name);
+        let r = ctx.best_of([reduced], 1);
+        if !r.sse.is_finite() || r.n == 0 {
+            continue;
+        }
+        if passes(ctx, &r, cur, x_name).is_none() {
+            removals.push(Change::Remove {
+                out: x_name,
+                fit: r,
+            });
+            continue;
+        }
+        let k_x = param_count(&cur.model, x_name);
+        for &y in REGISTRY {
+            let y_name = y.name();
+            if cur.model.term(y_name).is_some() {
+                continue;
+            }
+            let Some(f) = y.extend(ctx, &r) else {
+                continue;
+            };
+            let Some(score) = passes(ctx, &r, &f, y_name) else {
+                continue;
+            };
+            match refit_into(ctx, *x, &f) {
+                None => {
+                    let k_y = param_count(&f.model, y_name);
+                    if k_y < k_x || (k_y == k_x && f.sse < cur.sse) {
+                        swaps.push((
+                            k_y,
+                            f.sse,
+                            Change::Swap {
+                                out: x_name,
+                                into: y_name,
+                                fit: f,
+                                score,
+                                base: r.clone(),
+                            },
+                        ));
+                    }
+                }
+                Some(g) if may_add => {
+                    if let Some(s) = passes_against(ctx, cur, &g, &[x_name, y_name]) {
+                        adds.push((
+                            s,
+                            Change::Add {
+                                into: y_name,
+                                fit: g,
+                                score: s,
+                            },
+                        ));
+                    }
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    swaps.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    adds.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let ordered = removals
+        .into_iter()
+        .chain(swaps.into_iter().map(|s| s.2))
+        .chain(adds.into_iter().map(|a| a.1));
+    for change in ordered {
+        let fit = match &change {
+            Change::Remove { fit, .. } | Change::Swap { fit, .. } | Change::Add { fit, .. } => fit,
+        };
+        let f_cv = cv(fit);
+        let kept = match change {
+            Change::Add { .. } => f_cv.mean > cur_cv.mean + super::search::MIN_CV_GAIN_PP,
+            _ => f_cv.mean >= cur_cv.mean,
+        };
+        if kept {
+            let base_cv = match &change {
+                Change::Swap { base, .. } => Some(cv(base)),
+                _ => None,
+            };
+            return Some(Kept {
+                change,
+                cv: f_cv,
+                base_cv,
+            });
+        }
+    }
+    None
+}
+
+/// Effect `x` fitted afresh on `f`: the extended fit when `x` passes the addition tests there,
+/// `None` when it does not (once `f`'s new effect is in, `x` explains nothing more).
+fn refit_into(ctx: &Ctx, x: &dyn Effect, f: &Fit) -> Option<Fit> {
+    let g = x.extend(ctx, f)?;
+    passes(ctx, f, &g, x.name()).map(|_| g)
+}
+
+/// The addition tests for `after` against `before` where `after` has the terms `names`
+/// (plausible each): the score when it passes.
+fn passes_against(ctx: &Ctx, before: &Fit, after: &Fit, names: &[&str]) -> Option<f64> {
+    let mut score = None;
+    for n in names {
+        score = Some(passes(ctx, before, after, n)?);
+    }
+    score
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::diagnose::effects::dead_time::DeadTimeParams;
+    use crate::diagnose::effects::extra_mode::ExtraModeParams;
+    use crate::diagnose::model::Core;
+
+    fn model() -> Model {
+        Model::new(Core::default())
+            .with(DeadTimeParams { delay_samples: 2 })
+            .with(ExtraModeParams {
+                fn_hz: 5.0,
+                zeta: 0.1,
+                gain: 1.0,
+            })
+    }
+
+    #[test]
+    fn a_delay_counts_one_parameter_and_a_mode_three() {
+        let m = model();
+        assert_eq!(param_count(&m, "dead_time"), 1);
+        assert_eq!(param_count(&m, "extra_mode"), 3);
+        assert_eq!(param_count(&m, "supply_sag"), 0);
+    }
+
+    /// A lightly damped 2nd-order plant behind a dead time of 3 samples, driven by a staircase
+    /// with a small deterministic noise; the greedy model has an extra mode in place of the
+    /// delay. The revision must swap the mode for the delay (one parameter, and the mode adds
+    /// nothing once the delay is in) and find the delay's length.
+    #[test]
+    fn a_delay_fitted_as_an_extra_mode_is_swapped_back() {
+        use crate::diagnose::model::{simulate, Signals};
+        let dt = 0.01;
+        let levels = [0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65];
+        let u: Vec<f64> = levels
+            .iter()
+            .flat_map(|&l| std::iter::repeat(l).take(150))
+            .collect();
+        let truth = Model::new(Core {
+            fn_hz: 4.0,
+            zeta: 0.3,
+            gain: 2.0,
+            offset: 0.1,
+        })
+        .with(DeadTimeParams { delay_samples: 3 });
+        let mut y = vec![0.0; u.len()];
+        let sig0 = Signals {
+            dt_s: dt,
+            u: &u,
+            y: &y.clone(),
+            voltage: None,
+            u_ref: 0.5,
+            v_ref: 0.0,
+        };
+        simulate(&truth, &sig0, &mut y);
+        for (k, v) in y.iter_mut().enumerate() {
+            *v += 0.002 * ((k as f64 * 1.7).sin() + (k as f64 * 0.37).cos());
+        }
+        let folds = Folds::from_input(&u, &y, 0.7);
+        let mean = u.iter().sum::<f64>() / u.len() as f64;
+        let ctx = Ctx {
+            sig: Signals {
+                dt_s: dt,
+                u: &u,
+                y: &y,
+                voltage: None,
+                u_ref: mean,
+                v_ref: 0.0,
+            },
+            est: folds.estimation.clone(),
+            val: 0..u.len(),
+        };
+        let base = ctx.best_of(
+            [1.0, 2.0, 4.0, 8.0].map(|f| {
+                Model::new(Core {
+                    fn_hz: f,
+                    ..Core::default()
+                })
+            }),
+            2,
+        );
+        let greedy = crate::diagnose::effects::extra_mode::ExtraMode
+            .extend(&ctx, &base)
+            .expect("a mode can be fitted");
+        assert!(greedy.sse < base.sse, "the mode takes up part of the delay");
+        let cv = cross_validate(&ctx, &folds, &greedy);
+        let kept =
+            revise(&ctx, &folds, &greedy, &cv, &["extra_mode"], true).expect("a change is kept");
+        match kept.change {
+            Change::Swap { out, into, fit, .. } => {
+                assert_eq!((out, into), ("extra_mode", "dead_time"));
+                let d = fit.model.term("dead_time").map(|t| t.finding_params(dt));
+                assert_eq!(d.and_then(|p| p["delay_samples"].as_u64()), Some(3));
+            }
+            other => panic!("expected a swap, got {other:?}"),
+        }
+        assert!(kept.cv.mean >= cv.mean);
+    }
+
+    #[test]
+    fn without_drops_one_term_and_keeps_the_rest() {
+        let m = without(&model(), "extra_mode");
+        assert!(m.term("extra_mode").is_none());
+        assert!(m.term("dead_time").is_some());
+        assert_eq!(m.core, Core::default());
+    }
+}
