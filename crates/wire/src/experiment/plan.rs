@@ -126,6 +126,22 @@ pub enum Phase {
     Halted,
 }
 
+impl Phase {
+    /// From ARM sent to DISARM sent: the device may be armed (a reconnect must ask whether it
+    /// is the same boot; a stall must STOP it).
+    pub fn mid_plan(self) -> bool {
+        matches!(
+            self,
+            Phase::Arming
+                | Phase::Ramping
+                | Phase::Settling
+                | Phase::Pulsing
+                | Phase::RampDown
+                | Phase::Disarming
+        )
+    }
+}
+
 #[derive(Debug, Clone, Copy)]
 pub(super) struct InFlight {
     pub(super) seq: u16,

@@ -29,16 +29,7 @@ impl Experiment {
         if self.rearm_pending {
             return self.rearm(now_us);
         }
-        let mid_plan = matches!(
-            self.phase,
-            Phase::Arming
-                | Phase::Ramping
-                | Phase::Settling
-                | Phase::Pulsing
-                | Phase::RampDown
-                | Phase::Disarming
-        );
-        if !mid_plan || self.verifying.is_some() {
+        if !self.phase.mid_plan() || self.verifying.is_some() {
             return; // a handshake or a STOP in flight is re-sent by its retries
         }
         let displaced = self.in_flight.take();
@@ -51,15 +42,7 @@ impl Experiment {
     /// (`rearm_on_reset`). Nothing happens before the plan starts, once it is over, or while a
     /// shutdown STOP is in flight.
     pub fn link_stalled(&mut self, _now_us: u64) {
-        let armed = matches!(
-            self.phase,
-            Phase::Arming
-                | Phase::Ramping
-                | Phase::Settling
-                | Phase::Pulsing
-                | Phase::RampDown
-                | Phase::Disarming
-        );
+        let armed = self.phase.mid_plan();
         let resumable = matches!(
             self.phase,
             Phase::Handshake | Phase::Arming | Phase::Ramping | Phase::Settling | Phase::Pulsing
