@@ -207,6 +207,11 @@ impl SimConfig {
                 };
                 invalid(&key, &value.to_string(), reason)
             }
+            PlantError::NotForKind { key, kind, reason } => invalid(
+                key,
+                "(set)",
+                &format!("does not apply to a plant of kind \"{kind}\": {reason}"),
+            ),
         })?;
         self.experiment
             .validate()

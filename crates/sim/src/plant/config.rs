@@ -19,6 +19,16 @@ pub enum PlantError {
         /// What the valid range is.
         reason: &'static str,
     },
+    /// An effect configured for a plant kind that has no place for it (the key is named).
+    #[error("`{key}` does not apply to a plant of kind `{kind}`: {reason}")]
+    NotForKind {
+        /// Configuration key, e.g. `plant.effects.asymmetric_dynamics`.
+        key: &'static str,
+        /// The plant's `kind`.
+        kind: &'static str,
+        /// What to use instead.
+        reason: &'static str,
+    },
 }
 
 /// Which plant steps: the `kind` key of `[plant]`.
@@ -165,7 +175,36 @@ impl PlantConfig {
             check(v.is_finite() && v >= 0.0, key, v, "must be >= 0")?;
         }
         self.motor.validate()?;
-        self.effects.validate(dt_s)
+        self.effects.validate(dt_s)?;
+        self.effects_fit_the_kind()
+    }
+
+    /// The core effects act on the 2nd-order core; the motor has its own lag per direction and
+    /// no spring, so they are refused there rather than silently ignored.
+    fn effects_fit_the_kind(&self) -> Result<(), PlantError> {
+        if self.kind != PlantKind::Motor {
+            return Ok(());
+        }
+        let misplaced = [
+            (
+                self.effects.asymmetric_dynamics.is_some(),
+                "plant.effects.asymmetric_dynamics",
+                "the motor's spin-up and spin-down lags are plant.motor.tau_up_s and tau_down_s",
+            ),
+            (
+                self.effects.stiffness_nonlinearity.is_some(),
+                "plant.effects.stiffness_nonlinearity",
+                "the cubic spring acts on the 2nd-order core (kind = \"second_order\")",
+            ),
+        ];
+        match misplaced.into_iter().find(|(set, _, _)| *set) {
+            Some((_, key, reason)) => Err(PlantError::NotForKind {
+                key,
+                kind: "motor",
+                reason,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Thrust at the reference throttle in steady state, newtons (the clean static map; for the

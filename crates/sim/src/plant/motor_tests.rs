@@ -144,3 +144,31 @@ fn motor_keys_are_checked_and_parse_from_toml() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn core_effects_of_the_second_order_plant_are_refused_on_the_motor_not_ignored() {
+    use crate::effects::{AsymmetricDynamics, StiffnessNonlinearity};
+    let mut cfg = motor();
+    cfg.effects.asymmetric_dynamics = Some(AsymmetricDynamics {
+        up_scale: 1.0,
+        down_scale: 2.0,
+    });
+    match Plant::new(&cfg, DT, 0) {
+        Err(e @ PlantError::NotForKind { key, .. }) => {
+            assert_eq!(key, "plant.effects.asymmetric_dynamics");
+            assert!(e.to_string().contains("tau_down_s"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+    cfg.effects.asymmetric_dynamics = None;
+    cfg.effects.stiffness_nonlinearity = Some(StiffnessNonlinearity { k3_per_k1: 0.01 });
+    match Plant::new(&cfg, DT, 0) {
+        Err(PlantError::NotForKind { key, .. }) => {
+            assert_eq!(key, "plant.effects.stiffness_nonlinearity")
+        }
+        other => panic!("{other:?}"),
+    }
+    // the 2nd-order plant takes both
+    cfg.kind = PlantKind::SecondOrder;
+    assert!(Plant::new(&cfg, DT, 0).is_ok());
+}
