@@ -432,9 +432,21 @@ mod tests {
         let (effects, rest) = tail.split_once("[experiment]").unwrap();
         let mut lines = effects.lines();
         lines.next(); // the rest of the heading comment
-        let uncommented: Vec<&str> = lines.map(|l| l.strip_prefix("# ").unwrap_or(l)).collect();
+                      // the examples are the commented tables and keys; prose comments stay comments
+        fn example(l: &str) -> Option<&str> {
+            l.strip_prefix("# ").filter(|e| {
+                e.starts_with('[') || e.split_once(" = ").is_some_and(|(k, _)| !k.contains(' '))
+            })
+        }
+        let uncommented: Vec<&str> = lines.map(|l| example(l).unwrap_or(l)).collect();
         let all = format!("{head}\n{}\n[experiment]{rest}", uncommented.join("\n"));
-        let cfg = SimConfig::from_toml_str(&all, "uncommented").unwrap();
+        // the two core effects are the 2nd-order plant's: the shipped motor refuses them
+        let msg = SimConfig::from_toml_str(&all, "uncommented")
+            .unwrap_err()
+            .to_string();
+        assert!(msg.contains("plant.effects.asymmetric_dynamics"), "{msg}");
+        let second_order = all.replacen("kind = \"motor\"", "kind = \"second_order\"", 1);
+        let cfg = SimConfig::from_toml_str(&second_order, "uncommented").unwrap();
         assert_eq!(cfg.plant.effects.names().len(), 9);
     }
 
