@@ -44,14 +44,16 @@ use serde::Serialize;
 mod columns;
 pub mod command_range;
 mod convert;
+mod layout;
 
 use super::resample::{to_uniform, Carried, Jitter, ResampleError};
 use columns::{channel, header_columns, Column, Picks};
 pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
 use convert::{convert, Converted};
-use propid_wire::protocol::csv::columns::Scale;
+use layout::{layout, Layout};
+use propid_wire::protocol::csv::columns::{ColumnSpec, Quantity, Scale, Unit};
 use propid_wire::protocol::csv::line::{
-    classify_str, fields, is_numeric, separator, text_lines, LineKind,
+    classify_str, fields, parse_clock, parse_number, text_lines, LineKind,
 };
 use propid_wire::record::{Channel, Record};
 
@@ -82,7 +84,8 @@ pub struct CsvFileOptions {
     pub optional: Vec<String>,
     /// Sample rate, Hz: required without a time column, overrides it otherwise.
     pub fs_hz: Option<f64>,
-    /// Names for a file without a header (required for one).
+    /// Names of the file's columns: required for a file without a header; for a file with one,
+    /// they replace its names (to give a column the unit its header does not say).
     pub columns: Option<Vec<String>>,
     /// ESC pulse range of a command in µs (`--esc-us`).
     pub esc_us: Option<(f64, f64)>,
@@ -107,6 +110,32 @@ pub enum CsvFileError {
     NoHeader {
         /// Fields of the first line.
         fields: usize,
+    },
+    /// The thrust column's name says no unit (`Thrust`): newtons or gram-force is not guessed.
+    #[error(
+        "column {column} is a {quantity} without a unit ({units}): name the file's columns with \
+         their units, --columns NAME,NAME,... (they replace the header's names; e.g. {example})"
+    )]
+    Unitless {
+        /// The column.
+        column: String,
+        /// Its quantity (`thrust`).
+        quantity: &'static str,
+        /// The units it may be written in.
+        units: String,
+        /// A `--columns` value for this file.
+        example: String,
+    },
+    /// A time column without a unit whose whole-number values step by 1 or more: seconds,
+    /// milliseconds or microseconds is not guessed.
+    #[error(
+        "time column {column} has no unit and counts whole numbers (milliseconds or \
+         microseconds of a logger's clock?): name the file's columns with --columns NAME,NAME,... \
+         (they replace the header's names), with time_ms, time_us or time_s in its place"
+    )]
+    UnitlessTime {
+        /// The column.
+        column: String,
     },
     /// A requested (or the default) column is absent.
     #[error("no {what} column {wanted}; columns in the file: {available}")]
@@ -191,6 +220,10 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
+fn is_zero_usize(v: &usize) -> bool {
+    *v == 0
+}
+
 /// Where the data came from and what was done to it (published beside the model).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CsvSource {
@@ -214,6 +247,13 @@ pub struct CsvSource {
     pub comments: usize,
     /// True when the file had a header line.
     pub header: bool,
+    /// Lines before the header that are not `#` comments (an export's preamble: motor,
+    /// propeller, date), skipped.
+    #[serde(skip_serializing_if = "is_zero_usize")]
+    pub preamble: usize,
+    /// True when the units were read from a row of their own under the header's names.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub units_row: bool,
     /// How each channel read was carried onto the time base, by its key (`thrust`, ...): own
     /// samples, own period, samples bridged across empty cells, samples left NaN.
     pub channels: BTreeMap<String, Carried>,
@@ -262,7 +302,7 @@ struct Parsed {
     rows: usize,
     skipped: SkippedRows,
     comments: usize,
-    header: bool,
+    layout: Layout,
 }
 
 /// Reads CSV text (the whole file) into a record.
@@ -278,17 +318,17 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
             LineKind::BadChecksum | LineKind::NotText => skipped.bad_checksum += 1,
         }
     }
-    let Some(first) = lines.first() else {
+    if lines.is_empty() {
         return Err(CsvFileError::Empty);
-    };
-    let sep = separator(first);
-    let header = !is_numeric(first, sep);
-    let mut columns = header_columns(&lines, sep, header, opts)?;
-    // A header ending in a separator (benchmark files) has an empty, unnamed last column.
-    if columns.last().is_some_and(|c| c.name.is_empty()) {
+    }
+    let layout = layout(&lines);
+    let sep = layout.sep;
+    let mut columns = header_columns(&lines, &layout, opts)?;
+    // A header ending in separators (benchmark files) has empty, unnamed last columns.
+    while columns.last().is_some_and(|c| c.name.is_empty()) {
         columns.pop();
     }
-    let data = &lines[usize::from(header)..];
+    let data = &lines[layout.data_start..];
     if data.is_empty() {
         return Err(CsvFileError::Empty);
     }
@@ -297,6 +337,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     let required = used.len() - picks.optional.len();
     let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(data.len()); used.len()];
     let mut row = Vec::new();
+    let mut clock = false;
     'rows: for line in data {
         row.clear();
         row.extend(fields(line, sep));
@@ -306,7 +347,14 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         }
         let mut parsed = Vec::with_capacity(used.len());
         for (n, &i) in used.iter().enumerate() {
-            match (parse_field(row.get(i).copied().unwrap_or("")), n < required) {
+            let field = row.get(i).copied().unwrap_or("");
+            let mut value = parse_field(field, sep);
+            // A time column of time stamps (`18:55:23.120`, `2024-08-13 18:55:23.120`).
+            if value.is_none() && n == 0 && picks.time.is_some() {
+                value = parse_clock(field);
+                clock |= value.is_some();
+            }
+            match (value, n < required) {
                 (Some(v), _) => parsed.push(v),
                 (None, true) => {
                     skipped.not_a_number += 1;
@@ -322,12 +370,18 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     if rows < 2 {
         return Err(CsvFileError::TooFewRows(rows));
     }
+    if let (true, Some(t)) = (clock, picks.time) {
+        columns[t].spec = Some(ColumnSpec {
+            quantity: Quantity::Time,
+            unit: Unit::Clock,
+        });
+    }
     let parsed = Parsed {
         values,
         rows,
         skipped,
         comments,
-        header,
+        layout,
     };
     build(&columns, picks, parsed, opts)
 }
@@ -344,7 +398,7 @@ fn build(
         rows,
         skipped,
         comments,
-        header,
+        layout,
     } = parsed;
     let Converted {
         units,
@@ -417,7 +471,9 @@ fn build(
         rows,
         skipped,
         comments,
-        header,
+        header: layout.names.is_some(),
+        preamble: layout.preamble,
+        units_row: layout.units_row,
         channels: channels_report,
         units,
         input_range,
@@ -438,10 +494,11 @@ fn build(
     })
 }
 
-/// An empty field is "not measured" (NaN); text is `None`.
-fn parse_field(f: &str) -> Option<f64> {
+/// An empty field is "not measured" (NaN); text is `None`; a number is read by the dialect's
+/// rule ([`parse_number`]: decimal commas in a file not separated by `,`).
+fn parse_field(f: &str, sep: char) -> Option<f64> {
     if f.is_empty() {
         return Some(f64::NAN);
     }
-    f.parse().ok()
+    parse_number(f, sep)
 }

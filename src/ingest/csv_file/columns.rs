@@ -2,6 +2,7 @@
 //! caller), the time, input, output and optional columns picked from them, and the record
 //! channel each becomes.
 
+use super::layout::Layout;
 use super::{CsvFileError, CsvFileOptions, InputChoice};
 use propid_wire::protocol::csv::columns::{self as csv_columns, ColumnSpec, Quantity};
 use propid_wire::protocol::csv::line::fields;
@@ -56,13 +57,15 @@ impl Picks {
             InputChoice::None => None,
         };
         let outputs: Vec<usize> = if opts.outputs.is_empty() {
-            vec![
-                by_quantity(Quantity::Thrust).ok_or_else(|| CsvFileError::MissingColumn {
-                    what: "output",
-                    wanted: "thrust (give --output NAME)".into(),
-                    available: available(),
-                })?,
-            ]
+            let thrust = by_quantity(Quantity::Thrust);
+            if let (None, Some(e)) = (thrust, unitless_thrust(columns)) {
+                return Err(e);
+            }
+            vec![thrust.ok_or_else(|| CsvFileError::MissingColumn {
+                what: "output",
+                wanted: "thrust (give --output NAME)".into(),
+                available: available(),
+            })?]
         } else {
             opts.outputs
                 .iter()
@@ -157,26 +160,50 @@ pub(super) fn key(col: &Column) -> String {
         .map_or_else(|| col.name.clone(), |s| s.quantity.key().to_string())
 }
 
-/// The columns of the file: the header's names, else the names given; a file with neither is
-/// refused ([`CsvFileError::NoHeader`]: no column order is guessed).
+/// The columns of the file: the names given (`--columns`, also over a header's), else the
+/// header's (with the units of a units row); a file with neither is refused
+/// ([`CsvFileError::NoHeader`]: no column order is guessed).
 pub(super) fn header_columns(
     lines: &[&str],
-    sep: char,
-    header: bool,
+    layout: &Layout,
     opts: &CsvFileOptions,
 ) -> Result<Vec<Column>, CsvFileError> {
     let named = |name: &str| Column {
         name: name.to_string(),
         spec: csv_columns::lookup(name),
     };
-    if header {
-        return Ok(fields(lines[0], sep).map(named).collect());
+    let width = lines
+        .get(layout.data_start)
+        .map_or(0, |l| fields(l, layout.sep).count());
+    match (&opts.columns, &layout.names) {
+        (Some(names), _) => {
+            let mut cols: Vec<Column> = names.iter().map(|n| named(n)).collect();
+            cols.extend((cols.len()..width).map(|i| named(&format!("col{}", i + 1))));
+            Ok(cols)
+        }
+        (None, Some(names)) => Ok(names.iter().map(|n| named(n)).collect()),
+        (None, None) => Err(CsvFileError::NoHeader { fields: width }),
     }
-    let width = fields(lines[0], sep).count();
-    let Some(names) = &opts.columns else {
-        return Err(CsvFileError::NoHeader { fields: width });
-    };
-    let mut cols: Vec<Column> = names.iter().map(|n| named(n)).collect();
-    cols.extend((cols.len()..width).map(|i| named(&format!("col{}", i + 1))));
-    Ok(cols)
+}
+
+/// The refusal for a thrust column whose name says no unit, with a `--columns` for the file.
+fn unitless_thrust(columns: &[Column]) -> Option<CsvFileError> {
+    let i = columns
+        .iter()
+        .position(|c| csv_columns::unitless(&c.name) == Some(Quantity::Thrust))?;
+    let names: Vec<String> = columns
+        .iter()
+        .enumerate()
+        .map(|(j, c)| match j == i {
+            true => format!("{} (N)", c.name),
+            false => c.name.clone(),
+        })
+        .collect();
+    let example = format!("--columns '{}'", names.join(","));
+    Some(CsvFileError::Unitless {
+        column: columns[i].name.clone(),
+        quantity: Quantity::Thrust.key(),
+        units: csv_columns::units_of(Quantity::Thrust),
+        example,
+    })
 }

@@ -68,6 +68,11 @@ pub(super) fn convert(
                     source,
                 })
             }
+            (None, None) if picks.time == Some(i) && counts_ticks(&values[n]) => {
+                return Err(CsvFileError::UnitlessTime {
+                    column: col.name.clone(),
+                })
+            }
             (None, None) => (Affine::IDENTITY, time_or_unknown(picks, i)),
             (None, Some(spec)) => match spec.conversion(&conv) {
                 Ok(a) => (a, spec.unit.symbol().to_string()),
@@ -124,6 +129,27 @@ fn needs(e: ConvError) -> String {
         ConvError::NeedsRange => "--input-range MIN,MAX",
     };
     format!("{e}: give {option}")
+}
+
+/// True when a time column without a unit holds whole numbers stepping by 1 or more (the
+/// median step): milliseconds or microseconds of a logger's clock (`millis()`), not seconds of
+/// a stand logging once a second or slower — not to be taken as seconds in silence.
+fn counts_ticks(t: &[f64]) -> bool {
+    let finite: Vec<f64> = t.iter().copied().filter(|v| v.is_finite()).collect();
+    if finite.len() < 2 || finite.iter().any(|v| v.fract() != 0.0) {
+        return false;
+    }
+    let mut steps: Vec<f64> = finite
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .collect();
+    if steps.is_empty() {
+        return false;
+    }
+    let mid = steps.len() / 2;
+    let (_, median, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
+    *median >= 1.0
 }
 
 /// The unit of a column the table does not know: seconds for a time column found by its name

@@ -13,7 +13,9 @@
 
 use super::csv::columns;
 use super::csv::device::parse_comment;
-use super::csv::line::{classify, fields, separator, strip_checksum_str, text_lines, LineKind};
+use super::csv::line::{
+    classify, fields, parse_number, separator, strip_checksum_str, text_lines, LineKind,
+};
 use super::decoder::Decoder;
 
 /// Bytes examined at most.
@@ -69,9 +71,10 @@ fn is_csv_line(line: &[u8]) -> bool {
         return false;
     };
     let (mut numeric, mut blank, mut known, mut n) = (0, 0, false, 0);
-    for f in fields(text, separator(text)) {
+    let sep = separator(text);
+    for f in fields(text, sep) {
         n += 1;
-        numeric += usize::from(f.parse::<f64>().is_ok());
+        numeric += usize::from(parse_number(f, sep).is_some());
         blank += usize::from(f.is_empty());
         known |= columns::lookup(f).is_some();
     }

@@ -109,6 +109,9 @@ pub enum Unit {
     Millisecond,
     /// Microseconds.
     Microsecond,
+    /// A time-of-day or date-time stamp (`18:55:23.120`, `2024-08-13 18:55:23.120`), read as
+    /// seconds ([`parse_clock`](super::line::parse_clock)).
+    Clock,
     /// A count (sample index).
     Count,
     /// The §6 name `throttle`: TSP/1 level 0..10000 on the wire; in an exported file its scale
@@ -141,6 +144,10 @@ pub enum Unit {
     NewtonMillimetre,
     /// Ounce-force inch.
     OunceForceInch,
+    /// Pound-force inch.
+    PoundForceInch,
+    /// Pound-force foot.
+    PoundForceFoot,
     /// Mechanical rev/min.
     Rpm,
     /// Electrical rev/min (needs the motor's pole count).
@@ -165,6 +172,7 @@ impl Unit {
         match self {
             Unit::Second => "s",
             Unit::Millisecond => "ms",
+            Unit::Clock => "date-time",
             Unit::Microsecond | Unit::PulseMicrosecond => "µs",
             Unit::Count => "1",
             Unit::ThrottleLevel => "TSP/1 level",
@@ -180,6 +188,8 @@ impl Unit {
             Unit::NewtonMetre => "N·m",
             Unit::NewtonMillimetre => "N·mm",
             Unit::OunceForceInch => "ozf·in",
+            Unit::PoundForceInch => "lbf·in",
+            Unit::PoundForceFoot => "lbf·ft",
             Unit::Rpm => "RPM",
             Unit::ElectricalRpm => "eRPM",
             Unit::RadianPerSecond => "rad/s",
@@ -267,9 +277,12 @@ impl ColumnSpec {
     pub fn conversion(&self, o: &ConvOptions) -> Result<Affine, ConvError> {
         let r = |mul: f64, div: f64| Ok(Affine::ratio(mul, div));
         match self.unit {
-            Unit::Second | Unit::Count | Unit::Newton | Unit::NewtonMetre | Unit::Rpm => {
-                r(1.0, 1.0)
-            }
+            Unit::Second
+            | Unit::Clock
+            | Unit::Count
+            | Unit::Newton
+            | Unit::NewtonMetre
+            | Unit::Rpm => r(1.0, 1.0),
             Unit::Volt | Unit::Ampere | Unit::Fraction => r(1.0, 1.0),
             Unit::Millisecond | Unit::NewtonMillimetre | Unit::Millivolt | Unit::Milliampere => {
                 r(1.0, 1e3)
@@ -282,6 +295,8 @@ impl ColumnSpec {
             Unit::PoundForce => r(LBF_N, 1.0),
             Unit::OunceForce => r(LBF_N, 16.0),
             Unit::OunceForceInch => r(OZF_IN_NM, 1.0),
+            Unit::PoundForceInch => r(LBF_N * 0.0254, 1.0),
+            Unit::PoundForceFoot => r(LBF_N * 0.3048, 1.0),
             Unit::RadianPerSecond => r(60.0, std::f64::consts::TAU),
             Unit::Hertz => r(60.0, 1.0),
             Unit::DShot => Ok(Scale::DSHOT.affine()),
@@ -328,6 +343,11 @@ pub const NAMES: &[(&str, Quantity, Unit)] = &[
     ("idx", Q::Index, U::Count),
     ("index", Q::Index, U::Count),
     ("sample_index", Q::Index, U::Count),
+    ("timestamp", Q::Time, U::Clock),
+    ("datetime", Q::Time, U::Clock),
+    ("date/time", Q::Time, U::Clock),
+    ("date_time", Q::Time, U::Clock),
+    ("clock", Q::Time, U::Clock),
     ("throttle", Q::Throttle, U::ThrottleLevel),
     ("escsignal", Q::Throttle, U::Command),
     ("esc", Q::Throttle, U::Command),
@@ -363,7 +383,10 @@ pub const WORDS: &[(&str, Quantity)] = &[
     ("motorelectricalspeed", Q::Rpm),
     ("voltage", Q::Voltage),
     ("vbat", Q::Voltage),
+    // Betaflight blackbox CSV (`vbatLatest (V)`, `amperageLatest (A)`).
+    ("vbatlatest", Q::Voltage),
     ("current", Q::Current),
+    ("amperagelatest", Q::Current),
 ];
 
 /// The unit table: a unit suffix (normalised) of a quantity → its unit.
@@ -392,6 +415,10 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("ozf-in", Q::Torque, U::OunceForceInch),
     ("ozin", Q::Torque, U::OunceForceInch),
     ("oz-in", Q::Torque, U::OunceForceInch),
+    ("lbfin", Q::Torque, U::PoundForceInch),
+    ("lbf-in", Q::Torque, U::PoundForceInch),
+    ("lbfft", Q::Torque, U::PoundForceFoot),
+    ("lbf-ft", Q::Torque, U::PoundForceFoot),
     ("rpm", Q::Rpm, U::Rpm),
     ("erpm", Q::Rpm, U::ElectricalRpm),
     ("rad/s", Q::Rpm, U::RadianPerSecond),
@@ -418,6 +445,40 @@ pub fn lookup(name: &str) -> Option<ColumnSpec> {
         .iter()
         .find(|(s, q, _)| *s == suffix && *q == quantity)
         .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
+}
+
+/// A header name that is a quantity word without a unit (`Thrust`, `Torque`, `Current`; not a
+/// whole name of [`NAMES`] such as `rpm`, whose unit is its name): the quantity whose unit the
+/// file does not say. A reader must not guess it (newtons or gram-force?).
+pub fn unitless(name: &str) -> Option<Quantity> {
+    if lookup(name).is_some() {
+        return None;
+    }
+    let n = normalise(name);
+    WORDS.iter().find(|(w, _)| *w == n).map(|&(_, q)| q)
+}
+
+/// The units a quantity's column may be written in (the suffixes of [`UNITS`] as a person
+/// writes them: `N, gf, kgf, lbf, ozf` for thrust), for messages.
+pub fn units_of(q: Quantity) -> String {
+    let mut out: Vec<&str> = Vec::new();
+    for &(_, uq, u) in UNITS {
+        if uq == q && !out.contains(&u.symbol()) {
+            out.push(u.symbol());
+        }
+    }
+    out.join(", ")
+}
+
+/// True when `text` is a unit of the unit table (`s`, `%`, `gf`, `N·mm`, `[rad/s]`): a cell of a
+/// units row written under a header.
+pub fn is_unit(text: &str) -> bool {
+    let n = normalise(text);
+    let n = n
+        .strip_prefix('(')
+        .and_then(|n| n.strip_suffix(')'))
+        .unwrap_or(&n);
+    UNITS.iter().any(|(u, _, _)| *u == n)
 }
 
 /// The column order of a header-less TSP/1 CSV stream:

@@ -13,7 +13,13 @@
 //! 3. What is left, without a UTF-8 byte-order mark and surrounding space, is empty (ignored),
 //!    a `#` comment, or data ([`classify`]).
 //! 4. Data fields are separated by `,`, else by tabs, else by `;` ([`separator`]); each field is
-//!    trimmed and unquoted ([`fields`]).
+//!    trimmed and unquoted ([`fields`]). A line whose every `,` sits between two digits and that
+//!    has a tab or a `;` is a decimal-comma line (the European spreadsheet export,
+//!    `0,25;1503,2`): its separator is the tab or `;`.
+//! 5. A number is what Rust's `f64` parser reads, or, in a line not separated by `,`, a decimal
+//!    comma number (`-0,25`, `1503,2`: one `,` between digits, no `.`) ([`parse_number`]).
+//!    A time-of-day or date-time stamp (`18:55:23.120`, `2024-08-13 18:55:23.120`,
+//!    `2024-08-13T18:55:23Z`) is read as seconds by [`parse_clock`] where a column holds them.
 
 /// Longest line the protocol allows, characters (without the newline).
 pub const MAX_LINE: usize = 255;
@@ -182,9 +188,12 @@ fn classify_text(text: &str) -> LineKind<'_> {
     }
 }
 
-/// Field separator of a data line: `,`, else tab, else `;`.
+/// Field separator of a data line: `,`, else tab, else `;` — unless every `,` of the line is a
+/// decimal comma (between two digits) and it has a tab or a `;` (rule 4 of the
+/// [module documentation](self)).
 pub fn separator(text: &str) -> char {
-    if text.contains(',') {
+    let other = text.contains('\t') || text.contains(';');
+    if text.contains(',') && !(other && all_commas_decimal(text)) {
         ','
     } else if text.contains('\t') {
         '\t'
@@ -193,14 +202,84 @@ pub fn separator(text: &str) -> char {
     }
 }
 
+/// True when every `,` of `text` has an ASCII digit on both sides.
+fn all_commas_decimal(text: &str) -> bool {
+    let b = text.as_bytes();
+    b.iter()
+        .enumerate()
+        .filter(|(_, &c)| c == b',')
+        .all(|(i, _)| {
+            i > 0 && b[i - 1].is_ascii_digit() && b.get(i + 1).is_some_and(u8::is_ascii_digit)
+        })
+}
+
+/// A field as a number (rule 5 of the [module documentation](self)): Rust's `f64` syntax, or,
+/// when the line's separator `sep` is not `,`, a decimal comma (`-0,25`: one `,` between two
+/// digits, no `.`). `None` for anything else (text, a thousands separator `1.234,5`).
+pub fn parse_number(field: &str, sep: char) -> Option<f64> {
+    if let Ok(v) = field.parse() {
+        return Some(v);
+    }
+    if sep == ',' || field.contains('.') || field.matches(',').count() != 1 {
+        return None;
+    }
+    if !all_commas_decimal(field) {
+        return None;
+    }
+    field.replacen(',', ".", 1).parse().ok()
+}
+
+/// A time stamp as seconds: `HH:MM:SS[.fff]` (seconds of the day) or
+/// `YYYY-MM-DD[T| ]HH:MM:SS[.fff][Z]` (seconds since 1970-01-01, UTC as written: no time zone
+/// is applied). A decimal comma is accepted in the seconds. `None` for anything else.
+pub fn parse_clock(field: &str) -> Option<f64> {
+    let field = field.strip_suffix('Z').unwrap_or(field);
+    let (date, time) = match field.split_once(['T', ' ']) {
+        Some((d, t)) => (Some(d), t.trim()),
+        None => (None, field),
+    };
+    let mut hms = time.split(':');
+    let h: u32 = hms.next()?.parse().ok()?;
+    let m: u32 = hms.next()?.parse().ok()?;
+    let sec = hms.next()?.replacen(',', ".", 1);
+    let sec: f64 = sec.parse().ok()?;
+    if hms.next().is_some() || h > 23 || m > 59 || !(0.0..61.0).contains(&sec) {
+        return None;
+    }
+    let day_s = f64::from(h * 3600 + m * 60) + sec;
+    let Some(date) = date else {
+        return Some(day_s);
+    };
+    let mut ymd = date.split('-');
+    let y: i64 = ymd.next()?.parse().ok()?;
+    let mo: u32 = ymd.next()?.parse().ok()?;
+    let d: u32 = ymd.next()?.parse().ok()?;
+    if ymd.next().is_some() || !(1..=12).contains(&mo) || !(1..=31).contains(&d) {
+        return None;
+    }
+    Some(days_from_civil(y, mo, d) as f64 * 86_400.0 + day_s)
+}
+
+/// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant, "chrono-Compatible
+/// Low-Level Date Algorithms", `days_from_civil`).
+fn days_from_civil(y: i64, m: u32, d: u32) -> i64 {
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let yoe = y - era * 400;
+    let mp = i64::from((m + 9) % 12);
+    let doy = (153 * mp + 2) / 5 + i64::from(d) - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    era * 146_097 + doe - 719_468
+}
+
 /// The fields of a data line, trimmed and unquoted.
 pub fn fields(text: &str, sep: char) -> impl Iterator<Item = &str> {
     text.split(sep).map(|f| f.trim().trim_matches('"').trim())
 }
 
-/// True when every field is empty or a number (a data row, not a header).
+/// True when every field is empty or a number ([`parse_number`]): a data row, not a header.
 pub fn is_numeric(text: &str, sep: char) -> bool {
-    fields(text, sep).all(|f| f.is_empty() || f.parse::<f64>().is_ok())
+    fields(text, sep).all(|f| f.is_empty() || parse_number(f, sep).is_some())
 }
 
 #[cfg(test)]
@@ -265,12 +344,48 @@ mod tests {
 
     #[test]
     fn separators_and_fields() {
-        assert_eq!(separator("1;2,3"), ',');
+        assert_eq!(separator("a;b,c"), ',');
+        // Decimal commas in a `;` line (see `decimal_commas_in_semicolon_and_tab_lines`).
+        assert_eq!(separator("1;2,3"), ';');
         assert_eq!(separator("1;2\t3"), '\t');
         assert_eq!(separator("1;2"), ';');
         let f: Vec<&str> = fields(" \"Time (s)\" , 2 ,", ',').collect();
         assert_eq!(f, ["Time (s)", "2", ""]);
         assert!(is_numeric("1,,2.5", ','));
         assert!(!is_numeric("1,x", ','));
+    }
+
+    #[test]
+    fn decimal_commas_in_semicolon_and_tab_lines() {
+        // Every comma between digits, with a `;` or a tab: the commas are decimal.
+        assert_eq!(separator("0,010;30,5;-1,25"), ';');
+        assert_eq!(separator("0,010\t30,5"), '\t');
+        assert_eq!(separator("Time (s);Thrust (g)"), ';');
+        // A comma that is not between digits, or no other separator: a comma file.
+        assert_eq!(separator("a, b;c"), ',');
+        assert_eq!(separator("1,5"), ',');
+        assert_eq!(parse_number("-0,25", ';'), Some(-0.25));
+        assert_eq!(parse_number("1503,2", '\t'), Some(1503.2));
+        assert_eq!(parse_number("2.5", ';'), Some(2.5));
+        // Not in a comma file, not a thousands separator, not two commas, not a lone comma.
+        assert_eq!(parse_number("0,25", ','), None);
+        assert_eq!(parse_number("1.234,5", ';'), None);
+        assert_eq!(parse_number("1,2,3", ';'), None);
+        assert_eq!(parse_number(",5", ';'), None);
+        assert!(is_numeric("0,010;30,5;", ';'));
+        assert!(!is_numeric("0,010;x", ';'));
+    }
+
+    #[test]
+    fn clock_stamps_as_seconds() {
+        assert_eq!(parse_clock("18:55:23.5"), Some(68_123.5));
+        assert_eq!(parse_clock("1970-01-02 00:00:01"), Some(86_401.0));
+        assert_eq!(parse_clock("2000-03-01T00:00:00Z"), Some(951_868_800.0));
+        let a = parse_clock("2024-08-13 18:55:23,120").unwrap();
+        let b = parse_clock("2024-08-13T18:55:24.130").unwrap();
+        assert!((b - a - 1.01).abs() < 1e-6, "{}", b - a);
+        for bad in ["18:55", "25:00:00", "2024-13-01 00:00:00", "12.5", "a:b:c"] {
+            assert_eq!(parse_clock(bad), None, "{bad}");
+        }
     }
 }

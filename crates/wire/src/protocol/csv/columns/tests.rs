@@ -201,3 +201,39 @@ fn command_scales_are_declared_by_a_unit_or_left_to_the_values() {
     assert_eq!(scales("Thrust (N)"), None);
     assert_eq!(Scale::ESC_US.affine().apply(1500.0), 0.5);
 }
+
+#[test]
+fn unitless_quantities_units_rows_and_clock_names() {
+    assert_eq!(unitless("Thrust"), Some(Quantity::Thrust));
+    assert_eq!(unitless(" torque "), Some(Quantity::Torque));
+    // A name whose unit is said, or is the name itself, is not unitless.
+    assert_eq!(unitless("Thrust (gf)"), None);
+    assert_eq!(unitless("rpm"), None);
+    assert_eq!(unitless("Motor"), None);
+    assert_eq!(units_of(Quantity::Thrust), "N, gf, kgf, lbf, ozf");
+    for u in ["s", "%", "gf", "N·mm", "[rad/s]", "(µs)", "mA"] {
+        assert!(is_unit(u), "{u}");
+    }
+    for u in ["", "-", "Thrust", "1.5"] {
+        assert!(!is_unit(u), "{u}");
+    }
+    let spec = |q, u| {
+        Some(ColumnSpec {
+            quantity: q,
+            unit: u,
+        })
+    };
+    assert_eq!(lookup("Timestamp"), spec(Quantity::Time, Unit::Clock));
+    assert_eq!(
+        lookup("Torque (lbf·in)"),
+        spec(Quantity::Torque, Unit::PoundForceInch)
+    );
+    assert_eq!(
+        lookup("vbatLatest (V)"),
+        spec(Quantity::Voltage, Unit::Volt)
+    );
+    let lbf_ft = lookup("torque_lbf-ft")
+        .unwrap()
+        .conversion(&ConvOptions::default());
+    assert!((lbf_ft.unwrap().factor() - 1.355_817_948).abs() < 1e-8);
+}

@@ -1,0 +1,146 @@
+//! Where a CSV file's header and data are: lines of a preamble before the header, the header,
+//! a units row under it, the first data row, and the separator.
+//!
+//! Exports put other things than a header first (`Motor: X2212`, `Date,2024-03-01`, a blank
+//! line) and sometimes the units on a row of their own under the names (`Time,Thrust` then
+//! `s,gf`). The rule:
+//! 1. The first **data row** is the first line of two or more fields that are all empty or
+//!    numbers ([`is_numeric`], decimal commas included); its separator ([`separator`]) is the
+//!    file's.
+//! 2. A file whose first line is a data row has no header.
+//! 3. Otherwise the **header** is, among the lines before the first data row, the first one with
+//!    at least as many fields as that row and a name the alias table knows; else the first one
+//!    with as many fields; else the first line. The lines before it are the preamble (counted,
+//!    not read).
+//! 4. A line under the header, before the first data row, whose cells are all units of the unit
+//!    table ([`columns::is_unit`]) or empty or `-`, one at least a unit, is a **units row**: each
+//!    unit joins its column's name (`Thrust` + `gf` → `Thrust (gf)`).
+
+use propid_wire::protocol::csv::columns;
+use propid_wire::protocol::csv::line::{fields, is_numeric, separator};
+
+/// The layout of a file's lines (comments and blank lines already left out).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Layout {
+    /// The field separator.
+    pub(super) sep: char,
+    /// The header's names (units of a units row joined), `None` without a header.
+    pub(super) names: Option<Vec<String>>,
+    /// Lines before the header.
+    pub(super) preamble: usize,
+    /// True when a units row was read under the header.
+    pub(super) units_row: bool,
+    /// Index of the first line after the header (and its units row).
+    pub(super) data_start: usize,
+}
+
+/// The layout of `lines` (rules of the module documentation); `lines` is not empty.
+pub(super) fn layout(lines: &[&str]) -> Layout {
+    let is_data = |l: &str| {
+        let sep = separator(l);
+        fields(l, sep).count() >= 2 && is_numeric(l, sep)
+    };
+    let first_data = lines.iter().position(|l| is_data(l));
+    let sep = separator(lines[first_data.unwrap_or(0)]);
+    if first_data == Some(0) {
+        return Layout {
+            sep,
+            names: None,
+            preamble: 0,
+            units_row: false,
+            data_start: 0,
+        };
+    }
+    let before = first_data.unwrap_or(1);
+    let width = first_data.map_or(0, |d| fields(lines[d], sep).count());
+    let wide = |l: &&str| fields(l, sep).count() >= width;
+    let known = |l: &&str| {
+        fields(l, sep).any(|f| columns::lookup(f).is_some() || columns::unitless(f).is_some())
+    };
+    let candidates = &lines[..before];
+    let header = candidates
+        .iter()
+        .position(|l| wide(l) && known(l))
+        .or_else(|| candidates.iter().position(wide))
+        .unwrap_or(0);
+    let mut names: Vec<String> = fields(lines[header], sep).map(str::to_string).collect();
+    let units_row = header + 1 < before && is_units_row(lines[header + 1], sep);
+    if units_row {
+        for (name, unit) in names.iter_mut().zip(fields(lines[header + 1], sep)) {
+            if !unit.is_empty() && unit != "-" {
+                *name = if unit.starts_with(['(', '[']) {
+                    format!("{name} {unit}")
+                } else {
+                    format!("{name} ({unit})")
+                };
+            }
+        }
+    }
+    Layout {
+        sep,
+        names: Some(names),
+        preamble: header,
+        units_row,
+        data_start: header + 1 + usize::from(units_row),
+    }
+}
+
+/// Rule 4: every cell a unit, empty or `-`, one at least a unit.
+fn is_units_row(line: &str, sep: char) -> bool {
+    let mut any = false;
+    for f in fields(line, sep) {
+        if columns::is_unit(f) {
+            any = true;
+        } else if !(f.is_empty() || f == "-") {
+            return false;
+        }
+    }
+    any
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn preamble_header_and_units_row() {
+        let lines = [
+            "Motor: X2212 920KV",
+            "Propeller,10x4.5",
+            "Time,Throttle,Thrust,Torque,Note",
+            "s,%,gf,N·mm,",
+            "0.0,30,120.5,3.1,",
+            "0.1,30,121.5,3.2,tare",
+        ];
+        let l = layout(&lines);
+        assert_eq!(l.sep, ',');
+        assert_eq!(l.preamble, 2);
+        assert!(l.units_row);
+        assert_eq!(l.data_start, 4);
+        assert_eq!(
+            l.names.unwrap(),
+            [
+                "Time (s)",
+                "Throttle (%)",
+                "Thrust (gf)",
+                "Torque (N·mm)",
+                "Note"
+            ]
+        );
+    }
+
+    #[test]
+    fn a_header_first_a_numbers_first_and_a_text_first_row() {
+        let l = layout(&["t_s,thrust_N", "0,1"]);
+        assert_eq!((l.preamble, l.units_row, l.data_start), (0, false, 1));
+        let l = layout(&["0,1", "1,2"]);
+        assert_eq!((l.names, l.data_start), (None, 0));
+        // The first data row carries text in a column (an app message): the header is still the
+        // first line, the text row is data.
+        let l = layout(&["Time (s),Thrust (N),Msg", "0,1,started", "0.1,1.1,"]);
+        assert_eq!((l.preamble, l.data_start), (0, 1));
+        // Decimal commas, `;`-separated.
+        let l = layout(&["Zeit;Schub", "Time (s);Thrust (g)", "0,01;12,5"]);
+        assert_eq!((l.sep, l.preamble, l.data_start), (';', 1, 2));
+    }
+}
