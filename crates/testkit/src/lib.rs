@@ -8,6 +8,7 @@
 //! effects are `propid_sim::synth`.
 
 pub mod csv_bench;
+pub mod dialects;
 pub mod inject;
 
 use nalgebra::{DMatrix, Matrix2, Vector2};
