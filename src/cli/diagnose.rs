@@ -34,7 +34,8 @@ pub struct Args {
     /// Sample rate, Hz (needed without a time column).
     #[arg(long)]
     pub fs: Option<f64>,
-    /// Column names for a CSV file without a header, comma separated.
+    /// Column names for a CSV file without a header, comma separated (for a file with one, they
+    /// replace its names: to give a column the unit its header does not say).
     #[arg(long, value_delimiter = ',')]
     pub columns: Option<Vec<String>>,
     /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).

@@ -76,7 +76,8 @@ pub struct Args {
     /// Hankel size: auto (from the noise floor), square (largest near-square) or RxC blocks.
     #[arg(long, default_value = "auto", value_parser = parse_hankel)]
     pub hankel: HankelSize,
-    /// Column names for a CSV file without a header, comma separated.
+    /// Column names for a CSV file without a header, comma separated (for a file with one, they
+    /// replace its names: to give a column the unit its header does not say).
     #[arg(long, value_delimiter = ',')]
     pub columns: Option<Vec<String>>,
     /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).

@@ -93,7 +93,7 @@ pub struct Request<'a> {
     pub optional: &'a [&'a str],
     /// Sample rate, Hz (`--fs`).
     pub fs_hz: Option<f64>,
-    /// Column names for a CSV file without a header (`--columns`).
+    /// Column names for a CSV file without a header, or replacing a header's names (`--columns`).
     pub columns: Option<&'a [String]>,
     /// ESC pulse range for throttle columns, µs (`--esc-us MIN,MAX`, CSV files only).
     pub esc_us: Option<&'a [f64]>,

@@ -26,12 +26,20 @@
 //! output has no value, the channels read beside them ([`CsvFileOptions::optional`]) keep their
 //! own NaNs.
 //!
-//! **Header.** A file without a header is refused unless the caller names its columns
-//! (`--columns`): a column order is never guessed (§6's header-less order is a property of a
-//! TSP/1 CSV *stream*, read by [`crate::ingest::tsp`]). Bad rows are counted, never fatal: a
+//! **Header.** Where the header is (after preamble lines, with a units row under it) is the
+//! rule of `csv_file/layout.rs`. A file without a header is refused unless the caller names its
+//! columns (`--columns`, which for a file with a header replace its names): a column order is
+//! never guessed (§6's header-less order is a property of a TSP/1 CSV *stream*, read by
+//! [`crate::ingest::tsp`]). A thrust column whose name says no unit, and a time column without
+//! a unit counting whole milliseconds or microseconds, are refused naming `--columns`: their
+//! unit is not guessed. Bad rows are counted, never fatal: a
 //! wrong checksum, text in the time, input or an output column, a row with too few fields. An
 //! empty file, a file without data rows, or a requested column that is absent is an error naming
 //! what is missing and what is there.
+//!
+//! Numbers: decimal commas in a file not separated by `,`
+//! ([`parse_number`](propid_wire::protocol::csv::line::parse_number)); a time column may hold
+//! date-time stamps ([`parse_clock`](propid_wire::protocol::csv::line::parse_clock)).
 //!
 //! Time: a time column (`t_us`, `t_ms`, `t_s`, `Time (s)`, `t`, `time`) is resampled onto a
 //! uniform grid when irregular ([`super::resample`]); `fs` overrides its rate; without a time

@@ -9,9 +9,9 @@
 //!    file's.
 //! 2. A file whose first line is a data row has no header.
 //! 3. Otherwise the **header** is, among the lines before the first data row, the first one with
-//!    at least as many fields as that row and a name the alias table knows; else the first one
-//!    with as many fields; else the first line. The lines before it are the preamble (counted,
-//!    not read).
+//!    at least as many fields as that row and a name the alias table knows; else the first line
+//!    if it has a known name (a header narrower than its rows); else the first line with as many
+//!    fields; else the first line. The lines before it are the preamble (counted, not read).
 //! 4. A line under the header, before the first data row, whose cells are all units of the unit
 //!    table ([`columns::is_unit`]) or empty or `-`, one at least a unit, is a **units row**: each
 //!    unit joins its column's name (`Thrust` + `gf` → `Thrust (gf)`).
@@ -61,6 +61,7 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
     let header = candidates
         .iter()
         .position(|l| wide(l) && known(l))
+        .or_else(|| known(&candidates[0]).then_some(0))
         .or_else(|| candidates.iter().position(wide))
         .unwrap_or(0);
     let mut names: Vec<String> = fields(lines[header], sep).map(str::to_string).collect();
@@ -142,5 +143,9 @@ mod tests {
         // Decimal commas, `;`-separated.
         let l = layout(&["Zeit;Schub", "Time (s);Thrust (g)", "0,01;12,5"]);
         assert_eq!((l.sep, l.preamble, l.data_start), (';', 1, 2));
+        // A header narrower than its rows (trailing separators on data rows only), a text row
+        // first: still the first line.
+        let l = layout(&["t_s,thrust_N", "x,1,a,b", "0,1,,"]);
+        assert_eq!((l.preamble, l.data_start), (0, 1));
     }
 }
