@@ -71,7 +71,8 @@ fn check(d: &Dialect, dir: &std::path::Path) -> Vec<String> {
         ));
     }
     let gain = f(&v["model"]["dc_gain"]);
-    if !((gain / e.gain_n - 1.0).abs() < 0.03) {
+    let gain_ok = (gain / e.gain_n - 1.0).abs() < 0.03;
+    if !gain_ok {
         bad.push(format!(
             "DC gain {gain}, not {} N per unit throttle",
             e.gain_n
@@ -84,7 +85,8 @@ fn check(d: &Dialect, dir: &std::path::Path) -> Vec<String> {
     let dt = f(&v["model"]["dt_s"]);
     for st in &steps {
         let (dead, tau) = (f(&st["dead_time_s"]), f(&st["time_constant_s"]));
-        if !((dead - TRUTH.dead_s).abs() <= 1.5 * dt && (tau / TRUTH.tau_s - 1.0).abs() < 0.15) {
+        let ok = (dead - TRUTH.dead_s).abs() <= 1.5 * dt && (tau / TRUTH.tau_s - 1.0).abs() < 0.15;
+        if !ok {
             bad.push(format!(
                 "step {st}: not dead time {} s, time constant {} s",
                 TRUTH.dead_s, TRUTH.tau_s
