@@ -70,6 +70,14 @@ fn check(d: &Dialect, dir: &std::path::Path) -> Vec<String> {
             s["input_range"], s["input_range_from"], e.input_range, e.input_range_from
         ));
     }
+    for (pointer, want) in &e.source {
+        if s.pointer(pointer) != Some(want) {
+            bad.push(format!(
+                "source{pointer} = {:?}, not {want}",
+                s.pointer(pointer)
+            ));
+        }
+    }
     let gain = f(&v["model"]["dc_gain"]);
     let gain_ok = (gain / e.gain_n - 1.0).abs() < 0.03;
     if !gain_ok {

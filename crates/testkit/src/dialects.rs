@@ -203,6 +203,9 @@ pub struct Expect {
     pub input_range_from: &'static str,
     /// Thrust per unit throttle in the file's sign (−K for a load cell mounted reversed).
     pub gain_n: f64,
+    /// Other facts of identify's `source`: a JSON pointer into it and the value there
+    /// (`/csv/preamble` = 3).
+    pub source: Vec<(&'static str, serde_json::Value)>,
 }
 
 /// One dialect: its name, the file's text and what a reader must make of it.
@@ -282,6 +285,7 @@ pub(crate) fn expect(
         input_range: range,
         input_range_from: from,
         gain_n: TRUTH.gain_n,
+        source: Vec::new(),
     }
 }
 

@@ -1,5 +1,7 @@
 //! The dialects, one stand each way (see [`super`]).
 
+use serde_json::json;
+
 use super::{
     col, expect, num, sparse, unit, write, Col, Dialect, Expect, Sample, Style, G0, LBF_N, PLAIN,
     TRUTH,
@@ -76,15 +78,21 @@ pub fn dialects() -> Vec<Dialect> {
                 }
             }),
         ],
-        expect(
-            &[
-                ("throttle", "ESC signal", "raw ESC", 1.0 / 2047.0),
-                ("thrust", "Thrust (gf)", "gf", G0 / 1e3),
-                ("torque", "Torque (N·mm)", "N·mm", 1e-3),
+        Expect {
+            source: vec![
+                ("/input", json!("ESC signal")),
+                ("/csv/channels/thrust/values", json!(700)),
             ],
-            [0.0, 2047.0],
-            "values: 0..2047 (DShot/raw ESC)",
-        ),
+            ..expect(
+                &[
+                    ("throttle", "ESC signal", "raw ESC", 1.0 / 2047.0),
+                    ("thrust", "Thrust (gf)", "gf", G0 / 1e3),
+                    ("torque", "Torque (N·mm)", "N·mm", 1e-3),
+                ],
+                [0.0, 2047.0],
+                "values: 0..2047 (DShot/raw ESC)",
+            )
+        },
     );
     // 3. A European spreadsheet: `;`, decimal commas, grams.
     add(
@@ -99,14 +107,20 @@ pub fn dialects() -> Vec<Dialect> {
             col("Throttle (%)", pct),
             col("Thrust (g)", gf),
         ],
-        expect(
-            &[
-                ("throttle", "Throttle (%)", "%", 0.01),
-                ("thrust", "Thrust (g)", "gf", G0 / 1e3),
+        Expect {
+            source: vec![
+                ("/csv/skipped/not_a_number", json!(0)),
+                ("/samples", json!(1050)),
             ],
-            pct_range.0,
-            pct_range.1,
-        ),
+            ..expect(
+                &[
+                    ("throttle", "Throttle (%)", "%", 0.01),
+                    ("thrust", "Thrust (g)", "gf", G0 / 1e3),
+                ],
+                pct_range.0,
+                pct_range.1,
+            )
+        },
     );
     // 4. Units on a row of their own under the names.
     add(
@@ -121,15 +135,18 @@ pub fn dialects() -> Vec<Dialect> {
             unit("Thrust", "gf", gf),
             unit("Torque", "N·mm", |_, s| num(1e3 * s.torque_nm, 2)),
         ],
-        expect(
-            &[
-                ("time", "Time (s)", "s", 1.0),
-                ("thrust", "Thrust (gf)", "gf", G0 / 1e3),
-                ("torque", "Torque (N·mm)", "N·mm", 1e-3),
-            ],
-            pct_range.0,
-            pct_range.1,
-        ),
+        Expect {
+            source: vec![("/csv/units_row", json!(true))],
+            ..expect(
+                &[
+                    ("time", "Time (s)", "s", 1.0),
+                    ("thrust", "Thrust (gf)", "gf", G0 / 1e3),
+                    ("torque", "Torque (N·mm)", "N·mm", 1e-3),
+                ],
+                pct_range.0,
+                pct_range.1,
+            )
+        },
     );
     // 5. A preamble (motor, propeller, date, a key,value line) before the header.
     add(
@@ -148,11 +165,14 @@ pub fn dialects() -> Vec<Dialect> {
             col("ESC (µs)", us),
             col("Thrust (N)", n),
         ],
-        expect(
-            &[("throttle", "ESC (µs)", "µs", 1e-3)],
-            [1000.0, 2000.0],
-            "header: µs",
-        ),
+        Expect {
+            source: vec![("/csv/preamble", json!(3)), ("/csv/comments", json!(0))],
+            ..expect(
+                &[("throttle", "ESC (µs)", "µs", 1e-3)],
+                [1000.0, 2000.0],
+                "header: µs",
+            )
+        },
     );
     // 6. BOM, CRLF, every field quoted.
     add(
@@ -256,7 +276,10 @@ pub fn dialects() -> Vec<Dialect> {
             col("Throttle (%)", pct),
             col("Thrust (N)", n),
         ],
-        expect(&[("time", "Time (s)", "s", 1.0)], pct_range.0, pct_range.1),
+        Expect {
+            source: vec![("/csv/jitter/non_increasing", json!(525))],
+            ..expect(&[("time", "Time (s)", "s", 1.0)], pct_range.0, pct_range.1)
+        },
     );
     // 12. A load cell mounted reversed: thrust negative.
     add(
@@ -425,6 +448,29 @@ pub fn dialects() -> Vec<Dialect> {
             pct_range.0,
             pct_range.1,
         ),
+    );
+    // 20. A flight controller's motor output (`motor[0]`, DShot values) beside a load cell: no
+    //    command column the table knows, refused naming --input; read with the column and its
+    //    range.
+    add(
+        "blackbox_motor_output",
+        PLAIN,
+        &[
+            col("loopIteration", |k, _| (4 * k).to_string()),
+            col("time (us)", |_, s| num(5e6 + (1e6 * s.t_s).round(), 0)),
+            col("rcCommand[3]", us),
+            col("motor[0]", |_, s| num(48.0 + 1999.0 * s.u, 0)),
+            col("thrust (g)", gf),
+        ],
+        Expect {
+            args: vec!["--input", "motor[0]", "--input-range", "48,2047"],
+            refused_without_args: Some(vec!["--input NAME"]),
+            ..expect(
+                &[("motor[0]", "motor[0]", "raw", 1.0 / 1999.0)],
+                [48.0, 2047.0],
+                "--input-range",
+            )
+        },
     );
     out
 }
