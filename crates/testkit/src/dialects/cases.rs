@@ -472,5 +472,26 @@ pub fn dialects() -> Vec<Dialect> {
             )
         },
     );
+    // 21. A `Time` column of times of day (a logger's wall clock), seconds with a decimal comma in
+    //     a `;` file.
+    add(
+        "time_of_day_semicolon",
+        Style { sep: ';', ..PLAIN },
+        &[
+            col("Time", |_, s| {
+                let ms = 43_199_500 + (1e3 * s.t_s).round() as u64;
+                let (h, m, sec, milli) =
+                    (ms / 3_600_000, ms / 60_000 % 60, ms / 1000 % 60, ms % 1000);
+                format!("{h:02}:{m:02}:{sec:02},{milli:03}")
+            }),
+            col("Throttle (%)", pct),
+            col("Thrust (N)", n),
+        ],
+        expect(
+            &[("time", "Time", "date-time", 1.0)],
+            pct_range.0,
+            pct_range.1,
+        ),
+    );
     out
 }
