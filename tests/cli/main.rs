@@ -8,6 +8,7 @@ mod diagnose_sim;
 mod diagnose_staircase;
 mod host_faults_cli;
 mod identify_cli;
+mod identify_gain;
 mod identify_quality;
 mod identify_real_data;
 mod identify_sim_recording;
