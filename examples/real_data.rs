@@ -22,6 +22,10 @@ use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
+use propid_numerics::quality::judge_gain;
+use propid_numerics::segment::{Command, SegmentRules};
+use propid_numerics::stand::steady_levels;
+use propid_numerics::static_map::level_slope;
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
 use propid_numerics::ModelReport;
@@ -325,7 +329,9 @@ Produced by `scripts/real_data.sh` (`examples/real_data.rs`) from the datasets i
 first two thirds of the record and scored on the last third (free-run simulation from steady
 state; fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) on the held-out samples; 100 is perfect, 0 is no better
 than the mean, negative is worse; *diverges*: below −1000 %, an unstable or drifting model).
-Order chosen automatically. Rates in Hz; `τ` are the time
+Order chosen automatically. *DC gain* is `refused` where it contradicts the slope of the
+estimation part's own steady levels (`propid identify`'s `dc_gain_contradicts_levels`, exit
+4). Rates in Hz; `τ` are the time
 constants of the real poles; `fn`/`ζ` of the dominant oscillatory pair (– if none). *Static
 map* and *steps* are `propid identify`'s `static_map` and `steps` of the whole record (they
 need no model, so they are shown when the identification fails too): the power law
@@ -434,7 +440,20 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
     }
     let fit = held_out_fit(&model.report, &u, &ys, n_est);
     let r = &model.report;
-    if let propid_numerics::report::Gain::Scalar(g) = r.dc_gain {
+    if let Some(k) = model.okid.as_ref().and_then(|k| k.realised_dc_gain) {
+        notes.push(format!("DC gain Σ Y_k (ERA's realisation {k:.4})"));
+    }
+    // The same check as `propid identify`'s quality gate: the gain against the slope of the
+    // estimation part's own steady levels.
+    let cmd = Command::with_missing(&u[..n_est], &rec.missing[..n_est]);
+    let levels = steady_levels(cmd, &SegmentRules::DEFAULT, &ys[0][..n_est]);
+    let refused = level_slope(&levels).and_then(|s| judge_gain(r, &s));
+    if let Some(c) = refused {
+        notes.push(format!(
+            "refused (dc_gain_contradicts_levels): model {:.4}, levels' slope {:.4}",
+            c.dc_gain, c.slope.slope
+        ));
+    } else if let propid_numerics::report::Gain::Scalar(g) = r.dc_gain {
         if g <= 0.0 {
             notes.push("warning: DC gain ≤ 0 (the output falls as the input rises)".into());
         }
@@ -456,7 +475,11 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
         num(r.fn_hz, 3),
         num(r.zeta, 3),
         list(&r.time_constants_s),
-        gain(&r.dc_gain),
+        if refused.is_some() {
+            "refused".to_string()
+        } else {
+            gain(&r.dc_gain)
+        },
         fit.iter()
             .map(|f| num(*f, 1))
             .collect::<Vec<_>>()

@@ -12,7 +12,9 @@
 //! SVD ([`propid_numerics::stabilization`]; null when it cannot be realised).
 //!
 //! `"quality"` says whether the model passed the checks of [`propid_numerics::quality`] (the
-//! daemon's rule: no pole with `Re(s) ≥ 0`, a DC gain larger than its jackknife scatter); a
+//! daemon's rule: no pole with `Re(s) ≥ 0`, a DC gain larger than its jackknife scatter; and,
+//! when the record has steady levels, a DC gain with their sign and size:
+//! `dc_gain_contradicts_levels`, its hint naming both numbers); a
 //! rejected model is still printed, with `"accepted": false`, its `"flaws"` and a `"hint"`, and
 //! `identify` exits 4 (the data do not support an identification), as the daemon publishes it
 //! as a `model_unreliable` warning instead of a model. Isolated outlier samples of the outputs
@@ -42,7 +44,8 @@ use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
 use propid_numerics::segment::{Command, SegmentRules};
 use propid_numerics::stabilization::StabOptions;
-use propid_numerics::stand::{stand_figures, OutputChannel, StandFigures};
+use propid_numerics::stand::{stand_figures, steady_levels, OutputChannel, StandFigures};
+use propid_numerics::static_map::{level_slope, LevelSlope};
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
 
@@ -160,7 +163,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
     };
     let ops = operating_points(&input, &ident, &OpOptions::default());
-    let out = summary::Output::new(&loaded, &model, &ops, &stand);
+    let levels = levels_slope(&loaded);
+    let out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref());
     if let Some(dir) = &args.report {
         report::write(dir, &out)
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
@@ -177,6 +181,15 @@ pub fn run(args: Args) -> Result<(), CliError> {
             flaws: out.quality.names(),
         })
     }
+}
+
+/// The least-squares slope of the identified output's steady levels under the identified input
+/// (the levels the static map reads, [`steady_levels`]; for any input, a command or a named
+/// column): the gain the model's is judged against (`None` without levels).
+fn levels_slope(loaded: &load::Loaded) -> Option<LevelSlope> {
+    let y = loaded.outputs.first()?;
+    let cmd = Command::with_missing(&loaded.input, &loaded.missing);
+    level_slope(&steady_levels(cmd, &SegmentRules::DEFAULT, y))
 }
 
 /// The step figures and static maps of `args.file` as `identify` computes them (they need no

@@ -9,6 +9,7 @@ mod diagnose_staircase;
 mod host_faults_cli;
 mod identify_cli;
 mod identify_dialects;
+mod identify_gain;
 mod identify_quality;
 mod identify_real_data;
 mod identify_sim_recording;

@@ -18,6 +18,17 @@
 //!   complex and a real pole pair, which inflates the scatter of a good estimate (measured:
 //!   fn 12.8 Hz ± 14 Hz on a 12 Hz plant); the published `uncertainty` reports it instead.
 //!
+//! - [`Flaw::DcGainContradictsLevels`] ([`judge_gain`], when the record has steady levels: a
+//!   staircase, steps, a slow ramp): the DC gain `G` against the least-squares slope `g` of the
+//!   record's own steady levels ([`crate::static_map::level_slope`], `sd` its standard error).
+//!   A linear model fitted across those levels settles on them, so its gain has the sign of
+//!   `g` and lies within a factor [`LEVEL_GAIN_FACTOR`] of it: a curved static map puts its local
+//!   slopes on either side of `g` (`T = k·u³` over 0..1: local slopes 0..3k, `g ≈ 0.9k`). The
+//!   check runs only when `g` is resolved, `|g| > `[`LEVEL_SLOPE_SIGMAS`]` · sd`; a flat or
+//!   scattered map says nothing about the sign. `G/g ≤ 0` (a thrust that falls as the command
+//!   rises on a stand whose levels rise) or `G/g` outside `[1/4, 4]` is a number the data do
+//!   not support: refused, with both numbers named.
+//!
 //! The checks are deliberately coarse: a model that passes may still be imprecise, and its
 //! `uncertainty` says by how much; a model that fails is certainly not the plant. The daemon
 //! publishes a failing model as a `model_unreliable` warning; `propid identify` prints it with
@@ -26,10 +37,15 @@
 use serde::Serialize;
 
 use crate::report::Gain;
+use crate::static_map::LevelSlope;
 use crate::ModelReport;
 
 /// Relative jackknife standard deviation above which a value is unknown.
 pub const MAX_RELATIVE_SD: f64 = 1.0;
+/// A DC gain `G` agrees with the levels' slope `g` when `1/F ≤ G/g ≤ F`.
+pub const LEVEL_GAIN_FACTOR: f64 = 4.0;
+/// The levels' slope is resolved when it exceeds this many standard errors.
+pub const LEVEL_SLOPE_SIGMAS: f64 = 2.0;
 
 /// Why a model is not the plant's (published by these names).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -39,6 +55,9 @@ pub enum Flaw {
     UnstablePole,
     /// The jackknife standard deviation of the DC gain exceeds the DC gain.
     DcGainUncertain,
+    /// The DC gain has the other sign than the record's steady levels, or is more than
+    /// [`LEVEL_GAIN_FACTOR`] times off their slope ([`judge_gain`]).
+    DcGainContradictsLevels,
 }
 
 impl Flaw {
@@ -47,6 +66,7 @@ impl Flaw {
         match self {
             Flaw::UnstablePole => "unstable_pole",
             Flaw::DcGainUncertain => "dc_gain_uncertain",
+            Flaw::DcGainContradictsLevels => "dc_gain_contradicts_levels",
         }
     }
 }
@@ -69,6 +89,57 @@ pub fn judge(model: &ModelReport) -> Vec<Flaw> {
         }
     }
     flaws
+}
+
+/// A DC gain the steady levels do not support ([`Flaw::DcGainContradictsLevels`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GainContradiction {
+    /// The model's DC gain (input 0 to output 0).
+    pub dc_gain: f64,
+    /// The levels' least-squares slope.
+    pub slope: LevelSlope,
+}
+
+impl std::fmt::Display for GainContradiction {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = &self.slope;
+        write!(
+            f,
+            "the model's DC gain {:.4} is not the gain of the record's {} steady levels \
+             (their least-squares slope {:.4}{}; a linear model across them has its sign and \
+             lies within a factor {LEVEL_GAIN_FACTOR} of it): the record holds what a linear \
+             model cannot (a jump the logged command does not explain, an unlogged hold, a \
+             response slower than the record resolves)",
+            self.dc_gain,
+            s.levels,
+            s.slope,
+            s.sd.map_or(String::new(), |sd| format!(" ± {sd:.4}")),
+        )
+    }
+}
+
+/// The check of the DC gain against the record's steady levels (see the module doc): `Some`
+/// when `model`'s gain from input 0 to output 0 contradicts `slope`, `None` when it agrees or
+/// the slope is not resolved.
+pub fn judge_gain(model: &ModelReport, slope: &LevelSlope) -> Option<GainContradiction> {
+    let g = slope.slope;
+    let resolved = g.is_finite()
+        && g != 0.0
+        && match slope.sd {
+            None => true,
+            Some(sd) => sd.is_finite() && g.abs() > LEVEL_SLOPE_SIGMAS * sd,
+        };
+    if !resolved {
+        return None;
+    }
+    let dc_gain = model.dc_gain.get(0);
+    let ratio = dc_gain / g;
+    let agrees =
+        ratio.is_finite() && (1.0 / LEVEL_GAIN_FACTOR..=LEVEL_GAIN_FACTOR).contains(&ratio);
+    (!agrees).then_some(GainContradiction {
+        dc_gain,
+        slope: *slope,
+    })
 }
 
 #[cfg(test)]
@@ -149,10 +220,58 @@ mod tests {
     }
 
     #[test]
+    fn a_gain_against_the_levels_passes_only_with_their_sign_and_size() {
+        let slope = |g: f64, sd: Option<f64>| LevelSlope {
+            slope: g,
+            sd,
+            levels: 25,
+        };
+        // measured on noahcurtiss robbe (force counts per unit command): levels' slope 669,
+        // the realised model's gain -5978
+        let s = slope(669.0, Some(40.0));
+        let c = judge_gain(&report(json!({"dc_gain": -5978.3})), &s).unwrap();
+        assert_eq!(c.dc_gain, -5978.3);
+        assert!(c.to_string().contains("-5978.3"), "{c}");
+        assert!(c.to_string().contains("669.0"), "{c}");
+        for ok in [585.0, 669.0 / 3.9, 669.0 * 3.9] {
+            assert!(
+                judge_gain(&report(json!({ "dc_gain": ok })), &s).is_none(),
+                "{ok}"
+            );
+        }
+        for bad in [0.0, 669.0 / 4.1, 669.0 * 4.1] {
+            assert!(
+                judge_gain(&report(json!({ "dc_gain": bad })), &s).is_some(),
+                "{bad}"
+            );
+        }
+        // a non-finite gain is not supported either
+        assert!(judge_gain(&report(json!({ "dc_gain": null })), &s).is_some());
+        // falling levels: a falling gain agrees
+        let s = slope(-2.0, None);
+        assert!(judge_gain(&report(json!({"dc_gain": -1.5})), &s).is_none());
+        assert!(judge_gain(&report(json!({"dc_gain": 1.5})), &s).is_some());
+        // a slope within two standard errors of 0 says nothing
+        let s = slope(1.0, Some(0.6));
+        assert!(judge_gain(&report(json!({"dc_gain": -100.0})), &s).is_none());
+    }
+
+    #[test]
     fn flaws_are_published_by_their_names() {
-        let all = [Flaw::UnstablePole, Flaw::DcGainUncertain];
+        let all = [
+            Flaw::UnstablePole,
+            Flaw::DcGainUncertain,
+            Flaw::DcGainContradictsLevels,
+        ];
         let v = serde_json::to_value(all).unwrap();
-        assert_eq!(v, json!(["unstable_pole", "dc_gain_uncertain"]));
+        assert_eq!(
+            v,
+            json!([
+                "unstable_pole",
+                "dc_gain_uncertain",
+                "dc_gain_contradicts_levels"
+            ])
+        );
         for f in all {
             assert_eq!(serde_json::to_value(f).unwrap(), json!(f.name()));
         }

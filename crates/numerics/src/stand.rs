@@ -73,6 +73,31 @@ impl Over {
     }
 }
 
+/// Where the steady levels of `cmd` are read (see the module doc): `("steps", holds)`,
+/// `("ramp", windows)`, or `None`.
+fn over(
+    cmd: Command<'_>,
+    rules: &SegmentRules,
+    steps: &[segment::Step],
+) -> Option<(&'static str, Over)> {
+    let holds: Vec<segment::Run> = segment::holds(cmd, rules).collect();
+    if !steps.is_empty() || (holds.len() >= 2 && segment::is_piecewise_constant(cmd, rules)) {
+        Some(("steps", Over::Holds(holds)))
+    } else if segment::is_ramp(cmd, rules) {
+        Some(("ramp", Over::Windows(segment::ramp_windows(cmd, rules))))
+    } else {
+        None
+    }
+}
+
+/// The steady levels of output `y` under command `cmd`, read as [`stand_figures`] reads its
+/// static maps (over the holds of steps, or a ramp's windows; empty for any other command):
+/// what [`crate::quality::judge_gain`] holds a model's DC gain against.
+pub fn steady_levels(cmd: Command<'_>, rules: &SegmentRules, y: &[f64]) -> Vec<Level> {
+    let steps = segment::steps(cmd, rules);
+    over(cmd, rules, &steps).map_or_else(Vec::new, |(_, o)| o.levels(y))
+}
+
 /// The figures of a record with command `cmd` sampled every `dt_s` (see the module doc): step
 /// figures of `step_output` (the identified output), static maps of `outputs`.
 pub fn stand_figures(
@@ -83,18 +108,12 @@ pub fn stand_figures(
     outputs: &[OutputChannel<'_>],
 ) -> StandFigures {
     let steps = segment::steps(cmd, rules);
-    let holds: Vec<segment::Run> = segment::holds(cmd, rules).collect();
-    let (command, over) =
-        if !steps.is_empty() || (holds.len() >= 2 && segment::is_piecewise_constant(cmd, rules)) {
-            ("steps", Over::Holds(holds))
-        } else if segment::is_ramp(cmd, rules) {
-            ("ramp", Over::Windows(segment::ramp_windows(cmd, rules)))
-        } else {
-            return StandFigures {
-                command: "none",
-                ..StandFigures::default()
-            };
+    let Some((command, over)) = over(cmd, rules, &steps) else {
+        return StandFigures {
+            command: "none",
+            ..StandFigures::default()
         };
+    };
     let step_figs = steps
         .iter()
         .map(|s| step_figures(step_output, dt_s, s))

@@ -7,10 +7,11 @@ use serde::Serialize;
 use super::load::{Loaded, Source};
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
-use propid_numerics::quality::{judge, Flaw};
+use propid_numerics::quality::{judge, judge_gain, Flaw};
 use propid_numerics::report::Gain;
 use propid_numerics::stabilization::Stabilization;
 use propid_numerics::stand::StandFigures;
+use propid_numerics::static_map::LevelSlope;
 use propid_numerics::ModelReport;
 
 /// Everything `identify` prints.
@@ -33,7 +34,7 @@ pub struct Output<'a> {
 }
 
 /// `"quality"` in the JSON output: whether the model passed the checks a plant's model always
-/// passes, and if not why (`unstable_pole`, `dc_gain_uncertain`). A rejected model is printed
+/// passes, and if not why (`unstable_pole`, `dc_gain_uncertain`, `dc_gain_contradicts_levels`). A rejected model is printed
 /// for inspection and `identify` exits 4.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Quality {
@@ -41,9 +42,10 @@ pub struct Quality {
     pub accepted: bool,
     /// The checks it failed.
     pub flaws: Vec<Flaw>,
-    /// What to do about it (rejected models only).
+    /// What to do about it (rejected models only); names the numbers when the DC gain
+    /// contradicts the record's steady levels.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub hint: Option<&'static str>,
+    pub hint: Option<String>,
 }
 
 /// Hint printed with a rejected model.
@@ -52,14 +54,24 @@ pub const HINT: &str = "not the plant's model: the pulse responses are not resol
     transient, a drift); use a record that starts settled, wider or larger pulses, more pulses";
 
 impl Quality {
-    /// The verdict on `model`.
-    pub fn of(model: &propid_numerics::ModelReport) -> Quality {
-        let flaws = judge(model);
+    /// The verdict on `model`: the daemon's checks ([`judge`]), and its DC gain against the
+    /// slope of the record's steady levels when it has some ([`judge_gain`]).
+    pub fn of(model: &propid_numerics::ModelReport, levels: Option<&LevelSlope>) -> Quality {
+        let mut flaws = judge(model);
+        let contradiction = levels.and_then(|s| judge_gain(model, s));
+        let mut hints = Vec::new();
+        if let Some(c) = contradiction {
+            flaws.push(Flaw::DcGainContradictsLevels);
+            hints.push(c.to_string());
+        }
+        if flaws.len() > hints.len() {
+            hints.push(HINT.to_string());
+        }
         let accepted = flaws.is_empty();
         Quality {
             accepted,
             flaws,
-            hint: (!accepted).then_some(HINT),
+            hint: (!accepted).then(|| hints.join("; ")),
         }
     }
 
@@ -80,6 +92,7 @@ impl<'a> Output<'a> {
         model: &'a AnyModel,
         ops: &'a OpTable,
         stand: &'a StandFigures,
+        levels: Option<&LevelSlope>,
     ) -> Self {
         let mut source = loaded.source.clone();
         source.path = path_name(model.path);
@@ -91,7 +104,7 @@ impl<'a> Output<'a> {
             steps: &stand.steps,
             static_map: &stand.static_map,
             stabilization: model.stabilization.as_ref(),
-            quality: Quality::of(&model.report),
+            quality: Quality::of(&model.report, levels),
         }
     }
 
@@ -181,7 +194,8 @@ impl<'a> Output<'a> {
                 let _ = writeln!(o, "quality   accepted");
             }
             q => {
-                let _ = writeln!(o, "quality   REJECTED ({}): {}", q.names(), HINT);
+                let hint = q.hint.as_deref().unwrap_or(HINT);
+                let _ = writeln!(o, "quality   REJECTED ({}): {hint}", q.names());
             }
         }
         if let Some(st) = self.stabilization {

@@ -14,11 +14,14 @@
 //! - [`excitation`]: does the record look like a pulse experiment?
 //! - [`okid_path`]: OKID, its noise floor (split halves) and ERA on the recovered sequence.
 //! - [`finite`]: a model with non-finite parts is refused, never published.
+//! - [`gain`]: an OKID model's DC gain is its Markov sequence's (`B`, `D` re-fitted when ERA's
+//!   truncation lost it).
 //!
 //! Hankel size and model order follow the rules of [`crate::order`] on both paths.
 
 pub mod excitation;
 pub mod finite;
+pub mod gain;
 pub mod okid_path;
 
 use serde::Serialize;

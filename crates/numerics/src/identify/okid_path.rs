@@ -14,6 +14,10 @@
 //! where the sequence sinks below it ([`hankel_size::auto_dims`] with [`Span::OkidFloor`]),
 //! and the order from the singular values above the noise
 //! ([`model_order::order_above_noise`]), the same rules as the pulse path with this σ.
+//!
+//! **DC gain.** The realisation's gain is checked against the sequence's own `Σ Y_k` and, when
+//! ERA's truncation lost it, `B` and `D` are re-fitted to hold it ([`super::gain`]; published
+//! as `dc_gain_from`, `realised_dc_gain`).
 
 use serde::Serialize;
 
@@ -56,6 +60,12 @@ pub struct OkidSummary {
     pub markov_noise: Vec<f64>,
     /// `"split_half"` or `"regression"`: the smaller estimate (see the module docs).
     pub markov_noise_from: &'static str,
+    /// `"realisation"` (`D + C (I − A)⁻¹ B` as ERA realised it) or `"markov_sum"` (the
+    /// realisation's gain contradicted `Σ Y_k` and `B`, `D` were re-fitted to hold it:
+    /// [`super::gain`]).
+    pub dc_gain_from: &'static str,
+    /// The realisation's DC gain (input 0 to output 0) when it was replaced, else null.
+    pub realised_dc_gain: Option<f64>,
 }
 
 impl From<&OkidResult> for OkidSummary {
@@ -78,6 +88,8 @@ impl From<&OkidResult> for OkidSummary {
             markov_len: r.len,
             markov_noise: r.markov_noise.clone(),
             markov_noise_from: "regression",
+            dc_gain_from: "realisation",
+            realised_dc_gain: None,
         }
     }
 }
@@ -162,6 +174,10 @@ pub fn identify_okid_with(
     // regression (RMS over outputs).
     report.noise_rms = rms(&r.residual_rms);
     report.missing_samples = crate::workspace::count_missing(input.missing);
+    if let Some(repair) = super::gain::impose_sequence_gain(&mut report, &markov) {
+        summary.dc_gain_from = "markov_sum";
+        summary.realised_dc_gain = Some(repair.realised);
+    }
     check_finite(&report, Some(r.condition))?;
     let stabilization = stab.and_then(|o| ws.stabilization_markov(&markov, o).ok());
     Ok(AnyModel {

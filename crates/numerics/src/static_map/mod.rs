@@ -16,12 +16,19 @@
 //!   of `(c₁, c₂)`.
 //! - **Thrust coefficient** `T = k_t·ω²` (ω in rad/s), least squares through the origin.
 //!
+//! - **Slope** of the least-squares line through the levels ([`slope`]): the gain the steady
+//!   states show, against which [`crate::quality`] judges a linear model's DC gain.
+//!
 //! Fewer levels than parameters give no fit (`None`); exactly as many give the curve with no
 //! uncertainty (`None` standard errors): the data cannot support a spread then.
+
+pub mod slope;
 
 use serde::Serialize;
 
 use crate::segment::Run;
+
+pub use slope::{level_slope, LevelSlope};
 
 /// Share of a hold, from its end, taken as steady.
 pub const STEADY_SHARE: f64 = 0.5;
