@@ -117,6 +117,13 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         s.u.len(),
         s.dt_s
     );
+    if d.source.outliers > 0 {
+        let _ = writeln!(
+            t,
+            "outliers: {} isolated sample(s) of the output left out (marked missing)",
+            d.source.outliers
+        );
+    }
     let _ = writeln!(t, "{}", d.validation.describe(&d.split));
     let _ = writeln!(
         t,
