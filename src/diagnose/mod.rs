@@ -46,6 +46,8 @@ use ctx::Ctx;
 pub use error::DiagnoseError;
 use model::{Core, Signals};
 use propid_numerics::outliers::isolated_outliers;
+use propid_numerics::segment::SegmentRules;
+use propid_numerics::startup::start_transient;
 use propid_wire::record::{names, Record};
 pub use result::{
     Diagnosis, Extended, Finding, FoldFit, Gain, Source, Split, Stage, Traces, Validation,
@@ -129,8 +131,9 @@ pub fn diagnose_record(
 }
 
 /// Diagnoses sampled signals: input `u` (finite), output `y` (`NaN` = missing), optional
-/// supply voltage (finite). The output's isolated outliers ([`propid_numerics::outliers`]) are
-/// left out as missing and counted in [`Diagnosis::source`]. See the module doc for the method.
+/// supply voltage (finite). The output's isolated outliers ([`propid_numerics::outliers`]) and
+/// a start-up transient ([`propid_numerics::startup`]) are left out as missing and counted in
+/// [`Diagnosis::source`]. See the module doc for the method.
 pub fn diagnose(
     dt_s: f64,
     u: &[f64],
@@ -179,11 +182,16 @@ pub fn diagnose(
     for &k in &found {
         y_kept[k] = f64::NAN;
     }
+    // A start-up transient is left out too (the rule of `propid identify`): the output
+    // settling under the first level for a reason the command does not show.
+    let transient = start_transient(&y_kept, &[], u, &SegmentRules::DEFAULT).map_or(0, |t| t.end);
+    y_kept[..transient].iter_mut().for_each(|v| *v = f64::NAN);
     let y = &y_kept[..];
     let source = Source {
         samples: n,
         missing,
         outliers: found.len(),
+        start_up_transient: transient,
     };
     let folds = folds::Folds::from_input(u, y, opts.estimation_fraction);
     let est = folds.estimation.clone();
@@ -291,7 +299,7 @@ mod tests {
                      uncertainty fn_hz zeta dc_gain pulses pulses_skipped missing_samples noise_rms \
                      mass_spring_damper m d k hankel_block_rows hankel_block_cols svd terms";
         let want = format!(
-            "source samples missing outliers baseline model {model} gain offset fit_percent \
+            "source samples missing outliers start_up_transient baseline model {model} gain offset fit_percent \
              core_model path fn_hz zeta dc_gain fit_percent \
              findings effect score cv_gain_pp evidence delay_s delay_samples \
              extended effects model {model} delay_s delay_samples gain offset fit_percent \
@@ -307,9 +315,10 @@ mod tests {
     }
 
     #[test]
-    fn no_effect_of_the_catalogue_is_taken_for_outliers() {
+    fn no_effect_of_the_catalogue_is_taken_for_outliers_or_a_start_up_transient() {
         // the detection table's simulated cases: every effect (and none), 20 plants each; an
-        // effect must never be left out as isolated outliers before it can be named
+        // effect must never be left out as isolated outliers or a start-up transient before it
+        // can be named (a baseline drift is linear: never a start-up transient)
         let names = std::iter::once("clean").chain(effects::names());
         for name in names {
             for i in 0..20 {
@@ -318,6 +327,8 @@ mod tests {
                 };
                 let found = isolated_outliers(&m.y, &[], &m.u);
                 assert!(found.is_empty(), "{name} #{i}: {found:?}");
+                let t = start_transient(&m.y, &[], &m.u, &SegmentRules::DEFAULT);
+                assert_eq!(t, None, "{name} #{i}");
             }
         }
     }

@@ -139,6 +139,9 @@ pub struct Source {
     /// changes guarded), left out of every fit, fold and noise floor like missing samples
     /// (never replaced; not counted in `missing`).
     pub outliers: usize,
+    /// Samples at the record's start left out as a start-up transient
+    /// ([`propid_numerics::startup`]; marked missing, not counted in `missing`); 0 when none.
+    pub start_up_transient: usize,
 }
 
 /// The whole diagnosis (`propid diagnose --json`).
