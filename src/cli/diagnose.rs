@@ -118,6 +118,22 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         s.u.len(),
         s.dt_s
     );
+    if d.source.outliers > 0 {
+        let _ = writeln!(
+            t,
+            "outliers: {} isolated sample(s) of the output left out (marked missing)",
+            d.source.outliers
+        );
+    }
+    if d.source.start_up_transient > 0 {
+        let _ = writeln!(
+            t,
+            "start-up transient: the first {} samples ({:.3} s) left out (marked missing): the \
+             output was still settling under the first command level",
+            d.source.start_up_transient,
+            d.source.start_up_transient as f64 * s.dt_s
+        );
+    }
     let _ = writeln!(t, "{}", d.validation.describe(&d.split));
     let _ = writeln!(
         t,

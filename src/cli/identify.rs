@@ -127,6 +127,7 @@ fn parse_hankel(s: &str) -> Result<HankelSize, String> {
 pub fn run(args: Args) -> Result<(), CliError> {
     let mut loaded = load::load(&args)?;
     load::leave_out_outliers(&mut loaded);
+    load::leave_out_start_transient(&mut loaded);
     let ident = IdentOptions {
         order: args.order,
         svd: args.svd,

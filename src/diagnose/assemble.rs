@@ -83,6 +83,7 @@ pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraSt
         warnings.extend(verdict::warnings(&e.model, "extended", band));
     }
     Diagnosis {
+        source: Default::default(),
         baseline,
         findings,
         extended,

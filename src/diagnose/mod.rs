@@ -45,8 +45,13 @@ use serde_json::Value;
 use ctx::Ctx;
 pub use error::DiagnoseError;
 use model::{Core, Signals};
+use propid_numerics::outliers::isolated_outliers;
+use propid_numerics::segment::SegmentRules;
+use propid_numerics::startup::start_transient;
 use propid_wire::record::{names, Record};
-pub use result::{Diagnosis, Extended, Finding, FoldFit, Gain, Split, Stage, Traces, Validation};
+pub use result::{
+    Diagnosis, Extended, Finding, FoldFit, Gain, Source, Split, Stage, Traces, Validation,
+};
 pub use summary::ModelSummary;
 
 /// Longest sample period diagnosed, s: above it the highest frequency a mode may take
@@ -126,7 +131,9 @@ pub fn diagnose_record(
 }
 
 /// Diagnoses sampled signals: input `u` (finite), output `y` (`NaN` = missing), optional
-/// supply voltage (finite). See the module doc for the method.
+/// supply voltage (finite). The output's isolated outliers ([`propid_numerics::outliers`]) and
+/// a start-up transient ([`propid_numerics::startup`]) are left out as missing and counted in
+/// [`Diagnosis::source`]. See the module doc for the method.
 pub fn diagnose(
     dt_s: f64,
     u: &[f64],
@@ -166,6 +173,26 @@ pub fn diagnose(
         });
     }
     let (u, y) = (&u[..n], &y[..n]);
+    // Isolated outliers are left out like missing samples (the rule of `propid identify` and
+    // the daemon, the command's changes guarded): one wrong sample would otherwise be
+    // "explained" by an effect or pull every fit.
+    let missing = y.iter().filter(|v| v.is_nan()).count();
+    let found = isolated_outliers(y, &[], u);
+    let mut y_kept = y.to_vec();
+    for &k in &found {
+        y_kept[k] = f64::NAN;
+    }
+    // A start-up transient is left out too (the rule of `propid identify`): the output
+    // settling under the first level for a reason the command does not show.
+    let transient = start_transient(&y_kept, &[], u, &SegmentRules::DEFAULT).map_or(0, |t| t.end);
+    y_kept[..transient].iter_mut().for_each(|v| *v = f64::NAN);
+    let y = &y_kept[..];
+    let source = Source {
+        samples: n,
+        missing,
+        outliers: found.len(),
+        start_up_transient: transient,
+    };
     let folds = folds::Folds::from_input(u, y, opts.estimation_fraction);
     let est = folds.estimation.clone();
     let val = match folds.method {
@@ -197,12 +224,9 @@ pub fn diagnose(
             core: era.as_ref().err().cloned(),
         }
     })?;
-    Ok(assemble::assemble(
-        &ctx,
-        &folds,
-        searched,
-        era.as_ref().ok(),
-    ))
+    let mut d = assemble::assemble(&ctx, &folds, searched, era.as_ref().ok());
+    d.source = source;
+    Ok(d)
 }
 
 fn check_varies(x: &[f64], what: &'static str) -> Result<(), DiagnoseError> {
@@ -275,7 +299,7 @@ mod tests {
                      uncertainty fn_hz zeta dc_gain pulses pulses_skipped missing_samples noise_rms \
                      mass_spring_damper m d k hankel_block_rows hankel_block_cols svd terms";
         let want = format!(
-            "baseline model {model} gain offset fit_percent \
+            "source samples missing outliers start_up_transient baseline model {model} gain offset fit_percent \
              core_model path fn_hz zeta dc_gain fit_percent \
              findings effect score cv_gain_pp evidence delay_s delay_samples \
              extended effects model {model} delay_s delay_samples gain offset fit_percent \
@@ -288,6 +312,25 @@ mod tests {
         assert_eq!(keys_in_order(&text), want, "{text}");
         assert!(text.contains(r#"{"effect":"dead_time","score":"#), "{text}");
         assert!(text.contains(r#""extended":{"effects":["dead_time"],"model":{"order":2,"#));
+    }
+
+    #[test]
+    fn no_effect_of_the_catalogue_is_taken_for_outliers_or_a_start_up_transient() {
+        // the detection table's simulated cases: every effect (and none), 20 plants each; an
+        // effect must never be left out as isolated outliers or a start-up transient before it
+        // can be named (a baseline drift is linear: never a start-up transient)
+        let names = std::iter::once("clean").chain(effects::names());
+        for name in names {
+            for i in 0..20 {
+                let Ok((_, m)) = synth::case(name, i) else {
+                    continue;
+                };
+                let found = isolated_outliers(&m.y, &[], &m.u);
+                assert!(found.is_empty(), "{name} #{i}: {found:?}");
+                let t = start_transient(&m.y, &[], &m.u, &SegmentRules::DEFAULT);
+                assert_eq!(t, None, "{name} #{i}");
+            }
+        }
     }
 
     #[test]

@@ -128,9 +128,27 @@ pub struct FoldFit {
     pub fit_percent: f64,
 }
 
+/// What the record held (`"source"`; the same names and meaning as `propid identify`'s).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Source {
+    /// Samples diagnosed.
+    pub samples: usize,
+    /// Samples of the output missing in the record (lost, empty cells).
+    pub missing: usize,
+    /// Isolated outlier samples of the output ([`propid_numerics::outliers`], the command's
+    /// changes guarded), left out of every fit, fold and noise floor like missing samples
+    /// (never replaced; not counted in `missing`).
+    pub outliers: usize,
+    /// Samples at the record's start left out as a start-up transient
+    /// ([`propid_numerics::startup`]; marked missing, not counted in `missing`); 0 when none.
+    pub start_up_transient: usize,
+}
+
 /// The whole diagnosis (`propid diagnose --json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Diagnosis {
+    /// What the record held, its outliers counted.
+    pub source: Source,
     /// The 2nd-order model and its validation fit.
     pub baseline: Stage,
     /// The effects found (empty when none).

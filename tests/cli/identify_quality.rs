@@ -1,6 +1,7 @@
 //! `identify` judges what it prints (issue 12 item 6): isolated outlier samples are left out and
 //! counted, a model that fails the daemon's quality checks is printed with
-//! `"quality": {"accepted": false}` and exits 4, and a record holds as many pulses as it has.
+//! `"quality": {"accepted": false}` and exits 4, a start-up transient is left out and said
+//! (`source.start_up_transient`), and a record holds as many pulses as it has.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -164,4 +165,75 @@ fn a_five_thousand_pulse_recording_is_identified() {
         "{}",
         v["model"]
     );
+}
+
+#[test]
+fn a_start_up_transient_is_left_out_and_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let (u, y) = record(200, true);
+    let clean = write_csv(dir.path(), "clean.csv", &u, &y);
+    let (code, want, err) = identify(&clean, &[]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(want["source"]["start_up_transient"], 0);
+    let t = |k: usize| k as f64 * 0.001;
+    // a load cell's tare settling by `a` N with time constant `tau` s
+    let tare = |a: f64, tau: f64| -> Vec<f64> {
+        let decay = y.iter().enumerate();
+        decay.map(|(k, v)| v + a * (-t(k) / tau).exp()).collect()
+    };
+    // an ESC soft start: 80 % of the level at once, the rest with τ = 0.5 s (before: DC gain
+    // 12 % low, exit 0)
+    let soft = {
+        let ramped: Vec<f64> = u
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v - 0.2 * 0.45 * (-t(k) / 0.5).exp())
+            .collect();
+        let mut y = Plant::new(12.0, 0.7, 12.0, 0.001)
+            .simulate(&ramped, 0.0)
+            .remove(0);
+        add_noise(&mut y, 0.01, 11);
+        y
+    };
+    // (before: −1 N gave a DC gain 11 % low with exit 0); `fixed`: the model must be the clean
+    // record's, else it may also be refused (exit 4) — never a wrong model with exit 0
+    let cases = [
+        ("tare -1 N", tare(-1.0, 0.5), true),
+        ("tare +0.3 N", tare(0.3, 0.3), true),
+        ("soft start", soft, true),
+        ("tare +1 N", tare(1.0, 0.5), false),
+    ];
+    for (name, y, fixed) in cases {
+        let f = write_csv(dir.path(), "start.csv", &u, &y);
+        let (code, got, err) = identify(&f, &[]);
+        let left_out = got["source"]["start_up_transient"].as_u64().unwrap();
+        assert!(
+            (500..=2000).contains(&left_out),
+            "{name}: {}",
+            got["source"]
+        );
+        if code == 4 && !fixed {
+            assert_eq!(got["quality"]["accepted"], false, "{name}");
+            continue;
+        }
+        assert_eq!(code, 0, "{name}: {err}");
+        assert_eq!(got["quality"]["accepted"], true, "{name}");
+        // the clean record's model within 2 jackknife deviations (or 4 %), and those small
+        // (before, −1 N: DC gain 11.1 ± 7.3 N, ζ 0.63 ± 0.45; now 12.4 ± 1.1 N, 0.72 ± 0.06)
+        for key in ["fn_hz", "zeta", "dc_gain"] {
+            let (g, w) = (
+                num(&got, &format!("/model/{key}")),
+                num(&want, &format!("/model/{key}")),
+            );
+            let sd = num(&got, &format!("/model/uncertainty/{key}"));
+            let tol = (2.0 * sd).max(0.04 * w.abs());
+            assert!((g - w).abs() <= tol, "{name}: {key} {g} ± {sd} vs {w}");
+            assert!(sd <= 0.1 * w.abs(), "{name}: {key} {g} ± {sd}");
+        }
+    }
+    // the summary says it
+    let f = write_csv(dir.path(), "tare.csv", &u, &tare(-1.0, 0.5));
+    let (code, out, _) = propid(&["identify", f.to_str().unwrap()]);
+    assert_eq!(code, 0);
+    assert!(out.contains("start-up  the first "), "{out}");
 }

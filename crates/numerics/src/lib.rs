@@ -56,6 +56,7 @@ pub mod report;
 pub mod segment;
 pub mod stabilization;
 pub mod stand;
+pub mod startup;
 pub mod statespace;
 pub mod static_map;
 pub mod step_response;

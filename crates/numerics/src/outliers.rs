@@ -177,7 +177,7 @@ fn robust_sd(r: &[f64], v: &mut Vec<f64>, dev: &mut Vec<f64>) -> Option<f64> {
 }
 
 /// The smallest non-zero `|y_k − y_{k−1}|` (0 when there is none).
-fn resolution(y: &[f64]) -> f64 {
+pub(crate) fn resolution(y: &[f64]) -> f64 {
     let d = y
         .windows(2)
         .map(|w| (w[1] - w[0]).abs())
@@ -191,7 +191,7 @@ fn resolution(y: &[f64]) -> f64 {
 }
 
 /// Median (reorders `v` in place, without allocating; `v` not empty).
-fn median(v: &mut [f64]) -> f64 {
+pub(crate) fn median(v: &mut [f64]) -> f64 {
     let m = v.len() / 2;
     let odd = v.len() % 2 == 1;
     let (below, mid, _) = v.select_nth_unstable_by(m, f64::total_cmp);

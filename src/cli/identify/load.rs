@@ -11,6 +11,8 @@ use crate::ingest::csv_file::{ColumnUnit, CsvSource};
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
 use propid_numerics::outliers::{find_outliers, OutlierScratch};
+use propid_numerics::segment::SegmentRules;
+use propid_numerics::startup::start_transient;
 use propid_wire::protocol::detect::WireFormat;
 use propid_wire::record::names;
 
@@ -66,6 +68,10 @@ pub struct Source {
     /// Isolated outlier samples of the outputs, left out (marked missing, not counted in
     /// `missing`; [`propid_numerics::outliers`]).
     pub outliers: usize,
+    /// Samples at the record's start left out as a start-up transient (the output settling
+    /// under the first command level; marked missing, not counted in `missing`;
+    /// [`propid_numerics::startup`]); 0 when none.
+    pub start_up_transient: usize,
     /// `"pulse"` or `"okid"` (filled in after identification).
     pub path: &'static str,
     /// TSP/1 decoding counters (binary recordings).
@@ -191,6 +197,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
             samples: rec.len(),
             missing: rec.missing_count(),
             outliers: 0,
+            start_up_transient: 0,
             path: "",
             tsp1,
             csv,
@@ -215,13 +222,40 @@ pub fn leave_out_outliers(loaded: &mut Loaded) -> usize {
         }
     }
     let count = flagged.iter().filter(|&&f| f).count();
-    if count == 0 {
-        return 0;
+    let ks: Vec<usize> = (0..flagged.len()).filter(|&k| flagged[k]).collect();
+    leave_out(loaded, &ks);
+    loaded.source.outliers = count;
+    count
+}
+
+/// Leaves out a start-up transient ([`propid_numerics::startup`], judged on every output under
+/// the input's first level; the longest found): its samples are marked missing and NaN in the
+/// outputs and the stand's channels, never corrected. Returns how many samples (from the
+/// record's start).
+pub fn leave_out_start_transient(loaded: &mut Loaded) -> usize {
+    let rules = SegmentRules::DEFAULT;
+    let end = loaded
+        .outputs
+        .iter()
+        .filter_map(|y| start_transient(y, &loaded.missing, &loaded.input, &rules))
+        .map(|t| t.end)
+        .max()
+        .unwrap_or(0);
+    let ks: Vec<usize> = (0..end).collect();
+    leave_out(loaded, &ks);
+    loaded.source.start_up_transient = end;
+    end
+}
+
+/// Marks samples `ks` missing, NaN in the outputs and the stand's channels.
+fn leave_out(loaded: &mut Loaded, ks: &[usize]) {
+    let Some(&last) = ks.iter().max() else {
+        return;
+    };
+    if loaded.missing.len() <= last {
+        loaded.missing.resize(last + 1, false);
     }
-    if loaded.missing.len() < flagged.len() {
-        loaded.missing.resize(flagged.len(), false);
-    }
-    for (k, _) in flagged.iter().enumerate().filter(|(_, &f)| f) {
+    for &k in ks {
         loaded.missing[k] = true;
         let channels = loaded.outputs.iter_mut().map(Vec::as_mut_slice);
         let stand = loaded.stand.iter_mut().map(|(_, _, y)| y.as_mut_slice());
@@ -231,8 +265,6 @@ pub fn leave_out_outliers(loaded: &mut Loaded) -> usize {
             }
         }
     }
-    loaded.source.outliers = count;
-    count
 }
 
 fn step_out(s: &FoundStep, t0: f64, dt: f64) -> StepOut {

@@ -145,6 +145,15 @@ impl<'a> Output<'a> {
                 s.outliers
             );
         }
+        if s.start_up_transient > 0 {
+            let _ = writeln!(
+                o,
+                "start-up  the first {} samples ({:.3} s) left out (marked missing): the output \
+                 was still settling under the first command level",
+                s.start_up_transient,
+                s.start_up_transient as f64 / s.rate_hz
+            );
+        }
         if let Some(j) = s.csv.as_ref().and_then(|c| c.jitter.as_ref()) {
             let _ = writeln!(
                 o,
