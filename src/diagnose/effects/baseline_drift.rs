@@ -61,6 +61,12 @@ impl Term for BaselineDriftParams {
         }
     }
 
+    /// The lowest bins, `(0, 8.5/T]` over the estimation part's `T = n·dt`: where a line over
+    /// the record has its power (Hann periodogram of the mean-removed ramp).
+    fn band_hz(&self, n: usize, dt_s: f64) -> Option<[f64; 2]> {
+        Some([0.0, 8.5 / (n as f64 * dt_s)])
+    }
+
     fn free(&self) -> Vec<(f64, Scale)> {
         vec![(self.rate_per_s, Scale::Linear)]
     }
