@@ -43,8 +43,9 @@ fn samples(path: &Path, log: &Log) -> Option<Samples> {
     )
 }
 
-/// `diagnose --json` findings of `s` written to `file`; `None` when diagnose fails.
-fn findings(bin: &Path, file: &Path, s: &Samples) -> Option<Vec<Value>> {
+/// `diagnose --json` findings of `s` written to `file`, and the kinds of its warnings; `None`
+/// when diagnose fails.
+fn findings(bin: &Path, file: &Path, s: &Samples) -> Option<(Vec<Value>, Vec<String>)> {
     std::fs::write(file, s.to_csv()).ok()?;
     let out = Command::new(bin)
         .args(["diagnose", "--json", "--input", "u", "--output", "y"])
@@ -52,7 +53,12 @@ fn findings(bin: &Path, file: &Path, s: &Samples) -> Option<Vec<Value>> {
         .output()
         .ok()?;
     let v: Value = serde_json::from_slice(&out.stdout).ok()?;
-    v["findings"].as_array().cloned()
+    let kinds = v["warnings"].as_array().map_or(Vec::new(), |w| {
+        w.iter()
+            .filter_map(|w| w["kind"].as_str().map(String::from))
+            .collect()
+    });
+    Some((v["findings"].as_array().cloned()?, kinds))
 }
 
 fn main() {
@@ -82,19 +88,20 @@ fn main() {
          the tolerance (dead time ±1 sample, sinusoid 1 % on the frequency and 25 % on the \
          amplitude, drift 25 %, supply sag 30 %); error = median |parameter error| of the found \
          draws (samples for the dead time, relative otherwise); also = other effects named in \
-         the injected log but not in the clean one (count over the draws). The supply sag scales \
-         the output, so it is injected only where the output is zero at rest (not the tanks' \
-         water level).\n"
+         the injected log but not in the clean one (count over the draws); unidentifiable = \
+         draws where diagnose warns that the effect cannot be identified in this log (the \
+         `EFFECT_unidentifiable` warning). The supply sag scales the output, so it is injected \
+         only where the output is zero at rest (not the tanks' water level).\n"
     );
-    println!("| effect | log | found | within | median error | also named |");
-    println!("|---|---|---|---|---|---|");
+    println!("| effect | log | found | within | median error | unidentifiable | also named |");
+    println!("|---|---|---|---|---|---|---|");
     for effect in EFFECTS {
         for (path, log) in logs.iter().filter(|(_, l)| l.takes(effect)) {
             let Some(s) = samples(path, log) else {
                 continue;
             };
             let file = dir.path().join("injected.csv");
-            let Some(clean) = findings(&bin, &file, &s) else {
+            let Some((clean, _)) = findings(&bin, &file, &s) else {
                 eprintln!(
                     "injection_table: {}: diagnose failed on the clean log",
                     log.name
@@ -107,14 +114,16 @@ fn main() {
                     .collect()
             };
             let clean_names = named(&clean);
-            let (mut found, mut within, mut errors) = (0, 0, Vec::new());
+            let (mut found, mut within, mut errors, mut unident) = (0, 0, Vec::new(), 0);
+            let unidentifiable = format!("{effect}_unidentifiable");
             let mut also: std::collections::BTreeMap<String, usize> = Default::default();
             for k in 0..draws {
                 let mut rng = StdRng::seed_from_u64(1000 + k);
                 let Some(inj) = Injection::draw(effect, &s, &mut rng) else {
                     continue;
                 };
-                let got = findings(&bin, &file, &inject(&s, &inj)).unwrap_or_default();
+                let (got, kinds) = findings(&bin, &file, &inject(&s, &inj)).unwrap_or_default();
+                unident += usize::from(kinds.contains(&unidentifiable));
                 let o = judge(&inj, &clean, &got);
                 if !o.within(&inj) {
                     eprintln!(
@@ -142,7 +151,7 @@ fn main() {
                 .collect::<Vec<_>>()
                 .join(", ");
             println!(
-                "| {effect} | {} | {found}/{draws} | {within}/{draws} | {median} | {} |",
+                "| {effect} | {} | {found}/{draws} | {within}/{draws} | {median} | {unident}/{draws} | {} |",
                 log.name,
                 if also.is_empty() { "—" } else { &also }
             );

@@ -4,6 +4,7 @@
 //! samples, simulated over the whole record).
 
 use super::ctx::Ctx;
+use super::effects::baseline_drift;
 use super::era_start::{self, EraStart};
 use super::fit::Fit;
 use super::folds::{fit_percent, Folds};
@@ -82,6 +83,7 @@ pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraSt
     if let Some(e) = &extended {
         warnings.extend(verdict::warnings(&e.model, "extended", band));
     }
+    warnings.extend(verdict::drift_warning(baseline_drift::confounding(ctx)));
     Diagnosis {
         source: Default::default(),
         baseline,

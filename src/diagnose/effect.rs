@@ -136,6 +136,14 @@ pub trait Term: std::fmt::Debug + Send + Sync {
     /// Output places: transforms the output `y` (one value per sample) in place.
     fn shape_output(&self, _y: &mut [f64], _sig: &Signals) {}
 
+    /// The frequency band `[lo, hi]`, Hz, an additive narrowband output term lives in (a drift
+    /// near 0 Hz, a sinusoid about its frequency) over `n` estimation samples, for the search's
+    /// local test ([`super::revise::passes`]). `None` (the default): the term is tested
+    /// against the whole residual only.
+    fn band_hz(&self, _n: usize, _dt_s: f64) -> Option<[f64; 2]> {
+        None
+    }
+
     /// The parameters the fit adjusts, in a fixed order, with how it moves each (delays and
     /// clip levels are searched on grids by the effect itself and are not listed).
     fn free(&self) -> Vec<(f64, Scale)> {

@@ -28,9 +28,14 @@
 //!   `Δu` of a staircase or pulses is a train of impulses, flat up to Nyquist: the band is the
 //!   whole record's; a smooth input (slow ramp, low chirp) excites only its low band, and a mode
 //!   fitted above it is not measured but extrapolated.
+//! - `baseline_drift_unidentifiable` (the baseline): the time `t` is an affine function of the
+//!   command to within `1 − R²` ([`super::effects::baseline_drift::confounding`], `value` =
+//!   `R²`): a `baseline_drift` is then indistinguishable from a change of the static map, and
+//!   finding none (or one) says nothing about it.
 
 use serde::Serialize;
 
+use super::effects::baseline_drift::UNIDENTIFIABLE_R2;
 use super::noise::NoiseFloor;
 use super::spectrum::periodogram;
 use super::summary::ModelSummary;
@@ -134,6 +139,8 @@ pub enum WarningKind {
     TimeConstantBelowSample,
     /// The dominant mode outside the excited band.
     ModeOutsideBand,
+    /// A drift of the output cannot be told from the gain (a one-way ramp of the command).
+    BaselineDriftUnidentifiable,
 }
 
 /// An implausible result (`"warnings"`).
@@ -150,6 +157,22 @@ pub struct Warning {
     /// The excited band `[lo, hi]`, Hz (`mode_outside_band` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub band_hz: Option<[f64; 2]>,
+}
+
+/// The `baseline_drift_unidentifiable` warning when `r2` (the share of `t` explained by the
+/// command) reaches [`UNIDENTIFIABLE_R2`].
+pub fn drift_warning(r2: f64) -> Option<Warning> {
+    (r2 >= UNIDENTIFIABLE_R2).then(|| Warning {
+        kind: WarningKind::BaselineDriftUnidentifiable,
+        message: format!(
+            "baseline drift not identifiable: the command runs one way through the record (time \
+             is affine in it to R² = {r2:.5}), so a drift of the output cannot be told from a \
+             change of the thrust curve; a ramp up and back down, or holds, would separate them"
+        ),
+        model: "baseline",
+        value: r2,
+        band_hz: None,
+    })
 }
 
 /// The excited band `[1/T, f_hi]` of input `u` sampled every `dt_s` (see the module doc).

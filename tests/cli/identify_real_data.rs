@@ -32,7 +32,7 @@ fn f(v: &Value) -> f64 {
 }
 
 /// The shared dataset folder, or `None` (with a visible message) when it is absent.
-fn shared(folder: &str) -> Option<PathBuf> {
+pub(crate) fn shared(folder: &str) -> Option<PathBuf> {
     let root = std::env::var_os("PROPID_SHARED_DATA")
         .map(PathBuf::from)
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"));

@@ -1,5 +1,20 @@
 //! `baseline_drift`: the output creeps linearly in time whatever the input does (load-cell
 //! creep, temperature): `ŷ ← ŷ + r t`.
+//!
+//! **Identifiability.** The drift's regressor `t` competes with the static map's: a command
+//! `u` that runs one way through the whole record, slowly against the dynamics (a thrust-curve
+//! ramp), is an affine function of time, `u = a + b t`, and then a drift of the output is
+//! indistinguishable from a change of the map: `K u + r t = (K + r/b) u − r a/b`, and with a
+//! curved map the drift is read only through the assumed shape of the curve (a drift hidden in
+//! a measured ramp is named as a steeper or more curved map). [`confounding`] measures it: `R²`
+//! of the least-squares fit of `t` by `[1, u]` over the estimation samples (the fitted rate's
+//! variance grows as `1 / (1 − R²)`). At `R² ≥` [`UNIDENTIFIABLE_R2`] diagnose says so (a
+//! `baseline_drift_unidentifiable` warning) rather than nothing. The command, not the fitted
+//! response, is the measure: the 2nd-order baseline bends its response (a slow mode) to imitate
+//! a curved map, and would hide the ramp. A staircase holds each level while `t` runs on (`R²`
+//! of a monotone staircase of `L` equal levels is about `1 − 1/L²`) and a ramp up and back down
+//! is uncorrelated with `t`: on those the drift is read from the creep within the holds, or from
+//! the difference between the way up and the way down at the same command.
 
 use serde::Serialize;
 use serde_json::{json, Map, Value};
@@ -11,6 +26,33 @@ use crate::diagnose::model::{Core, Signals};
 
 /// The published name.
 pub const NAME: &str = "baseline_drift";
+
+/// `R²` at and above which the drift is called unidentifiable: the fitted rate's variance
+/// inflated a thousandfold, `t` affine in the command to within 0.1 % of its variance (a
+/// monotone staircase needs about 30 equal levels to get there).
+pub const UNIDENTIFIABLE_R2: f64 = 0.999;
+
+/// `R²` of `t` fitted by `[1, u]` over the estimation samples with a measured output, `u` the
+/// command (module doc); 0 when the command is constant there.
+pub fn confounding(ctx: &Ctx) -> f64 {
+    let u = ctx.sig.u;
+    let ks: Vec<usize> = ctx
+        .est
+        .clone()
+        .filter(|&k| ctx.sig.y[k].is_finite())
+        .collect();
+    let m = ks.len().max(1) as f64;
+    let mean = |f: &dyn Fn(usize) -> f64| ks.iter().map(|&k| f(k)).sum::<f64>() / m;
+    let t = |k: usize| k as f64 * ctx.sig.dt_s;
+    let (mt, ms) = (mean(&t), mean(&|k| u[k]));
+    let sxy = mean(&|k| (t(k) - mt) * (u[k] - ms));
+    let sxx = mean(&|k| (t(k) - mt).powi(2));
+    let syy = mean(&|k| (u[k] - ms).powi(2));
+    if sxx <= 0.0 || syy <= 1e-24 * ms * ms || syy <= 0.0 {
+        return 0.0;
+    }
+    (sxy * sxy / (sxx * syy)).clamp(0.0, 1.0)
+}
 
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
@@ -61,6 +103,12 @@ impl Term for BaselineDriftParams {
         }
     }
 
+    /// The lowest bins, `(0, 8.5/T]` over the estimation part's `T = n·dt`: where a line over
+    /// the record has its power (Hann periodogram of the mean-removed ramp).
+    fn band_hz(&self, n: usize, dt_s: f64) -> Option<[f64; 2]> {
+        Some([0.0, 8.5 / (n as f64 * dt_s)])
+    }
+
     fn free(&self) -> Vec<(f64, Scale)> {
         vec![(self.rate_per_s, Scale::Linear)]
     }
@@ -104,6 +152,40 @@ impl Term for BaselineDriftParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::model::Signals;
+
+    fn ctx<'a>(u: &'a [f64], y: &'a [f64]) -> Ctx<'a> {
+        Ctx {
+            sig: Signals {
+                dt_s: 0.02,
+                u,
+                y,
+                voltage: None,
+                u_ref: 0.5,
+                v_ref: 0.0,
+            },
+            est: 0..u.len(),
+            val: 0..u.len(),
+        }
+    }
+
+    /// A one-way ramp confounds the drift with the map; a staircase of 5 levels and a ramp up
+    /// and back down do not.
+    #[test]
+    fn a_one_way_ramp_confounds_the_drift_and_a_staircase_or_a_ramp_up_and_down_does_not() {
+        let n = 2000;
+        let ramp: Vec<f64> = (0..n).map(|k| k as f64 / n as f64).collect();
+        let stairs: Vec<f64> = (0..n).map(|k| (5 * k / n) as f64 * 0.2).collect();
+        let updown: Vec<f64> = (0..n)
+            .map(|k| 1.0 - (2.0 * k as f64 / n as f64 - 1.0).abs())
+            .collect();
+        let y = vec![0.0; n];
+        let r2 = |u: &[f64]| confounding(&ctx(u, &y));
+        assert!(r2(&ramp) >= UNIDENTIFIABLE_R2, "{}", r2(&ramp));
+        assert!(r2(&stairs) < 0.97, "{}", r2(&stairs));
+        assert!(r2(&updown) < 0.01, "{}", r2(&updown));
+        assert_eq!(r2(&vec![0.3; n]), 0.0);
+    }
 
     #[test]
     fn the_published_parameters_keep_their_names() {

@@ -8,7 +8,7 @@ use crate::diagnose::ctx::Ctx;
 use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
 use crate::diagnose::fit::Fit;
 use crate::diagnose::model::{max_freq_hz, Core, Model, Signals};
-use crate::diagnose::spectrum::peaks;
+use crate::diagnose::spectrum::{band_level, peaks, steady_power};
 
 /// The published name.
 pub const NAME: &str = "periodic_disturbance";
@@ -16,6 +16,9 @@ pub const NAME: &str = "periodic_disturbance";
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
 pub struct PeriodicDisturbance;
+
+/// Residual-spectrum peaks whose steady power is compared ([`Effect::extend`]).
+pub const PEAKS: usize = 8;
 
 /// The fitted sinusoid.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,28 +45,49 @@ impl Effect for PeriodicDisturbance {
         NAME
     }
 
-    /// Starts at the three strongest peaks of the residual spectrum between 3 periods per
-    /// estimation part and 0.95 Nyquist (none: not applicable); Levenberg–Marquardt from the
-    /// best.
+    /// One start: of the [`PEAKS`] strongest peaks of the residual spectrum between 3 periods
+    /// per estimation part and 0.95 Nyquist, the one whose steady power ([`steady_power`]: the
+    /// same sinusoid in both halves of the estimation part) stands highest above the residual's
+    /// level around it ([`band_level`] over [`band`], the peak's own bins left out), when it is
+    /// positive (none: not applicable); Levenberg–Marquardt from it.
+    ///
+    /// Why not the strongest peak: on a measured log the residual of the 2nd-order model has
+    /// bumps of its own (a lightly damped mode the sweep runs through, a slow nonlinear misfit)
+    /// stronger than a sinusoid hidden in it; fitted first, such a bump wins the SSE and then
+    /// fails the held-out test, and the sinusoid is never tried. A steady sinusoid keeps its
+    /// amplitude and phase from one half to the other, where an input-driven bump does not, and
+    /// it is a line, narrower than the residual around it.
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
         let dt = ctx.sig.dt_s;
         let fmax = max_freq_hz(dt);
         let n = ctx.est.len() as f64;
-        let starts: Vec<_> = peaks(&ctx.residual(cur), dt, 3.0 / (n * dt), 0.95 * fmax, 3)
+        let residual = ctx.residual(cur);
+        let contrast = |f: f64| {
+            let level = band_level(&residual, dt, band(f, ctx.est.len(), dt), Some(f));
+            steady_power(&residual, dt, f) / level.unwrap_or(f64::NAN).max(1e-300)
+        };
+        let (freq_hz, steady) = peaks(&residual, dt, 3.0 / (n * dt), 0.95 * fmax, PEAKS)
             .into_iter()
-            .map(|(freq_hz, _)| {
-                cur.model.with(PeriodicDisturbanceParams {
-                    freq_hz,
-                    sin_coef: 0.0,
-                    cos_coef: 0.0,
-                })
-            })
-            .collect();
-        if starts.is_empty() {
+            .map(|(f, _)| (f, contrast(f)))
+            .filter(|(_, c)| !c.is_nan())
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if steady <= 0.0 {
             return None;
         }
-        Some(ctx.best_of(starts, 1))
+        let start = cur.model.with(PeriodicDisturbanceParams {
+            freq_hz,
+            sin_coef: 0.0,
+            cos_coef: 0.0,
+        });
+        Some(ctx.best_of([start], 1))
     }
+}
+
+/// The band a sinusoid at `f_hz` is tested in over `n` samples every `dt_s`: `f ± w`, `w` the
+/// larger of 10 % of `f` and 12 bins of the periodogram.
+pub fn band(f_hz: f64, n: usize, dt_s: f64) -> [f64; 2] {
+    let w = (0.1 * f_hz).max(12.0 / (n as f64 * dt_s));
+    [f_hz - w, f_hz + w]
 }
 
 impl PeriodicDisturbanceParams {
@@ -91,6 +115,11 @@ impl Term for PeriodicDisturbanceParams {
         let fmax = max_freq_hz(ctx.sig.dt_s);
         let span_s = ctx.est.len() as f64 * ctx.sig.dt_s;
         self.freq_hz >= 5.0 / span_s && self.freq_hz < fmax
+    }
+
+    /// [`band`] about its frequency.
+    fn band_hz(&self, n: usize, dt_s: f64) -> Option<[f64; 2]> {
+        Some(band(self.freq_hz, n, dt_s))
     }
 
     fn shape_output(&self, y: &mut [f64], sig: &Signals) {
