@@ -172,9 +172,6 @@ pub fn search(
     })
 }
 
-/// An addition that passed the tests: its score, the effect, the extended fit.
-type Candidate<'e> = (f64, &'e dyn Effect, Fit);
-
 /// One forward step (module doc): every effect not in `findings` fitted on top of `cur`; the
 /// candidate the selection rule takes, with its score, fit and held-out scores.
 fn forward<'e>(
@@ -184,7 +181,7 @@ fn forward<'e>(
     cur_figure: f64,
     cv: &impl Fn(&Fit) -> Scores,
 ) -> Option<(f64, &'e dyn Effect, Fit, Scores)> {
-    let mut candidates: Vec<(f64, Candidate)> = Vec::new();
+    let mut candidates: Vec<(f64, (f64, &dyn Effect, Fit))> = Vec::new();
     for &e in REGISTRY {
         if findings.iter().any(|f| f.effect == e.name()) {
             continue;
