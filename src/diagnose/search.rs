@@ -14,19 +14,10 @@
 //! ([`Effect::extend`]: every parameter of the model, the core's, the earlier effects' and the
 //! new one's, fitted together); the candidates that pass the score, the RMS drop and
 //! plausibility ([`Term::plausible`](super::effect::Term::plausible)) are tried in order of
-//! **score per parameter** `S / k` ([`param_count`]: the F-to-enter of stepwise regression,
-//! `(ΔSSE / k) / σ̂²`), and the first whose **held-out figure** ([`super::folds`]: the mean fit of the blocked
+//! score, and the first whose **held-out figure** ([`super::folds`]: the mean fit of the blocked
 //! cross-validation folds, or the hold-out tail) is higher than the current model's is taken;
 //! its gain in percentage points is the finding's `cv_gain_pp`. An addition that does not
 //! improve the held-out figure is not taken. Repeat (at most `max_effects` effects in all).
-//! Ordering by the score per parameter, not the total: a flexible effect fits a little of
-//! everything, so its total score is larger than that of the one-parameter effect that is
-//! really there (a series mode, 3 parameters, imitates a dead time's phase lag and rings a
-//! little more; on a thrust stand whose three slots hold a static map and a supply sag, the
-//! mode took the last slot and the 5-sample delay of the log was never named). Under the null
-//! hypothesis `S` is χ² with `k` degrees of freedom, so `S / k` is the statistic on a common
-//! scale; the more flexible effect still enters next if it explains more than the simpler one
-//! took, and the revision removes the simpler one if the later one makes it redundant.
 //!
 //! **Revision.** Greedy forward selection cannot undo a choice: a flexible effect taken first
 //! (a series mode whose phase lag imitates a dead time) leaves a simpler true one nothing to
@@ -44,7 +35,7 @@ use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Scores};
 use super::model::{Core, Model};
 use super::result::Finding;
-use super::revise::{param_count, passes, revise, Change, Kept, MAX_REVISIONS};
+use super::revise::{passes, revise, Change, Kept, MAX_REVISIONS};
 
 /// Decision threshold on the score `n ln(SSE_M / SSE_{M+e})`.
 pub const SCORE_THRESHOLD: f64 = 40.0;
@@ -181,7 +172,7 @@ fn forward<'e>(
     cur_figure: f64,
     cv: &impl Fn(&Fit) -> Scores,
 ) -> Option<(f64, &'e dyn Effect, Fit, Scores)> {
-    let mut candidates: Vec<(f64, (f64, &dyn Effect, Fit))> = Vec::new();
+    let mut candidates: Vec<(f64, (&dyn Effect, Fit))> = Vec::new();
     for &e in REGISTRY {
         if findings.iter().any(|f| f.effect == e.name()) {
             continue;
@@ -190,11 +181,10 @@ fn forward<'e>(
             continue;
         };
         if let Some(score) = passes(ctx, cur, &f, e.name()) {
-            let per_param = score / param_count(&f.model, e.name()).max(1) as f64;
-            candidates.push((per_param, (score, e, f)));
+            candidates.push((score, (e, f)));
         }
     }
-    let (_, (score, e, f), f_cv) = select(candidates, cur_figure, |(_, _, f)| {
+    let (score, (e, f), f_cv) = select(candidates, cur_figure, |(_, f)| {
         let s = cv(f);
         (s.mean, s)
     })?;
@@ -293,82 +283,6 @@ fn finding(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A lightly damped plant (4 Hz, ζ 0.3, at 100 Hz) behind a transport delay of 3.5
-    /// samples (the mean of `u_{k−3}` and `u_{k−4}`: a sensor sampled half a period after the
-    /// command, as the Silverbox log is), a staircase, a small deterministic noise. On the
-    /// 2nd-order baseline the series mode (3 parameters, whose phase lag takes the half
-    /// sample too) has the larger total score — the rule by total score took it and named no
-    /// delay — but the delay (1 parameter) has the larger score per parameter: the forward
-    /// step takes the delay, with its length to the nearest sample.
-    #[test]
-    fn a_delay_is_taken_before_a_mode_that_imitates_it() {
-        use crate::diagnose::effects::dead_time::DeadTime;
-        use crate::diagnose::effects::extra_mode::ExtraMode;
-        use crate::diagnose::model::{simulate, Signals};
-        let dt = 0.01;
-        let levels = [0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65];
-        let u: Vec<f64> = levels
-            .iter()
-            .flat_map(|&l| std::iter::repeat(l).take(150))
-            .collect();
-        let delayed: Vec<f64> = (0..u.len())
-            .map(|k| 0.5 * (u[k.saturating_sub(3)] + u[k.saturating_sub(4)]))
-            .collect();
-        let truth = Model::new(Core {
-            fn_hz: 4.0,
-            zeta: 0.3,
-            gain: 2.0,
-            offset: 0.1,
-        });
-        let mut y = vec![0.0; u.len()];
-        let y0 = y.clone();
-        let sig0 = Signals {
-            dt_s: dt,
-            u: &delayed,
-            y: &y0,
-            voltage: None,
-            u_ref: 0.5,
-            v_ref: 0.0,
-        };
-        simulate(&truth, &sig0, &mut y);
-        for (k, v) in y.iter_mut().enumerate() {
-            *v += 0.002 * ((k as f64 * 1.7).sin() + (k as f64 * 0.37).cos());
-        }
-        // The detector sees the undelayed command and the measured output only.
-        let folds = Folds::from_input(&u, &y, 0.7);
-        let mean = u.iter().sum::<f64>() / u.len() as f64;
-        let ctx = Ctx {
-            sig: Signals {
-                dt_s: dt,
-                u: &u,
-                y: &y,
-                voltage: None,
-                u_ref: mean,
-                v_ref: 0.0,
-            },
-            est: folds.estimation.clone(),
-            val: 0..u.len(),
-        };
-        let base = baseline(&ctx, &Model::default(), &[]);
-        let score = |e: &dyn Effect| {
-            let f = e.extend(&ctx, &base).expect("fitted");
-            passes(&ctx, &base, &f, e.name()).expect("passes the addition tests")
-        };
-        let (s_delay, s_mode) = (score(&DeadTime), score(&ExtraMode));
-        assert!(
-            s_mode > s_delay && s_mode / 3.0 < s_delay,
-            "the case must be one the rule by total score got wrong: mode {s_mode}, delay \
-             {s_delay}"
-        );
-        let cv = |f: &Fit| cross_validate(&ctx, &folds, f);
-        let base_cv = cv(&base);
-        let (_, e, f, _) = forward(&ctx, &[], &base, base_cv.mean, &cv).expect("an addition");
-        assert_eq!(e.name(), "dead_time");
-        let d = f.model.term("dead_time").map(|t| t.finding_params(dt));
-        let d = d.and_then(|p| p["delay_samples"].as_u64());
-        assert!(matches!(d, Some(3 | 4)), "delay {d:?}");
-    }
 
     #[test]
     fn the_strongest_candidate_that_raises_the_held_out_figure_is_taken() {
