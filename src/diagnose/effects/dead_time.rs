@@ -53,26 +53,59 @@ impl Effect for DeadTime {
         NAME
     }
 
-    /// Delays up to [`max_delay_samples`]. A coarse
-    /// grid (every 4th delay) with a short refit of every parameter at each delay (the
-    /// baseline's `fn` and `ζ` have absorbed part of the delay), then every delay around the
-    /// best with a longer refit.
+    /// Delays up to [`max_delay_samples`], each tried with every parameter of the current
+    /// model refitted jointly (the core's `fn` and `ζ` have absorbed part of the delay, and
+    /// the other effects' parameters shift with it). A coarse grid with a short refit, then
+    /// every delay around the best [`FINE_STARTS`] coarse delays with a longer refit.
+    ///
+    /// The coarse step is [`coarse_step`]: the SSE as a function of the delay is not smooth
+    /// when the core rings (a delay of one period of the core's mode fits almost as well as
+    /// none, a half period fits worst), so the grid must sample that period; a step of 4 on a
+    /// mode of 8 samples per period skips the true delay's narrow valley and lands a whole
+    /// period later (Silverbox at 610 Hz, a 65 Hz resonance: 3 samples found as 11).
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
         let dmax = max_delay_samples(ctx.sig.dt_s, ctx.est.len());
         let lm_at = |d: usize, iters: usize| {
             let start = cur.model.with(DeadTimeParams { delay_samples: d });
             ctx.lm(&start, iters)
         };
-        let coarse = (1..=dmax).step_by(4).map(|d| (d, lm_at(d, 8).sse));
-        let d0 = coarse.min_by(|a, b| a.1.total_cmp(&b.1))?.0;
+        let step = coarse_step(cur.model.core.fn_hz, ctx.sig.dt_s);
+        let mut coarse: Vec<(usize, f64)> = (1..=dmax)
+            .step_by(step)
+            .map(|d| (d, lm_at(d, 8).sse))
+            .collect();
+        coarse.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let mut fine: Vec<usize> = coarse
+            .iter()
+            .take(FINE_STARTS)
+            .flat_map(|&(d0, _)| d0.saturating_sub(step).max(1)..=(d0 + step).min(dmax))
+            .collect();
+        fine.sort_unstable();
+        fine.dedup();
         let mut best: Option<Fit> = None;
-        for d in d0.saturating_sub(4).max(1)..=(d0 + 4).min(dmax) {
+        for d in fine {
             let f = lm_at(d, 30);
             if best.as_ref().map_or(true, |b| f.sse < b.sse) {
                 best = Some(f);
             }
         }
         best
+    }
+}
+
+/// Coarse delays refined by [`DeadTime::extend`]: the best this many (the SSE over the delay
+/// has a valley per period of a ringing core).
+pub const FINE_STARTS: usize = 2;
+
+/// The coarse step of the delay search, samples: a quarter of the core's period
+/// `1 / (fn dt)` samples (so that every valley of the SSE over the delay is sampled, see
+/// [`DeadTime::extend`]), within 1..=4.
+pub fn coarse_step(fn_hz: f64, dt_s: f64) -> usize {
+    let period = 1.0 / (fn_hz * dt_s);
+    if period.is_finite() {
+        ((period / 4.0).floor() as usize).clamp(1, 4)
+    } else {
+        4
     }
 }
 
@@ -143,6 +176,17 @@ mod tests {
         // A short record: a tenth of its estimation part.
         assert_eq!(max_delay_samples(4.0, 90), 9);
         assert_eq!(max_delay_samples(4.0, 5), 1);
+    }
+
+    #[test]
+    fn the_coarse_step_samples_a_quarter_of_the_core_period() {
+        // Silverbox: a 65 Hz resonance at 610 Hz, 9.4 samples per period.
+        assert_eq!(coarse_step(65.0, 1.0 / 610.35), 2);
+        // A motor at 10 Hz sampled at 500 Hz: 50 samples per period, the step stays 4.
+        assert_eq!(coarse_step(10.0, 0.002), 4);
+        // Near Nyquist every delay is tried; a degenerate core keeps 4.
+        assert_eq!(coarse_step(200.0, 1.0 / 610.35), 1);
+        assert_eq!(coarse_step(0.0, 0.002), 4);
     }
 
     #[test]
