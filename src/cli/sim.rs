@@ -85,6 +85,14 @@ pub struct Overrides {
     /// Fault: hang up after S seconds (faults.hangup_after_s).
     #[arg(long, value_name = "S")]
     pub hangup_after: Option<f64>,
+    /// Fault: hang up every S seconds of the run, re-opening after --reopen-after
+    /// (faults.hangup_every_s).
+    #[arg(long, value_name = "S")]
+    pub hangup_every: Option<f64>,
+    /// Fault: reset the device every S seconds of the run, the port kept open: a new boot id
+    /// (faults.reset_every_s).
+    #[arg(long, value_name = "S")]
+    pub reset_every: Option<f64>,
     /// Fault: re-open as a new boot MS ms after a hang-up (faults.reopen_after_ms; <0 never).
     #[arg(long, value_name = "MS", allow_negative_numbers = true)]
     pub reopen_after: Option<i64>,
@@ -142,6 +150,8 @@ pub fn load_config(args: &Args) -> Result<SimConfig, CliError> {
     set(&mut f.hangup_after_s, o.hangup_after);
     set(&mut f.reopen_after_ms, o.reopen_after);
     set(&mut f.freeze_after_s, o.freeze_after);
+    set(&mut f.hangup_every_s, o.hangup_every);
+    set(&mut f.reset_every_s, o.reset_every);
     cfg.validate()?;
     Ok(cfg)
 }

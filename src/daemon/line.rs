@@ -293,6 +293,16 @@ pub enum Warning<'a> {
         /// Samples dropped.
         count: u64,
     },
+    /// A device reset (a new segment) closed a window before its K pulses: not identified (the
+    /// plan, re-armed, fires the operating point's pulses again).
+    WindowInterrupted {
+        /// The window's operating point.
+        operating_point: f64,
+        /// Pulses it held (fewer than `identify.pulses_per_model`).
+        pulses: usize,
+        /// Device time of the window's last sample, s (the reset device's clock).
+        t_s: f64,
+    },
     /// The window filled before K pulses.
     WindowFull {
         /// The sample that found it full.
@@ -356,6 +366,9 @@ impl Warning<'_> {
             Warning::LinkFailed { .. } => "a command went unanswered after its re-sends",
             Warning::OverflowGap { .. } => {
                 "samples dropped by a full sampler queue; masked as missing"
+            }
+            Warning::WindowInterrupted { .. } => {
+                "a device reset interrupted the window before its K pulses: not identified"
             }
             Warning::WindowFull { .. } => {
                 "window filled before K pulses; its samples were discarded"

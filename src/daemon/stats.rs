@@ -68,6 +68,10 @@ pub struct WorkStats {
     pub models_unreliable: u64,
     /// Pulses seen (EVENT IMPULSE_START).
     pub pulses: u64,
+    /// Windows a device reset (a new segment) closed before their K pulses, each a
+    /// `window_interrupted` warning (published when there was one).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub windows_interrupted: u64,
 }
 
 /// The final `"stats"` line (its `"type"` is written by [`super::line::Line::Stats`]).

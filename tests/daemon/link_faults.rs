@@ -77,6 +77,59 @@ fn a_device_reset_rearms_when_the_config_says_so_and_models_follow() {
     assert!(s["segments"].as_u64().unwrap() >= 2, "{s}");
 }
 
+#[test]
+fn scheduled_hang_ups_and_resets_are_each_followed_and_re_armed() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("stand");
+    let cfg = config(
+        dir.path(),
+        1000,
+        "",
+        "rearm_on_reset = true\nmax_rearms = 10\n",
+    );
+    // `propid sim --hangup-every/--reset-every` (the soak's faults): a hang-up at 1.5 s of the
+    // run (a new boot behind the link 100 ms later), a reset with the port open at 2.5 s
+    let sim = sim_process(
+        &link,
+        20.0,
+        &[
+            "--hangup-every",
+            "1.5",
+            "--reset-every",
+            "2.5",
+            "--reopen-after",
+            "100",
+        ],
+    );
+    let mut d = Daemon::run(&cfg, link.to_str().unwrap(), None);
+    d.wait_for(10.0, |l| l["kind"] == "disconnected");
+    d.wait_for(5.0, |l| l["kind"] == "device_reset");
+    // the reset comes with the port open: a new boot id, no disconnection
+    d.wait_for(5.0, |l| l["kind"] == "device_reset");
+    d.wait_for(5.0, |l| l["kind"] == "arm_acknowledged");
+    d.signal(libc::SIGINT);
+    let (status, lines, err) = d.finish(5.0);
+    drop(sim);
+    assert!(status.success(), "{status:?} {err}");
+    let resets = kind(&lines, "device_reset");
+    assert!(resets.len() >= 2, "{lines:#?}");
+    assert!(resets.iter().all(|r| r["rearm"] == true), "{resets:#?}");
+    let second = lines
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| l["kind"] == "device_reset")
+        .nth(1)
+        .unwrap()
+        .0;
+    let first = position(&lines, "device_reset");
+    assert!(
+        kind(&lines[first..second], "disconnected").is_empty(),
+        "{lines:#?}"
+    );
+    // three boots, each announced by a `segment` line
+    assert!(kind(&lines, "segment").len() >= 3, "{lines:#?}");
+}
+
 /// `propid run` against a stand that freezes after 1 s (port open, silent, reset when the host
 /// closes the port), with a 300 ms stall watchdog.
 fn frozen_stand(dir: &Path, rearm: bool) -> (Daemon, daemon_proc::KillOnDrop) {

@@ -122,6 +122,16 @@ pub struct FaultConfig {
     /// After a hang-up, open a new pty (and re-point `--link`) as a new boot after this delay, ms,
     /// 0..=60000; negative means never reopen (the runner ends).
     pub reopen_after_ms: i64,
+    /// Hang up every this many seconds of the run (the run's clock, not the boot's), s, 0
+    /// (never) ..= 86400: the link is cut, what is on the wire is given time to reach the host,
+    /// the pty closes and re-opens as a new boot after `reopen_after_ms` (at least 0 here).
+    /// Skipped while no host has the port open or the faults are off (`--faults-for`).
+    pub hangup_every_s: f64,
+    /// Reset the device every this many seconds of the run, the port kept open (a brown-out or
+    /// watchdog reset behind a USB-serial bridge): a new boot on the same pty, new boot id,
+    /// disarmed, counters restarted; output not yet sent is lost. s, 0 (never) ..= 86400;
+    /// skipped like `hangup_every_s`.
+    pub reset_every_s: f64,
     /// Freeze (the firmware hangs: nothing sent, commands dropped, the pty kept open) after this
     /// many seconds of the first boot, s, 0 (never) ..= 86400. The host closing the port resets
     /// the board (a new boot on the same pty, as DTR resets an Arduino); once per run.
@@ -151,6 +161,8 @@ impl Default for FaultConfig {
             hangup_after_s: 0.0,
             reopen_after_ms: -1,
             freeze_after_s: 0.0,
+            hangup_every_s: 0.0,
+            reset_every_s: 0.0,
             drop_samples_at: Vec::new(),
             corrupt_samples_at: Vec::new(),
             garbage_before_samples_at: Vec::new(),
@@ -285,6 +297,8 @@ impl FaultConfig {
         check_int("faults.stall_ms", self.stall_ms as i64, 1, 10_000)?;
         check_f64("faults.hangup_after_s", self.hangup_after_s, 0.0, 86_400.0)?;
         check_f64("faults.freeze_after_s", self.freeze_after_s, 0.0, 86_400.0)?;
+        check_f64("faults.hangup_every_s", self.hangup_every_s, 0.0, 86_400.0)?;
+        check_f64("faults.reset_every_s", self.reset_every_s, 0.0, 86_400.0)?;
         check_int(
             "faults.reopen_after_ms",
             self.reopen_after_ms,
@@ -313,6 +327,8 @@ impl FaultConfig {
             && self.stalls_per_s == 0.0
             && self.hangup_after_s == 0.0
             && self.freeze_after_s == 0.0
+            && self.hangup_every_s == 0.0
+            && self.reset_every_s == 0.0
             && self.drop_samples_at.is_empty()
             && self.corrupt_samples_at.is_empty()
             && self.garbage_before_samples_at.is_empty()

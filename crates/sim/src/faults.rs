@@ -59,6 +59,17 @@ pub struct FaultStats {
     pub reopens: u64,
     /// Freezes (firmware hung with the port open, until the host closes it: a new boot).
     pub freezes: u64,
+    /// Resets with the port kept open (`reset_every_s`: a new boot on the same pty).
+    pub resets: u64,
+    /// SAMPLEs taken while the link was down (no host had the port open, or the link was cut
+    /// for a hang-up): never sent, and not faults (no host could see them).
+    pub samples_unsent: u64,
+    /// SAMPLEs lost where the link was cut (a hang-up, a reset, the host closing the port):
+    /// those not yet on the wire, and those dropped or corrupted after the last SAMPLE that
+    /// reached the wire (no later sample of that boot shows the host the jump). They are not in
+    /// `dropped_samples`/`corrupted_samples`; faults on frames never put on the wire are not
+    /// counted at all.
+    pub samples_cut: u64,
 }
 
 impl FaultStats {
@@ -89,6 +100,20 @@ pub struct FaultInjector {
     corrupt_next_sample: bool,
     /// SAMPLEs still to drop in the current drop burst.
     burst_left: u32,
+    /// False while the link is down ([`Self::set_link_up`]): nothing is queued.
+    link_up: bool,
+    /// Clean SAMPLE frames in `pending`.
+    pending_samples: u64,
+    /// Faults counted on the frames in `pending` (corrupted frames, garbage bursts).
+    pending_faults: FaultStats,
+    /// SAMPLEs dropped and corrupted since the last clean SAMPLE that went on the wire: counted
+    /// as faults only once a clean SAMPLE after them goes on the wire too (the host sees the
+    /// jump), and only when one went before them since the link came up or the device booted.
+    unseen: (u64, u64),
+    /// `unseen` when the first and the latest clean SAMPLE in `pending` were queued.
+    pending_clean: Option<((u64, u64), (u64, u64))>,
+    /// A clean SAMPLE went on the wire since the link came up or the device booted.
+    anchored: bool,
 }
 
 impl FaultInjector {
@@ -115,6 +140,13 @@ impl FaultInjector {
             enabled: true,
             corrupt_next_sample: false,
             burst_left: 0,
+            link_up: true,
+            pending_samples: 0,
+            pending_faults: FaultStats::default(),
+            unseen: (0, 0),
+            pending_clean: None,
+            // a recording is read from its first byte; a pty's link starts down
+            anchored: true,
         };
         inj.next_garbage_us = inj.gap_us(inj.cfg.garbage_bursts_per_s, 0);
         inj.next_stall_us = inj.gap_us(inj.cfg.stalls_per_s, 0);
@@ -156,9 +188,58 @@ impl FaultInjector {
         self.stats.freezes += 1;
     }
 
-    /// Forgets output not yet sent (the link went away with it).
+    /// A new boot restarts the device clock at 0: the next garbage burst and stall are drawn
+    /// again on the new clock (the processes are memoryless, so their rates hold).
+    pub fn new_boot(&mut self) {
+        self.stall_until_us = 0;
+        self.next_garbage_us = self.gap_us(self.cfg.garbage_bursts_per_s, 0);
+        self.next_stall_us = self.gap_us(self.cfg.stalls_per_s, 0);
+    }
+
+    /// Counts a reset with the port open done by the runner.
+    pub fn note_reset(&mut self) {
+        self.stats.resets += 1;
+    }
+
+    /// Forgets output not yet sent (the link went away with it): [`Self::cut`].
     pub fn discard_pending(&mut self) {
+        self.cut();
+    }
+
+    /// Switches the link up or down (up by default). Going down cuts it ([`Self::cut`]); while
+    /// it is down every SAMPLE is counted in `samples_unsent` and not sent, other frames are
+    /// discarded. The pty runner takes it down while no host has the port open and from the
+    /// moment a hang-up cuts the link.
+    pub fn set_link_up(&mut self, up: bool) {
+        if self.link_up && !up {
+            self.cut();
+        }
+        self.link_up = up;
+    }
+
+    /// The link is cut here (a hang-up, a reset, the host gone): what is not on the wire yet is
+    /// lost, and so are the samples dropped or corrupted since the last SAMPLE that went on the
+    /// wire (the host never sees a later sample of this boot, so never a jump): all counted in
+    /// `samples_cut` instead of as faults, as are those before the first SAMPLE on the wire of
+    /// a connection or a boot. Faults on frames never sent are uncounted; the frames already on
+    /// the wire keep theirs. The rule that keeps the host's counts exact:
+    /// `samples_lost = dropped_samples + corrupted_samples` and
+    /// `frames_dropped = corrupted_frames + garbage_bursts`, whatever the link did.
+    pub fn cut(&mut self) {
+        let s = &mut self.stats;
+        s.samples_cut += self.unseen.0 + self.unseen.1 + self.pending_samples;
+        s.corrupted_frames -= self.pending_faults.corrupted_frames;
+        s.garbage_bursts -= self.pending_faults.garbage_bursts;
+        s.garbage_bytes -= self.pending_faults.garbage_bytes;
+        self.unseen = (0, 0);
+        self.anchored = false;
         self.pending.clear();
+        self.pending_samples = 0;
+        self.pending_faults = FaultStats::default();
+        self.pending_clean = None;
+        self.burst_left = 0;
+        self.corrupt_next_sample = false;
+        self.stall_until_us = 0;
     }
 
     /// Next event of a Poisson process with `rate_per_s`, after `now_us`.
@@ -199,6 +280,8 @@ impl FaultInjector {
         self.pending.push(self.delimiter);
         self.stats.garbage_bursts += 1;
         self.stats.garbage_bytes += n as u64 + 1;
+        self.pending_faults.garbage_bursts += 1;
+        self.pending_faults.garbage_bytes += n as u64 + 1;
     }
 
     /// The SAMPLE `index` is about to be sent: inserts a garbage burst before it when
@@ -210,6 +293,10 @@ impl FaultInjector {
     /// `sample_index` jump without a `seq` jump: a device-side drop (PROTOCOL.md §3).
     pub fn before_sample(&mut self, index: u32) -> bool {
         self.corrupt_next_sample = false;
+        if !self.link_up {
+            self.stats.samples_unsent += 1;
+            return true;
+        }
         if !self.enabled {
             return false;
         }
@@ -225,7 +312,7 @@ impl FaultInjector {
             || (self.cfg.drop_sample_prob > 0.0 && self.rng.gen_bool(self.cfg.drop_sample_prob))
             || self.in_drop_burst();
         if drop {
-            self.stats.dropped_samples += 1;
+            self.unseen.0 += 1;
             return true;
         }
         self.corrupt_next_sample = self.cfg.corrupt_samples_at.binary_search(&index).is_ok();
@@ -248,6 +335,21 @@ impl FaultInjector {
     /// Passes one encoded frame (ending in its 0x00 delimiter) through the faults into the
     /// output queue.
     pub fn push_frame(&mut self, frame: &[u8], kind: FrameKind) {
+        if !self.link_up {
+            return;
+        }
+        let before = self.stats.corrupted_frames;
+        self.push_faulted(frame, kind);
+        let corrupted = self.stats.corrupted_frames - before;
+        self.pending_faults.corrupted_frames += corrupted;
+        if kind == FrameKind::Sample && corrupted == 0 {
+            self.pending_samples += 1;
+            let first = self.pending_clean.map_or(self.unseen, |(f, _)| f);
+            self.pending_clean = Some((first, self.unseen));
+        }
+    }
+
+    fn push_faulted(&mut self, frame: &[u8], kind: FrameKind) {
         let start = self.pending.len();
         self.pending.extend_from_slice(frame);
         let body = frame.len().saturating_sub(1);
@@ -256,7 +358,7 @@ impl FaultInjector {
             let at = start + self.rng.gen_range(0..body);
             self.flip(at);
             self.stats.corrupted_frames += 1;
-            self.stats.corrupted_samples += 1;
+            self.unseen.1 += 1;
         } else if self.enabled && self.cfg.bit_flip_per_byte > 0.0 && body > 0 {
             let p_frame = 1.0 - (1.0 - self.cfg.bit_flip_per_byte).powi(body as i32);
             if self.rng.gen_bool(p_frame.clamp(0.0, 1.0)) {
@@ -264,7 +366,7 @@ impl FaultInjector {
                 self.flip(at);
                 self.stats.corrupted_frames += 1;
                 if kind == FrameKind::Sample {
-                    self.stats.corrupted_samples += 1;
+                    self.unseen.1 += 1;
                 }
             }
         }
@@ -286,6 +388,19 @@ impl FaultInjector {
         self.poll(now_us);
         if now_us >= self.stall_until_us {
             out.append(&mut self.pending);
+            if let Some(((d0, c0), (d, c))) = self.pending_clean.take() {
+                // the losses before those samples are seen now, but for those before the first
+                // sample of a connection or a boot (no earlier one shows the jump)
+                let (lead_d, lead_c) = if self.anchored { (0, 0) } else { (d0, c0) };
+                self.stats.samples_cut += lead_d + lead_c;
+                self.stats.dropped_samples += d - lead_d;
+                self.stats.corrupted_samples += c - lead_c;
+                self.unseen.0 -= d;
+                self.unseen.1 -= c;
+                self.anchored = true;
+            }
+            self.pending_samples = 0;
+            self.pending_faults = FaultStats::default();
         }
     }
 
@@ -296,172 +411,4 @@ impl FaultInjector {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn frame(n: usize) -> Vec<u8> {
-        let mut f = vec![0x11u8; n];
-        f.push(0);
-        f
-    }
-
-    #[test]
-    fn clean_config_passes_bytes_unchanged() {
-        let mut inj = FaultInjector::new(&FaultConfig::default(), 1);
-        inj.push_frame(&frame(10), FrameKind::Sample);
-        let mut out = Vec::new();
-        inj.drain_ready(1_000_000, &mut out);
-        assert_eq!(out, frame(10));
-        assert_eq!(inj.stats(), FaultStats::default());
-    }
-
-    #[test]
-    fn bit_flips_keep_frame_boundaries_and_are_counted() {
-        let cfg = FaultConfig {
-            bit_flip_per_byte: 0.05,
-            ..FaultConfig::default()
-        };
-        let mut inj = FaultInjector::new(&cfg, 7);
-        let mut out = Vec::new();
-        for _ in 0..1000 {
-            inj.push_frame(&frame(20), FrameKind::Sample);
-        }
-        inj.drain_ready(0, &mut out);
-        let changed = out
-            .chunks(21)
-            .filter(|c| *c != frame(20).as_slice())
-            .count() as u64;
-        assert_eq!(
-            out.iter().filter(|&&b| b == 0).count(),
-            1000,
-            "delimiters intact"
-        );
-        let s = inj.stats();
-        assert_eq!(changed, s.corrupted_frames);
-        assert_eq!(s.corrupted_samples, s.corrupted_frames);
-        // P(frame) = 1 - 0.95^20 = 0.64
-        assert!((500..800).contains(&s.corrupted_frames), "{s:?}");
-    }
-
-    #[test]
-    fn dropped_samples_never_touch_other_frames() {
-        let cfg = FaultConfig {
-            drop_sample_prob: 0.5,
-            ..FaultConfig::default()
-        };
-        let mut inj = FaultInjector::new(&cfg, 3);
-        for _ in 0..100 {
-            if !inj.before_sample(0) {
-                inj.push_frame(&frame(5), FrameKind::Sample);
-            }
-            inj.push_frame(&frame(3), FrameKind::Other);
-        }
-        let mut out = Vec::new();
-        inj.drain_ready(0, &mut out);
-        let s = inj.stats();
-        assert!(s.dropped_samples > 20 && s.dropped_samples < 80, "{s:?}");
-        assert_eq!(out.len() as u64, 100 * 4 + (100 - s.dropped_samples) * 6);
-    }
-
-    #[test]
-    fn garbage_bursts_arrive_at_their_rate_and_end_in_a_delimiter() {
-        let cfg = FaultConfig {
-            garbage_bursts_per_s: 100.0,
-            garbage_burst_bytes: 10,
-            ..FaultConfig::default()
-        };
-        let mut inj = FaultInjector::new(&cfg, 5);
-        let mut out = Vec::new();
-        inj.drain_ready(1_000_000, &mut out);
-        let s = inj.stats();
-        assert!((60..140).contains(&s.garbage_bursts), "{s:?}");
-        assert_eq!(out.len() as u64, s.garbage_bytes);
-        assert_eq!(
-            out.iter().filter(|&&b| b == 0).count() as u64,
-            s.garbage_bursts
-        );
-    }
-
-    #[test]
-    fn disabled_injector_passes_everything_and_counts_nothing() {
-        let cfg = FaultConfig {
-            bit_flip_per_byte: 0.1,
-            garbage_bursts_per_s: 100.0,
-            drop_sample_prob: 0.5,
-            stalls_per_s: 50.0,
-            ..FaultConfig::default()
-        };
-        let mut inj = FaultInjector::new(&cfg, 9);
-        inj.set_enabled(false);
-        let mut out = Vec::new();
-        for k in 0..100 {
-            assert!(!inj.before_sample(k as u32));
-            inj.push_frame(&frame(20), FrameKind::Sample);
-            inj.drain_ready(k * 10_000, &mut out);
-        }
-        assert_eq!(out, frame(20).repeat(100));
-        assert_eq!(inj.stats(), FaultStats::default());
-        inj.set_enabled(true);
-        inj.drain_ready(2_000_000, &mut out);
-        assert!(inj.stats().garbage_bursts > 0, "on again");
-    }
-
-    #[test]
-    fn faults_by_sample_index_are_placed_and_counted_exactly() {
-        let cfg = FaultConfig {
-            drop_samples_at: vec![11, 10, 500],
-            corrupt_samples_at: vec![20, 700, 701, 10],
-            garbage_before_samples_at: vec![30, 900, 10],
-            ..FaultConfig::default()
-        };
-        let mut inj = FaultInjector::new(&cfg, 1);
-        let mut out = Vec::new();
-        let mut sent = Vec::new();
-        for k in 0..1000u32 {
-            if !inj.before_sample(k) {
-                sent.push(k);
-                inj.push_frame(&frame(20), FrameKind::Sample);
-            }
-            inj.push_frame(&frame(8), FrameKind::Other);
-            inj.drain_ready(u64::from(k), &mut out);
-        }
-        let s = inj.stats();
-        // 10 is dropped (a dropped sample cannot also be corrupted); its burst still comes
-        assert_eq!(s.dropped_samples, 3);
-        assert_eq!((s.corrupted_frames, s.corrupted_samples), (3, 3));
-        assert_eq!(s.garbage_bursts, 3);
-        assert_eq!(sent.len(), 997);
-        // every corrupted frame and every burst is one dropped frame, nothing else is
-        assert_eq!(
-            out.iter().filter(|&&b| b == 0).count() as u64,
-            997 + 1000 + s.garbage_bursts
-        );
-        let changed = out
-            .split_inclusive(|&b| b == 0)
-            .filter(|c| c.len() == 21 && *c != frame(20).as_slice())
-            .count();
-        assert_eq!(changed, 3);
-    }
-
-    #[test]
-    fn stall_holds_output_then_releases_all_of_it() {
-        let cfg = FaultConfig {
-            stalls_per_s: 10.0,
-            stall_ms: 50,
-            ..FaultConfig::default()
-        };
-        let mut inj = FaultInjector::new(&cfg, 11);
-        let mut out = Vec::new();
-        let mut t = 0;
-        while inj.stats().stalls == 0 {
-            t += 1000;
-            inj.poll(t);
-        }
-        assert!(inj.stalled(t));
-        inj.push_frame(&frame(4), FrameKind::Sample);
-        inj.drain_ready(t, &mut out);
-        assert!(out.is_empty());
-        inj.drain_ready(t + 50_000, &mut out);
-        assert_eq!(out, frame(4));
-    }
-}
+mod tests;

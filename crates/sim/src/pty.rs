@@ -42,9 +42,12 @@ use super::pace::MonoClock;
 use super::SimError;
 
 mod link;
+mod schedule;
 
 pub use link::point_link;
-use link::{open_link, read_master, wait_master, write_master, Link, Ready};
+use link::{drain_to_host, open_link, read_master, wait_master, write_master, Link, Ready};
+use schedule::Schedule;
+pub use schedule::DRAIN_MAX;
 
 /// Output kept for a host that does not read, bytes; beyond it output is dropped and counted.
 pub const MAX_BACKLOG: usize = 1 << 20;
@@ -105,7 +108,7 @@ pub struct SimReport {
     pub samples_total: u64,
     /// Injected faults over all boots.
     pub faults: FaultStats,
-    /// Bytes written to the master.
+    /// Bytes written to the master (this and the byte counters below: over all boots).
     pub bytes_out: u64,
     /// Bytes read from the master.
     pub bytes_in: u64,
@@ -113,6 +116,12 @@ pub struct SimReport {
     pub bytes_no_reader: u64,
     /// Bytes dropped because the host did not read fast enough.
     pub bytes_overrun: u64,
+    /// Bytes on the wire the host had not read when a hang-up (or the stop) closed the port
+    /// (the runner waits up to [`DRAIN_MAX`] for the host to read them: 0 unless the host was
+    /// starved).
+    pub bytes_unread_at_hangups: u64,
+    /// Pulses started over all boots.
+    pub pulses_total: u64,
     /// Why the runner ended (empty while running).
     pub ended: String,
 }
@@ -161,13 +170,22 @@ fn run_shared(
     };
     let dt_s = 1.0 / cfg.stand.sample_rate_hz as f64;
     let mut faults = FaultInjector::new(&cfg.faults, cfg.stand.seed);
+    let mut schedule = Schedule::new(cfg, started);
     let mut boot = 0u64;
-    let mut samples_before = 0u64;
+    let mut before = Before::default();
     loop {
         let link = open_link(opts.link.as_deref())?;
         on_path(opts.link.as_deref().unwrap_or(&link.path), &link.path);
+        // kept across the boots on this pty: what is on its way out, whether a host is there
+        let mut wire = Wire {
+            backlog: Vec::new(),
+            reader_present: false,
+        };
         // the boots on this pty: the first, and one after every freeze the host reset
         loop {
+            if boot > 0 {
+                faults.new_boot();
+            }
             let plant = PlantDynamics::new(&cfg.plant, dt_s, cfg.stand.seed.wrapping_add(boot))?;
             let id = super::boot_id(cfg.stand.seed, boot);
             let mut fw = Firmware::new(&cfg.stand, plant, id, faults);
@@ -180,14 +198,19 @@ fn run_shared(
             let freeze = boot == 0;
             let end = serve(
                 &mut fw,
-                &link,
+                (&link, &mut wire),
                 cfg,
-                shared,
+                (shared, &mut schedule),
                 [&stopped, &faults_on],
-                samples_before,
+                before,
                 freeze,
             )?;
-            samples_before += fw.stats().samples;
+            before.samples += fw.stats().samples;
+            {
+                let r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
+                before.io = [r.bytes_out, r.bytes_in, r.bytes_no_reader, r.bytes_overrun];
+            }
+            before.pulses += fw.stats().pulses;
             faults = fw.into_faults();
             match end {
                 End::Stopped => {
@@ -205,14 +228,14 @@ fn run_shared(
         faults.discard_pending();
         drop(link);
         if cfg.faults.reopen_after_ms < 0 {
-            update(shared, None, &faults, samples_before);
+            update(shared, None, &faults, before);
             set_ended(shared, "hung up");
             return Ok(());
         }
         let until = Instant::now() + Duration::from_millis(cfg.faults.reopen_after_ms as u64);
         while Instant::now() < until {
             if stopped() {
-                update(shared, None, &faults, samples_before);
+                update(shared, None, &faults, before);
                 set_ended(shared, "stopped");
                 return Ok(());
             }
@@ -228,13 +251,31 @@ fn set_ended(shared: &Shared, why: &str) {
     r.ended = why.to_string();
 }
 
-fn update(shared: &Shared, fw: Option<FirmwareStats>, faults: &FaultInjector, samples_before: u64) {
+fn update(shared: &Shared, fw: Option<FirmwareStats>, faults: &FaultInjector, before: Before) {
     let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
     if let Some(s) = fw {
         r.firmware = s;
-        r.samples_total = samples_before + s.samples;
+        r.samples_total = before.samples + s.samples;
+        r.pulses_total = before.pulses + s.pulses;
     }
     r.faults = faults.stats();
+}
+
+/// Counters of the boots before the current one.
+#[derive(Debug, Clone, Copy, Default)]
+struct Before {
+    samples: u64,
+    pulses: u64,
+    /// The byte counters (out, in, no reader, overrun).
+    io: [u64; 4],
+}
+
+/// One pty's output side, kept across the boots on it.
+struct Wire {
+    /// Output taken from the firmware, not yet written to the master.
+    backlog: Vec<u8>,
+    /// Whether a host has the slave open (as last seen).
+    reader_present: bool,
 }
 
 /// How one boot ended.
@@ -243,18 +284,19 @@ enum End {
     Stopped,
     /// A hang-up fault closed the pty.
     HungUp,
-    /// Frozen, then reset by the host closing the port: a new boot on the same pty.
+    /// Frozen, then reset by the host closing the port, or reset with the port open
+    /// (`reset_every_s`): a new boot on the same pty.
     Reset,
 }
 
 /// Serves one boot on one pty (`freeze`: the freeze fault may strike in this boot).
 fn serve(
     fw: &mut Firmware<PlantDynamics>,
-    link: &Link,
+    (link, wire): (&Link, &mut Wire),
     cfg: &SimConfig,
-    shared: &Shared,
+    (shared, schedule): (&Shared, &mut Schedule),
     [stopped, faults_on]: [&dyn Fn() -> bool; 2],
-    samples_before: u64,
+    before: Before,
     freeze: bool,
 ) -> Result<End, SimError> {
     let fd = link.master.as_raw_fd();
@@ -263,47 +305,67 @@ fn serve(
         (cfg.faults.hangup_after_s > 0.0).then_some((cfg.faults.hangup_after_s * 1e6) as u64);
     let freeze_us = (freeze && cfg.faults.freeze_after_s > 0.0)
         .then_some((cfg.faults.freeze_after_s * 1e6) as u64);
-    let mut backlog: Vec<u8> = Vec::new();
+    let backlog = &mut wire.backlog;
     let mut rx = [0u8; 4096];
     let (mut bytes_out, mut bytes_in, mut no_reader, mut overrun) = (0u64, 0u64, 0u64, 0u64);
-    let mut reader_present = false;
     loop {
         if stopped() {
             break;
         }
         let now = clock.now_us();
-        if hangup_us.is_some_and(|h| now >= h) {
+        let live = wire.reader_present && faults_on();
+        let wall = Instant::now();
+        if hangup_us.is_some_and(|h| now >= h) || schedule.due(Schedule::HANGUP, wall, live) {
+            // the link is cut here; what is already on the wire still reaches the host
+            fw.faults_mut().set_link_up(false);
+            let unread = drain_to_host(fd, &link.path, backlog, &mut bytes_out);
+            shared
+                .report
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .bytes_unread_at_hangups += unread;
             publish(
                 shared,
                 fw,
-                samples_before,
+                before,
                 [bytes_out, bytes_in, no_reader, overrun],
             );
             return Ok(End::HungUp);
         }
-        if reader_present && freeze_us.is_some_and(|f| now >= f) {
+        if schedule.due(Schedule::RESET, wall, live) {
+            fw.faults_mut().note_reset();
+            publish(
+                shared,
+                fw,
+                before,
+                [bytes_out, bytes_in, no_reader, overrun],
+            );
+            return Ok(End::Reset);
+        }
+        if wire.reader_present && freeze_us.is_some_and(|f| now >= f) {
             fw.faults_mut().note_freeze();
             publish(
                 shared,
                 fw,
-                samples_before,
+                before,
                 [bytes_out, bytes_in, no_reader, overrun],
             );
             return Ok(frozen(fd, stopped, &mut rx, shared));
         }
-        fw.faults_mut().set_enabled(reader_present && faults_on());
+        fw.faults_mut().set_enabled(live);
+        fw.faults_mut().set_link_up(wire.reader_present);
         fw.advance(now);
-        let before = backlog.len();
-        fw.drain_output(now, &mut backlog);
+        let start = backlog.len();
+        fw.drain_output(now, backlog);
         if backlog.len() > MAX_BACKLOG {
-            overrun += (backlog.len() - before) as u64;
-            backlog.truncate(before);
+            overrun += (backlog.len() - start) as u64;
+            backlog.truncate(start);
         }
-        if !reader_present {
+        if !wire.reader_present {
             no_reader += backlog.len() as u64;
             backlog.clear();
         } else if !backlog.is_empty() {
-            match write_master(fd, &backlog) {
+            match write_master(fd, backlog) {
                 Ok(n) => {
                     bytes_out += n as u64;
                     backlog.drain(..n);
@@ -319,33 +381,45 @@ fn serve(
         let wait = clock.until(wake_us).min(MAX_WAIT);
         match wait_master(fd, wait) {
             Ready::Input => {
-                reader_present = true;
+                wire.reader_present = true;
+                // the host is there: the answers to what it sent go out
+                fw.faults_mut().set_link_up(true);
                 match read_master(fd, &mut rx) {
                     Ok(n) if n > 0 => {
                         bytes_in += n as u64;
                         fw.feed(clock.now_us(), &rx[..n]);
                     }
                     Ok(_) => {}
-                    Err(_) => reader_present = false,
+                    Err(_) => wire.reader_present = false,
                 }
             }
             Ready::NoReader => {
-                reader_present = false;
+                wire.reader_present = false;
                 std::thread::sleep(wait);
             }
-            Ready::Nothing => reader_present = true,
+            Ready::Nothing => wire.reader_present = true,
         }
         publish(
             shared,
             fw,
-            samples_before,
+            before,
             [bytes_out, bytes_in, no_reader, overrun],
         );
+    }
+    if wire.reader_present {
+        // stopped: the link is cut as at a hang-up, what is on the wire reaches the host
+        fw.faults_mut().set_link_up(false);
+        let unread = drain_to_host(fd, &link.path, backlog, &mut bytes_out);
+        shared
+            .report
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .bytes_unread_at_hangups += unread;
     }
     publish(
         shared,
         fw,
-        samples_before,
+        before,
         [bytes_out, bytes_in, no_reader, overrun],
     );
     Ok(End::Stopped)
@@ -371,16 +445,17 @@ fn frozen(fd: i32, stopped: &dyn Fn() -> bool, rx: &mut [u8], shared: &Shared) -
     }
 }
 
-fn publish(shared: &Shared, fw: &Firmware<PlantDynamics>, samples_before: u64, io: [u64; 4]) {
+fn publish(shared: &Shared, fw: &Firmware<PlantDynamics>, before: Before, io: [u64; 4]) {
     let mut r = shared.report.lock().unwrap_or_else(|p| p.into_inner());
     let s = fw.stats();
     r.firmware = s;
-    r.samples_total = samples_before + s.samples;
+    r.samples_total = before.samples + s.samples;
+    r.pulses_total = before.pulses + s.pulses;
     r.faults = fw.fault_stats();
-    r.bytes_out = io[0];
-    r.bytes_in = io[1];
-    r.bytes_no_reader = io[2];
-    r.bytes_overrun = io[3];
+    r.bytes_out = before.io[0] + io[0];
+    r.bytes_in = before.io[1] + io[1];
+    r.bytes_no_reader = before.io[2] + io[2];
+    r.bytes_overrun = before.io[3] + io[3];
 }
 
 /// The simulated stand running on its own thread.

@@ -43,6 +43,17 @@ use std::time::Instant;
 
 use super::item::{flags, SampleItem};
 
+/// A window a new device segment closed with fewer than K pulses: not identified.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interrupted {
+    /// The window's operating point.
+    pub operating_point: f64,
+    /// Pulses it held (1..K).
+    pub pulses: usize,
+    /// Device time of its last sample, s (the old segment's clock).
+    pub t_s: f64,
+}
+
 /// The fixed-capacity window.
 #[derive(Debug)]
 pub struct Window {
@@ -239,11 +250,23 @@ impl Window {
         }
     }
 
-    /// A new device segment: what is complete is identified, the rest dropped.
-    pub fn on_segment(&mut self, identify: impl FnMut(&WindowView<'_>)) {
+    /// A new device segment: what is complete is identified, the rest dropped. Returns the
+    /// window the device's reset interrupted, if one was dropped with pulses in it (the
+    /// worker publishes it as `window_interrupted`, so that no window goes silently).
+    pub fn on_segment(&mut self, identify: impl FnMut(&WindowView<'_>)) -> Option<Interrupted> {
         self.next_index = None;
         self.announced_pulse = None;
+        let pulses = self.pulse_starts.len();
+        let interrupted = (pulses > 0 && pulses < self.k)
+            .then(|| self.level())
+            .flatten()
+            .map(|operating_point| Interrupted {
+                operating_point,
+                pulses,
+                t_s: self.t_us.last().copied().unwrap_or(0) as f64 * 1e-6,
+            });
         self.close(Reason::Segment, identify);
+        interrupted
     }
 
     /// End of the stream.

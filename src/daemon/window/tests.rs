@@ -215,15 +215,38 @@ fn segment_identifies_complete_window_then_waits_for_a_level() {
     let mut log = Vec::new();
     feed(&mut w, 0, 100, 3000, 50, 1000, &mut log);
     let mut n = 0;
-    w.on_segment(|v| {
+    let cut = w.on_segment(|v| {
         assert_eq!(v.reason, Reason::Segment);
         n += 1
     });
     assert_eq!(n, 1);
+    assert_eq!(cut, None, "identified, not interrupted");
     assert_eq!(w.level(), None);
     // a pulse sample first after the reset is not referred to any level
     let o = w.on_sample(&sample(0, 3500, flags::IMPULSE_ACTIVE), |_| {});
     assert!(!o.pulse);
+}
+
+#[test]
+fn a_segment_before_k_pulses_reports_the_interrupted_window() {
+    let mut w = Window::new(10_000, 4, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    // 3 of 4 pulses at 0.3, then the device resets
+    feed(&mut w, 0, 320, 3000, 50, 100, &mut log);
+    assert!(log.is_empty());
+    let cut = w.on_segment(|_| panic!("3 of 4 pulses: nothing to identify"));
+    assert_eq!(
+        cut,
+        Some(Interrupted {
+            operating_point: 0.3,
+            pulses: 3,
+            t_s: 0.319
+        })
+    );
+    assert_eq!(w.level(), None);
+    // a window without a pulse yet is not one the plan made: nothing is reported
+    feed(&mut w, 0, 40, 3000, 50, 100, &mut log);
+    assert_eq!(w.on_segment(|_| panic!("no pulse")), None);
 }
 
 #[test]

@@ -139,10 +139,19 @@ impl<I: Identifier> Worker<I> {
                 let mut done = None;
                 let identifier = &mut self.identifier;
                 let live = self.live.is_some();
-                self.window
+                let cut = self
+                    .window
                     .on_segment(|v| done = Some(identify_one(identifier, v, live)));
                 if let Some(d) = done {
                     self.publish_model(d);
+                }
+                if let Some(w) = cut {
+                    self.stats.windows_interrupted += 1;
+                    self.emit(&Line::Warning(Warning::WindowInterrupted {
+                        operating_point: w.operating_point,
+                        pulses: w.pulses,
+                        t_s: w.t_s,
+                    }));
                 }
                 self.emit(&Line::Event(Event::Segment { boot_id }));
             }

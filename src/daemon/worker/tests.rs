@@ -201,3 +201,47 @@ fn failed_identification_is_a_warning_not_a_model() {
         .count();
     assert_eq!((models, failed), (3, 3));
 }
+
+#[test]
+fn a_reset_before_k_pulses_is_a_named_and_counted_interrupted_window() {
+    let (publisher, lines) = Publisher::capture();
+    let fake = Fake {
+        last: None,
+        fail_every: 0,
+        unstable_every: 0,
+        calls: 0,
+    };
+    let window = Window::new(10_000, 4, 0.005, OutputChannel::Thrust);
+    let (tx, rx) = crossbeam_channel::bounded(10_000);
+    // 0.45: 3 of 4 pulses, then the device resets (a new segment); the new boot ramps again
+    for i in 0..330u64 {
+        let pulse = i % 100 == 50;
+        let f = if pulse { flags::IMPULSE_ACTIVE } else { 0 };
+        tx.send(sample(i, if pulse { 5300 } else { 4500 }, f))
+            .unwrap();
+    }
+    tx.send(Item::Segment { boot_id: 9 }).unwrap();
+    tx.send(sample(0, 0, flags::RAMP_ACTIVE)).unwrap();
+    drop(tx);
+    let out = Worker::new(window, fake, publisher).run(rx);
+    assert_eq!((out.stats.pulses, out.stats.models), (3, 0));
+    assert_eq!(out.stats.windows_interrupted, 1);
+    let lines: Vec<Value> = lines
+        .lock()
+        .unwrap()
+        .iter()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let cut: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["kind"] == "window_interrupted")
+        .collect();
+    assert_eq!(cut.len(), 1, "{lines:#?}");
+    assert_eq!(cut[0]["type"], "warning");
+    assert_eq!(cut[0]["operating_point"], 0.45);
+    assert_eq!(cut[0]["pulses"], 3);
+    assert!(cut[0]["message"].as_str().unwrap().contains("reset"));
+    // before the segment line that announces the new boot
+    let at = |k: &str| lines.iter().position(|l| l["kind"] == k).unwrap();
+    assert!(at("window_interrupted") < at("segment"));
+}

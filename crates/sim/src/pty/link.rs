@@ -4,11 +4,11 @@
 
 use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use serialport::{SerialPort, TTYPort};
 
-use super::PtyError;
+use super::{schedule, PtyError};
 use crate::SimError;
 
 /// One pty pair: the master we keep, the slave path the host opens.
@@ -121,6 +121,26 @@ pub(super) fn wait_master(fd: i32, timeout: Duration) -> Ready {
     }
 }
 
+/// Bytes in the slave's input queue (written by us, not read by the host yet), through a second
+/// descriptor of the slave opened for the query; `None` when it cannot be opened (a host that
+/// holds the port exclusively, without the privilege to override it) or queried.
+fn slave_unread(path: &Path) -> Option<usize> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).ok()?;
+    let flags = libc::O_RDONLY | libc::O_NOCTTY | libc::O_NONBLOCK | libc::O_CLOEXEC;
+    // SAFETY: a valid NUL-terminated path; the descriptor is closed below.
+    let fd = unsafe { libc::open(c.as_ptr(), flags) };
+    if fd < 0 {
+        return None;
+    }
+    let mut n: libc::c_int = 0;
+    // SAFETY: FIONREAD writes one c_int to the pointer given.
+    let r = unsafe { libc::ioctl(fd, libc::FIONREAD, &mut n) };
+    // SAFETY: a descriptor we opened above.
+    unsafe { libc::close(fd) };
+    (r == 0).then_some(n.max(0) as usize)
+}
+
 /// Non-blocking read; `Ok(0)` when nothing is there.
 pub(super) fn read_master(fd: i32, buf: &mut [u8]) -> std::io::Result<usize> {
     // SAFETY: `buf` is valid for `buf.len()` bytes.
@@ -146,6 +166,58 @@ pub(super) fn write_master(fd: i32, buf: &[u8]) -> std::io::Result<usize> {
     match e.kind() {
         std::io::ErrorKind::WouldBlock | std::io::ErrorKind::Interrupted => Ok(0),
         _ => Err(e),
+    }
+}
+
+/// A hang-up: the link is cut (nothing new goes out), then what is on its way — the backlog,
+/// and the bytes in the slave's input queue — is given up to [`DRAIN_MAX`](super::DRAIN_MAX) to reach the host
+/// before the port closes (closing the master discards the slave's unread bytes). Returns the
+/// bytes the host had not read by then (0 when it keeps up). Where the slave's queue cannot
+/// be measured (the slave cannot be opened a second time) it waits `DRAIN_BLIND`.
+pub(super) fn drain_to_host(
+    fd: i32,
+    slave: &Path,
+    backlog: &mut Vec<u8>,
+    bytes_out: &mut u64,
+) -> u64 {
+    let start = Instant::now();
+    let mut last_write = start;
+    loop {
+        if !backlog.is_empty() {
+            match write_master(fd, backlog) {
+                Ok(n) => {
+                    *bytes_out += n as u64;
+                    backlog.drain(..n);
+                    if n > 0 {
+                        last_write = Instant::now();
+                    }
+                }
+                Err(_) => {
+                    let left = backlog.len() as u64;
+                    backlog.clear();
+                    return left;
+                }
+            }
+        }
+        let unread = if backlog.is_empty() {
+            slave_unread(slave)
+        } else {
+            None
+        };
+        let waited = start.elapsed();
+        match unread {
+            // the slave's count leaves out what the kernel has not moved to it yet: settled
+            Some(0) if backlog.is_empty() && last_write.elapsed() >= schedule::DRAIN_SETTLE => {
+                return 0
+            }
+            None if backlog.is_empty() && waited >= schedule::DRAIN_BLIND => return 0,
+            _ if waited >= schedule::DRAIN_MAX => {
+                let left = backlog.len() as u64 + unread.unwrap_or(0) as u64;
+                backlog.clear();
+                return left;
+            }
+            _ => std::thread::sleep(Duration::from_millis(1)),
+        }
     }
 }
 

@@ -317,3 +317,119 @@ fn csv_dialect_over_the_pty() {
     assert!(row(&text), "{text}");
     drop(sim);
 }
+
+/// What a host that follows the stand through its hang-ups saw: per connection a new decoder,
+/// a new boot at every connection, at a HELLO with a new boot id and where the index goes back.
+#[derive(Debug, Default)]
+struct HostView {
+    samples: u64,
+    gaps: u64,
+    frames_dropped: u64,
+    connections: u64,
+    boots: u64,
+}
+
+fn follow(link: &std::path::Path, done: &std::sync::atomic::AtomicBool) -> HostView {
+    use std::sync::atomic::Ordering;
+    let mut v = HostView::default();
+    let mut buf = [0u8; 4096];
+    while !done.load(Ordering::Relaxed) {
+        let Ok(mut port) = serialport::new(link.to_string_lossy(), 921_600)
+            .timeout(Duration::from_millis(20))
+            .open()
+        else {
+            std::thread::sleep(Duration::from_millis(10));
+            continue;
+        };
+        v.connections += 1;
+        v.boots += 1;
+        let mut dec = Decoder::new();
+        let (mut boot, mut last) = (None::<u32>, None::<u32>);
+        loop {
+            let n = match port.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => n,
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => continue,
+                Err(_) => break,
+            };
+            dec.push(&buf[..n], |f| match f.msg {
+                Message::Hello(h) => {
+                    if boot.is_some_and(|b| b != h.boot_id) && last.is_some() {
+                        v.boots += 1;
+                        last = None;
+                    }
+                    boot = Some(h.boot_id);
+                }
+                Message::Sample(s) => {
+                    v.samples += 1;
+                    match last {
+                        Some(l) if s.sample_index > l => v.gaps += (s.sample_index - l - 1) as u64,
+                        Some(_) => v.boots += 1, // back: a reset whose HELLO was not seen
+                        None => {}
+                    }
+                    last = Some(s.sample_index);
+                }
+                _ => {}
+            });
+        }
+        v.frames_dropped += dec.stats().dropped.total();
+    }
+    v
+}
+
+#[test]
+fn scheduled_hang_ups_and_resets_leave_every_sample_and_fault_accounted_for() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("stand");
+    let mut cfg = SimConfig::default();
+    cfg.faults.bit_flip_per_byte = 0.002;
+    cfg.faults.garbage_bursts_per_s = 20.0;
+    cfg.faults.drop_sample_prob = 0.02;
+    cfg.faults.stalls_per_s = 5.0;
+    cfg.faults.stall_ms = 20;
+    cfg.faults.hangup_every_s = 0.5;
+    cfg.faults.reset_every_s = 0.7;
+    cfg.faults.reopen_after_ms = 50;
+    let opts = RunOptions {
+        link: Some(link.clone()),
+        seconds: None,
+        faults_for: Some(1.8),
+    };
+    let sim = SimHandle::spawn(cfg, opts).unwrap();
+    let done = Arc::new(AtomicBool::new(false));
+    let host = {
+        let (link, done) = (link.clone(), Arc::clone(&done));
+        std::thread::spawn(move || follow(&link, &done))
+    };
+    std::thread::sleep(Duration::from_millis(2200));
+    // the stop cuts the link as a hang-up does: what is on the wire reaches the host first
+    let r = sim.stop().unwrap();
+    done.store(true, Ordering::Relaxed);
+    let v = host.join().unwrap();
+    let f = r.faults;
+    // hang-ups at 0.5, 1.0, 1.5 s, resets at 0.7, 1.4 s (each skipped if no host was there)
+    assert!(f.hangups >= 2 && f.resets >= 1, "{r:?}");
+    assert_eq!(f.reopens, f.hangups);
+    assert_eq!(r.boots, 1 + f.hangups + f.resets, "{r:?}");
+    assert_eq!(v.connections, 1 + f.hangups, "{v:?}");
+    assert_eq!(v.boots, r.boots, "{v:?} {r:?}");
+    assert_eq!(r.bytes_unread_at_hangups, 0);
+    assert_eq!(
+        v.gaps,
+        f.dropped_samples + f.corrupted_samples,
+        "{v:?} {f:?}"
+    );
+    assert_eq!(
+        v.frames_dropped,
+        f.corrupted_frames + f.garbage_bursts,
+        "{v:?} {f:?}"
+    );
+    // every sample the stand took: received, lost to a fault, cut or taken with the link down
+    assert_eq!(
+        v.samples + v.gaps + f.samples_cut + f.samples_unsent,
+        r.samples_total,
+        "{v:?} {r:?}"
+    );
+}
