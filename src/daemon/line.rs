@@ -293,15 +293,20 @@ pub enum Warning<'a> {
         /// Samples dropped.
         count: u64,
     },
-    /// A device reset (a new segment) closed a window before its K pulses: not identified (the
-    /// plan, re-armed, fires the operating point's pulses again).
+    /// A window closed before its K pulses: not identified. `closed_by` says what closed it:
+    /// `segment` (a device reset or a hang-up: a new boot, announced or seen as the sample
+    /// index going back; the plan, re-armed, fires the operating point's pulses again),
+    /// `level_end` (the operating point ended with pulses left over), `end` (the stream
+    /// ended).
     WindowInterrupted {
         /// The window's operating point.
         operating_point: f64,
         /// Pulses it held (fewer than `identify.pulses_per_model`).
         pulses: usize,
-        /// Device time of the window's last sample, s (the reset device's clock).
+        /// Device time of the window's last sample, s (the old segment's clock).
         t_s: f64,
+        /// What closed it.
+        closed_by: Reason,
     },
     /// The window filled before K pulses.
     WindowFull {
@@ -367,8 +372,15 @@ impl Warning<'_> {
             Warning::OverflowGap { .. } => {
                 "samples dropped by a full sampler queue; masked as missing"
             }
+            Warning::WindowInterrupted {
+                closed_by: Reason::Segment,
+                ..
+            } => {
+                "a device reset or hang-up interrupted the window before its K pulses: not \
+                 identified"
+            }
             Warning::WindowInterrupted { .. } => {
-                "a device reset interrupted the window before its K pulses: not identified"
+                "the window closed before its K pulses (closed_by): not identified"
             }
             Warning::WindowFull { .. } => {
                 "window filled before K pulses; its samples were discarded"

@@ -43,7 +43,9 @@ use std::time::Instant;
 
 use super::item::{flags, SampleItem};
 
-/// A window a new device segment closed with fewer than K pulses: not identified.
+/// A window closed with fewer than K pulses (a new device segment, announced or seen as the
+/// sample index going back; the operating point's end; the stream's end): not identified, and
+/// reported, so that every pulse counted is in a model, a refusal or one of these.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Interrupted {
     /// The window's operating point.
@@ -52,6 +54,8 @@ pub struct Interrupted {
     pub pulses: usize,
     /// Device time of its last sample, s (the old segment's clock).
     pub t_s: f64,
+    /// What closed it.
+    pub closed_by: Reason,
 }
 
 /// The fixed-capacity window.
@@ -140,7 +144,7 @@ impl Window {
                 out.unannounced_lost = s.index - next;
                 out.pulse = self.on_gap(s.index - next, &mut identify);
             }
-            Some(next) if s.index < next => self.close(Reason::Segment, &mut identify),
+            Some(next) if s.index < next => out.cut = self.close(Reason::Segment, &mut identify),
             _ => {}
         }
         if self.announced_pulse.is_some_and(|p| p <= s.index) {
@@ -149,7 +153,7 @@ impl Window {
         }
         self.next_index = Some(s.index + 1);
         if s.has(flags::RAMP_ACTIVE) {
-            self.close(Reason::LevelEnd, &mut identify);
+            out.cut = out.cut.or(self.close(Reason::LevelEnd, &mut identify));
             return out;
         }
         let pulse = s.has(flags::IMPULSE_ACTIVE);
@@ -158,7 +162,7 @@ impl Window {
             None => true,
         };
         if !pulse && off_level {
-            self.close(Reason::LevelEnd, &mut identify);
+            out.cut = out.cut.or(self.close(Reason::LevelEnd, &mut identify));
             self.start_level(s);
             out.new_level = true;
         } else if self.level_raw.is_none() {
@@ -256,6 +260,23 @@ impl Window {
     pub fn on_segment(&mut self, identify: impl FnMut(&WindowView<'_>)) -> Option<Interrupted> {
         self.next_index = None;
         self.announced_pulse = None;
+        self.close(Reason::Segment, identify)
+    }
+
+    /// End of the stream: what is complete is identified; returns the window left with fewer
+    /// than K pulses, if any.
+    pub fn finish(&mut self, identify: impl FnMut(&WindowView<'_>)) -> Option<Interrupted> {
+        self.close(Reason::End, identify)
+    }
+
+    /// Closes the window: identified when it holds K pulses, otherwise returned as
+    /// [`Interrupted`] when it held any pulse (a window without a pulse is not one the plan
+    /// made).
+    fn close(
+        &mut self,
+        reason: Reason,
+        mut identify: impl FnMut(&WindowView<'_>),
+    ) -> Option<Interrupted> {
         let pulses = self.pulse_starts.len();
         let interrupted = (pulses > 0 && pulses < self.k)
             .then(|| self.level())
@@ -264,21 +285,13 @@ impl Window {
                 operating_point,
                 pulses,
                 t_s: self.t_us.last().copied().unwrap_or(0) as f64 * 1e-6,
+                closed_by: reason,
             });
-        self.close(Reason::Segment, identify);
-        interrupted
-    }
-
-    /// End of the stream.
-    pub fn finish(&mut self, identify: impl FnMut(&WindowView<'_>)) {
-        self.close(Reason::End, identify);
-    }
-
-    fn close(&mut self, reason: Reason, mut identify: impl FnMut(&WindowView<'_>)) {
         self.identify_if_complete(reason, &mut identify);
         self.clear();
         self.level_raw = None;
         self.in_pulse = false;
+        interrupted
     }
 
     fn identify_if_complete(&mut self, reason: Reason, identify: impl FnMut(&WindowView<'_>)) {

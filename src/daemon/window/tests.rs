@@ -240,13 +240,55 @@ fn a_segment_before_k_pulses_reports_the_interrupted_window() {
         Some(Interrupted {
             operating_point: 0.3,
             pulses: 3,
-            t_s: 0.319
+            t_s: 0.319,
+            closed_by: Reason::Segment,
         })
     );
     assert_eq!(w.level(), None);
     // a window without a pulse yet is not one the plan made: nothing is reported
     feed(&mut w, 0, 40, 3000, 50, 100, &mut log);
     assert_eq!(w.on_segment(|_| panic!("no pulse")), None);
+}
+
+#[test]
+fn a_window_cut_by_the_index_going_back_or_the_level_end_or_the_stream_end_is_reported() {
+    // A hang-up re-opened as a new boot whose HELLO the host never saw: the first sample of
+    // the new boot (index back to 0) closes the old window. It held 1 of 4 pulses (the soak
+    // found these 1-pulse windows missing from every outcome).
+    let mut w = Window::new(10_000, 4, 0.005, OutputChannel::Thrust);
+    let mut log = Vec::new();
+    feed(&mut w, 0, 420, 3000, 50, 100, &mut log); // 4 pulses started (50..350)
+    feed(&mut w, 420, 30, 3000, 1000, 100, &mut log);
+    assert!(
+        log.is_empty(),
+        "4 pulses, no fifth started: not identified yet"
+    );
+    let o = w.on_sample(&sample(0, 3000, 0), |v| {
+        log.push((v.reason, v.input.len(), v.pulse_starts.len(), v.level))
+    });
+    assert_eq!(log.len(), 1, "the complete window is identified at the cut");
+    assert_eq!(o.cut, None, "4 of 4: identified, not cut");
+    // now 1 pulse then the index goes back again
+    feed(&mut w, 1, 120, 3000, 49, 100, &mut log);
+    let o = w.on_sample(&sample(0, 3000, 0), |_| panic!("1 of 4 pulses"));
+    let cut = o
+        .cut
+        .expect("a 1-pulse window cut by the index going back is reported");
+    assert_eq!((cut.pulses, cut.closed_by), (1, Reason::Segment));
+    // 2 pulses, then the operating point changes
+    feed(&mut w, 1, 200, 4500, 49, 100, &mut log);
+    let o = w.on_sample(&sample(201, 6000, 0), |_| panic!("2 of 4 pulses"));
+    let cut = o
+        .cut
+        .expect("pulses left over at the level's end are reported");
+    assert_eq!((cut.pulses, cut.operating_point), (2, 0.45));
+    assert_eq!(cut.closed_by, Reason::LevelEnd);
+    // 3 pulses, then the stream ends
+    feed(&mut w, 202, 300, 6000, 49, 100, &mut log);
+    let cut = w
+        .finish(|_| panic!("3 of 4 pulses"))
+        .expect("reported at the end");
+    assert_eq!((cut.pulses, cut.closed_by), (3, Reason::End));
 }
 
 #[test]

@@ -81,7 +81,7 @@ pub struct WindowView<'a> {
 }
 
 /// What a sample did to the window, for counters and events.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Outcome {
     /// A pulse started at this sample.
     pub pulse: bool,
@@ -91,4 +91,7 @@ pub struct Outcome {
     pub overflowed: bool,
     /// Samples missing just before this one that no gap announced (an index jump).
     pub unannounced_lost: u64,
+    /// A window this sample closed with fewer than K pulses (the index going back, the
+    /// operating point's end).
+    pub cut: Option<super::Interrupted>,
 }

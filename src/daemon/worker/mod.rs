@@ -24,7 +24,7 @@ use super::publish::Publisher;
 use super::quality;
 use super::recorder::RecordNote;
 use super::stats::{LinkStats, StatsLine, WorkStats};
-use super::window::{Window, WindowView};
+use super::window::{Interrupted, Window, WindowView};
 use super::DaemonError;
 
 /// Latency samples kept (the first ones of a run; enough for p99).
@@ -146,12 +146,7 @@ impl<I: Identifier> Worker<I> {
                     self.publish_model(d);
                 }
                 if let Some(w) = cut {
-                    self.stats.windows_interrupted += 1;
-                    self.emit(&Line::Warning(Warning::WindowInterrupted {
-                        operating_point: w.operating_point,
-                        pulses: w.pulses,
-                        t_s: w.t_s,
-                    }));
+                    self.publish_cut(w);
                 }
                 self.emit(&Line::Event(Event::Segment { boot_id }));
             }
@@ -189,10 +184,14 @@ impl<I: Identifier> Worker<I> {
         let mut done = None;
         let identifier = &mut self.identifier;
         let live = self.live.is_some();
-        self.window
+        let cut = self
+            .window
             .finish(|v| done = Some(identify_one(identifier, v, live)));
         if let Some(d) = done {
             self.publish_model(d);
+        }
+        if let Some(w) = cut {
+            self.publish_cut(w);
         }
         if let Some(line) = self.live.as_mut().and_then(|l| l.digest.take()) {
             self.emit_live(&Line::Samples(&line));
@@ -206,6 +205,18 @@ impl<I: Identifier> Worker<I> {
             latencies_s: self.latencies_s,
             error: self.error,
         }
+    }
+
+    /// A window closed with fewer than K pulses: named and counted (`window_interrupted`), so
+    /// that every pulse counted is in a model, a refusal or one of these.
+    fn publish_cut(&mut self, w: Interrupted) {
+        self.stats.windows_interrupted += 1;
+        self.emit(&Line::Warning(Warning::WindowInterrupted {
+            operating_point: w.operating_point,
+            pulses: w.pulses,
+            t_s: w.t_s,
+            closed_by: w.closed_by,
+        }));
     }
 
     fn on_sample(&mut self, s: &SampleItem) {
@@ -231,6 +242,9 @@ impl<I: Identifier> Worker<I> {
         }
         if let Some(d) = done {
             self.publish_model(d);
+        }
+        if let Some(w) = outcome.cut {
+            self.publish_cut(w);
         }
         if outcome.overflowed {
             self.emit(&Line::Warning(Warning::WindowFull {
