@@ -4,6 +4,7 @@ mod demo_cli;
 mod diagnose_cli;
 mod diagnose_injected;
 mod diagnose_model_keys;
+mod diagnose_rejected;
 mod diagnose_sim;
 mod diagnose_staircase;
 mod host_faults_cli;
