@@ -30,8 +30,17 @@ pub struct Rejected {
 
 impl Rejected {
     /// A candidate that passed the in-sample tests but changed the held-out figure by
-    /// `cv_gain_pp` (≤ the search's minimum gain).
+    /// `cv_gain_pp` (≤ the search's minimum gain; not finite when a fold's prediction
+    /// diverged: then null).
     pub fn held_out(effect: &str, score: f64, cv_gain_pp: f64) -> Rejected {
+        if !cv_gain_pp.is_finite() {
+            return Rejected {
+                effect: effect.to_string(),
+                score,
+                cv_gain_pp: None,
+                reason: "fits in-sample but its held-out prediction diverges: not taken".into(),
+            };
+        }
         let change = if cv_gain_pp < 0.0 {
             format!("lowers the held-out fit by {:.1} pp", -cv_gain_pp)
         } else {
@@ -96,6 +105,9 @@ mod tests {
         let r = l.clone().rejected(&["dead_time".to_string()]);
         assert_eq!(r.len(), 1);
         assert_eq!(r[0].effect, "supply_sag");
+        let diverged = Rejected::held_out("saturation", 63.0, f64::NEG_INFINITY);
+        assert_eq!(diverged.cv_gain_pp, None);
+        assert!(diverged.reason.contains("diverges"), "{}", diverged.reason);
         l.forget("supply_sag");
         assert_eq!(l.rejected(&[]).len(), 1);
     }
