@@ -7,8 +7,9 @@
 //! table (found rate, within-tolerance rate, median parameter error) that
 //! `scripts/injection_table.sh` writes to `docs/injection.md` for README.
 //!
-//! Usage: `cargo run --release --example injection_table -- BIN DRAWS [SHARED_DIR]` (every
-//! miss is told on stderr with its draw and the findings).
+//! Usage: `cargo run --release --example injection_table -- BIN DRAWS [SHARED_DIR [EFFECT]]`
+//! (every miss is told on stderr with its draw and the findings; `EFFECT` runs that effect's
+//! rows only; with `PROPID_INJECTION_KEEP=DIR` every injected file is kept there).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -64,7 +65,7 @@ fn findings(bin: &Path, file: &Path, s: &Samples) -> Option<(Vec<Value>, Vec<Str
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(bin), Some(Ok(draws))) = (args.first(), args.get(1).map(|d| d.parse::<u64>())) else {
-        eprintln!("usage: injection_table BIN DRAWS [SHARED_DIR]");
+        eprintln!("usage: injection_table BIN DRAWS [SHARED_DIR [EFFECT]]");
         std::process::exit(2);
     };
     let bin = PathBuf::from(bin);
@@ -95,7 +96,12 @@ fn main() {
     );
     println!("| effect | log | found | within | median error | unidentifiable | also named |");
     println!("|---|---|---|---|---|---|---|");
-    for effect in EFFECTS {
+    let only = args.get(3);
+    let keep = std::env::var_os("PROPID_INJECTION_KEEP").map(PathBuf::from);
+    for effect in EFFECTS
+        .into_iter()
+        .filter(|e| only.map_or(true, |o| o == e))
+    {
         for (path, log) in logs.iter().filter(|(_, l)| l.takes(effect)) {
             let Some(s) = samples(path, log) else {
                 continue;
@@ -122,7 +128,12 @@ fn main() {
                 let Some(inj) = Injection::draw(effect, &s, &mut rng) else {
                     continue;
                 };
-                let (got, kinds) = findings(&bin, &file, &inject(&s, &inj)).unwrap_or_default();
+                let injected = inject(&s, &inj);
+                if let Some(keep) = &keep {
+                    let name = format!("{}-{effect}-{k}.csv", log.name.replace(' ', "_"));
+                    let _ = std::fs::write(keep.join(name), injected.to_csv());
+                }
+                let (got, kinds) = findings(&bin, &file, &injected).unwrap_or_default();
                 unident += usize::from(kinds.contains(&unidentifiable));
                 let o = judge(&inj, &clean, &got);
                 if !o.within(&inj) {

@@ -165,6 +165,16 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
             f.effect, f.score, f.cv_gain_pp, f.evidence
         );
     }
+    for r in &d.rejected {
+        let held_out = r
+            .cv_gain_pp
+            .map_or(String::new(), |g| format!(", held-out {g:+.2} points"));
+        let _ = writeln!(
+            t,
+            "- not taken: {} (score {:.0}{held_out}): {}",
+            r.effect, r.score, r.reason
+        );
+    }
     if let (Some(e), Some(g)) = (&d.extended, &d.gain) {
         let _ = writeln!(
             t,

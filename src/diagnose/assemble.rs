@@ -33,6 +33,7 @@ pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraSt
         extended: cur,
         extended_cv,
         findings,
+        rejected,
     } = searched;
     let mut sim_b = vec![0.0; ctx.sig.u.len()];
     let mut sim_e = Vec::new();
@@ -113,6 +114,7 @@ pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraSt
         residual,
         verdict,
         warnings,
+        rejected,
         traces: Traces {
             dt_s: dt,
             u: ctx.sig.u.to_vec(),

@@ -102,6 +102,14 @@ pub trait Effect: Sync {
     /// Fits the model `cur` extended by this effect on the estimation samples; `None` when the
     /// effect does not apply to this data (e.g. no voltage channel).
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit>;
+
+    /// Whether the data can tell this effect, as fitted in `after` on top of `before`, apart
+    /// from what the model already holds or a simpler effect explains; `Err` with the reason
+    /// in words when it cannot (the search then does not take it and says why). Default: it
+    /// can.
+    fn identifiable(&self, _ctx: &Ctx, _before: &Fit, _after: &Fit) -> Result<(), String> {
+        Ok(())
+    }
 }
 
 /// The fitted parameters of one effect inside a model (see the module doc).

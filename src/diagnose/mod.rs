@@ -32,6 +32,7 @@ pub mod fit;
 pub mod folds;
 pub mod model;
 pub mod noise;
+pub mod rejected;
 pub mod report;
 pub mod result;
 pub mod revise;
@@ -214,7 +215,7 @@ pub fn diagnose(
         y,
         voltage: voltage.map(|v| &v[..n]),
         u_ref: mean(&u[est.clone()]).max(1e-6),
-        v_ref: voltage.map_or(0.0, |v| mean(&v[est.clone()])),
+        v_ref: voltage.map_or(0.0, |v| mean(&v[..n])),
     };
     let ctx = Ctx { sig, est, val };
     let era = era_start::era_start(&ctx);
@@ -294,6 +295,7 @@ mod tests {
         let text = serde_json::to_string(&d).unwrap();
         assert!(d.validation.folds.len() >= folds::MIN_FOLDS);
         let folds = "samples baseline_fit_percent fit_percent ".repeat(d.validation.folds.len());
+        let rejected = "effect score cv_gain_pp reason ".repeat(d.rejected.len());
         let model = "order dt_s fn_hz zeta dc_gain time_constants_s poles_s poles_z a b c d \
                      singular_values indicators msv mac emac mpc cmi msv mac emac mpc cmi \
                      uncertainty fn_hz zeta dc_gain pulses pulses_skipped missing_samples noise_rms \
@@ -306,7 +308,7 @@ mod tests {
              gain fit_percent_points rms_ratio split estimation validation \
              validation method folds {folds}baseline_mean_fit_percent mean_fit_percent \
              noise_floor rms from samples residual baseline_rms extended_rms \
-             verdict kind unexplained_share reason warnings"
+             verdict kind unexplained_share reason warnings rejected {rejected}"
         );
         let want: Vec<&str> = want.split_whitespace().collect();
         assert_eq!(keys_in_order(&text), want, "{text}");

@@ -166,7 +166,7 @@ pub struct Signals<'a> {
     pub voltage: Option<&'a [f64]>,
     /// Reference throttle of the static map (mean of the input).
     pub u_ref: f64,
-    /// Reference voltage of the supply term (mean voltage).
+    /// Reference voltage of the supply term (the record's mean voltage).
     pub v_ref: f64,
 }
 

@@ -46,9 +46,15 @@ pub struct Finding {
     pub cv_gain_pp: f64,
     /// The evidence in words.
     pub evidence: String,
-    /// The effect's parameter estimates (`delay_s`, `exponent`, `fn_hz`, ...).
+    /// The effect's parameter estimates (`delay_s`, `exponent`, `fn_hz`, ...): an effect the
+    /// search added reports its values in the final model, where every parameter is fitted
+    /// jointly ([`super::search`]).
     #[serde(flatten)]
     pub params: Map<String, Value>,
+    /// The evidence's sentence on how much the estimation residual fell when the effect was
+    /// added (part of `evidence`; kept to rewrite the evidence with the final values).
+    #[serde(skip)]
+    pub drop: String,
 }
 
 /// What the extension gained on the validation samples.
@@ -169,6 +175,9 @@ pub struct Diagnosis {
     pub verdict: super::verdict::Verdict,
     /// Implausible results of the published models.
     pub warnings: Vec<super::verdict::Warning>,
+    /// The candidates that fitted in-sample and were not taken, each with its score, held-out
+    /// change and reason ([`super::rejected`]); empty when none.
+    pub rejected: Vec<super::rejected::Rejected>,
     /// Fitted models and predictions, for reports (not serialised).
     #[serde(skip)]
     pub traces: Traces,

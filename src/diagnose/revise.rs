@@ -59,27 +59,73 @@ pub fn without(m: &Model, name: &str) -> Model {
 }
 
 /// The addition tests of the search for `after` = `before` + effect `name`: the score
-/// `n ln(SSE_before / SSE_after)` when it passes them (score, RMS drop, plausibility); for a
-/// term with a band ([`Term::band_hz`](super::effect::Term::band_hz)) that fails the score,
-/// its local score ([`local_score`]) when that passes.
+/// `n ln(SSE_before / SSE_after)` when it passes them (score, RMS drop, plausibility, and the
+/// effect's own test that the data can tell it apart, [`Effect::identifiable`]); for a term
+/// with a band ([`Term::band_hz`](super::effect::Term::band_hz)) that fails the score, its
+/// local score ([`local_score`]) when that passes.
 pub fn passes(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Option<f64> {
+    assess(ctx, before, after, name).ok()
+}
+
+/// Why an extension failed the addition tests: its score (NaN when the fit is unusable) and
+/// the reason in words.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refusal {
+    /// `n ln(SSE_before / SSE_after)`.
+    pub score: f64,
+    /// The test it failed, in words.
+    pub reason: String,
+}
+
+impl Refusal {
+    /// Whether it fits in-sample (its score passed the threshold): a refusal worth telling
+    /// ([`super::rejected`]).
+    pub fn fits(&self) -> bool {
+        self.score >= SCORE_THRESHOLD
+    }
+}
+
+/// [`passes`] with the reason of a refusal. The tests in order: a usable fit, the score (or
+/// the local score of a term with a band), the RMS drop, plausibility, then [`Effect::identifiable`] (last: it may fit again).
+pub fn assess(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Result<f64, Refusal> {
     let usable = after.sse.is_finite() && after.sse > 0.0 && before.sse > 0.0;
+    if !usable {
+        return Err(Refusal {
+            score: f64::NAN,
+            reason: "the fit failed".into(),
+        });
+    }
+    let score = after.n as f64 * (before.sse / after.sse).ln();
+    let rms_drop = 1.0 - (after.sse / before.sse).sqrt();
+    let refuse = |reason: String| Err(Refusal { score, reason });
+    let score = if score >= SCORE_THRESHOLD {
+        score
+    } else {
+        match local_score(ctx, before, after, name).filter(|s| *s >= SCORE_THRESHOLD) {
+            Some(local) => local,
+            None => return refuse(format!("score below {SCORE_THRESHOLD}")),
+        }
+    };
+    if rms_drop < MIN_RMS_DROP {
+        return refuse(format!(
+            "lowers the estimation residual RMS by only {:.2} % (< {:.0} %): not taken",
+            100.0 * rms_drop,
+            100.0 * MIN_RMS_DROP
+        ));
+    }
     let plausible = after
         .model
         .term(name)
         .is_some_and(|t| t.plausible(ctx, &after.model));
-    if !(usable && plausible) {
-        return None;
+    if !plausible {
+        return refuse("fits in-sample but with physically implausible values: not taken".into());
     }
-    let score = after.n as f64 * (before.sse / after.sse).ln();
-    let rms_drop = 1.0 - (after.sse / before.sse).sqrt();
-    if rms_drop < MIN_RMS_DROP {
-        return None;
+    if let Some(e) = REGISTRY.iter().find(|e| e.name() == name) {
+        if let Err(reason) = e.identifiable(ctx, before, after) {
+            return refuse(reason);
+        }
     }
-    if score >= SCORE_THRESHOLD {
-        return Some(score);
-    }
-    local_score(ctx, before, after, name).filter(|s| *s >= SCORE_THRESHOLD)
+    Ok(score)
 }
 
 /// The score of an additive narrowband output term (a drift, a sinusoid) against the

@@ -19,6 +19,13 @@
 //! its gain in percentage points is the finding's `cv_gain_pp`. An addition that does not
 //! improve the held-out figure is not taken. Repeat (at most `max_effects` effects in all).
 //!
+//! **Published values.** Each extension refits every parameter of the model jointly, so the
+//! parameters of an effect move when later effects join (a supply sag's gain per volt fitted
+//! before the static map takes the map's curvature into it). The findings report the values
+//! of the final model, the one published; each finding's score and held-out gain stay those of
+//! its step. Candidates that fitted in-sample and were not taken are reported with their
+//! reason ([`super::rejected`]).
+//!
 //! **Revision.** Greedy forward selection cannot undo a choice: a flexible effect taken first
 //! (a series mode whose phase lag imitates a dead time) leaves a simpler true one nothing to
 //! add. Each time the additions stop, [`super::revise`] tries, for every effect the search
@@ -34,8 +41,9 @@ use super::effects::REGISTRY;
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Scores};
 use super::model::{Core, Model};
+use super::rejected::{Ledger, Rejected};
 use super::result::Finding;
-use super::revise::{passes, revise, Change, Kept, MAX_REVISIONS};
+use super::revise::{assess, revise, Change, Kept, MAX_REVISIONS};
 
 /// Decision threshold on the score `n ln(SSE_M / SSE_{M+e})`.
 pub const SCORE_THRESHOLD: f64 = 40.0;
@@ -58,6 +66,8 @@ pub struct Searched {
     pub extended_cv: Scores,
     /// The findings, in the order found.
     pub findings: Vec<Finding>,
+    /// The candidates that fitted in-sample and were not taken ([`super::rejected`]).
+    pub rejected: Vec<Rejected>,
 }
 
 impl Searched {
@@ -126,15 +136,19 @@ pub fn search(
                 cv_gain_pp: f_cv.mean - cur_cv.mean,
                 evidence,
                 params,
+                drop: String::new(),
             });
             (cur, cur_cv) = (f, f_cv);
         }
     }
     let detected = findings.len();
     let mut revisions = 0;
+    let mut ledger = Ledger::default();
     loop {
         while findings.len() < max_effects {
-            let Some((score, e, f, f_cv)) = forward(ctx, &findings, &cur, cur_cv.mean, &cv) else {
+            let Some((score, e, f, f_cv)) =
+                forward(ctx, &findings, &cur, cur_cv.mean, &cv, &mut ledger)
+            else {
                 break;
             };
             findings.push(finding(e, score, f_cv.mean - cur_cv.mean, &cur, &f, ctx));
@@ -152,25 +166,30 @@ pub fn search(
             break;
         };
         revisions += 1;
-        apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv);
+        apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv, &mut ledger);
     }
+    final_values(&mut findings[detected..], &cur, ctx);
+    let taken: Vec<String> = findings.iter().map(|f| f.effect.clone()).collect();
     Some(Searched {
         base,
         base_cv,
         extended: cur,
         extended_cv: cur_cv,
         findings,
+        rejected: ledger.rejected(&taken),
     })
 }
 
 /// One forward step (module doc): every effect not in `findings` fitted on top of `cur`; the
-/// candidate the selection rule takes, with its score, fit and held-out scores.
+/// candidate the selection rule takes, with its score, fit and held-out scores. Every
+/// candidate that fitted in-sample and was not taken is noted in `ledger` with the reason.
 fn forward<'e>(
     ctx: &Ctx,
     findings: &[Finding],
     cur: &Fit,
     cur_figure: f64,
     cv: &impl Fn(&Fit) -> Scores,
+    ledger: &mut Ledger,
 ) -> Option<(f64, &'e dyn Effect, Fit, Scores)> {
     let mut candidates: Vec<(f64, (&dyn Effect, Fit))> = Vec::new();
     for &e in REGISTRY {
@@ -180,24 +199,64 @@ fn forward<'e>(
         let Some(f) = e.extend(ctx, cur) else {
             continue;
         };
-        if let Some(score) = passes(ctx, cur, &f, e.name()) {
-            candidates.push((score, (e, f)));
+        match assess(ctx, cur, &f, e.name()) {
+            Ok(score) => candidates.push((score, (e, f))),
+            Err(r) if r.fits() => ledger.note(Rejected {
+                effect: e.name().to_string(),
+                score: r.score,
+                cv_gain_pp: None,
+                reason: r.reason,
+            }),
+            // It explains nothing more on this model: an earlier word on it is out of date.
+            Err(_) => ledger.forget(e.name()),
         }
     }
-    let (score, (e, f), f_cv) = select(candidates, cur_figure, |(_, f)| {
+    let scores: Vec<(&str, f64)> = candidates
+        .iter()
+        .map(|(s, (e, _))| (e.name(), *s))
+        .collect();
+    let mut tried: Vec<(&str, f64)> = Vec::new();
+    let taken = select(candidates, cur_figure, |(e, f)| {
         let s = cv(f);
+        tried.push((e.name(), s.mean));
         (s.mean, s)
-    })?;
+    });
+    let taken_name = taken.as_ref().map(|(_, (e, _), _)| e.name());
+    for (name, figure) in tried.into_iter().filter(|t| Some(t.0) != taken_name) {
+        let score = scores
+            .iter()
+            .find(|s| s.0 == name)
+            .map_or(f64::NAN, |s| s.1);
+        ledger.note(Rejected::held_out(name, score, figure - cur_figure));
+    }
+    let (score, (e, f), f_cv) = taken?;
     Some((score, e, f, f_cv))
 }
 
 /// Applies a change the revision kept ([`super::revise`]): a removed effect's finding goes, a
 /// swapped-in effect's finding takes the place of the one it replaces (its score and held-out
 /// gain measured against the model without the effect it replaces), an added one is appended.
-fn apply(ctx: &Ctx, kept: Kept, findings: &mut Vec<Finding>, cur: &mut Fit, cur_cv: &mut Scores) {
+/// An effect that leaves is noted in `ledger` with the revision's reason.
+fn apply(
+    ctx: &Ctx,
+    kept: Kept,
+    findings: &mut Vec<Finding>,
+    cur: &mut Fit,
+    cur_cv: &mut Scores,
+    ledger: &mut Ledger,
+) {
     let effect = |name: &str| REGISTRY.iter().copied().find(|e| e.name() == name);
+    let score_of = |before: &Fit, after: &Fit| after.n as f64 * (before.sse / after.sse).ln();
     match kept.change {
         Change::Remove { out, fit } => {
+            ledger.note(Rejected {
+                effect: out.to_string(),
+                score: score_of(&fit, &*cur),
+                cv_gain_pp: Some(cur_cv.mean - kept.cv.mean),
+                reason: "taken, then removed by the revision: once the other effects were in, \
+                         it no longer passed the addition tests"
+                    .into(),
+            });
             findings.retain(|f| f.effect != out);
             *cur = fit;
         }
@@ -209,6 +268,15 @@ fn apply(ctx: &Ctx, kept: Kept, findings: &mut Vec<Finding>, cur: &mut Fit, cur_
             base,
         } => {
             let gain = kept.cv.mean - kept.base_cv.as_ref().map_or(cur_cv.mean, |s| s.mean);
+            ledger.note(Rejected {
+                effect: out.to_string(),
+                score: score_of(&base, &*cur),
+                cv_gain_pp: kept.base_cv.as_ref().map(|s| cur_cv.mean - s.mean),
+                reason: format!(
+                    "taken, then replaced by {into} in the revision: {into} explains the same \
+                     feature of the data with no more parameters and leaves it nothing to add"
+                ),
+            });
             if let (Some(e), Some(i)) =
                 (effect(into), findings.iter().position(|f| f.effect == out))
             {
@@ -277,6 +345,21 @@ fn finding(
             |t| t.evidence(&after.model.core, ctx, &drop),
         ),
         params: term.map_or_else(Default::default, |t| t.finding_params(ctx.sig.dt_s)),
+        drop,
+    }
+}
+
+/// Every finding's parameters and evidence from the final fit `f` (module doc: a step fits the
+/// parameters of the model of that step, and the effects added later move them — an exponent
+/// fitted before a supply sag has absorbed part of the sag; the final model fits them all
+/// jointly, and it is the model published). The sentence on the residual's drop stays the
+/// step's.
+fn final_values(findings: &mut [Finding], f: &Fit, ctx: &Ctx) {
+    for finding in findings {
+        if let Some(t) = f.model.term(&finding.effect) {
+            finding.params = t.finding_params(ctx.sig.dt_s);
+            finding.evidence = t.evidence(&f.model.core, ctx, &finding.drop);
+        }
     }
 }
 

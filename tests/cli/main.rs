@@ -5,6 +5,7 @@ mod diagnose_cli;
 mod diagnose_injected;
 mod diagnose_model_keys;
 mod diagnose_outliers;
+mod diagnose_rejected;
 mod diagnose_sim;
 mod diagnose_staircase;
 mod host_faults_cli;

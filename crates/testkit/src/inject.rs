@@ -340,7 +340,8 @@ pub fn tolerance(inj: &Injection) -> f64 {
 /// Judges the findings (`diagnose --json`'s `findings` array) of the injected log against
 /// those of the clean log: the effect must be named; its parameter is compared with the
 /// injected one plus what the clean log already had for an additive parameter (a delay, a
-/// drift rate).
+/// drift rate, a supply sag's gain per volt: the relative slopes of two gains that multiply
+/// add).
 pub fn judge(inj: &Injection, clean: &[Value], injected: &[Value]) -> Outcome {
     let name = inj.effect();
     let param = |fs: &[Value], key: &str| {
@@ -370,7 +371,9 @@ pub fn judge(inj: &Injection, clean: &[Value], injected: &[Value]) -> Outcome {
             param(injected, "rate_per_s").map(|r| rel(r - before, rate_per_s))
         }
         Injection::SupplySag { gain_per_volt, .. } => {
-            param(injected, "gain_per_volt").map(|g| rel(g, gain_per_volt))
+            // Gains multiply: (1 + g₀ ΔV)(1 + g ΔV) has the relative slope g₀ + g at the mean.
+            let before = param(clean, "gain_per_volt").unwrap_or(0.0);
+            param(injected, "gain_per_volt").map(|g| rel(g - before, gain_per_volt))
         }
     };
     Outcome {
@@ -503,5 +506,15 @@ mod tests {
         assert!(judge(&p, &[], &off).found && !judge(&p, &[], &off).within(&p));
         let on = [json!({"effect": "periodic_disturbance", "freq_hz": 10.01, "amplitude": 1.2})];
         assert!(judge(&p, &[], &on).within(&p));
+        let sag = Injection::SupplySag {
+            gain_per_volt: 0.1,
+            v_start: 16.8,
+            v_end: 14.0,
+        };
+        let clean = [json!({"effect": "supply_sag", "gain_per_volt": 0.08})];
+        let found = [json!({"effect": "supply_sag", "gain_per_volt": 0.17})];
+        let o = judge(&sag, &clean, &found);
+        assert!((o.error.unwrap() - -0.1).abs() < 1e-9 && o.within(&sag));
+        assert!(!judge(&sag, &[], &found).within(&sag));
     }
 }

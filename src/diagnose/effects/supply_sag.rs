@@ -1,6 +1,15 @@
 //! `supply_sag`: the gain follows the supply voltage (a sagging battery gives less thrust per
-//! unit throttle): `v ← v · (1 + g_V (V_k − V_r))` with `V_r` the mean voltage of the
-//! estimation part. Needs a voltage channel.
+//! unit throttle): `v ← v · (1 + g_V (V_k − V_r))` with `V_r` the mean voltage of the record
+//! (the voltage is a measured input, known on every sample). `g_V` is the relative gain change
+//! per volt at `V_r`. Needs a voltage channel.
+//!
+//! **Identifiability.** A voltage that only follows the command (the load's IR drop on a
+//! monotone ramp, a battery that discharges while a staircase climbs) makes `v` a function of
+//! the throttle alone: a static map, which `static_nonlinearity` describes as well, and `g_V`
+//! then measures the map's curvature, not the supply. The term is taken only when the voltage's
+//! own variation counts ([`SupplySag::identifiable`]): the extended model is refitted with the
+//! voltage replaced by its smooth function of the throttle ([`voltage_from_throttle`]), and the
+//! real voltage must beat it by the search's own score threshold.
 
 use serde::Serialize;
 use serde_json::{json, Map, Value};
@@ -9,9 +18,13 @@ use crate::diagnose::ctx::Ctx;
 use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
 use crate::diagnose::fit::Fit;
 use crate::diagnose::model::{Core, Signals};
+use crate::diagnose::search::SCORE_THRESHOLD;
 
 /// The published name.
 pub const NAME: &str = "supply_sag";
+
+/// Exponents `n` of the starts `g_V = n / V_r` (thrust ∝ V^1–2 on a motor; one negative start).
+pub const START_EXPONENTS: [f64; 4] = [-1.0, 0.5, 1.5, 4.0];
 
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
@@ -36,13 +49,90 @@ impl Effect for SupplySag {
         NAME
     }
 
-    /// Without a voltage channel: not applicable. Starts at ±0.03 and ±0.1 per volt;
-    /// Levenberg–Marquardt from the best.
+    /// Without a voltage channel: not applicable. Starts where the gain goes as `V^n` around
+    /// the reference voltage, `g_V = n / V_r` for `n` in [`START_EXPONENTS`] (the same starts
+    /// for a 1-cell and a 6-cell battery); Levenberg–Marquardt from every start (the gain and
+    /// the core's gain and offset trade against each other: the start nearest in the linear
+    /// refit is not always the basin of the best fit).
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
         ctx.sig.voltage?;
-        let starts = [-0.1, -0.03, 0.03, 0.1]
-            .map(|gain_per_volt| cur.model.with(SupplySagParams { gain_per_volt }));
-        Some(ctx.best_of(starts, 1))
+        let v_ref = ctx.sig.v_ref.abs().max(1e-6);
+        let starts = START_EXPONENTS.map(|n| {
+            cur.model.with(SupplySagParams {
+                gain_per_volt: n / v_ref,
+            })
+        });
+        Some(ctx.best_of(starts, START_EXPONENTS.len()))
+    }
+
+    /// The module doc's test: `after` refitted with the voltage replaced by
+    /// [`voltage_from_throttle`] (from `after`'s values and from this effect's own starts on
+    /// `before`); the real voltage must lower the SSE by a score `n ln(SSE_alt / SSE_after)` of
+    /// at least [`SCORE_THRESHOLD`].
+    fn identifiable(&self, ctx: &Ctx, before: &Fit, after: &Fit) -> Result<(), String> {
+        let Some(volt) = ctx.sig.voltage else {
+            return Ok(());
+        };
+        let vhat = voltage_from_throttle(ctx.sig.u, volt);
+        let alt = Ctx {
+            sig: Signals {
+                voltage: Some(&vhat),
+                ..ctx.sig
+            },
+            est: ctx.est.clone(),
+            val: ctx.val.clone(),
+        };
+        let mut f = alt.best_of([after.model.clone()], 1);
+        if let Some(g) = self.extend(&alt, before).filter(|g| g.sse < f.sse) {
+            f = g;
+        }
+        let own = after.n as f64 * (f.sse / after.sse).ln();
+        if own >= SCORE_THRESHOLD {
+            return Ok(());
+        }
+        Err(format!(
+            "fits in-sample, but the supply voltage follows the throttle: with the voltage \
+             replaced by a smooth function of the throttle the fit is as good (the voltage's own \
+             variation scores {own:.0} < {SCORE_THRESHOLD}), so a voltage gain cannot be told \
+             from a static map of the throttle in this record: not taken"
+        ))
+    }
+}
+
+/// The supply voltage as a smooth function of the throttle alone: the least-squares quadratic
+/// `V̂ = a + b x + c x²` in the standardised throttle `x = (u − ū) / σ_u`. A load's IR drop
+/// (∝ current, a power of the throttle near 1.5) and a discharge on a monotone ramp (∝ time ∝
+/// throttle) are such functions; a voltage that collapses on one level only, or discharges
+/// while a staircase comes back down, is not. A throttle that does not vary gives the mean
+/// voltage (a small ridge keeps the solution defined when the throttle takes two values).
+pub fn voltage_from_throttle(u: &[f64], v: &[f64]) -> Vec<f64> {
+    let n = u.len().min(v.len());
+    let (u, v) = (&u[..n], &v[..n]);
+    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
+    let (mu, mv) = (mean(u), mean(v));
+    let su = (u.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / n.max(1) as f64).sqrt();
+    if !(su > 0.0 && su.is_finite()) {
+        return vec![mv; n];
+    }
+    let x: Vec<f64> = u.iter().map(|&a| (a - mu) / su).collect();
+    let mut ata = nalgebra::Matrix3::<f64>::zeros();
+    let mut aty = nalgebra::Vector3::<f64>::zeros();
+    for (&xk, &vk) in x.iter().zip(v) {
+        let row = nalgebra::Vector3::new(1.0, xk, xk * xk);
+        ata += row * row.transpose();
+        aty += row * vk;
+    }
+    // A small ridge: with two distinct throttles x² is a multiple of the constant.
+    let ridge = 1e-9 * ata.diagonal().max();
+    for i in 0..3 {
+        ata[(i, i)] += ridge;
+    }
+    match ata.cholesky().map(|c| c.solve(&aty)) {
+        Some(c) if c.iter().all(|a| a.is_finite()) => x
+            .iter()
+            .map(|&xk| c[0] + c[1] * xk + c[2] * xk * xk)
+            .collect(),
+        _ => vec![mv; n],
     }
 }
 
@@ -103,6 +193,115 @@ impl Term for SupplySagParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_voltage_from_the_throttle_is_its_smooth_part() {
+        // Two levels (0.2 and 0.6, 40 samples each) with a voltage falling through both.
+        let u: Vec<f64> = (0..80).map(|k| if k < 40 { 0.2 } else { 0.6 }).collect();
+        let v: Vec<f64> = (0..80).map(|k| 16.0 - 0.01 * k as f64).collect();
+        let vhat = voltage_from_throttle(&u, &v);
+        assert!((vhat[0] - (16.0 - 0.195)).abs() < 1e-6, "{}", vhat[0]);
+        assert!(vhat[..40].iter().all(|&x| (x - vhat[0]).abs() < 1e-6));
+        assert!((vhat[79] - (16.0 - 0.595)).abs() < 1e-6, "{}", vhat[79]);
+        // A ramp with an IR drop growing as throttle^1.5: followed within 2 % of its span.
+        let u: Vec<f64> = (0..640).map(|k| k as f64 / 640.0).collect();
+        let v: Vec<f64> = u
+            .iter()
+            .map(|x| 4.0 - 0.3 * x - 0.4 * x.powf(1.5))
+            .collect();
+        let vhat = voltage_from_throttle(&u, &v);
+        let worst = v
+            .iter()
+            .zip(&vhat)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(worst <= 0.02 * 0.7, "{worst}");
+        // A constant throttle: the mean voltage.
+        assert_eq!(
+            voltage_from_throttle(&[0.5; 4], &[1.0, 2.0, 3.0, 4.0]),
+            [2.5; 4]
+        );
+    }
+
+    /// A non-monotone staircase (150 samples a level at 100 Hz) through a 2nd-order core with
+    /// a supply sag of 0.1 per volt on voltage `volt(k, u)`, a small deterministic noise
+    /// added; the baseline fitted; returns (u, y, v).
+    fn sagging_staircase(volt: impl Fn(usize, f64) -> f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        use crate::diagnose::model::simulate;
+        let levels = [0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65];
+        let u: Vec<f64> = levels
+            .iter()
+            .flat_map(|&l| std::iter::repeat(l).take(150))
+            .collect();
+        let v: Vec<f64> = u.iter().enumerate().map(|(k, &x)| volt(k, x)).collect();
+        let truth = crate::diagnose::model::Model::new(Core {
+            fn_hz: 3.0,
+            zeta: 0.7,
+            gain: 2.0,
+            offset: 0.0,
+        })
+        .with(SupplySagParams { gain_per_volt: 0.1 });
+        let mut y = vec![0.0; u.len()];
+        let sig = Signals {
+            dt_s: 0.01,
+            u: &u,
+            y: &u,
+            voltage: Some(&v),
+            u_ref: 0.5,
+            v_ref: v.iter().sum::<f64>() / v.len() as f64,
+        };
+        simulate(&truth, &sig, &mut y);
+        for (k, x) in y.iter_mut().enumerate() {
+            *x += 0.003 * ((k as f64 * 1.7).sin() + (k as f64 * 0.37).cos());
+        }
+        (u, y, v)
+    }
+
+    /// The sag fitted on the baseline of `(u, y, v)`: the fit and the identifiability test.
+    fn fit_sag(u: &[f64], y: &[f64], v: &[f64]) -> (Fit, Result<(), String>) {
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+        let ctx = Ctx {
+            sig: Signals {
+                dt_s: 0.01,
+                u,
+                y,
+                voltage: Some(v),
+                u_ref: mean(u),
+                v_ref: mean(v),
+            },
+            est: 0..u.len(),
+            val: 0..u.len(),
+        };
+        let base = crate::diagnose::search::baseline(&ctx, &Default::default(), &[]);
+        let after = SupplySag.extend(&ctx, &base).expect("a voltage channel");
+        let verdict = SupplySag.identifiable(&ctx, &base, &after);
+        (after, verdict)
+    }
+
+    fn gain_per_volt(f: &Fit) -> f64 {
+        f.model.term(NAME).map_or(f64::NAN, |t| t.free()[0].0)
+    }
+
+    #[test]
+    fn a_battery_that_discharges_through_a_staircase_is_told_from_a_static_map() {
+        // An IR drop with the load and a discharge of 2.4 V over the record: the levels come
+        // back at lower voltages, which no function of the throttle follows.
+        let (u, y, v) = sagging_staircase(|k, x| 16.8 - 1.5 * x - 2.4 * k as f64 / 1200.0);
+        let (f, verdict) = fit_sag(&u, &y, &v);
+        assert_eq!(verdict, Ok(()));
+        let g = gain_per_volt(&f);
+        assert!((g / 0.1 - 1.0).abs() < 0.1, "{g}");
+    }
+
+    #[test]
+    fn a_voltage_that_only_follows_the_throttle_is_not_taken_for_a_sag() {
+        // The IR drop alone: the voltage is a function of the throttle, the sag a static map.
+        let (u, y, v) = sagging_staircase(|_, x| 16.8 - 3.0 * x * x);
+        let (f, verdict) = fit_sag(&u, &y, &v);
+        assert!(gain_per_volt(&f).is_finite());
+        let reason = verdict.expect_err("not separable from a static map");
+        assert!(reason.contains("follows the throttle"), "{reason}");
+    }
 
     #[test]
     fn the_published_parameters_keep_their_names() {
