@@ -17,7 +17,10 @@
 //! `dc_gain_contradicts_levels`, its hint naming both numbers); a
 //! rejected model is still printed, with `"accepted": false`, its `"flaws"` and a `"hint"`, and
 //! `identify` exits 4 (the data do not support an identification), as the daemon publishes it
-//! as a `model_unreliable` warning instead of a model. Isolated outlier samples of the outputs
+//! as a `model_unreliable` warning instead of a model. `"warnings"` lists implausible results
+//! that do not reject the model: `nonpositive_gain` (a DC gain `≤ 0` under a command: more
+//! command, less output — a reversed load cell or a wrong model; the rule of `diagnose`,
+//! [`propid_numerics::quality::nonpositive_gain`]), also printed in the summary. Isolated outlier samples of the outputs
 //! ([`propid_numerics::outliers`]) are left out (marked missing) before identification and
 //! counted in `"source"."outliers"`.
 //!

@@ -208,8 +208,7 @@ pub fn dominant_mode_hz(fn_hz: f64, zeta: f64) -> f64 {
 pub fn warnings(m: &ModelSummary, name: &'static str, band: [f64; 2]) -> Vec<Warning> {
     let r = &m.report;
     let mut out = Vec::new();
-    let gain = r.dc_gain.get(0);
-    if gain.is_finite() && gain <= 0.0 {
+    if let Some(gain) = propid_numerics::quality::nonpositive_gain(r) {
         out.push(Warning {
             kind: WarningKind::NonpositiveGain,
             message: format!(

@@ -86,6 +86,15 @@ fn check(d: &Dialect, dir: &std::path::Path) -> Vec<String> {
             e.gain_n
         ));
     }
+    let warned = v["warnings"]
+        .as_array()
+        .is_some_and(|w| w.iter().any(|w| w["kind"] == "nonpositive_gain"));
+    if warned != (e.gain_n <= 0.0) {
+        bad.push(format!(
+            "identify warnings {} (a gain ≤ 0 must be warned of, only then)",
+            v["warnings"]
+        ));
+    }
     let steps = v["steps"].as_array().cloned().unwrap_or_default();
     if steps.len() != LEVELS.len() - 1 {
         bad.push(format!("{} steps, not {}", steps.len(), LEVELS.len() - 1));

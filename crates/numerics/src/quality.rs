@@ -71,6 +71,16 @@ impl Flaw {
     }
 }
 
+/// The DC gain of output 0 per unit of input 0 when it is finite and `≤ 0`: more command,
+/// less output — implausible for a thrust (or a speed, a current) under a throttle command: a
+/// load cell mounted reversed, a sign convention of the export, or a wrong model. A warning
+/// (`nonpositive_gain`, in `identify` and `diagnose`), not a flaw: the model may be right for
+/// a reversed sensor, and the user must be told either way.
+pub fn nonpositive_gain(model: &ModelReport) -> Option<f64> {
+    let gain = model.dc_gain.get(0);
+    (gain.is_finite() && gain <= 0.0).then_some(gain)
+}
+
 /// The flaws of a model (empty: it may be used as a model).
 pub fn judge(model: &ModelReport) -> Vec<Flaw> {
     let mut flaws = Vec::new();

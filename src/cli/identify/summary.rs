@@ -31,6 +31,38 @@ pub struct Output<'a> {
     pub stabilization: Option<&'a Stabilization>,
     /// The quality checks of the model ([`propid_numerics::quality`], the daemon's rule).
     pub quality: Quality,
+    /// Implausible results that do not reject the model (`nonpositive_gain`: the output falls
+    /// as the command rises, [`propid_numerics::quality::nonpositive_gain`]); empty when none.
+    pub warnings: Vec<IdentifyWarning>,
+}
+
+/// One entry of `"warnings"`: the shape of `diagnose`'s (`kind`, `message`, `value`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IdentifyWarning {
+    /// What is implausible (`nonpositive_gain`).
+    pub kind: &'static str,
+    /// In words.
+    pub message: String,
+    /// The offending value.
+    pub value: f64,
+}
+
+/// The warnings on `model` identified from a command (`commanded`): a DC gain `≤ 0`.
+fn warnings_of(model: &propid_numerics::ModelReport, commanded: bool) -> Vec<IdentifyWarning> {
+    let gain = commanded
+        .then(|| propid_numerics::quality::nonpositive_gain(model))
+        .flatten();
+    gain.map(|g| IdentifyWarning {
+        kind: "nonpositive_gain",
+        message: format!(
+            "DC gain {g:.4} ≤ 0: the output does not grow with the command (a load cell \
+             mounted reversed or a sign convention of the export? the model is printed as \
+             measured)"
+        ),
+        value: g,
+    })
+    .into_iter()
+    .collect()
 }
 
 /// `"quality"` in the JSON output: whether the model passed the checks a plant's model always
@@ -105,6 +137,7 @@ impl<'a> Output<'a> {
             static_map: &stand.static_map,
             stabilization: model.stabilization.as_ref(),
             quality: Quality::of(&model.report, levels),
+            warnings: warnings_of(&model.report, loaded.commanded),
         }
     }
 
@@ -206,6 +239,9 @@ impl<'a> Output<'a> {
                 let hint = q.hint.as_deref().unwrap_or(HINT);
                 let _ = writeln!(o, "quality   REJECTED ({}): {hint}", q.names());
             }
+        }
+        for w in &self.warnings {
+            let _ = writeln!(o, "warning   {}: {}", w.kind, w.message);
         }
         if let Some(st) = self.stabilization {
             let line = crate::plot::stabilization::summary_line(st, m.fn_hz, m.zeta);
