@@ -20,6 +20,7 @@ if [ -z "$data" ]; then
 elif [ "${data#/}" = "$data" ]; then
     data="$caller/$data"
 fi
+data="$(realpath -m "$data")" # the table names the folder without ../ detours
 if [ ! -d "$data" ]; then
     echo "warning: data dir $data absent; the real-data table will say so" >&2
 fi
