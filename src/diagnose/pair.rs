@@ -19,7 +19,10 @@
 //!   [`MIN_RMS_DROP`];
 //! - its held-out figure is higher than the current model's by more than [`MIN_CV_GAIN_PP`].
 //!
-//! The first pair that passes is taken ([`select_pair`]); its fits run only until then.
+//! Of the pairs that pass, the one with the highest held-out figure is taken
+//! ([`select_pair`]): a pair of a true effect and a flexible imitator of the other (a
+//! saturation bending the top level like a sag) may pass too, and the held-out figure is the
+//! judge between them.
 //!
 //! **Reported values.** Both findings carry the pair's step: `a`'s score is its own against
 //! `M`, `b`'s its score given `a`; the **pair's held-out gain is reported on `a`**, and `b`'s
@@ -66,18 +69,26 @@ pub fn joint_evidence(sse_cur: f64, sse_pair: f64, n: usize) -> Option<f64> {
     (score >= 2.0 * SCORE_THRESHOLD && rms_drop >= MIN_RMS_DROP).then_some(score)
 }
 
-/// The pair rule (module doc): the pairs of [`pairs`] over `scores` are fitted in turn by
-/// `fit` (`None`: the pair fails an in-sample test); the first whose held-out figure exceeds
-/// `current` by more than [`MIN_CV_GAIN_PP`] is returned with what `fit` gave.
+/// The pair rule (module doc): every pair of [`pairs`] over `scores` is fitted by `fit`
+/// (`None`: the pair fails an in-sample test); of those whose held-out figure exceeds
+/// `current` by more than [`MIN_CV_GAIN_PP`], the highest figure is returned (ties: the
+/// first tried) with what `fit` gave.
 pub fn select_pair<S>(
     scores: &[f64],
     current: f64,
     mut fit: impl FnMut(usize, usize) -> Option<(f64, S)>,
 ) -> Option<(usize, usize, S)> {
-    pairs(scores).into_iter().find_map(|(a, b)| {
-        let (figure, extra) = fit(a, b)?;
-        (figure - current > MIN_CV_GAIN_PP).then_some((a, b, extra))
-    })
+    let mut best: Option<(f64, usize, usize, S)> = None;
+    for (a, b) in pairs(scores) {
+        let Some((figure, extra)) = fit(a, b) else {
+            continue;
+        };
+        let better = best.as_ref().map_or(true, |b| figure > b.0);
+        if figure - current > MIN_CV_GAIN_PP && better {
+            best = Some((figure, a, b, extra));
+        }
+    }
+    best.map(|(_, a, b, extra)| (a, b, extra))
 }
 
 #[cfg(test)]
@@ -104,6 +115,19 @@ mod tests {
         assert!(select_pair(&scores, 50.0, |_, _| Some((50.0, ()))).is_none());
         assert!(select_pair(&scores, 50.0, |_, _| None::<(f64, ())>).is_none());
         assert!(select_pair(&[300.0], 0.0, |_, _| Some((99.0, ()))).is_none());
+    }
+
+    #[test]
+    fn of_the_pairs_that_pass_the_best_held_out_figure_wins() {
+        let scores = [300.0, 200.0, 100.0];
+        // (0,1) → 55, (0,2) → 60, (1,2) → 52.
+        let fig = |a: usize, b: usize| match (a, b) {
+            (0, 1) => 55.0,
+            (0, 2) => 60.0,
+            _ => 52.0,
+        };
+        let got = select_pair(&scores, 50.0, |a, b| Some((fig(a, b), ())));
+        assert_eq!(got.map(|g| (g.0, g.1)), Some((0, 2)));
     }
 
     #[test]

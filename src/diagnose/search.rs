@@ -19,7 +19,7 @@
 //! its gain in percentage points is the finding's `cv_gain_pp`. An addition that does not
 //! improve the held-out figure is not taken. When none is, two candidates that each fitted
 //! in-sample are tried together ([`super::pair`]: both added and fitted jointly, two effects'
-//! worth of evidence, the pair must raise the held-out figure; the pair's gain is reported on
+//! worth of evidence, the best pair must raise the held-out figure; its gain is reported on
 //! the stronger, 0 on the other). Repeat (at most `max_effects` effects in all).
 //!
 //! **Published values.** Each extension refits every parameter of the model jointly, so the
