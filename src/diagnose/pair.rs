@@ -100,8 +100,7 @@ mod tests {
         // The current model's held-out figure is 50. Alone, "sag" (score 300) gives 30 and
         // "map" (score 200) gives 45: the single step takes neither (search::select).
         let alone = [("sag", 300.0, 30.0), ("map", 200.0, 45.0)];
-        let singles: Vec<(f64, (&str, f64))> =
-            alone.iter().map(|&(n, s, f)| (s, (n, f))).collect();
+        let singles: Vec<(f64, (&str, f64))> = alone.iter().map(|&(n, s, f)| (s, (n, f))).collect();
         assert!(super::super::search::select(singles, 50.0, |&(_, f)| (f, ())).is_none());
         // Together they give 62: the pair is taken, the stronger first.
         let scores: Vec<f64> = alone.iter().map(|a| a.1).collect();
