@@ -32,6 +32,7 @@ pub mod fit;
 pub mod folds;
 pub mod model;
 pub mod noise;
+pub mod pair;
 pub mod rejected;
 pub mod report;
 pub mod result;

@@ -17,7 +17,10 @@
 //! score, and the first whose **held-out figure** ([`super::folds`]: the mean fit of the blocked
 //! cross-validation folds, or the hold-out tail) is higher than the current model's is taken;
 //! its gain in percentage points is the finding's `cv_gain_pp`. An addition that does not
-//! improve the held-out figure is not taken. Repeat (at most `max_effects` effects in all).
+//! improve the held-out figure is not taken. When none is, two candidates that each fitted
+//! in-sample are tried together ([`super::pair`]: both added and fitted jointly, two effects'
+//! worth of evidence, the best pair must raise the held-out figure; its gain is reported on
+//! the stronger, 0 on the other). Repeat (at most `max_effects` effects in all).
 //!
 //! **Published values.** Each extension refits every parameter of the model jointly, so the
 //! parameters of an effect move when later effects join (a supply sag's gain per volt fitted
@@ -41,6 +44,7 @@ use super::effects::REGISTRY;
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Scores};
 use super::model::{Core, Model};
+use super::pair::{joint_evidence, select_pair};
 use super::rejected::{Ledger, Rejected};
 use super::result::Finding;
 use super::revise::{assess, revise, Change, Kept, MAX_REVISIONS};
@@ -146,13 +150,25 @@ pub fn search(
     let mut ledger = Ledger::default();
     loop {
         while findings.len() < max_effects {
-            let Some((score, e, f, f_cv)) =
-                forward(ctx, &findings, &cur, cur_cv.mean, &cv, &mut ledger)
+            let room = max_effects - findings.len();
+            let Some(step) = forward(ctx, &findings, &cur, cur_cv.mean, &cv, &mut ledger, room)
             else {
                 break;
             };
-            findings.push(finding(e, score, f_cv.mean - cur_cv.mean, &cur, &f, ctx));
-            (cur, cur_cv) = (f, f_cv);
+            for (score, e, gain, with) in step.taken {
+                let mut f = finding(e, score, gain, &cur, &step.fit, ctx);
+                if let Some(other) = with {
+                    let note = format!(
+                        "; taken together with {other}: neither raised the held-out fit \
+                         alone, the pair did (the pair's held-out gain is reported on the \
+                         stronger of the two, 0 on the other)"
+                    );
+                    f.drop.push_str(&note);
+                    f.evidence.push_str(&note);
+                }
+                findings.push(f);
+            }
+            (cur, cur_cv) = (step.fit, step.cv);
         }
         let searched: Vec<&'static str> = findings[detected..]
             .iter()
@@ -180,18 +196,28 @@ pub fn search(
     })
 }
 
+/// What one forward step takes: one effect, or a pair ([`super::pair`]), each as (score,
+/// effect, held-out gain in pp, the effect it was taken with), and the model with them.
+struct Step {
+    taken: Vec<(f64, &'static dyn Effect, f64, Option<&'static str>)>,
+    fit: Fit,
+    cv: Scores,
+}
+
 /// One forward step (module doc): every effect not in `findings` fitted on top of `cur`; the
-/// candidate the selection rule takes, with its score, fit and held-out scores. Every
-/// candidate that fitted in-sample and was not taken is noted in `ledger` with the reason.
-fn forward<'e>(
+/// candidate the selection rule takes, or when none is and `room` allows two, the pair the
+/// pair rule takes ([`super::pair`]). Every candidate that fitted in-sample and was not taken
+/// is noted in `ledger` with the reason.
+fn forward(
     ctx: &Ctx,
     findings: &[Finding],
     cur: &Fit,
     cur_figure: f64,
     cv: &impl Fn(&Fit) -> Scores,
     ledger: &mut Ledger,
-) -> Option<(f64, &'e dyn Effect, Fit, Scores)> {
-    let mut candidates: Vec<(f64, (&dyn Effect, Fit))> = Vec::new();
+    room: usize,
+) -> Option<Step> {
+    let mut candidates: Vec<(f64, (&'static dyn Effect, Fit))> = Vec::new();
     for &e in REGISTRY {
         if findings.iter().any(|f| f.effect == e.name()) {
             continue;
@@ -215,6 +241,7 @@ fn forward<'e>(
         .iter()
         .map(|(s, (e, _))| (e.name(), *s))
         .collect();
+    let pool = candidates.clone();
     let mut tried: Vec<(&str, f64)> = Vec::new();
     let taken = select(candidates, cur_figure, |(e, f)| {
         let s = cv(f);
@@ -222,15 +249,45 @@ fn forward<'e>(
         (s.mean, s)
     });
     let taken_name = taken.as_ref().map(|(_, (e, _), _)| e.name());
-    for (name, figure) in tried.into_iter().filter(|t| Some(t.0) != taken_name) {
+    for &(name, figure) in tried.iter().filter(|t| Some(t.0) != taken_name) {
         let score = scores
             .iter()
             .find(|s| s.0 == name)
             .map_or(f64::NAN, |s| s.1);
         ledger.note(Rejected::held_out(name, score, figure - cur_figure));
     }
-    let (score, (e, f), f_cv) = taken?;
-    Some((score, e, f, f_cv))
+    if let Some((score, (e, f), f_cv)) = taken {
+        return Some(Step {
+            taken: vec![(score, e, f_cv.mean - cur_figure, None)],
+            fit: f,
+            cv: f_cv,
+        });
+    }
+    if room < 2 {
+        return None;
+    }
+    let pool_scores: Vec<f64> = pool.iter().map(|c| c.0).collect();
+    let (a, b, (score_b, fit, f_cv)) = select_pair(&pool_scores, cur_figure, |a, b| {
+        let ((_, (ea, fa)), (_, (eb, fb))) = (&pool[a], &pool[b]);
+        let both = eb.extend(ctx, fa)?;
+        let score_b = assess(ctx, fa, &both, eb.name()).ok()?;
+        assess(ctx, fb, &both, ea.name()).ok()?;
+        joint_evidence(cur.sse, both.sse, both.n)?;
+        let s = cv(&both);
+        Some((s.mean, (score_b, both, s)))
+    })?;
+    let (ea, eb) = (pool[a].1 .0, pool[b].1 .0);
+    for e in [ea, eb] {
+        ledger.forget(e.name());
+    }
+    Some(Step {
+        taken: vec![
+            (pool[a].0, ea, f_cv.mean - cur_figure, Some(eb.name())),
+            (score_b, eb, 0.0, Some(ea.name())),
+        ],
+        fit,
+        cv: f_cv,
+    })
 }
 
 /// Applies a change the revision kept ([`super::revise`]): a removed effect's finding goes, a
