@@ -317,13 +317,7 @@ fn serve(
         let wall = Instant::now();
         if hangup_us.is_some_and(|h| now >= h) || schedule.due(Schedule::HANGUP, wall, live) {
             // the link is cut here; what is already on the wire still reaches the host
-            fw.faults_mut().set_link_up(false);
-            let unread = drain_to_host(fd, &link.path, backlog, &mut bytes_out);
-            shared
-                .report
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .bytes_unread_at_hangups += unread;
+            cut_link(fw, (fd, &link.path), backlog, &mut bytes_out, shared);
             publish(
                 shared,
                 fw,
@@ -408,13 +402,7 @@ fn serve(
     }
     if wire.reader_present {
         // stopped: the link is cut as at a hang-up, what is on the wire reaches the host
-        fw.faults_mut().set_link_up(false);
-        let unread = drain_to_host(fd, &link.path, backlog, &mut bytes_out);
-        shared
-            .report
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .bytes_unread_at_hangups += unread;
+        cut_link(fw, (fd, &link.path), backlog, &mut bytes_out, shared);
     }
     publish(
         shared,
@@ -427,6 +415,25 @@ fn serve(
 
 /// The firmware hung: nothing goes out, the host's bytes are read and dropped, until the host
 /// closes the port (a reset: [`End::Reset`]) or the runner is stopped.
+/// Cuts the link (the fault injector counts what the host never receives from here on) and
+/// lets what is already on the wire reach the host ([`drain_to_host`]); what it could not
+/// deliver is counted in `bytes_unread_at_hangups`.
+fn cut_link(
+    fw: &mut Firmware<PlantDynamics>,
+    (fd, slave): (i32, &std::path::Path),
+    backlog: &mut Vec<u8>,
+    bytes_out: &mut u64,
+    shared: &Shared,
+) {
+    fw.faults_mut().set_link_up(false);
+    let unread = drain_to_host(fd, slave, backlog, bytes_out);
+    shared
+        .report
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .bytes_unread_at_hangups += unread;
+}
+
 fn frozen(fd: i32, stopped: &dyn Fn() -> bool, rx: &mut [u8], shared: &Shared) -> End {
     loop {
         if stopped() {
