@@ -37,8 +37,9 @@
 #      simulator's bytes_out minus the daemon's bytes; those bytes must hold the tail's samples);
 #   5. no window the data supported was lost: every pulse the device fired is counted, and every
 #      pulse is in exactly one window's outcome: K x (models + refused by the quality checks +
-#      failed) + the pulses of every window a reset or hang-up interrupted (`window_interrupted`,
-#      each named) = pulses; the windows the plan made = models + refused + failed + interrupted.
+#      failed) + the pulses of every window closed before K pulses (`window_interrupted`, each
+#      named with what closed it: `closed_by` segment = a reset or hang-up, level_end = pulses
+#      left over when an operating point ended, end = the stream's end) = pulses; the windows the plan made = models + refused + failed + interrupted.
 # Writes docs/soak.md and README.md between <!-- BEGIN soak --> and <!-- END soak -->
 # (scripts/update_readme_tables.sh copies it again). Run by hand; it takes STAND_S + ~3 min:
 #
@@ -206,7 +207,8 @@ def outcome(l):
     return f"{l['kind']} at {l.get('operating_point')} (t {l.get('t_s', 0):.0f} s: {why})"
 outcomes = "; ".join(outcome(l) for l in judged)
 cut = "; ".join(f"{l['pulses']} of {per_model} pulses at {l['operating_point']}"
-                f" (device t {l['t_s']:.1f} s)" for l in interrupted)
+                f" (device t {l['t_s']:.1f} s, {l.get('closed_by', 'segment')})"
+                for l in interrupted)
 identified = stats["models"] + stats["models_unreliable"] + stats["identify_errors"]
 accounted = stats["samples"] + stats["samples_lost"] + f["samples_cut"] + f["samples_unsent"]
 link_faults = f["hangups"] + f["resets"]
@@ -266,7 +268,8 @@ print(f"simulated stand on a pty at 1 kHz for {sim['samples_total']} samples"
       f" drops by kind: {kinds}; warnings: {json.dumps(warn, sort_keys=True)};"
       f" {stats['models']} models published, {stats['models_unreliable']} refused by the quality"
       f" checks, {stats['identify_errors']} failed ({outcomes or 'none'}),"
-      f" {len(interrupted)} windows interrupted by a hang-up or reset ({cut or 'none'});"
+      f" {len(interrupted)} windows closed before K pulses by a reset or hang-up (segment)"
+      f" or an operating point's end (level_end) ({cut or 'none'});"
       f" the reference without faults (same plant and plan, `sim --record` + `replay`):"
       f" {ref_stats['models']} models, {ref_stats['models_unreliable']} refused,"
       f" {ref_stats['identify_errors']} failed. Result: **{'PASS' if ok else 'FAIL'}**.")
