@@ -32,6 +32,7 @@
 //! a DC gain of about 1 (output per output), and what it carries is the dynamics: time constants,
 //! natural frequency and damping.
 
+use propid_numerics::outliers::MAD_TO_SD;
 use propid_numerics::segment::{ResponseStepRules, SegmentRules};
 use serde::Serialize;
 
@@ -81,7 +82,7 @@ pub fn find_steps_with(y: &[f64], rules: &ResponseStepRules) -> Option<StepFindi
         .map(|w| (w[2 * m] - 2.0 * w[m] + w[0]).abs() / 6f64.sqrt())
         .filter(|d| d.is_finite())
         .collect();
-    let noise = 1.4826 * quantile(&mut diffs, 0.5);
+    let noise = MAD_TO_SD * quantile(&mut diffs, 0.5);
     let mut finite: Vec<f64> = s.iter().copied().filter(|v| v.is_finite()).collect();
     let range = quantile(&mut finite, 0.99) - quantile(&mut finite, 0.01);
     let thr = (rules.noise_sigmas * noise).max(rules.range_fraction * range);

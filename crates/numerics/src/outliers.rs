@@ -48,8 +48,9 @@ pub const NEIGHBOUR_AGREEMENT: f64 = 0.5;
 /// Samples either side of a command change that are never judged.
 pub const COMMAND_GUARD: usize = 2;
 
-/// Consistency factor of the MAD for Gaussian data.
-const MAD_TO_SD: f64 = 1.4826;
+/// Consistency factor of the MAD for Gaussian data (σ ≈ 1.4826 · MAD; the one copy: the
+/// start-up rule and ingest's step finder use it too).
+pub const MAD_TO_SD: f64 = 1.4826;
 /// Consistency factor of the mean absolute deviation for Gaussian data (`√(π/2)`).
 const MEAN_AD_TO_SD: f64 = 1.2533;
 

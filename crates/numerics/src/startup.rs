@@ -34,7 +34,7 @@
 //! A level of fewer than `BLOCKS · MIN_BLOCK` samples is not judged (too few blocks to tell a
 //! settled level), nor a record without a command level.
 
-use crate::outliers::{median, resolution};
+use crate::outliers::{median, resolution, MAD_TO_SD};
 use crate::segment::{levels, Command, SegmentRules};
 
 /// Blocks the first level is cut into.
@@ -43,9 +43,6 @@ pub const BLOCKS: usize = 32;
 pub const MIN_BLOCK: usize = 20;
 /// A first block farther than this many scatters from the settled level is a transient.
 pub const TRANSIENT_SIGMAS: f64 = 8.0;
-
-/// Consistency factor of the MAD for Gaussian data.
-const MAD_TO_SD: f64 = 1.4826;
 
 /// A start-up transient found ([`start_transient`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
