@@ -37,9 +37,10 @@
 //! empty file, a file without data rows, or a requested column that is absent is an error naming
 //! what is missing and what is there.
 //!
-//! Numbers: decimal commas in a file not separated by `,`
-//! ([`parse_number`](propid_wire::protocol::csv::line::parse_number)); a time column may hold
-//! date-time stamps ([`parse_clock`](propid_wire::protocol::csv::line::parse_clock)).
+//! Numbers: a decimal point or a decimal comma, thousands grouped by the other mark, the file's
+//! mark shown by its rows ([`DecimalMark`]; `1.234,5`, `1,234.5`, `"0,45"` in a quoted field of a
+//! `,` file); a time column may hold date-time or time-of-day stamps, which keep increasing
+//! across midnight ([`ClockColumn`]; the midnights passed are counted in `midnights`).
 //!
 //! Time: a time column (`t_us`, `t_ms`, `t_s`, `Time (s)`, `t`, `time`) is resampled onto a
 //! uniform grid when irregular ([`super::resample`]); `fs` overrides its rate; without a time
@@ -61,7 +62,7 @@ use convert::{convert, Converted};
 use layout::{layout, Layout};
 use propid_wire::protocol::csv::columns::{ColumnSpec, Quantity, Scale, Unit};
 use propid_wire::protocol::csv::line::{
-    classify_str, fields, parse_clock, parse_number, text_lines, LineKind,
+    classify_str, fields, parse_number, text_lines, ClockColumn, DecimalMark, LineKind,
 };
 use propid_wire::record::{Channel, Record};
 
@@ -262,6 +263,12 @@ pub struct CsvSource {
     /// True when the units were read from a row of their own under the header's names.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub units_row: bool,
+    /// `","` when the file's numbers are written with a decimal comma (omitted for the point).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub decimal_mark: Option<&'static str>,
+    /// Midnights a time column of times of day passed (a day added after each).
+    #[serde(skip_serializing_if = "is_zero_usize")]
+    pub midnights: usize,
     /// How each channel read was carried onto the time base, by its key (`thrust`, ...): own
     /// samples, own period, samples bridged across empty cells, samples left NaN.
     pub channels: BTreeMap<String, Carried>,
@@ -311,6 +318,7 @@ struct Parsed {
     skipped: SkippedRows,
     comments: usize,
     layout: Layout,
+    midnights: usize,
 }
 
 /// Reads CSV text (the whole file) into a record.
@@ -330,7 +338,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         return Err(CsvFileError::Empty);
     }
     let layout = layout(&lines);
-    let sep = layout.sep;
+    let (sep, mark) = (layout.sep, layout.mark);
     let mut columns = header_columns(&lines, &layout, opts)?;
     // A header ending in separators (benchmark files) has empty, unnamed last columns.
     while columns.last().is_some_and(|c| c.name.is_empty()) {
@@ -346,6 +354,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(data.len()); used.len()];
     let mut row = Vec::new();
     let mut clock = false;
+    let mut stamps = ClockColumn::default();
     'rows: for line in data {
         row.clear();
         row.extend(fields(line, sep));
@@ -356,10 +365,10 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         let mut parsed = Vec::with_capacity(used.len());
         for (n, &i) in used.iter().enumerate() {
             let field = row.get(i).copied().unwrap_or("");
-            let mut value = parse_field(field, sep);
+            let mut value = parse_field(field, mark);
             // A time column of time stamps (`18:55:23.120`, `2024-08-13 18:55:23.120`).
             if value.is_none() && n == 0 && picks.time.is_some() {
-                value = parse_clock(field);
+                value = stamps.read(field);
                 clock |= value.is_some();
             }
             match (value, n < required) {
@@ -390,6 +399,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         skipped,
         comments,
         layout,
+        midnights: stamps.midnights,
     };
     build(&columns, picks, parsed, opts)
 }
@@ -407,6 +417,7 @@ fn build(
         skipped,
         comments,
         layout,
+        midnights,
     } = parsed;
     let Converted {
         units,
@@ -482,6 +493,8 @@ fn build(
         header: layout.names.is_some(),
         preamble: layout.preamble,
         units_row: layout.units_row,
+        decimal_mark: (layout.mark == DecimalMark::Comma).then_some(","),
+        midnights,
         channels: channels_report,
         units,
         input_range,
@@ -503,10 +516,10 @@ fn build(
 }
 
 /// An empty field is "not measured" (NaN); text is `None`; a number is read by the dialect's
-/// rule ([`parse_number`]: decimal commas in a file not separated by `,`).
-fn parse_field(f: &str, sep: char) -> Option<f64> {
+/// rule ([`parse_number`] with the file's decimal mark).
+fn parse_field(f: &str, mark: DecimalMark) -> Option<f64> {
     if f.is_empty() {
         return Some(f64::NAN);
     }
-    parse_number(f, sep)
+    parse_number(f, mark)
 }

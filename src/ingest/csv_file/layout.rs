@@ -15,15 +15,20 @@
 //! 4. A line under the header, before the first data row, whose cells are all units of the unit
 //!    table ([`columns::is_unit`]) or empty or `-`, one at least a unit, is a **units row**: each
 //!    unit joins its column's name (`Thrust` + `gf` → `Thrust (gf)`).
+//! 5. The file's **decimal mark** is the one its data rows show
+//!    ([`DecimalMark::of_fields`]: `0,45` for the comma, `0.45` for the point); it decides
+//!    fields that either mark reads (`1,234`, `1.300`).
 
 use propid_wire::protocol::csv::columns;
-use propid_wire::protocol::csv::line::{fields, is_numeric, separator};
+use propid_wire::protocol::csv::line::{fields, is_numeric, separator, DecimalMark};
 
 /// The layout of a file's lines (comments and blank lines already left out).
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct Layout {
     /// The field separator.
     pub(super) sep: char,
+    /// The decimal mark of the data rows' numbers.
+    pub(super) mark: DecimalMark,
     /// The header's names (units of a units row joined), `None` without a header.
     pub(super) names: Option<Vec<String>>,
     /// Lines before the header.
@@ -42,9 +47,17 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
     };
     let first_data = lines.iter().position(|l| is_data(l));
     let sep = separator(lines[first_data.unwrap_or(0)]);
+    let mark_from = |start: usize| {
+        DecimalMark::of_fields(
+            lines[start.min(lines.len())..]
+                .iter()
+                .flat_map(|l| fields(l, sep)),
+        )
+    };
     if first_data == Some(0) {
         return Layout {
             sep,
+            mark: mark_from(0),
             names: None,
             preamble: 0,
             units_row: false,
@@ -77,12 +90,14 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
             }
         }
     }
+    let data_start = header + 1 + usize::from(units_row);
     Layout {
         sep,
+        mark: mark_from(data_start),
         names: Some(names),
         preamble: header,
         units_row,
-        data_start: header + 1 + usize::from(units_row),
+        data_start,
     }
 }
 
@@ -143,6 +158,12 @@ mod tests {
         // Decimal commas, `;`-separated.
         let l = layout(&["Zeit;Schub", "Time (s);Thrust (g)", "0,01;12,5"]);
         assert_eq!((l.sep, l.preamble, l.data_start), (';', 1, 2));
+        assert_eq!(l.mark, DecimalMark::Comma);
+        // Thousands in a tab file with decimal points; in quoted fields of a `,` file.
+        let l = layout(&["Time (s)\teRPM", "0.010\t12,345", "0.020\t12,346"]);
+        assert_eq!((l.sep, l.mark, l.data_start), ('\t', DecimalMark::Point, 1));
+        let l = layout(&["\"t (s)\",\"F (N)\"", "\"0,010\",\"1,234\""]);
+        assert_eq!((l.sep, l.mark, l.data_start), (',', DecimalMark::Comma, 1));
         // A header narrower than its rows (trailing separators on data rows only), a text row
         // first: still the first line.
         let l = layout(&["t_s,thrust_N", "x,1,a,b", "0,1,,"]);

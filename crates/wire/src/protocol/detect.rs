@@ -14,7 +14,7 @@
 use super::csv::columns;
 use super::csv::device::parse_comment;
 use super::csv::line::{
-    classify, fields, parse_number, separator, strip_checksum_str, text_lines, LineKind,
+    classify, fields, is_number, separator, strip_checksum_str, text_lines, LineKind,
 };
 use super::decoder::Decoder;
 
@@ -74,7 +74,7 @@ fn is_csv_line(line: &[u8]) -> bool {
     let sep = separator(text);
     for f in fields(text, sep) {
         n += 1;
-        numeric += usize::from(parse_number(f, sep).is_some());
+        numeric += usize::from(is_number(f));
         blank += usize::from(f.is_empty());
         known |= columns::lookup(f).is_some();
     }

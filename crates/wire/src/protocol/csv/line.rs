@@ -12,14 +12,22 @@
 //!    before the `*`, in hex (as NMEA) — a wrong one drops the line ([`strip_checksum`]).
 //! 3. What is left, without a UTF-8 byte-order mark and surrounding space, is empty (ignored),
 //!    a `#` comment, or data ([`classify`]).
-//! 4. Data fields are separated by `,`, else by tabs, else by `;` ([`separator`]); each field is
-//!    trimmed and unquoted ([`fields`]). A line whose every `,` sits between two digits and that
-//!    has a tab or a `;` is a decimal-comma line (the European spreadsheet export,
-//!    `0,25;1503,2`): its separator is the tab or `;`.
-//! 5. A number is what Rust's `f64` parser reads, or, in a line not separated by `,`, a decimal
-//!    comma number (`-0,25`, `1503,2`: one `,` between digits, no `.`) ([`parse_number`]).
+//! 4. Data fields are separated by `,`, else by tabs, else by `;` ([`separator`]), outside
+//!    double quotes (a quoted field keeps its separators: `"0,45","12,3"`); each field is
+//!    trimmed and unquoted ([`fields`]). A line whose every `,` (outside quotes) sits between
+//!    two digits and that has a tab or a `;` is a decimal-comma or thousands line (the European
+//!    spreadsheet export `0,25;1503,2`, or `1,234.5\t0.45`): its separator is the tab or `;`.
+//! 5. A number is written with a decimal mark, `.` or `,`, and may group thousands with the
+//!    other mark (`1,234.5`, `1.234,5`, `12,345`): [`DecimalMark`] reads a field both ways. A
+//!    field only one mark reads (`0,45`, `1.234,5`, `12,3`; `0.45`, `1,234.5`) shows the
+//!    file's mark; `1,234` and `1.234` (one mark, then exactly three digits) are read with the
+//!    mark the file's other fields show ([`DecimalMark::of_fields`], `.` when they show none),
+//!    so a plain `,`-separated file, whose fields hold no `,`, never reads a `.` as thousands
+//!    ([`parse_number`]).
 //!    A time-of-day or date-time stamp (`18:55:23.120`, `2024-08-13 18:55:23.120`,
-//!    `2024-08-13T18:55:23Z`) is read as seconds by [`parse_clock`] where a column holds them.
+//!    `2024-08-13T18:55:23Z`) is read as seconds by [`parse_clock`] where a column holds them;
+//!    read in order ([`ClockColumn`]), a time of day that falls back by more than 12 h has
+//!    passed midnight (23:59:59.9 then 00:00:00.1 is 0.2 s later).
 
 /// Longest line the protocol allows, characters (without the newline).
 pub const MAX_LINE: usize = 255;
@@ -188,51 +196,167 @@ fn classify_text(text: &str) -> LineKind<'_> {
     }
 }
 
-/// Field separator of a data line: `,`, else tab, else `;` — unless every `,` of the line is a
-/// decimal comma (between two digits) and it has a tab or a `;` (rule 4 of the
-/// [module documentation](self)).
+/// Field separator of a data line: `,`, else tab, else `;`, counting only those outside double
+/// quotes — unless every such `,` has a digit on both sides (a decimal comma or a thousands
+/// separator) and the line has a tab or a `;` (rule 4 of the [module documentation](self)).
 pub fn separator(text: &str) -> char {
-    let other = text.contains('\t') || text.contains(';');
-    if text.contains(',') && !(other && all_commas_decimal(text)) {
+    let b = text.as_bytes();
+    let (mut comma, mut tab, mut semicolon, mut digit_commas) = (false, false, false, true);
+    for (i, c) in outside_quotes(b) {
+        match c {
+            b',' => {
+                comma = true;
+                digit_commas &= between_digits(b, i);
+            }
+            b'\t' => tab = true,
+            b';' => semicolon = true,
+            _ => {}
+        }
+    }
+    if comma && !((tab || semicolon) && digit_commas) {
         ','
-    } else if text.contains('\t') {
+    } else if tab {
         '\t'
     } else {
         ';'
     }
 }
 
-/// True when every `,` of `text` has an ASCII digit on both sides.
-fn all_commas_decimal(text: &str) -> bool {
-    let b = text.as_bytes();
-    b.iter()
-        .enumerate()
-        .filter(|(_, &c)| c == b',')
-        .all(|(i, _)| {
-            i > 0 && b[i - 1].is_ascii_digit() && b.get(i + 1).is_some_and(u8::is_ascii_digit)
-        })
+/// The bytes of `b` outside double quotes, with their index (a `"` opens or closes a quote).
+fn outside_quotes(b: &[u8]) -> impl Iterator<Item = (usize, u8)> + '_ {
+    let mut quoted = false;
+    b.iter().enumerate().filter_map(move |(i, &c)| {
+        if c == b'"' {
+            quoted = !quoted;
+            None
+        } else {
+            (!quoted).then_some((i, c))
+        }
+    })
 }
 
-/// A field as a number (rule 5 of the [module documentation](self)): Rust's `f64` syntax, or,
-/// when the line's separator `sep` is not `,`, a decimal comma (`-0,25`: one `,` between two
-/// digits, no `.`). `None` for anything else (text, a thousands separator `1.234,5`).
-pub fn parse_number(field: &str, sep: char) -> Option<f64> {
-    if let Ok(v) = field.parse() {
-        return Some(v);
+/// True when byte `i` of `b` has an ASCII digit on both sides.
+fn between_digits(b: &[u8], i: usize) -> bool {
+    i > 0 && b[i - 1].is_ascii_digit() && b.get(i + 1).is_some_and(u8::is_ascii_digit)
+}
+
+/// The decimal mark of a file's numbers (rule 5 of the [module documentation](self)); the
+/// other mark groups thousands.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum DecimalMark {
+    /// `1,234.5`, `0.45`.
+    #[default]
+    Point,
+    /// `1.234,5`, `0,45`.
+    Comma,
+}
+
+impl DecimalMark {
+    /// The decimal mark and the thousands separator.
+    fn marks(self) -> (char, char) {
+        match self {
+            DecimalMark::Point => ('.', ','),
+            DecimalMark::Comma => (',', '.'),
+        }
     }
-    if sep == ',' || field.contains('.') || field.matches(',').count() != 1 {
+
+    fn other(self) -> Self {
+        match self {
+            DecimalMark::Point => DecimalMark::Comma,
+            DecimalMark::Comma => DecimalMark::Point,
+        }
+    }
+
+    /// The mark a file's fields show: a field that only one mark reads (`0,45`, `12,3`,
+    /// `1.234,5` for the comma; `0.45`, `1,234.5` for the point) is a vote for it; `,` when
+    /// its votes outnumber the point's, else `.`. Fields either mark reads alike (`12`) or
+    /// differently (`1,234`) and text say nothing.
+    pub fn of_fields<'a>(fields: impl IntoIterator<Item = &'a str>) -> Self {
+        let (mut point, mut comma) = (0usize, 0usize);
+        for f in fields {
+            match (read_as(f, Self::Point), read_as(f, Self::Comma)) {
+                (Some(_), None) => point += 1,
+                (None, Some(_)) => comma += 1,
+                _ => {}
+            }
+        }
+        if comma > point {
+            Self::Comma
+        } else {
+            Self::Point
+        }
+    }
+}
+
+/// `field` as a number written with decimal mark `mark` and the other mark between groups of
+/// three digits (`1,234,567.5`); without a thousands separator, Rust's `f64` syntax (with a
+/// decimal comma: one `,` between two digits). `None` when it is not written so.
+fn read_as(field: &str, mark: DecimalMark) -> Option<f64> {
+    let (decimal, group) = mark.marks();
+    if !field.contains(group) {
+        if decimal == '.' {
+            return field.parse().ok();
+        }
+        return match field.matches(',').count() {
+            0 => field.parse().ok(),
+            1 if between_digits(field.as_bytes(), field.find(',')?) => {
+                field.replacen(',', ".", 1).parse().ok()
+            }
+            _ => None,
+        };
+    }
+    let body = field.strip_prefix(['-', '+']).unwrap_or(field);
+    let (int, frac) = match body.split_once(decimal) {
+        Some((i, f)) => (i, Some(f)),
+        None => (body, None),
+    };
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|c| c.is_ascii_digit());
+    let mut groups = int.split(group);
+    let first = groups.next()?;
+    let grouped = digits(first)
+        && first.len() <= 3
+        && !first.starts_with('0')
+        && groups.all(|g| g.len() == 3 && digits(g));
+    if !grouped || frac.is_some_and(|f| !digits(f)) {
         return None;
     }
-    if !all_commas_decimal(field) {
-        return None;
+    let mut plain: String = field.chars().filter(|&c| c != group).collect();
+    if decimal == ',' {
+        plain = plain.replacen(',', ".", 1);
     }
-    field.replacen(',', ".", 1).parse().ok()
+    plain.parse().ok()
+}
+
+/// A field as a number in a file whose decimal mark is `mark` (rule 5 of the
+/// [module documentation](self)): read with that mark, the other one grouping thousands; a
+/// field with a single mark that `mark` cannot read (`2.5` or `0,25` where the file's mark is
+/// the other) is read with its own. `None` for anything else (text, `1.2.3`).
+pub fn parse_number(field: &str, mark: DecimalMark) -> Option<f64> {
+    read_as(field, mark).or_else(|| {
+        let single = field.matches([',', '.']).count() == 1;
+        single.then(|| read_as(field, mark.other())).flatten()
+    })
+}
+
+/// True when `field` is a number written with either decimal mark.
+pub fn is_number(field: &str) -> bool {
+    read_as(field, DecimalMark::Point).is_some() || read_as(field, DecimalMark::Comma).is_some()
 }
 
 /// A time stamp as seconds: `HH:MM:SS[.fff]` (seconds of the day) or
 /// `YYYY-MM-DD[T| ]HH:MM:SS[.fff][Z]` (seconds since 1970-01-01, UTC as written: no time zone
 /// is applied). A decimal comma is accepted in the seconds. `None` for anything else.
 pub fn parse_clock(field: &str) -> Option<f64> {
+    clock(field).map(|c| c.seconds)
+}
+
+/// A parsed stamp: its seconds ([`parse_clock`]) and whether it carried a date.
+struct Clock {
+    seconds: f64,
+    dated: bool,
+}
+
+fn clock(field: &str) -> Option<Clock> {
     let field = field.strip_suffix('Z').unwrap_or(field);
     let (date, time) = match field.split_once(['T', ' ']) {
         Some((d, t)) => (Some(d), t.trim()),
@@ -248,7 +372,10 @@ pub fn parse_clock(field: &str) -> Option<f64> {
     }
     let day_s = f64::from(h * 3600 + m * 60) + sec;
     let Some(date) = date else {
-        return Some(day_s);
+        return Some(Clock {
+            seconds: day_s,
+            dated: false,
+        });
     };
     let mut ymd = date.split('-');
     let y: i64 = ymd.next()?.parse().ok()?;
@@ -257,7 +384,46 @@ pub fn parse_clock(field: &str) -> Option<f64> {
     if ymd.next().is_some() || !(1..=12).contains(&mo) || !(1..=31).contains(&d) {
         return None;
     }
-    Some(days_from_civil(y, mo, d) as f64 * 86_400.0 + day_s)
+    Some(Clock {
+        seconds: days_from_civil(y, mo, d) as f64 * DAY_S + day_s,
+        dated: true,
+    })
+}
+
+/// One day, s.
+const DAY_S: f64 = 86_400.0;
+
+/// The stamps of one time column read in order ([`ClockColumn::read`]): a time of day without
+/// a date that falls back by more than half a day from the one before it has passed midnight,
+/// and a day is added from there on (23:59:59.9 then 00:00:00.1 is 0.2 s later); one that
+/// jumps ahead by more than half a day is a row from before that midnight. Stamps with a date
+/// are read as they are.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ClockColumn {
+    last: Option<f64>,
+    days: i64,
+    /// Midnights passed so far.
+    pub midnights: usize,
+}
+
+impl ClockColumn {
+    /// The next stamp of the column as seconds ([`parse_clock`], days added after midnight).
+    pub fn read(&mut self, field: &str) -> Option<f64> {
+        let c = clock(field)?;
+        if c.dated {
+            return Some(c.seconds);
+        }
+        if let Some(last) = self.last {
+            if c.seconds < last - DAY_S / 2.0 {
+                self.days += 1;
+                self.midnights = self.midnights.max(usize::try_from(self.days).unwrap_or(0));
+            } else if c.seconds > last + DAY_S / 2.0 {
+                self.days -= 1;
+            }
+        }
+        self.last = Some(c.seconds);
+        Some(c.seconds + self.days as f64 * DAY_S)
+    }
 }
 
 /// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant, "chrono-Compatible
@@ -272,14 +438,48 @@ fn days_from_civil(y: i64, m: u32, d: u32) -> i64 {
     era * 146_097 + doe - 719_468
 }
 
-/// The fields of a data line, trimmed and unquoted.
-pub fn fields(text: &str, sep: char) -> impl Iterator<Item = &str> {
-    text.split(sep).map(|f| f.trim().trim_matches('"').trim())
+/// The fields of a data line, split at `sep` outside double quotes, trimmed and unquoted.
+pub fn fields(text: &str, sep: char) -> Fields<'_> {
+    Fields {
+        rest: Some(text),
+        sep,
+    }
 }
 
-/// True when every field is empty or a number ([`parse_number`]): a data row, not a header.
+/// The iterator of [`fields`] (no allocation: the stream decoder splits every row with it).
+#[derive(Debug, Clone)]
+pub struct Fields<'a> {
+    rest: Option<&'a str>,
+    sep: char,
+}
+
+impl<'a> Iterator for Fields<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        let rest = self.rest?;
+        let mut quoted = false;
+        let end = rest.char_indices().find(|&(_, c)| {
+            quoted ^= c == '"';
+            c == self.sep && !quoted
+        });
+        let field = match end {
+            Some((i, c)) => {
+                self.rest = Some(&rest[i + c.len_utf8()..]);
+                &rest[..i]
+            }
+            None => {
+                self.rest = None;
+                rest
+            }
+        };
+        Some(field.trim().trim_matches('"').trim())
+    }
+}
+
+/// True when every field is empty or a number ([`is_number`]): a data row, not a header.
 pub fn is_numeric(text: &str, sep: char) -> bool {
-    fields(text, sep).all(|f| f.is_empty() || parse_number(f, sep).is_some())
+    fields(text, sep).all(|f| f.is_empty() || is_number(f))
 }
 
 #[cfg(test)]
@@ -364,16 +564,87 @@ mod tests {
         // A comma that is not between digits, or no other separator: a comma file.
         assert_eq!(separator("a, b;c"), ',');
         assert_eq!(separator("1,5"), ',');
-        assert_eq!(parse_number("-0,25", ';'), Some(-0.25));
-        assert_eq!(parse_number("1503,2", '\t'), Some(1503.2));
-        assert_eq!(parse_number("2.5", ';'), Some(2.5));
-        // Not in a comma file, not a thousands separator, not two commas, not a lone comma.
-        assert_eq!(parse_number("0,25", ','), None);
-        assert_eq!(parse_number("1.234,5", ';'), None);
-        assert_eq!(parse_number("1,2,3", ';'), None);
-        assert_eq!(parse_number(",5", ';'), None);
+        let comma = DecimalMark::Comma;
+        assert_eq!(parse_number("-0,25", comma), Some(-0.25));
+        assert_eq!(parse_number("1503,2", comma), Some(1503.2));
+        // A point number where the file's mark is the comma: read with its own mark.
+        assert_eq!(parse_number("2.5", comma), Some(2.5));
+        // Not two commas, not a lone comma.
+        assert_eq!(parse_number("1,2,3", comma), None);
+        assert_eq!(parse_number(",5", comma), None);
         assert!(is_numeric("0,010;30,5;", ';'));
         assert!(!is_numeric("0,010;x", ';'));
+    }
+
+    #[test]
+    fn thousands_separators_with_either_decimal_mark() {
+        let (point, comma) = (DecimalMark::Point, DecimalMark::Comma);
+        // Unambiguous: the last mark is the decimal one, the other groups by three.
+        assert_eq!(parse_number("1.234,5", comma), Some(1234.5));
+        assert_eq!(parse_number("-1.234.567,25", comma), Some(-1_234_567.25));
+        assert_eq!(parse_number("1,234.5", point), Some(1234.5));
+        assert_eq!(parse_number("12,345", point), Some(12345.0));
+        assert_eq!(parse_number("1,234,567", point), Some(1_234_567.0));
+        // One mark then three digits: the file's mark decides.
+        assert_eq!(parse_number("1,234", comma), Some(1.234));
+        assert_eq!(parse_number("1.234", point), Some(1.234));
+        assert_eq!(parse_number("1.300", comma), Some(1300.0));
+        // Not groups of three, a leading zero group, the marks mixed up: not a number.
+        for bad in [
+            "1,23.5",
+            "1.2345,6",
+            "0.123,4",
+            "1,234,5.6",
+            "12,34,567",
+            "1.2.3",
+        ] {
+            assert_eq!(parse_number(bad, point), None, "{bad}");
+            assert_eq!(parse_number(bad, comma), None, "{bad}");
+        }
+        assert_eq!(parse_number("1,234.5", comma), None);
+        assert_eq!(parse_number("1.234,5", point), None);
+        // Separators: thousands in a tab or `;` line are not the separator.
+        assert_eq!(separator("1,234.5\t0.45"), '\t');
+        assert_eq!(separator("0,010;1.300,0;42.000"), ';');
+        assert!(is_numeric("0,010;1.300,0;42.000", ';'));
+    }
+
+    #[test]
+    fn a_files_fields_show_its_decimal_mark() {
+        let mark =
+            |rows: &[&str], sep| DecimalMark::of_fields(rows.iter().flat_map(|r| fields(r, sep)));
+        // `0,010` only a comma reads: `1.300` is then 1300, not 1.3.
+        let eu = ["0,000;1.300;307,23", "0,010;1.300;307,39"];
+        assert_eq!(mark(&eu, ';'), DecimalMark::Comma);
+        // `0.010` only a point reads: `12,345` is then 12345.
+        let tab = ["0.000\t1,300\t12,345", "0.010\t1,300\t12,345"];
+        assert_eq!(mark(&tab, '\t'), DecimalMark::Point);
+        // A plain `,` file: its fields hold no comma, `1.234` stays 1.234.
+        let plain = ["1.234,1.500,1000", "1.235,1.501,1001"];
+        assert_eq!(mark(&plain, ','), DecimalMark::Point);
+        assert_eq!(parse_number("1.234", mark(&plain, ',')), Some(1.234));
+        // Nothing to tell (integers, text): the point.
+        assert_eq!(mark(&["12;x;1,234"], ';'), DecimalMark::Point);
+    }
+
+    #[test]
+    fn quoted_fields_keep_their_separators() {
+        let line = "\"0,45\",\"12,3\",\"1,234.5\", 7 ,";
+        assert_eq!(separator(line), ',');
+        let f: Vec<&str> = fields(line, ',').collect();
+        assert_eq!(f, ["0,45", "12,3", "1,234.5", "7", ""]);
+        let f: Vec<&str> = fields("\"a;b\";\"1,5\"", ';').collect();
+        assert_eq!(f, ["a;b", "1,5"]);
+        assert_eq!(separator("\"1,5\";\"2,5\""), ';');
+        assert_eq!(fields("", ',').collect::<Vec<_>>(), [""]);
+        // Quoted decimal commas in a `,` file: the comma is the file's mark.
+        let rows = [
+            "\"0,000\",\"30,0\",\"3,0129\"",
+            "\"1,500\",\"50,0\",\"4,9911\"",
+        ];
+        let mark = DecimalMark::of_fields(rows.iter().flat_map(|r| fields(r, ',')));
+        assert_eq!(mark, DecimalMark::Comma);
+        assert_eq!(parse_number("1,500", mark), Some(1.5));
     }
 
     #[test]
@@ -387,5 +658,41 @@ mod tests {
         for bad in ["18:55", "25:00:00", "2024-13-01 00:00:00", "12.5", "a:b:c"] {
             assert_eq!(parse_clock(bad), None, "{bad}");
         }
+    }
+
+    #[test]
+    fn times_of_day_keep_increasing_across_midnight() {
+        let mut c = ClockColumn::default();
+        let t: Vec<f64> = [
+            "23:59:59.8",
+            "23:59:59.9",
+            "00:00:00.1",
+            "00:00:00.0",
+            "00:00:00.2",
+        ]
+        .iter()
+        .map(|f| c.read(f).unwrap())
+        .collect();
+        assert!((t[2] - t[1] - 0.2).abs() < 1e-9, "{t:?}");
+        // A row a little out of order stays a little out of order, on the same day.
+        assert!((t[3] - t[1] - 0.1).abs() < 1e-9, "{t:?}");
+        assert!((t[4] - t[1] - 0.3).abs() < 1e-9, "{t:?}");
+        assert_eq!(c.midnights, 1);
+        // A late row from before midnight, then the next day again: one midnight.
+        assert!((c.read("23:59:59.95").unwrap() - t[1] - 0.05).abs() < 1e-9);
+        assert!((c.read("00:00:00.3").unwrap() - t[1] - 0.4).abs() < 1e-9);
+        assert_eq!(c.midnights, 1);
+        // Two days on: two midnights.
+        let mut c = ClockColumn::default();
+        for f in ["22:00:00", "04:00:00", "14:00:00", "23:00:00", "02:00:00"] {
+            c.read(f).unwrap();
+        }
+        assert_eq!(c.midnights, 2);
+        // Stamps with a date are read as they are.
+        let mut c = ClockColumn::default();
+        let a = c.read("2024-08-13 23:59:59.9").unwrap();
+        let b = c.read("2024-08-14 00:00:00.1").unwrap();
+        assert!((b - a - 0.2).abs() < 1e-6);
+        assert_eq!((c.midnights, c.read("x")), (0, None));
     }
 }
