@@ -29,6 +29,11 @@
 //!    read in order ([`ClockColumn`]), a time of day that falls back by more than 12 h has
 //!    passed midnight (23:59:59.9 then 00:00:00.1 is 0.2 s later).
 
+mod clock;
+mod number;
+pub use clock::{parse_clock, ClockColumn};
+pub use number::{is_number, parse_number, DecimalMark};
+
 /// Longest line the protocol allows, characters (without the newline).
 pub const MAX_LINE: usize = 255;
 
@@ -236,206 +241,8 @@ fn outside_quotes(b: &[u8]) -> impl Iterator<Item = (usize, u8)> + '_ {
 }
 
 /// True when byte `i` of `b` has an ASCII digit on both sides.
-fn between_digits(b: &[u8], i: usize) -> bool {
+pub(crate) fn between_digits(b: &[u8], i: usize) -> bool {
     i > 0 && b[i - 1].is_ascii_digit() && b.get(i + 1).is_some_and(u8::is_ascii_digit)
-}
-
-/// The decimal mark of a file's numbers (rule 5 of the [module documentation](self)); the
-/// other mark groups thousands.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub enum DecimalMark {
-    /// `1,234.5`, `0.45`.
-    #[default]
-    Point,
-    /// `1.234,5`, `0,45`.
-    Comma,
-}
-
-impl DecimalMark {
-    /// The decimal mark and the thousands separator.
-    fn marks(self) -> (char, char) {
-        match self {
-            DecimalMark::Point => ('.', ','),
-            DecimalMark::Comma => (',', '.'),
-        }
-    }
-
-    fn other(self) -> Self {
-        match self {
-            DecimalMark::Point => DecimalMark::Comma,
-            DecimalMark::Comma => DecimalMark::Point,
-        }
-    }
-
-    /// The mark a file's fields show: a field that only one mark reads (`0,45`, `12,3`,
-    /// `1.234,5` for the comma; `0.45`, `1,234.5` for the point) is a vote for it; `,` when
-    /// its votes outnumber the point's, else `.`. Fields either mark reads alike (`12`) or
-    /// differently (`1,234`) and text say nothing.
-    pub fn of_fields<'a>(fields: impl IntoIterator<Item = &'a str>) -> Self {
-        let (mut point, mut comma) = (0usize, 0usize);
-        for f in fields {
-            match (read_as(f, Self::Point), read_as(f, Self::Comma)) {
-                (Some(_), None) => point += 1,
-                (None, Some(_)) => comma += 1,
-                _ => {}
-            }
-        }
-        if comma > point {
-            Self::Comma
-        } else {
-            Self::Point
-        }
-    }
-}
-
-/// `field` as a number written with decimal mark `mark` and the other mark between groups of
-/// three digits (`1,234,567.5`); without a thousands separator, Rust's `f64` syntax (with a
-/// decimal comma: one `,` between two digits). `None` when it is not written so.
-fn read_as(field: &str, mark: DecimalMark) -> Option<f64> {
-    let (decimal, group) = mark.marks();
-    if !field.contains(group) {
-        if decimal == '.' {
-            return field.parse().ok();
-        }
-        return match field.matches(',').count() {
-            0 => field.parse().ok(),
-            1 if between_digits(field.as_bytes(), field.find(',')?) => {
-                field.replacen(',', ".", 1).parse().ok()
-            }
-            _ => None,
-        };
-    }
-    let body = field.strip_prefix(['-', '+']).unwrap_or(field);
-    let (int, frac) = match body.split_once(decimal) {
-        Some((i, f)) => (i, Some(f)),
-        None => (body, None),
-    };
-    let digits = |s: &str| !s.is_empty() && s.bytes().all(|c| c.is_ascii_digit());
-    let mut groups = int.split(group);
-    let first = groups.next()?;
-    let grouped = digits(first)
-        && first.len() <= 3
-        && !first.starts_with('0')
-        && groups.all(|g| g.len() == 3 && digits(g));
-    if !grouped || frac.is_some_and(|f| !digits(f)) {
-        return None;
-    }
-    let mut plain: String = field.chars().filter(|&c| c != group).collect();
-    if decimal == ',' {
-        plain = plain.replacen(',', ".", 1);
-    }
-    plain.parse().ok()
-}
-
-/// A field as a number in a file whose decimal mark is `mark` (rule 5 of the
-/// [module documentation](self)): read with that mark, the other one grouping thousands; a
-/// field with a single mark that `mark` cannot read (`2.5` or `0,25` where the file's mark is
-/// the other) is read with its own. `None` for anything else (text, `1.2.3`).
-pub fn parse_number(field: &str, mark: DecimalMark) -> Option<f64> {
-    read_as(field, mark).or_else(|| {
-        let single = field.matches([',', '.']).count() == 1;
-        single.then(|| read_as(field, mark.other())).flatten()
-    })
-}
-
-/// True when `field` is a number written with either decimal mark.
-pub fn is_number(field: &str) -> bool {
-    read_as(field, DecimalMark::Point).is_some() || read_as(field, DecimalMark::Comma).is_some()
-}
-
-/// A time stamp as seconds: `HH:MM:SS[.fff]` (seconds of the day) or
-/// `YYYY-MM-DD[T| ]HH:MM:SS[.fff][Z]` (seconds since 1970-01-01, UTC as written: no time zone
-/// is applied). A decimal comma is accepted in the seconds. `None` for anything else.
-pub fn parse_clock(field: &str) -> Option<f64> {
-    clock(field).map(|c| c.seconds)
-}
-
-/// A parsed stamp: its seconds ([`parse_clock`]) and whether it carried a date.
-struct Clock {
-    seconds: f64,
-    dated: bool,
-}
-
-fn clock(field: &str) -> Option<Clock> {
-    let field = field.strip_suffix('Z').unwrap_or(field);
-    let (date, time) = match field.split_once(['T', ' ']) {
-        Some((d, t)) => (Some(d), t.trim()),
-        None => (None, field),
-    };
-    let mut hms = time.split(':');
-    let h: u32 = hms.next()?.parse().ok()?;
-    let m: u32 = hms.next()?.parse().ok()?;
-    let sec = hms.next()?.replacen(',', ".", 1);
-    let sec: f64 = sec.parse().ok()?;
-    if hms.next().is_some() || h > 23 || m > 59 || !(0.0..61.0).contains(&sec) {
-        return None;
-    }
-    let day_s = f64::from(h * 3600 + m * 60) + sec;
-    let Some(date) = date else {
-        return Some(Clock {
-            seconds: day_s,
-            dated: false,
-        });
-    };
-    let mut ymd = date.split('-');
-    let y: i64 = ymd.next()?.parse().ok()?;
-    let mo: u32 = ymd.next()?.parse().ok()?;
-    let d: u32 = ymd.next()?.parse().ok()?;
-    if ymd.next().is_some() || !(1..=12).contains(&mo) || !(1..=31).contains(&d) {
-        return None;
-    }
-    Some(Clock {
-        seconds: days_from_civil(y, mo, d) as f64 * DAY_S + day_s,
-        dated: true,
-    })
-}
-
-/// One day, s.
-const DAY_S: f64 = 86_400.0;
-
-/// The stamps of one time column read in order ([`ClockColumn::read`]): a time of day without
-/// a date that falls back by more than half a day from the one before it has passed midnight,
-/// and a day is added from there on (23:59:59.9 then 00:00:00.1 is 0.2 s later); one that
-/// jumps ahead by more than half a day is a row from before that midnight. Stamps with a date
-/// are read as they are.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ClockColumn {
-    last: Option<f64>,
-    days: i64,
-    /// Midnights passed so far.
-    pub midnights: usize,
-}
-
-impl ClockColumn {
-    /// The next stamp of the column as seconds ([`parse_clock`], days added after midnight).
-    pub fn read(&mut self, field: &str) -> Option<f64> {
-        let c = clock(field)?;
-        if c.dated {
-            return Some(c.seconds);
-        }
-        if let Some(last) = self.last {
-            if c.seconds < last - DAY_S / 2.0 {
-                self.days += 1;
-                self.midnights = self.midnights.max(usize::try_from(self.days).unwrap_or(0));
-            } else if c.seconds > last + DAY_S / 2.0 {
-                self.days -= 1;
-            }
-        }
-        self.last = Some(c.seconds);
-        Some(c.seconds + self.days as f64 * DAY_S)
-    }
-}
-
-/// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant, "chrono-Compatible
-/// Low-Level Date Algorithms", `days_from_civil`).
-fn days_from_civil(y: i64, m: u32, d: u32) -> i64 {
-    let y = if m <= 2 { y - 1 } else { y };
-    let era = y.div_euclid(400);
-    let yoe = y - era * 400;
-    let mp = i64::from((m + 9) % 12);
-    let doy = (153 * mp + 2) / 5 + i64::from(d) - 1;
-    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    era * 146_097 + doe - 719_468
 }
 
 /// The fields of a data line, split at `sep` outside double quotes, trimmed and unquoted.
@@ -577,57 +384,6 @@ mod tests {
     }
 
     #[test]
-    fn thousands_separators_with_either_decimal_mark() {
-        let (point, comma) = (DecimalMark::Point, DecimalMark::Comma);
-        // Unambiguous: the last mark is the decimal one, the other groups by three.
-        assert_eq!(parse_number("1.234,5", comma), Some(1234.5));
-        assert_eq!(parse_number("-1.234.567,25", comma), Some(-1_234_567.25));
-        assert_eq!(parse_number("1,234.5", point), Some(1234.5));
-        assert_eq!(parse_number("12,345", point), Some(12345.0));
-        assert_eq!(parse_number("1,234,567", point), Some(1_234_567.0));
-        // One mark then three digits: the file's mark decides.
-        assert_eq!(parse_number("1,234", comma), Some(1.234));
-        assert_eq!(parse_number("1.234", point), Some(1.234));
-        assert_eq!(parse_number("1.300", comma), Some(1300.0));
-        // Not groups of three, a leading zero group, the marks mixed up: not a number.
-        for bad in [
-            "1,23.5",
-            "1.2345,6",
-            "0.123,4",
-            "1,234,5.6",
-            "12,34,567",
-            "1.2.3",
-        ] {
-            assert_eq!(parse_number(bad, point), None, "{bad}");
-            assert_eq!(parse_number(bad, comma), None, "{bad}");
-        }
-        assert_eq!(parse_number("1,234.5", comma), None);
-        assert_eq!(parse_number("1.234,5", point), None);
-        // Separators: thousands in a tab or `;` line are not the separator.
-        assert_eq!(separator("1,234.5\t0.45"), '\t');
-        assert_eq!(separator("0,010;1.300,0;42.000"), ';');
-        assert!(is_numeric("0,010;1.300,0;42.000", ';'));
-    }
-
-    #[test]
-    fn a_files_fields_show_its_decimal_mark() {
-        let mark =
-            |rows: &[&str], sep| DecimalMark::of_fields(rows.iter().flat_map(|r| fields(r, sep)));
-        // `0,010` only a comma reads: `1.300` is then 1300, not 1.3.
-        let eu = ["0,000;1.300;307,23", "0,010;1.300;307,39"];
-        assert_eq!(mark(&eu, ';'), DecimalMark::Comma);
-        // `0.010` only a point reads: `12,345` is then 12345.
-        let tab = ["0.000\t1,300\t12,345", "0.010\t1,300\t12,345"];
-        assert_eq!(mark(&tab, '\t'), DecimalMark::Point);
-        // A plain `,` file: its fields hold no comma, `1.234` stays 1.234.
-        let plain = ["1.234,1.500,1000", "1.235,1.501,1001"];
-        assert_eq!(mark(&plain, ','), DecimalMark::Point);
-        assert_eq!(parse_number("1.234", mark(&plain, ',')), Some(1.234));
-        // Nothing to tell (integers, text): the point.
-        assert_eq!(mark(&["12;x;1,234"], ';'), DecimalMark::Point);
-    }
-
-    #[test]
     fn quoted_fields_keep_their_separators() {
         let line = "\"0,45\",\"12,3\",\"1,234.5\", 7 ,";
         assert_eq!(separator(line), ',');
@@ -645,54 +401,5 @@ mod tests {
         let mark = DecimalMark::of_fields(rows.iter().flat_map(|r| fields(r, ',')));
         assert_eq!(mark, DecimalMark::Comma);
         assert_eq!(parse_number("1,500", mark), Some(1.5));
-    }
-
-    #[test]
-    fn clock_stamps_as_seconds() {
-        assert_eq!(parse_clock("18:55:23.5"), Some(68_123.5));
-        assert_eq!(parse_clock("1970-01-02 00:00:01"), Some(86_401.0));
-        assert_eq!(parse_clock("2000-03-01T00:00:00Z"), Some(951_868_800.0));
-        let a = parse_clock("2024-08-13 18:55:23,120").unwrap();
-        let b = parse_clock("2024-08-13T18:55:24.130").unwrap();
-        assert!((b - a - 1.01).abs() < 1e-6, "{}", b - a);
-        for bad in ["18:55", "25:00:00", "2024-13-01 00:00:00", "12.5", "a:b:c"] {
-            assert_eq!(parse_clock(bad), None, "{bad}");
-        }
-    }
-
-    #[test]
-    fn times_of_day_keep_increasing_across_midnight() {
-        let mut c = ClockColumn::default();
-        let t: Vec<f64> = [
-            "23:59:59.8",
-            "23:59:59.9",
-            "00:00:00.1",
-            "00:00:00.0",
-            "00:00:00.2",
-        ]
-        .iter()
-        .map(|f| c.read(f).unwrap())
-        .collect();
-        assert!((t[2] - t[1] - 0.2).abs() < 1e-9, "{t:?}");
-        // A row a little out of order stays a little out of order, on the same day.
-        assert!((t[3] - t[1] - 0.1).abs() < 1e-9, "{t:?}");
-        assert!((t[4] - t[1] - 0.3).abs() < 1e-9, "{t:?}");
-        assert_eq!(c.midnights, 1);
-        // A late row from before midnight, then the next day again: one midnight.
-        assert!((c.read("23:59:59.95").unwrap() - t[1] - 0.05).abs() < 1e-9);
-        assert!((c.read("00:00:00.3").unwrap() - t[1] - 0.4).abs() < 1e-9);
-        assert_eq!(c.midnights, 1);
-        // Two days on: two midnights.
-        let mut c = ClockColumn::default();
-        for f in ["22:00:00", "04:00:00", "14:00:00", "23:00:00", "02:00:00"] {
-            c.read(f).unwrap();
-        }
-        assert_eq!(c.midnights, 2);
-        // Stamps with a date are read as they are.
-        let mut c = ClockColumn::default();
-        let a = c.read("2024-08-13 23:59:59.9").unwrap();
-        let b = c.read("2024-08-14 00:00:00.1").unwrap();
-        assert!((b - a - 0.2).abs() < 1e-6);
-        assert_eq!((c.midnights, c.read("x")), (0, None));
     }
 }

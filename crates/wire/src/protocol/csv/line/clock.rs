@@ -1,0 +1,151 @@
+//! Time stamps of the CSV dialect, rule 5 of the [line rules](super): times of day and
+//! date-times as seconds, and a column of times of day read across midnight.
+
+/// A time stamp as seconds: `HH:MM:SS[.fff]` (seconds of the day) or
+/// `YYYY-MM-DD[T| ]HH:MM:SS[.fff][Z]` (seconds since 1970-01-01, UTC as written: no time zone
+/// is applied). A decimal comma is accepted in the seconds. `None` for anything else.
+pub fn parse_clock(field: &str) -> Option<f64> {
+    clock(field).map(|c| c.seconds)
+}
+
+/// A parsed stamp: its seconds ([`parse_clock`]) and whether it carried a date.
+struct Clock {
+    seconds: f64,
+    dated: bool,
+}
+
+fn clock(field: &str) -> Option<Clock> {
+    let field = field.strip_suffix('Z').unwrap_or(field);
+    let (date, time) = match field.split_once(['T', ' ']) {
+        Some((d, t)) => (Some(d), t.trim()),
+        None => (None, field),
+    };
+    let mut hms = time.split(':');
+    let h: u32 = hms.next()?.parse().ok()?;
+    let m: u32 = hms.next()?.parse().ok()?;
+    let sec = hms.next()?.replacen(',', ".", 1);
+    let sec: f64 = sec.parse().ok()?;
+    if hms.next().is_some() || h > 23 || m > 59 || !(0.0..61.0).contains(&sec) {
+        return None;
+    }
+    let day_s = f64::from(h * 3600 + m * 60) + sec;
+    let Some(date) = date else {
+        return Some(Clock {
+            seconds: day_s,
+            dated: false,
+        });
+    };
+    let mut ymd = date.split('-');
+    let y: i64 = ymd.next()?.parse().ok()?;
+    let mo: u32 = ymd.next()?.parse().ok()?;
+    let d: u32 = ymd.next()?.parse().ok()?;
+    if ymd.next().is_some() || !(1..=12).contains(&mo) || !(1..=31).contains(&d) {
+        return None;
+    }
+    Some(Clock {
+        seconds: days_from_civil(y, mo, d) as f64 * DAY_S + day_s,
+        dated: true,
+    })
+}
+
+/// One day, s.
+const DAY_S: f64 = 86_400.0;
+
+/// The stamps of one time column read in order ([`ClockColumn::read`]): a time of day without
+/// a date that falls back by more than half a day from the one before it has passed midnight,
+/// and a day is added from there on (23:59:59.9 then 00:00:00.1 is 0.2 s later); one that
+/// jumps ahead by more than half a day is a row from before that midnight. Stamps with a date
+/// are read as they are.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ClockColumn {
+    last: Option<f64>,
+    days: i64,
+    /// Midnights passed so far.
+    pub midnights: usize,
+}
+
+impl ClockColumn {
+    /// The next stamp of the column as seconds ([`parse_clock`], days added after midnight).
+    pub fn read(&mut self, field: &str) -> Option<f64> {
+        let c = clock(field)?;
+        if c.dated {
+            return Some(c.seconds);
+        }
+        if let Some(last) = self.last {
+            if c.seconds < last - DAY_S / 2.0 {
+                self.days += 1;
+                self.midnights = self.midnights.max(usize::try_from(self.days).unwrap_or(0));
+            } else if c.seconds > last + DAY_S / 2.0 {
+                self.days -= 1;
+            }
+        }
+        self.last = Some(c.seconds);
+        Some(c.seconds + self.days as f64 * DAY_S)
+    }
+}
+
+/// Days since 1970-01-01 of a proleptic Gregorian date (H. Hinnant, "chrono-Compatible
+/// Low-Level Date Algorithms", `days_from_civil`).
+fn days_from_civil(y: i64, m: u32, d: u32) -> i64 {
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let yoe = y - era * 400;
+    let mp = i64::from((m + 9) % 12);
+    let doy = (153 * mp + 2) / 5 + i64::from(d) - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    era * 146_097 + doe - 719_468
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clock_stamps_as_seconds() {
+        assert_eq!(parse_clock("18:55:23.5"), Some(68_123.5));
+        assert_eq!(parse_clock("1970-01-02 00:00:01"), Some(86_401.0));
+        assert_eq!(parse_clock("2000-03-01T00:00:00Z"), Some(951_868_800.0));
+        let a = parse_clock("2024-08-13 18:55:23,120").unwrap();
+        let b = parse_clock("2024-08-13T18:55:24.130").unwrap();
+        assert!((b - a - 1.01).abs() < 1e-6, "{}", b - a);
+        for bad in ["18:55", "25:00:00", "2024-13-01 00:00:00", "12.5", "a:b:c"] {
+            assert_eq!(parse_clock(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn times_of_day_keep_increasing_across_midnight() {
+        let mut c = ClockColumn::default();
+        let t: Vec<f64> = [
+            "23:59:59.8",
+            "23:59:59.9",
+            "00:00:00.1",
+            "00:00:00.0",
+            "00:00:00.2",
+        ]
+        .iter()
+        .map(|f| c.read(f).unwrap())
+        .collect();
+        assert!((t[2] - t[1] - 0.2).abs() < 1e-9, "{t:?}");
+        // A row a little out of order stays a little out of order, on the same day.
+        assert!((t[3] - t[1] - 0.1).abs() < 1e-9, "{t:?}");
+        assert!((t[4] - t[1] - 0.3).abs() < 1e-9, "{t:?}");
+        assert_eq!(c.midnights, 1);
+        // A late row from before midnight, then the next day again: one midnight.
+        assert!((c.read("23:59:59.95").unwrap() - t[1] - 0.05).abs() < 1e-9);
+        assert!((c.read("00:00:00.3").unwrap() - t[1] - 0.4).abs() < 1e-9);
+        assert_eq!(c.midnights, 1);
+        // Two days on: two midnights.
+        let mut c = ClockColumn::default();
+        for f in ["22:00:00", "04:00:00", "14:00:00", "23:00:00", "02:00:00"] {
+            c.read(f).unwrap();
+        }
+        assert_eq!(c.midnights, 2);
+        // Stamps with a date are read as they are.
+        let mut c = ClockColumn::default();
+        let a = c.read("2024-08-13 23:59:59.9").unwrap();
+        let b = c.read("2024-08-14 00:00:00.1").unwrap();
+        assert!((b - a - 0.2).abs() < 1e-6);
+        assert_eq!((c.midnights, c.read("x")), (0, None));
+    }
+}
