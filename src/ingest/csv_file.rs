@@ -18,6 +18,9 @@
 //! say `--input NAME`, or `--input none` ([`InputChoice::None`]) to have the steps found in the
 //! response. Its full scale is decided from the options, the header and the values, and stated
 //! ([`command_range`]); a scale that cannot be decided is an error naming the option to give.
+//! An `--input` column the unit table does not know is read like a bare command, or taken as
+//! it is when its values are a signal in its own units (signed or fractional, fitting no
+//! command range: [`command_range::unknown_input_range`]).
 //!
 //! **Empty cells.** An empty cell is a missing value of its channel only: the other channels of
 //! the row stay. Each channel is carried onto the time base from its own samples at its own rate

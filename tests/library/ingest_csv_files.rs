@@ -349,15 +349,13 @@ fn an_input_range_scales_an_input_the_table_does_not_know() {
         input: InputChoice::Column("u8".into()),
         ..opts()
     };
-    let f = read_csv(text, &o).unwrap();
-    assert_eq!(
-        f.record.channel("u8").unwrap().data,
-        vec![51.0, 102.0, 204.0]
+    // Whole numbers in no usual command range: a command's scale is not guessed.
+    let e = read_csv(text, &o).unwrap_err();
+    assert!(
+        matches!(&e, CsvFileError::CommandRange { column, .. } if column == "u8"),
+        "{e}"
     );
-    assert_eq!(
-        f.source.input_range, None,
-        "read as it is, and no scale claimed"
-    );
+    assert!(e.to_string().contains("--input-range MIN,MAX"), "{e}");
     let o = CsvFileOptions {
         input_range: Some((0.0, 255.0)),
         ..o
@@ -367,4 +365,36 @@ fn an_input_range_scales_an_input_the_table_does_not_know() {
     let r = f.source.input_range.as_ref().unwrap();
     assert_eq!((r.raw_max, r.from.as_str()), (255.0, "--input-range"));
     assert_eq!(f.source.units["u8"].unit, "raw");
+}
+
+#[test]
+fn an_input_of_unknown_unit_is_read_from_its_values_or_raw_when_a_signal() {
+    let rows = |cell: fn(usize) -> String| -> String {
+        let body: String = (0..40)
+            .map(|k| format!("{},{},{}\n", 0.01 * k as f64, cell(k), k % 7))
+            .collect();
+        format!("t_s,setpoint,thrust_N\n{body}")
+    };
+    let o = CsvFileOptions {
+        input: InputChoice::Column("setpoint".into()),
+        ..opts()
+    };
+    // 30..70: percent, inferred and said.
+    let f = read_csv(&rows(|k| (30 + k).to_string()), &o).unwrap();
+    let r = f.source.input_range.as_ref().unwrap();
+    assert_eq!((r.raw_max, r.from.as_str()), (100.0, "values: 0..100 (%)"));
+    assert_eq!(f.record.channel("setpoint").unwrap().data[0], 0.3);
+    assert_eq!(f.source.units["setpoint"].unit, "%");
+    // A signed signal: as it is, factor 1, said.
+    let f = read_csv(&rows(|k| format!("{}", k as f64 * 0.1 - 2.0)), &o).unwrap();
+    let r = f.source.input_range.as_ref().unwrap();
+    assert!(r.from.starts_with("raw"), "{}", r.from);
+    assert_eq!(f.record.channel("setpoint").unwrap().data[0], -2.0);
+    assert_eq!(
+        (
+            f.source.units["setpoint"].unit.as_str(),
+            f.source.units["setpoint"].factor
+        ),
+        ("?", 1.0)
+    );
 }

@@ -20,6 +20,16 @@
 //!    is the scale (`"values: 0..2047 (DShot/raw ESC)"`); none or several is a refusal that
 //!    names the candidates and the options (`1000..2000` fits both µs and 0..2047: refused).
 //!
+//! 5. An `--input` column whose unit the table does not know (`motor[0]`, `setpoint`: unit
+//!    `?`) is read like a bare command ([`unknown_input_range`]): `--input-range`, `--esc-us`,
+//!    else its values decide among the same candidates (`"values: 0..100 (%)"`). Values that fit
+//!    none and are signed or fractional are no command a stand sends (a throttle is never
+//!    negative, and a raw command is a whole number: these are a signal in its own units, a
+//!    benchmark's voltage, torque or force) and are taken as they are, factor 1
+//!    ([`RAW_SIGNAL`], `input_range` `[0, 1]`); whole numbers ≥ 0 that fit none (an 8-bit
+//!    10..250: a command in a range of its own), and values that fit several (1000..2000: µs
+//!    or raw ESC), are refused naming `--input-range`: a command's scale is not guessed.
+//!
 //! The map is affine, `throttle = (raw − raw_min) / (raw_max − raw_min)`.
 
 use propid_wire::protocol::csv::columns::{Affine, CommandScales, Scale, Unit};
@@ -150,6 +160,36 @@ pub fn command_range(
         return Some(Ok(CommandRange::given(r, "µs", "--esc-us")));
     }
     Some(from_values(scales, values))
+}
+
+/// What an input column of unknown unit was taken as when its values fit no command scale
+/// and are signed or fractional (rule 5 of the module documentation).
+pub const RAW_SIGNAL: &str = "raw: signed or fractional values, no command range";
+
+/// The scale of an `--input` column the unit table does not know (rule 5 of the module
+/// documentation): as a bare command's, except that signed or fractional values fitting no
+/// command scale are taken raw (factor 1, said in [`CommandRange::from`]).
+pub fn unknown_input_range(
+    values: &[f64],
+    given: &GivenRanges,
+) -> Result<CommandRange, RangeError> {
+    let decided = command_range(Unit::Command, values, given).unwrap_or(Err(RangeError::NoValues));
+    let signal = || {
+        values
+            .iter()
+            .any(|v| v.is_finite() && (*v < 0.0 || v.fract() != 0.0))
+    };
+    match decided {
+        Err(RangeError::Undecided { ref fits, .. }) if fits.is_empty() && signal() => {
+            Ok(CommandRange {
+                raw_min: 0.0,
+                raw_max: 1.0,
+                unit: "?",
+                from: RAW_SIGNAL.to_string(),
+            })
+        }
+        other => other,
+    }
 }
 
 fn from_values(scales: CommandScales, values: &[f64]) -> Result<CommandRange, RangeError> {
@@ -324,6 +364,54 @@ mod tests {
             decide(Unit::Command, &[f64::NAN; 3]),
             Err(RangeError::NoValues)
         );
+    }
+
+    #[test]
+    fn an_input_of_unknown_unit_is_read_as_a_bare_command_or_raw_when_signed() {
+        let none = GivenRanges::default();
+        let r = unknown_input_range(&stairs(30.0, 70.0), &none).unwrap();
+        assert_eq!(
+            (r.raw_min, r.raw_max, r.from.as_str()),
+            (0.0, 100.0, "values: 0..100 (%)")
+        );
+        let r = unknown_input_range(&stairs(0.15, 1.0), &none).unwrap();
+        assert_eq!((r.raw_max, r.from.as_str()), (1.0, "values: 0..1"));
+        // A signed excitation (Silverbox's V1, a robot arm's torque) or a fractional signal
+        // outside every command range (the tanks' pump voltage 0.41..6.47): raw, factor 1, said.
+        for values in [vec![-0.08, 0.0, 0.081], vec![-3.0, 2.0], stairs(0.41, 6.47)] {
+            let r = unknown_input_range(&values, &none).unwrap();
+            assert_eq!(
+                (r.raw_min, r.raw_max, r.unit),
+                (0.0, 1.0, "?"),
+                "{values:?}"
+            );
+            assert_eq!(r.from, RAW_SIGNAL);
+            assert_eq!(r.affine().apply(values[0]), values[0]);
+        }
+        // Whole numbers >= 0 in no usual range (an 8-bit command), or in two: refused naming
+        // --input-range.
+        let eight_bit: Vec<f64> = stairs(10.0, 250.0).iter().map(|v| v.round()).collect();
+        for values in [eight_bit, vec![51.0, 102.0, 204.0], stairs(1000.0, 2000.0)] {
+            let e = unknown_input_range(&values, &none).unwrap_err();
+            assert!(e.to_string().contains("--input-range MIN,MAX"), "{e}");
+        }
+        assert_eq!(
+            unknown_input_range(&[f64::NAN], &none),
+            Err(RangeError::NoValues)
+        );
+        // Given ranges win, signed or not.
+        let given = GivenRanges {
+            input_range: Some((-1.0, 1.0)),
+            esc_us: None,
+        };
+        let r = unknown_input_range(&[-0.5, 0.5], &given).unwrap();
+        assert_eq!((r.raw_min, r.from.as_str()), (-1.0, "--input-range"));
+        let esc = GivenRanges {
+            esc_us: Some((1100.0, 1900.0)),
+            input_range: None,
+        };
+        let r = unknown_input_range(&stairs(1100.0, 1900.0), &esc).unwrap();
+        assert_eq!((r.raw_min, r.unit), (1100.0, "µs"));
     }
 
     #[test]

@@ -1,11 +1,12 @@
-//! Every used column of a CSV file into canonical units: a command by its decided scale
-//! ([`command_range`]), any other by the one unit table
+//! Every used column of a CSV file into canonical units: a command, or an input column of
+//! unknown unit, by its decided scale ([`command_range`]), any other by the one unit table
 //! ([`protocol::csv::columns`](propid_wire::protocol::csv::columns)), each reported with its
 //! column, unit and factor ([`ColumnUnit`]).
 
 use std::collections::BTreeMap;
 
 use super::columns::{self, Column, Picks};
+use super::command_range::unknown_input_range;
 use super::{
     command_range, ColumnUnit, CommandRange, CsvFileError, CsvFileOptions, GivenRanges, Unread,
     DEFAULT_ESC_US,
@@ -52,6 +53,8 @@ pub(super) fn convert(
                 Some(Ok(CommandRange::given_input(range)))
             }
             (Some(spec), _) => command_range(spec.unit, &values[n], &given),
+            // An input the table does not know: read as a bare command, raw when signed.
+            (None, _) if picks.input == Some(i) => Some(unknown_input_range(&values[n], &given)),
             (None, _) => None,
         };
         let (affine, unit) = match (scale, col.spec) {
