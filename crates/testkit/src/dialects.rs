@@ -164,6 +164,8 @@ pub struct Style {
     pub bom: bool,
     /// Every field in double quotes.
     pub quoted: bool,
+    /// Thousands grouped (`1,300`; `1.300` with a decimal comma).
+    pub thousands: bool,
     /// A units row under the header (from [`Col::unit`]).
     pub units_row: bool,
     /// A header line at all.
@@ -181,6 +183,7 @@ pub const PLAIN: Style = Style {
     crlf: false,
     bom: false,
     quoted: false,
+    thousands: false,
     units_row: false,
     header: true,
     preamble: &[],
@@ -226,8 +229,20 @@ pub(crate) fn num(v: f64, decimals: usize) -> String {
 pub fn write(style: &Style, cols: &[Col], seed: u64) -> String {
     let nl = if style.crlf { "\r\n" } else { "\n" };
     let quote = |f: String| {
+        let f = if style.thousands {
+            group_thousands(&f)
+        } else {
+            f
+        };
         let f = if style.decimal_comma {
-            f.replace('.', ",")
+            // The marks trade places: `1,300.5` becomes `1.300,5`.
+            f.chars()
+                .map(|c| match c {
+                    '.' => ',',
+                    ',' => '.',
+                    c => c,
+                })
+                .collect()
         } else {
             f
         };
@@ -273,6 +288,33 @@ pub fn write(style: &Style, cols: &[Col], seed: u64) -> String {
     text
 }
 
+/// A number's integer digits grouped by three with `,` (`-12345.6` → `-12,345.6`); other text
+/// as it is.
+fn group_thousands(f: &str) -> String {
+    let (sign, body) = match f.strip_prefix('-') {
+        Some(b) => ("-", b),
+        None => ("", f),
+    };
+    let (int, frac) = body.split_once('.').unwrap_or((body, ""));
+    let numeric = !int.is_empty()
+        && int.bytes().all(|c| c.is_ascii_digit())
+        && frac.bytes().all(|c| c.is_ascii_digit());
+    if !numeric {
+        return f.to_string();
+    }
+    let mut grouped = String::new();
+    for (i, c) in int.chars().enumerate() {
+        if i > 0 && (int.len() - i) % 3 == 0 {
+            grouped.push(',');
+        }
+        grouped.push(c);
+    }
+    match body.contains('.') {
+        true => format!("{sign}{grouped}.{frac}"),
+        false => format!("{sign}{grouped}"),
+    }
+}
+
 pub(crate) fn expect(
     units: &[(&'static str, &'static str, &'static str, f64)],
     range: [f64; 2],
@@ -290,6 +332,7 @@ pub(crate) fn expect(
 }
 
 mod cases;
+mod numbers;
 pub use cases::dialects;
 
 #[cfg(test)]
@@ -330,6 +373,19 @@ mod tests {
             .nth(2)
             .unwrap()
             .contains(",,"));
+        assert_eq!(group_thousands("-12345.6"), "-12,345.6");
+        assert_eq!(group_thousands("1300"), "1,300");
+        assert_eq!(group_thousands("999.25"), "999.25");
+        assert_eq!(group_thousands("Time (s)"), "Time (s)");
+        let eu = text("semicolon_thousands_decimal_comma");
+        assert!(eu.lines().nth(1).unwrap().contains(";1.300;"), "{eu:.200}");
+        assert!(text("quoted_thousands").contains("\"1,300.0\""));
+        assert!(text("comma_quoted_decimal_comma")
+            .lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("\"0,000\",\"30,0\","));
+        assert!(text("time_of_day_midnight").contains("\n00:00:00.000,"));
         // Same seed, same bytes.
         assert_eq!(dialects()[3].text, d[3].text);
     }

@@ -493,5 +493,7 @@ pub fn dialects() -> Vec<Dialect> {
             pct_range.1,
         ),
     );
+    let first = out.len() as u64 + 1;
+    out.extend(super::numbers::dialects(first));
     out
 }
