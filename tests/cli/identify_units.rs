@@ -293,6 +293,36 @@ fn a_command_whose_scale_the_values_cannot_tell_is_refused_naming_the_options() 
 }
 
 #[test]
+fn an_input_of_unknown_unit_in_whole_numbers_of_no_usual_range_is_refused_naming_input_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("Time (s),setpoint,Thrust (N)\n");
+    for k in 0..600 {
+        let raw = if (k / 100) % 2 == 0 { 60 } else { 200 };
+        text.push_str(&format!(
+            "{},{raw},{}\n",
+            0.01 * k as f64,
+            raw as f64 / 100.0
+        ));
+    }
+    let file = dir.path().join("setpoint_8bit.csv");
+    std::fs::write(&file, text).unwrap();
+    let path = file.to_str().unwrap();
+    let (code, out, err) = propid(&["identify", path, "--json", "--input", "setpoint"]);
+    assert_eq!(code, 3, "{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains("setpoint") && err.contains("--input-range MIN,MAX"),
+        "{err}"
+    );
+    let v = identify(&file, &["--input", "setpoint", "--input-range", "0,255"]);
+    assert_eq!(v["source"]["input_range"], serde_json::json!([0.0, 255.0]));
+    assert_eq!(v["source"]["input_range_from"], "--input-range");
+    // 255 raw per unit throttle, 0.01 N per raw: 2.55 N per unit throttle.
+    let gain = f(&v["model"]["dc_gain"]);
+    assert!((gain / 2.55 - 1.0).abs() < 0.05, "DC gain {gain}");
+}
+
+#[test]
 fn a_file_without_a_command_column_needs_input_none() {
     let dir = tempfile::tempdir().unwrap();
     let rows: String = (0..300)
