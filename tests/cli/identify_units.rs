@@ -320,6 +320,20 @@ fn an_input_of_unknown_unit_in_whole_numbers_of_no_usual_range_is_refused_naming
     // 255 raw per unit throttle, 0.01 N per raw: 2.55 N per unit throttle.
     let gain = f(&v["model"]["dc_gain"]);
     assert!((gain / 2.55 - 1.0).abs() < 0.05, "DC gain {gain}");
+    // A signed signal (a benchmark's voltage) is no command: taken as it is, and said so.
+    let mut text = String::from("Time (s),setpoint,Thrust (N)\n");
+    for k in 0..600 {
+        let raw = if (k / 100) % 2 == 0 { -0.5 } else { 0.5 };
+        text.push_str(&format!("{},{raw},{}\n", 0.01 * k as f64, 2.0 + raw));
+    }
+    std::fs::write(&file, text).unwrap();
+    let v = identify(&file, &["--input", "setpoint"]);
+    let from = v["source"]["input_range_from"].as_str().unwrap_or_default();
+    assert!(from.starts_with("raw"), "{from}");
+    assert_eq!(v["source"]["units"]["setpoint"]["factor"], 1.0);
+    let (code, out, err) = propid(&["identify", path, "--input", "setpoint"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("taken as it is, factor 1 (raw"), "{out}");
 }
 
 #[test]

@@ -5,6 +5,7 @@ use std::fmt::Write;
 use serde::Serialize;
 
 use super::load::{Loaded, Source};
+use crate::ingest::csv_file::command_range::RAW_SIGNAL;
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::quality::{judge, judge_gain, Flaw};
@@ -152,8 +153,14 @@ impl<'a> Output<'a> {
         let mut o = String::new();
         let _ = writeln!(o, "file      {} ({})", s.file, s.format);
         let _ = writeln!(o, "input     {}", s.input);
-        if let (Some([lo, hi]), Some(from)) = (s.input_range, &s.input_range_from) {
-            let _ = writeln!(o, "          {lo}..{hi} taken as throttle 0..1 ({from})");
+        match (s.input_range, &s.input_range_from) {
+            (Some(_), Some(from)) if from == RAW_SIGNAL => {
+                let _ = writeln!(o, "          taken as it is, factor 1 ({from})");
+            }
+            (Some([lo, hi]), Some(from)) => {
+                let _ = writeln!(o, "          {lo}..{hi} taken as throttle 0..1 ({from})");
+            }
+            _ => {}
         }
         if let Some(units) = &s.units {
             let text: Vec<String> = units
