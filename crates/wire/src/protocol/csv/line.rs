@@ -21,9 +21,10 @@
 //!    other mark (`1,234.5`, `1.234,5`, `12,345`): [`DecimalMark`] reads a field both ways. A
 //!    field only one mark reads (`0,45`, `1.234,5`, `12,3`; `0.45`, `1,234.5`) shows the
 //!    file's mark; `1,234` and `1.234` (one mark, then exactly three digits) are read with the
-//!    mark the file's other fields show ([`DecimalMark::of_fields`], `.` when they show none),
-//!    so a plain `,`-separated file, whose fields hold no `,`, never reads a `.` as thousands
-//!    ([`parse_number`]).
+//!    mark the file's other fields show ([`DecimalMark::of_fields`]); where they show none, as
+//!    a decimal (`1,234` is 1.234): thousands are read only where the file shows the other
+//!    mark, and a plain `,`-separated file, whose fields hold no `,`, never reads a `.` as
+//!    thousands ([`parse_number`]).
 //!    A time-of-day or date-time stamp (`18:55:23.120`, `2024-08-13 18:55:23.120`,
 //!    `2024-08-13T18:55:23Z`) is read as seconds by [`parse_clock`] where a column holds them;
 //!    read in order ([`ClockColumn`]), a time of day that falls back by more than 12 h has

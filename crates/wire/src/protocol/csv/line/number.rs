@@ -8,17 +8,21 @@ use super::between_digits;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum DecimalMark {
     /// `1,234.5`, `0.45`.
-    #[default]
     Point,
     /// `1.234,5`, `0,45`.
     Comma,
+    /// The file's rows show neither (or both alike): a field with one mark reads it as its
+    /// decimal mark (`1,234` is 1.234, `1.234` is 1.234), thousands only where nothing else
+    /// reads (`1,234,567`).
+    #[default]
+    Unshown,
 }
 
 impl DecimalMark {
     /// The decimal mark and the thousands separator.
     fn marks(self) -> (char, char) {
         match self {
-            DecimalMark::Point => ('.', ','),
+            DecimalMark::Point | DecimalMark::Unshown => ('.', ','),
             DecimalMark::Comma => (',', '.'),
         }
     }
@@ -27,13 +31,14 @@ impl DecimalMark {
         match self {
             DecimalMark::Point => DecimalMark::Comma,
             DecimalMark::Comma => DecimalMark::Point,
+            DecimalMark::Unshown => DecimalMark::Unshown,
         }
     }
 
     /// The mark a file's fields show: a field that only one mark reads (`0,45`, `12,3`,
-    /// `1.234,5` for the comma; `0.45`, `1,234.5` for the point) is a vote for it; `,` when
-    /// its votes outnumber the point's, else `.`. Fields either mark reads alike (`12`) or
-    /// differently (`1,234`) and text say nothing.
+    /// `1.234,5` for the comma; `0.45`, `1,234.5` for the point) is a vote for it; the mark
+    /// with more votes is the file's, [`DecimalMark::Unshown`] when neither has more. Fields
+    /// either mark reads alike (`12`) or differently (`1,234`) and text say nothing.
     pub fn of_fields<'a>(fields: impl IntoIterator<Item = &'a str>) -> Self {
         let (mut point, mut comma) = (0usize, 0usize);
         for f in fields {
@@ -43,10 +48,10 @@ impl DecimalMark {
                 _ => {}
             }
         }
-        if comma > point {
-            Self::Comma
-        } else {
-            Self::Point
+        match comma.cmp(&point) {
+            std::cmp::Ordering::Greater => Self::Comma,
+            std::cmp::Ordering::Less => Self::Point,
+            std::cmp::Ordering::Equal => Self::Unshown,
         }
     }
 }
@@ -93,12 +98,20 @@ fn read_as(field: &str, mark: DecimalMark) -> Option<f64> {
 /// A field as a number in a file whose decimal mark is `mark` (rule 5 of the
 /// [line rules](super)): read with that mark, the other one grouping thousands; a
 /// field with a single mark that `mark` cannot read (`2.5` or `0,25` where the file's mark is
-/// the other) is read with its own. `None` for anything else (text, `1.2.3`).
+/// the other) is read with its own; where the file shows no mark, a field with one mark reads
+/// it as its decimal mark. `None` for anything else (text, `1.2.3`).
 pub fn parse_number(field: &str, mark: DecimalMark) -> Option<f64> {
-    read_as(field, mark).or_else(|| {
-        let single = field.matches([',', '.']).count() == 1;
-        single.then(|| read_as(field, mark.other())).flatten()
-    })
+    let single = field.matches([',', '.']).count() == 1;
+    match mark {
+        DecimalMark::Unshown => {
+            let own = match single && field.contains(',') {
+                true => DecimalMark::Comma,
+                false => DecimalMark::Point,
+            };
+            read_as(field, own).or_else(|| read_as(field, own.other()))
+        }
+        m => read_as(field, m).or_else(|| single.then(|| read_as(field, m.other())).flatten()),
+    }
 }
 
 /// True when `field` is a number written with either decimal mark.
@@ -156,9 +169,16 @@ mod tests {
         assert_eq!(mark(&tab, '\t'), DecimalMark::Point);
         // A plain `,` file: its fields hold no comma, `1.234` stays 1.234.
         let plain = ["1.234,1.500,1000", "1.235,1.501,1001"];
-        assert_eq!(mark(&plain, ','), DecimalMark::Point);
+        assert_eq!(mark(&plain, ','), DecimalMark::Unshown);
         assert_eq!(parse_number("1.234", mark(&plain, ',')), Some(1.234));
-        // Nothing to tell (integers, text): the point.
-        assert_eq!(mark(&["12;x;1,234"], ';'), DecimalMark::Point);
+        // Nothing to tell (integers, text, one mark then three digits): each field's one mark
+        // is its decimal mark; thousands only where nothing else reads.
+        let unshown = mark(&["12;x;1,234"], ';');
+        assert_eq!(unshown, DecimalMark::Unshown);
+        assert_eq!(parse_number("1,234", unshown), Some(1.234));
+        assert_eq!(parse_number("1.234", unshown), Some(1.234));
+        assert_eq!(parse_number("1,234,567", unshown), Some(1_234_567.0));
+        assert_eq!(parse_number("1.234,5", unshown), Some(1234.5));
+        assert_eq!(parse_number("12", unshown), Some(12.0));
     }
 }
