@@ -9,7 +9,8 @@
 //!
 //! Usage: `cargo run --release --example injection_table -- BIN DRAWS [SHARED_DIR [EFFECT]]`
 //! (every miss is told on stderr with its draw and the findings; `EFFECT` runs that effect's
-//! rows only; with `PROPID_INJECTION_KEEP=DIR` every injected file is kept there).
+//! rows only; with `PROPID_INJECTION_KEEP=DIR` every injected file is kept there; with
+//! `PROPID_INJECTION_LOGS=NAME,...` only the logs whose names contain one of them).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -82,6 +83,9 @@ fn main() {
             dir.display()
         ),
         None => {}
+    }
+    if let Ok(names) = std::env::var("PROPID_INJECTION_LOGS") {
+        logs.retain(|(_, l)| names.split(',').any(|n| l.name.contains(n)));
     }
     let dir = tempfile::tempdir().expect("a temporary folder");
     println!(

@@ -130,6 +130,31 @@ pub trait Term: std::fmt::Debug + Send + Sync {
         !model.has_nan()
     }
 
+    /// Samples by which the measured supply voltage reaches the input terms late: the part of
+    /// a dead time that lies on the output's side (a load cell's filter, a logger's buffer) and
+    /// so delays what the voltage acts on as much as the throttle ([`super::model::simulate`]
+    /// shifts the voltage by the largest of these). Default 0.
+    fn voltage_delay(&self) -> usize {
+        0
+    }
+
+    /// Samples by which the term delays the throttle (a dead time's); default 0.
+    fn input_delay(&self) -> usize {
+        0
+    }
+
+    /// A copy with `samples` of its delay (at most all of it) on the output's side
+    /// ([`Term::voltage_delay`]); `None` (the default) for a term without a delay.
+    fn with_voltage_delay(&self, _samples: usize) -> Option<Box<dyn Term>> {
+        None
+    }
+
+    /// Whether the term reads the measured supply voltage (then the share of a dead time on the
+    /// output's side, [`Term::voltage_delay`], changes the model). Default: no.
+    fn reads_voltage(&self) -> bool {
+        false
+    }
+
     /// Input places: transforms the input path `v` (one value per sample, the throttle before
     /// the core's gain) in place.
     fn shape_input(&self, _v: &mut [f64], _sig: &Signals) {}

@@ -199,9 +199,19 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
         sig.dt_s,
     );
     let mut v = sig.u[..n].to_vec();
+    let lag = m.terms().map(|t| t.voltage_delay()).max().unwrap_or(0);
+    let late: Option<Vec<f64>> = sig.voltage.filter(|_| lag > 0).map(|volt| {
+        (0..volt.len())
+            .map(|k| volt[k.saturating_sub(lag)])
+            .collect()
+    });
+    let input_sig = Signals {
+        voltage: late.as_deref().or(sig.voltage),
+        ..*sig
+    };
     for place in Place::ALL.into_iter().filter(|p| p.is_input()) {
         for t in m.at(place) {
-            t.shape_input(&mut v, sig);
+            t.shape_input(&mut v, &input_sig);
         }
     }
     for x in v.iter_mut() {
@@ -303,6 +313,41 @@ mod tests {
         assert_eq!(m2.core.gain, 3.0);
         assert_eq!(m2.free()[4].0, 1.5);
         assert_eq!(m2.free()[5].0, -0.05);
+    }
+
+    #[test]
+    fn the_voltage_is_as_late_as_the_output_side_of_the_delay() {
+        use crate::diagnose::effects::dead_time::DeadTimeParams;
+        // Throttle 1 throughout, a voltage step at sample 10, a static core (fast, gain 1):
+        // the sag scales the input by 1 + g (V − V_r).
+        let u = vec![1.0; 30];
+        let y = vec![0.0; 30];
+        let volt: Vec<f64> = (0..30).map(|k| if k < 10 { 16.0 } else { 15.0 }).collect();
+        let sig = Signals {
+            voltage: Some(&volt),
+            v_ref: 16.0,
+            ..signals(&u, &y)
+        };
+        let core = Core {
+            fn_hz: 400.0,
+            zeta: 1.0,
+            gain: 1.0,
+            offset: 0.0,
+        };
+        let sag = SupplySagParams { gain_per_volt: 0.1 };
+        let first_low = |sensor: usize| {
+            let m = Model::new(core).with(sag).with(DeadTimeParams {
+                delay_samples: 4,
+                sensor_samples: sensor,
+            });
+            let mut out = vec![0.0; 30];
+            simulate(&m, &sig, &mut out);
+            out.iter().position(|v| *v < 0.95).unwrap()
+        };
+        // All on the throttle's side: the voltage acts at its own time; all on the output's
+        // side: 4 samples later.
+        assert_eq!(first_low(4) - first_low(0), 4);
+        assert_eq!(first_low(1) - first_low(0), 1);
     }
 
     #[test]

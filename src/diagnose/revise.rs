@@ -120,6 +120,19 @@ pub fn assess(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Result<f64, R
     if !plausible {
         return refuse("fits in-sample but with physically implausible values: not taken".into());
     }
+    // Every parameter moves in the joint fit: a term taken earlier may leave its plausible
+    // range once this one is in (krull's staircase: a direction's time constant of 0.1 ms at
+    // 50 Hz once a cubic stiffness joined). Such a model is an artefact too.
+    if let Some(t) = after
+        .model
+        .terms()
+        .find(|t| t.name() != name && !t.plausible(ctx, &after.model))
+    {
+        return refuse(format!(
+            "fits in-sample but drives {} to physically implausible values: not taken",
+            t.name()
+        ));
+    }
     if let Some(e) = REGISTRY.iter().find(|e| e.name() == name) {
         if let Err(reason) = e.identifiable(ctx, before, after) {
             return refuse(reason);
@@ -316,7 +329,7 @@ mod tests {
 
     fn model() -> Model {
         Model::new(Core::default())
-            .with(DeadTimeParams { delay_samples: 2 })
+            .with(DeadTimeParams::throttle(2))
             .with(ExtraModeParams {
                 fn_hz: 5.0,
                 zeta: 0.1,
@@ -351,7 +364,7 @@ mod tests {
             gain: 2.0,
             offset: 0.1,
         })
-        .with(DeadTimeParams { delay_samples: 3 });
+        .with(DeadTimeParams::throttle(3));
         let mut y = vec![0.0; u.len()];
         let sig0 = Signals {
             dt_s: dt,

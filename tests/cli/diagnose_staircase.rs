@@ -20,6 +20,12 @@ const GAIN_PER_VOLT: f64 = 0.08;
 /// Writes the staircase (1.5 s per level) as a §6 CSV with the supply voltage: 16.8 V, then
 /// 14.0 V on the top level. The plant sees `u (1 + g (V − 16.8))`; the file holds `u`.
 fn write_staircase(path: &Path) {
+    write_staircase_read_late(path, 0);
+}
+
+/// The staircase of [`write_staircase`] with its thrust read `late` samples late (a load
+/// cell's filter: the thrust column shifted, the throttle and the voltage at their own time).
+fn write_staircase_read_late(path: &Path, late: usize) {
     let cfg = PlantConfig {
         noise_rms_n: 0.01,
         ..PlantConfig::default()
@@ -27,7 +33,8 @@ fn write_staircase(path: &Path) {
     let mut plant = Plant::new(&cfg, DT_S, 7).unwrap();
     plant.settle(LEVELS[0]);
     let per = (1.5 / DT_S) as usize;
-    let mut s = String::from("t_us,throttle,thrust_N,voltage_V\n");
+    let mut rows = Vec::new();
+    let mut thrust = Vec::new();
     for (i, &u) in LEVELS.iter().enumerate() {
         let volt = if i + 1 == LEVELS.len() { 14.0 } else { 16.8 };
         for k in 0..per {
@@ -35,8 +42,14 @@ fn write_staircase(path: &Path) {
             let m = plant.step(u * (1.0 + GAIN_PER_VOLT * (volt - 16.8)));
             let t_us = (n as f64 * DT_S * 1e6).round() as u64;
             let thr = (u * 10000.0).round() as u64;
-            s.push_str(&format!("{t_us},{thr},{:.5},{volt:.3}\n", m.thrust_n));
+            rows.push((t_us, thr, volt));
+            thrust.push(m.thrust_n);
         }
+    }
+    let mut s = String::from("t_us,throttle,thrust_N,voltage_V\n");
+    for (k, (t_us, thr, volt)) in rows.into_iter().enumerate() {
+        let y = thrust[k.saturating_sub(late)];
+        s.push_str(&format!("{t_us},{thr},{y:.5},{volt:.3}\n"));
     }
     std::fs::write(path, s).unwrap();
 }
@@ -84,5 +97,56 @@ fn a_sag_on_the_last_level_only_is_found_by_blocked_cross_validation_over_steps(
     assert_eq!(
         v["baseline"]["fit_percent"],
         val["baseline_mean_fit_percent"]
+    );
+}
+
+/// The delay of the `dead_time` finding and its output-side share (0 when not named).
+fn delay(v: &serde_json::Value) -> (u64, u64) {
+    v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["effect"] == "dead_time")
+        .map_or((0, 0), |f| {
+            (
+                f["delay_samples"].as_u64().unwrap(),
+                f["sensor_delay_samples"].as_u64().unwrap_or(0),
+            )
+        })
+}
+
+#[test]
+fn a_thrust_read_late_beside_a_voltage_on_time_is_a_delay_on_the_output_side() {
+    // The load cell lags by 8 samples (40 ms); the voltage, measured elsewhere, does not. The
+    // delay is found 8 samples longer than the record's own, with the voltage aligned to the
+    // late thrust (the share on the output's side), and the sag keeps its value.
+    let dir = tempfile::tempdir().unwrap();
+    let diagnose = |late: usize| {
+        let csv = dir.path().join(format!("late{late}.csv"));
+        write_staircase_read_late(&csv, late);
+        let (code, out, err) = propid(&["diagnose", csv.to_str().unwrap(), "--json"]);
+        assert_eq!(code, 0, "{err}");
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()
+    };
+    let (clean, late) = (diagnose(0), diagnose(8));
+    let ((d0, s0), (d, s)) = (delay(&clean), delay(&late));
+    assert!(
+        d.abs_diff(d0 + 8) <= 1,
+        "delay {d} against {d0} + 8: {late}"
+    );
+    assert!(
+        s.abs_diff(s0 + 8) <= 1,
+        "output side {s} against {s0} + 8: {late}"
+    );
+    let sag = late["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["effect"] == "supply_sag")
+        .unwrap_or_else(|| panic!("no supply_sag: {late}"));
+    let g = sag["gain_per_volt"].as_f64().unwrap();
+    assert!(
+        (g - GAIN_PER_VOLT).abs() < 0.25 * GAIN_PER_VOLT,
+        "gain/V {g}"
     );
 }

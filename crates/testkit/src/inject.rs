@@ -82,7 +82,7 @@ pub const REPO_LOGS: [Log; 3] = [
 ];
 
 /// Motor-stand logs that may only be read from `../shared/data` (no licence to copy them).
-pub const SHARED_LOGS: [Log; 2] = [
+pub const SHARED_LOGS: [Log; 3] = [
     Log {
         name: "vanderploeg 90PERCENT",
         path: "vanderploeg-rcbenchmark-steps/90PERCENT_2024-08-13_185523.csv",
@@ -97,6 +97,14 @@ pub const SHARED_LOGS: [Log; 2] = [
         input: None,
         output: None,
         fs_hz: None,
+        zero_at_rest: true,
+    },
+    Log {
+        name: "bitcraze cf21",
+        path: "bitcraze-cf21-pwm-steps/cf21_stock2.csv",
+        input: Some("pwm"),
+        output: Some("weight[g]"),
+        fs_hz: Some(100.0),
         zero_at_rest: true,
     },
 ];

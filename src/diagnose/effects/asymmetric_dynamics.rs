@@ -106,7 +106,11 @@ impl Term for AsymmetricDynamicsParams {
         }
         let tau = |scale: f64| time_constant_s(model.core.fn_hz / scale, model.core.zeta);
         match (tau(self.up()), tau(self.down())) {
-            (Some(up), Some(down)) => (down - up).abs() >= ctx.sig.dt_s,
+            // The difference must show on the sample grid, and neither direction may be
+            // faster than half a sample (a time constant the record cannot resolve).
+            (Some(up), Some(down)) => {
+                (down - up).abs() >= ctx.sig.dt_s && up.min(down) >= 0.5 * ctx.sig.dt_s
+            }
             _ => false,
         }
     }

@@ -1,6 +1,22 @@
 //! `dead_time`: a transport delay of the throttle (ESC update, filtering, logging),
 //! `v_k = u_{k−d}` with `d` whole samples (the first sample held before the record starts).
+//!
+//! **Which side of the plant.** A delay on the throttle's side (the ESC's update) and one on
+//! the output's side (a load cell's filter, a logger's buffer) give the same model as long as
+//! only the throttle drives it. A supply voltage measured beside the thrust does not pass
+//! through the load cell: with a `sensor_samples` share `s` of the delay on the output's side,
+//! the model sees `V_{k−s}` (the voltage is as late as the thrust it is compared with). The
+//! share matters only when a term reads the voltage ([`Term::reads_voltage`], the supply sag);
+//! it is searched then and published as `sensor_delay_samples` when it is not 0. A thrust
+//! channel shifted by 3 samples in vanderploeg's log was found as 4 samples (SSE 1.59) with the
+//! voltage taken at the throttle's time, as 5 (SSE 0.66, the clean log's 2 + 3) with the share.
+//!
+//! **Range.** Delays up to [`delay_search_samples`]: 0.15 s (at least 16 samples), raised to
+//! what the command's steps show ([`steps_delay_samples`]: a slow load cell delays a
+//! Crazyflie stand's thrust by 0.23 s).
 
+use propid_numerics::segment::{self, Command, SegmentRules};
+use propid_numerics::step_response::step_figures;
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
@@ -28,6 +44,35 @@ pub fn max_delay_samples(dt_s: f64, est_len: usize) -> usize {
         .clamp(1, cap)
 }
 
+/// The longest delay searched in a record whose command steps show a dead time of
+/// `steps_delay` samples ([`steps_delay_samples`]): [`max_delay_samples`], raised to
+/// `1.5 θ + 2` when the steps show more (a slow load cell's filter delays the thrust by
+/// 0.2–0.3 s: a Crazyflie stand at 100 Hz shows 23 samples), within a tenth of the estimation
+/// samples.
+pub fn delay_search_samples(dt_s: f64, est_len: usize, steps_delay: Option<f64>) -> usize {
+    let base = max_delay_samples(dt_s, est_len);
+    let seen = steps_delay.map_or(0, |d| (1.5 * d + 2.0).ceil() as usize);
+    base.max(seen.min(est_len / 10))
+}
+
+/// The dead time the command's clean steps show, samples: the median of the steps'
+/// first-order-plus-dead-time delays ([`propid_numerics::step_response`], found with the one
+/// segmentation); `None` without a step that has one.
+pub fn steps_delay_samples(sig: &Signals) -> Option<f64> {
+    let steps = segment::steps(Command::new(sig.u), &SegmentRules::DEFAULT);
+    let mut d: Vec<f64> = steps
+        .iter()
+        .filter_map(|s| step_figures(sig.y, sig.dt_s, s).dead_time_s)
+        .map(|t| t / sig.dt_s)
+        .filter(|d| d.is_finite())
+        .collect();
+    if d.is_empty() {
+        return None;
+    }
+    d.sort_by(f64::total_cmp);
+    Some(d[d.len() / 2])
+}
+
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
 pub struct DeadTime;
@@ -37,6 +82,19 @@ pub struct DeadTime;
 pub struct DeadTimeParams {
     /// Delay `d`, whole samples (≥ 1 once fitted).
     pub delay_samples: usize,
+    /// The part of it on the output's side (≤ `delay_samples`): the measured voltage reaches
+    /// the model that much late too ([`Term::voltage_delay`]; 0 without a voltage).
+    pub sensor_samples: usize,
+}
+
+impl DeadTimeParams {
+    /// A delay of `d` samples all on the throttle's side.
+    pub fn throttle(d: usize) -> DeadTimeParams {
+        DeadTimeParams {
+            delay_samples: d,
+            sensor_samples: 0,
+        }
+    }
 }
 
 /// The finding's published parameters.
@@ -46,6 +104,10 @@ struct Published {
     delay_s: f64,
     /// Delay, samples.
     delay_samples: usize,
+    /// The part of it on the output's side, samples: the measured supply voltage reaches the
+    /// model that much late too (only when some of it is; module doc).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sensor_delay_samples: Option<usize>,
 }
 
 impl Effect for DeadTime {
@@ -64,15 +126,55 @@ impl Effect for DeadTime {
     /// mode of 8 samples per period skips the true delay's narrow valley and lands a whole
     /// period later (Silverbox at 610 Hz, a 65 Hz resonance: 3 samples found as 11).
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
-        let dmax = max_delay_samples(ctx.sig.dt_s, ctx.est.len());
-        let lm_at = |d: usize, iters: usize| {
-            let start = cur.model.with(DeadTimeParams { delay_samples: d });
-            ctx.lm(&start, iters)
+        let dmax = delay_search_samples(ctx.sig.dt_s, ctx.est.len(), steps_delay_samples(&ctx.sig));
+        // With a term that reads the voltage, where the delay lies matters (module doc): each
+        // delay is tried all on the throttle's side and all on the output's, and the best
+        // delay's share is refined.
+        let split = ctx.sig.voltage.is_some() && cur.model.terms().any(|t| t.reads_voltage());
+        let d_cur = cur
+            .model
+            .terms()
+            .map(|t| t.input_delay())
+            .max()
+            .unwrap_or(0);
+        let lm_at = |p: DeadTimeParams, iters: usize| {
+            let delayed = cur.model.with(p);
+            let from_cur = ctx.lm(&delayed, iters);
+            let delay_s = (p.delay_samples as f64 - d_cur as f64) * ctx.sig.dt_s;
+            match compensated_core(&cur.model.core, delay_s) {
+                Some(core) => {
+                    let f = ctx.lm(&delayed.with_core(core), iters);
+                    if f.sse < from_cur.sse {
+                        f
+                    } else {
+                        from_cur
+                    }
+                }
+                None => from_cur,
+            }
         };
-        let step = coarse_step(cur.model.core.fn_hz, ctx.sig.dt_s);
+        let fit_d = |d: usize, iters: usize| {
+            let throttle = lm_at(DeadTimeParams::throttle(d), iters);
+            if !split {
+                return throttle;
+            }
+            let output = lm_at(
+                DeadTimeParams {
+                    delay_samples: d,
+                    sensor_samples: d,
+                },
+                iters,
+            );
+            if output.sse < throttle.sse {
+                output
+            } else {
+                throttle
+            }
+        };
+        let step = coarse_step(cur.model.core.fn_hz, ctx.sig.dt_s).max(dmax / 32);
         let mut coarse: Vec<(usize, f64)> = (1..=dmax)
             .step_by(step)
-            .map(|d| (d, lm_at(d, 8).sse))
+            .map(|d| (d, fit_d(d, 8).sse))
             .collect();
         coarse.sort_by(|a, b| a.1.total_cmp(&b.1));
         let mut fine: Vec<usize> = coarse
@@ -84,13 +186,60 @@ impl Effect for DeadTime {
         fine.dedup();
         let mut best: Option<Fit> = None;
         for d in fine {
-            let f = lm_at(d, 30);
+            let f = fit_d(d, 30);
             if best.as_ref().map_or(true, |b| f.sse < b.sse) {
                 best = Some(f);
             }
         }
-        best
+        let best = best?;
+        if !split {
+            return Some(best);
+        }
+        let d = best.model.term(NAME).map_or(0, |t| t.input_delay());
+        let mut best = best;
+        for share in shares(d).into_iter().filter(|&s| s > 0 && s < d) {
+            let f = lm_at(
+                DeadTimeParams {
+                    delay_samples: d,
+                    sensor_samples: share,
+                },
+                30,
+            );
+            if f.sse < best.sse {
+                best = f;
+            }
+        }
+        Some(best)
     }
+}
+
+/// The shares of a delay of `all` samples tried on the output's side: every one from 0 to
+/// `all`, or 9 evenly spaced when there are more.
+pub fn shares(all: usize) -> Vec<usize> {
+    let step = all.div_ceil(8).max(1);
+    let mut s: Vec<usize> = (0..=all).step_by(step).collect();
+    if s.last() != Some(&all) {
+        s.push(all);
+    }
+    s
+}
+
+/// The current core with the lag that `delay_s` more of delay takes over given back (or, for
+/// less delay, taken on): a core fitted without the delay has absorbed it (a lower `fn`, the
+/// same low-frequency lag), and a fit started there with the delay added stays in that valley
+/// (vanderploeg with 3 samples injected: 4 samples found at SSE 1.59 from the slow core, 5 at
+/// 0.65 from this start). The low-frequency group delay of `ωn² / (s² + 2ζωn s + ωn²)` is
+/// `τ = 2ζ/ωn`; the core that keeps `τ − delay` has `ωn' = 2ζ / (τ − delay)`. `None` for no
+/// change, when the delay is not shorter than `τ` by a tenth of it (nothing to give back) or
+/// the core is degenerate.
+pub fn compensated_core(core: &Core, delay_s: f64) -> Option<Core> {
+    let wn = std::f64::consts::TAU * core.fn_hz;
+    let tau = 2.0 * core.zeta / wn;
+    let left = tau - delay_s;
+    (tau.is_finite() && delay_s != 0.0 && left > 0.1 * tau).then(|| Core {
+        fn_hz: core.fn_hz * tau / left,
+        ..*core
+    })
 }
 
 /// Coarse delays refined by [`DeadTime::extend`]: the best this many (the SSE over the delay
@@ -122,6 +271,21 @@ impl Term for DeadTimeParams {
         Box::new(*self)
     }
 
+    fn voltage_delay(&self) -> usize {
+        self.sensor_samples
+    }
+
+    fn input_delay(&self) -> usize {
+        self.delay_samples
+    }
+
+    fn with_voltage_delay(&self, samples: usize) -> Option<Box<dyn Term>> {
+        Some(Box::new(DeadTimeParams {
+            sensor_samples: samples.min(self.delay_samples),
+            ..*self
+        }))
+    }
+
     fn shape_input(&self, v: &mut [f64], _sig: &Signals) {
         let d = self.delay_samples;
         for k in (1..v.len()).rev() {
@@ -134,12 +298,16 @@ impl Term for DeadTimeParams {
             terms.insert("delay_samples".into(), json!(self.delay_samples));
             terms.insert("delay_s".into(), json!(self.delay_s(dt_s)));
         }
+        if self.sensor_samples > 0 {
+            terms.insert("sensor_delay_samples".into(), json!(self.sensor_samples));
+        }
     }
 
     fn finding_params(&self, dt_s: f64) -> Map<String, Value> {
         to_map(Published {
             delay_s: self.delay_s(dt_s),
             delay_samples: self.delay_samples,
+            sensor_delay_samples: (self.sensor_samples > 0).then_some(self.sensor_samples),
         })
     }
 
@@ -200,13 +368,84 @@ mod tests {
             v_ref: 0.0,
         };
         let mut v = vec![1.0, 2.0, 3.0, 4.0, 5.0];
-        DeadTimeParams { delay_samples: 2 }.shape_input(&mut v, &sig);
+        DeadTimeParams::throttle(2).shape_input(&mut v, &sig);
         assert_eq!(v, [1.0, 1.0, 1.0, 2.0, 3.0]);
     }
 
     #[test]
+    fn the_search_reaches_the_delay_the_steps_show() {
+        // A Crazyflie stand at 100 Hz whose steps show 23 samples: searched to 1.5·23 + 2.
+        assert_eq!(delay_search_samples(0.01, 1400, Some(23.0)), 37);
+        // Steps that show less keep the default range; a short record caps it.
+        assert_eq!(delay_search_samples(0.01, 1400, Some(3.0)), 16);
+        assert_eq!(delay_search_samples(0.01, 1400, None), 16);
+        assert_eq!(delay_search_samples(0.01, 200, Some(23.0)), 20);
+    }
+
+    #[test]
+    fn the_steps_delay_is_the_median_of_the_steps_dead_times() {
+        // A staircase of 4 levels, 100 samples each; the output follows 5 samples late as a
+        // first order with τ = 4 samples.
+        let n = 400;
+        let u: Vec<f64> = (0..n).map(|k| 0.2 + 0.1 * (k / 100) as f64).collect();
+        let mut y = vec![0.0; n];
+        for k in 1..n {
+            let target = u[k.saturating_sub(5)];
+            y[k] = y[k - 1] + (target - y[k - 1]) * (1.0 - (-1.0f64 / 4.0).exp());
+        }
+        y[0] = 0.2;
+        for k in 1..100 {
+            y[k] = 0.2;
+        }
+        let sig = Signals {
+            dt_s: 0.01,
+            u: &u,
+            y: &y,
+            voltage: None,
+            u_ref: 0.35,
+            v_ref: 0.0,
+        };
+        let d = steps_delay_samples(&sig).expect("three steps");
+        assert!((d - 5.0).abs() < 1.0, "{d}");
+        let flat = Signals {
+            u: &[0.5; 400],
+            ..sig
+        };
+        assert_eq!(steps_delay_samples(&flat), None);
+    }
+
+    #[test]
+    fn a_delay_gives_back_the_lag_the_core_took_on() {
+        // τ = 2ζ/ωn = 2·0.7/(2π·2) = 0.1114 s; 0.05 s of delay leaves 0.0614 s.
+        let core = Core {
+            fn_hz: 2.0,
+            zeta: 0.7,
+            ..Core::default()
+        };
+        let c = compensated_core(&core, 0.05).expect("room left");
+        let tau = 2.0 * 0.7 / (std::f64::consts::TAU * 2.0);
+        assert!((c.fn_hz - 2.0 * tau / (tau - 0.05)).abs() < 1e-12);
+        assert_eq!(c.zeta, 0.7);
+        // Less delay: a slower core; no change, or no room: none.
+        assert!(compensated_core(&core, -0.05).unwrap().fn_hz < 2.0);
+        assert_eq!(compensated_core(&core, 0.0), None);
+        assert_eq!(compensated_core(&core, 0.105), None);
+    }
+
+    #[test]
+    fn shares_run_from_none_to_all_of_the_delay() {
+        assert_eq!(shares(0), [0]);
+        assert_eq!(shares(5), [0, 1, 2, 3, 4, 5]);
+        assert_eq!(shares(20), [0, 3, 6, 9, 12, 15, 18, 20]);
+        let p = DeadTimeParams::throttle(6);
+        let t = p.with_voltage_delay(usize::MAX).unwrap();
+        assert_eq!((t.input_delay(), t.voltage_delay()), (6, 6));
+        assert_eq!(p.with_voltage_delay(2).unwrap().voltage_delay(), 2);
+    }
+
+    #[test]
     fn the_published_parameters_keep_their_names() {
-        let p = DeadTimeParams { delay_samples: 16 };
+        let p = DeadTimeParams::throttle(16);
         let text = |m: &Map<String, Value>| serde_json::to_string(m).unwrap();
         assert_eq!(
             text(&p.finding_params(0.002)),
@@ -215,5 +454,13 @@ mod tests {
         let mut terms = Map::new();
         p.terms(0.002, &mut terms);
         assert_eq!(text(&terms), r#"{"delay_s":0.032,"delay_samples":16}"#);
+        let p = DeadTimeParams {
+            delay_samples: 16,
+            sensor_samples: 4,
+        };
+        assert_eq!(
+            text(&p.finding_params(0.002)),
+            r#"{"delay_s":0.032,"delay_samples":16,"sensor_delay_samples":4}"#
+        );
     }
 }

@@ -16,6 +16,7 @@ use serde_json::{json, Map, Value};
 
 use crate::diagnose::ctx::Ctx;
 use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
+use crate::diagnose::effects::dead_time::shares;
 use crate::diagnose::fit::Fit;
 use crate::diagnose::model::{Core, Signals};
 use crate::diagnose::search::SCORE_THRESHOLD;
@@ -62,7 +63,27 @@ impl Effect for SupplySag {
                 gain_per_volt: n / v_ref,
             })
         });
-        Some(ctx.best_of(starts, START_EXPONENTS.len()))
+        let best = ctx.best_of(starts.clone(), START_EXPONENTS.len());
+        // A dead time already in the model was placed with no term reading the voltage: its
+        // share on the output's side is still open (`Term::voltage_delay`); every share from
+        // none to all of it is tried.
+        let all = cur
+            .model
+            .terms()
+            .map(|t| t.input_delay())
+            .max()
+            .unwrap_or(0);
+        let mut best = best;
+        for share in shares(all).into_iter().filter(|&s| s > 0) {
+            let Some(t) = cur.model.terms().find_map(|t| t.with_voltage_delay(share)) else {
+                continue;
+            };
+            let f = ctx.best_of(starts.iter().map(|m| m.with_boxed(t.clone_box())), 1);
+            if f.sse < best.sse {
+                best = f;
+            }
+        }
+        Some(best)
     }
 
     /// The module doc's test: `after` refitted with the voltage replaced by
@@ -147,6 +168,10 @@ impl Term for SupplySagParams {
 
     fn clone_box(&self) -> Box<dyn Term> {
         Box::new(*self)
+    }
+
+    fn reads_voltage(&self) -> bool {
+        true
     }
 
     fn shape_input(&self, v: &mut [f64], sig: &Signals) {
