@@ -40,7 +40,6 @@
 
 use super::ctx::Ctx;
 use super::effect::Effect;
-use super::effects::dead_time::{self, DeadTime};
 use super::effects::REGISTRY;
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Scores};
@@ -185,10 +184,6 @@ pub fn search(
         revisions += 1;
         apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv, &mut ledger);
     }
-    if let Some(f) = polish_delay(ctx, &cur) {
-        cur_cv = cv(&f);
-        cur = f;
-    }
     final_values(&mut findings[detected..], &cur, ctx);
     let taken: Vec<String> = findings.iter().map(|f| f.effect.clone()).collect();
     Some(Searched {
@@ -292,19 +287,6 @@ fn forward(
         ],
         fit,
         cv: f_cv,
-    })
-}
-
-/// The final model's dead time searched again with every other parameter in place
-/// ([`DeadTime::extend`] on the final model: each delay refitted jointly): the delay was placed
-/// when the model had fewer terms, and the terms added after it (a series mode, a static map)
-/// trade with it; the search from the final model finds the delay the whole model fits best,
-/// whatever path led to it, so that a log and the same log shifted by `d` samples get delays
-/// `d` apart. `Some` when it lowers the SSE.
-fn polish_delay(ctx: &Ctx, cur: &Fit) -> Option<Fit> {
-    cur.model.term(dead_time::NAME)?;
-    DeadTime.extend(ctx, cur).filter(|f| {
-        f.sse < cur.sse && f.sse.is_finite() && f.model.terms().all(|t| t.plausible(ctx, &f.model))
     })
 }
 
