@@ -388,14 +388,10 @@ mod tests {
         // first order with τ = 4 samples.
         let n = 400;
         let u: Vec<f64> = (0..n).map(|k| 0.2 + 0.1 * (k / 100) as f64).collect();
-        let mut y = vec![0.0; n];
+        let mut y = vec![0.2; n];
         for k in 1..n {
             let target = u[k.saturating_sub(5)];
             y[k] = y[k - 1] + (target - y[k - 1]) * (1.0 - (-1.0f64 / 4.0).exp());
-        }
-        y[0] = 0.2;
-        for k in 1..100 {
-            y[k] = 0.2;
         }
         let sig = Signals {
             dt_s: 0.01,
