@@ -4,7 +4,7 @@
 //! samples, simulated over the whole record).
 
 use super::ctx::Ctx;
-use super::effects::baseline_drift;
+use super::effects::{baseline_drift, dead_time};
 use super::era_start::{self, EraStart};
 use super::fit::Fit;
 use super::folds::{fit_percent, Folds};
@@ -85,6 +85,7 @@ pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraSt
         warnings.extend(verdict::warnings(&e.model, "extended", band));
     }
     warnings.extend(verdict::drift_warning(baseline_drift::confounding(ctx)));
+    warnings.extend(verdict::dead_time_warning(dead_time::confounding(ctx)));
     Diagnosis {
         source: Default::default(),
         baseline,

@@ -32,10 +32,15 @@
 //!   command to within `1 − R²` ([`super::effects::baseline_drift::confounding`], `value` =
 //!   `R²`): a `baseline_drift` is then indistinguishable from a change of the static map, and
 //!   finding none (or one) says nothing about it.
+//! - `dead_time_unidentifiable` (the baseline): the command delayed by a couple of samples is an
+//!   affine function of itself to within `1 − R²` ([`super::effects::dead_time::confounding`],
+//!   `value` = `R²`): a delay is then a shift of the thrust curve or a lag, and finding none
+//!   (or one) says nothing about it.
 
 use serde::Serialize;
 
 use super::effects::baseline_drift::UNIDENTIFIABLE_R2;
+use super::effects::dead_time::CONFOUNDING_SHIFT;
 use super::noise::NoiseFloor;
 use super::spectrum::periodogram;
 use super::summary::ModelSummary;
@@ -141,6 +146,9 @@ pub enum WarningKind {
     ModeOutsideBand,
     /// A drift of the output cannot be told from the gain (a one-way ramp of the command).
     BaselineDriftUnidentifiable,
+    /// A dead time cannot be told from a shift of the thrust curve or a lag (a command smooth
+    /// against the sample period).
+    DeadTimeUnidentifiable,
 }
 
 /// An implausible result (`"warnings"`).
@@ -168,6 +176,24 @@ pub fn drift_warning(r2: f64) -> Option<Warning> {
             "baseline drift not identifiable: the command runs one way through the record (time \
              is affine in it to R² = {r2:.5}), so a drift of the output cannot be told from a \
              change of the thrust curve; a ramp up and back down, or holds, would separate them"
+        ),
+        model: "baseline",
+        value: r2,
+        band_hz: None,
+    })
+}
+
+/// The `dead_time_unidentifiable` warning when `r2` (the share of the command delayed by
+/// [`CONFOUNDING_SHIFT`] samples that an affine function of the command explains) reaches
+/// [`UNIDENTIFIABLE_R2`] ([`super::effects::dead_time::confounding`]).
+pub fn dead_time_warning(r2: f64) -> Option<Warning> {
+    (r2 >= UNIDENTIFIABLE_R2).then(|| Warning {
+        kind: WarningKind::DeadTimeUnidentifiable,
+        message: format!(
+            "dead time not identifiable: the command is smooth against the sample period (delayed \
+             by {CONFOUNDING_SHIFT} samples it is an affine function of itself to R² = {r2:.5}), \
+             so a delay of the output cannot be told from a shift of the thrust curve or a lag; \
+             steps or holds would show it"
         ),
         model: "baseline",
         value: r2,
