@@ -379,6 +379,14 @@ impl Warning<'_> {
                 "a device reset or hang-up interrupted the window before its K pulses: not \
                  identified"
             }
+            Warning::WindowInterrupted {
+                closed_by: Reason::LevelEnd,
+                ..
+            } => {
+                "the operating point ended with fewer than K pulses after its last model \
+                 (pulses_per_level not a multiple of K, or the device fired a pulse the plan did \
+                 not count): not identified"
+            }
             Warning::WindowInterrupted { .. } => {
                 "the window closed before its K pulses (closed_by): not identified"
             }
