@@ -404,7 +404,7 @@ mod tests {
     fn each_segment_is_announced_once_a_last_hello_included() {
         let mut t = Tracker::default();
         let mut announced = Vec::new();
-        let mut sample = |t: &mut Tracker, i: u32, a: &mut Vec<&str>| {
+        let sample = |t: &mut Tracker, i: u32, a: &mut Vec<&str>| {
             let p = t.sample(i, i * 1000);
             assert!(!p.announce || p.new_segment);
             if p.announce {
