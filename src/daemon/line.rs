@@ -383,9 +383,8 @@ impl Warning<'_> {
                 closed_by: Reason::LevelEnd,
                 ..
             } => {
-                "the operating point ended with fewer than K pulses after its last model \
-                 (pulses_per_level not a multiple of K, or the device fired a pulse the plan did \
-                 not count): not identified"
+                "the operating point ended with pulses left over after its last model (the \
+                 pulses seen at the level are not a multiple of K): not identified"
             }
             Warning::WindowInterrupted { .. } => {
                 "the window closed before its K pulses (closed_by): not identified"
