@@ -379,6 +379,13 @@ impl Warning<'_> {
                 "a device reset or hang-up interrupted the window before its K pulses: not \
                  identified"
             }
+            Warning::WindowInterrupted {
+                closed_by: Reason::LevelEnd,
+                ..
+            } => {
+                "the operating point ended with pulses left over after its last model (the \
+                 pulses seen at the level are not a multiple of K): not identified"
+            }
             Warning::WindowInterrupted { .. } => {
                 "the window closed before its K pulses (closed_by): not identified"
             }

@@ -39,8 +39,6 @@ pub struct LinkStats {
     /// a `link_stalled` warning (published when there was one).
     #[serde(skip_serializing_if = "is_zero")]
     pub stalls: u64,
-    /// Device boots seen (distinct `boot_id`s in a row).
-    pub segments: u64,
     /// Times the 32-bit device clock wrapped.
     pub clock_wraps: u64,
     /// SAMPLE frames dropped as duplicates (same `sample_index` as the previous one).
@@ -68,6 +66,12 @@ pub struct WorkStats {
     pub models_unreliable: u64,
     /// Pulses seen (EVENT IMPULSE_START).
     pub pulses: u64,
+    /// `segment` lines published: device segments as the sampler's tracker announces them
+    /// ([`super::tracker`], "Announcing": each boot's HELLO, else the first sample after the
+    /// index went back or a gap too long to mask, or of a stream without HELLO), counted where
+    /// the line is published so that the two always agree (a reset with no sample after it
+    /// included; an item lost to a full queue is in neither, but in `overflows`).
+    pub segments: u64,
     /// Windows a device reset (a new segment) closed before their K pulses, each a
     /// `window_interrupted` warning (published when there was one).
     #[serde(skip_serializing_if = "is_zero")]

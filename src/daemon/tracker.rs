@@ -24,6 +24,15 @@
 //! - **Boots.** A HELLO whose `boot_id` differs from the current one ends the segment (the
 //!   device reset: disarmed, counters restarted); the next sample starts the new one. The host
 //!   never re-arms by itself; the experiment plan is told and decides.
+//! - **Announcing.** Every segment is announced exactly once, at the first thing that shows
+//!   it: the HELLO that starts it ([`Tracker::hello`] returns true), else its first sample
+//!   ([`Placed::announce`]: the first sample of a stream without HELLO, the index going back, a
+//!   gap too long to mask). A HELLO of a new boot with no sample after it (a device reset at the
+//!   very end of a run) is announced like any other. This is the daemon's one decision of what
+//!   a `segment` line is; the published `segments` counter counts those lines
+//!   ([`crate::daemon::stats::WorkStats::segments`]), so the two agree by construction. The
+//!   record's own segment count (segments holding samples, as `propid identify` counts them) is
+//!   the assembler's ([`Tracker::assemble_stats`]).
 //!
 //! The tracker does not diff the assembler's counters: the assembler says, per sample, what
 //! happened as typed items ([`Assembled`]: a gap, a duplicate, a segment start and its
@@ -49,6 +58,9 @@ pub struct Placed {
     /// This sample starts a new segment (first sample, a new boot, the index went backwards,
     /// or a gap beyond the largest one).
     pub new_segment: bool,
+    /// The new segment this sample starts was not announced by a HELLO: announce it now (see
+    /// the module documentation, "Announcing"). Implies `new_segment`.
+    pub announce: bool,
     /// The same index as the previous sample: a duplicate, to be dropped.
     pub duplicate: bool,
 }
@@ -67,8 +79,8 @@ pub struct Tracker {
     pub gaps: u64,
     /// Gaps beyond the largest one: each ended its segment instead of being masked.
     pub large_gaps: u64,
-    /// Segments started.
-    pub segments: u64,
+    /// A HELLO announced a segment whose first sample has not come yet.
+    announced: bool,
     /// Duplicate samples dropped (same index as the previous one).
     pub duplicates: u64,
     /// Backward index jumps without a new HELLO (inferred device resets).
@@ -93,7 +105,7 @@ impl Tracker {
             samples_lost: 0,
             gaps: 0,
             large_gaps: 0,
-            segments: 0,
+            announced: false,
             duplicates: 0,
             resets: 0,
             wraps: 0,
@@ -101,11 +113,14 @@ impl Tracker {
     }
 
     /// A HELLO arrived; returns true when its `boot_id` starts a new segment (the first HELLO
-    /// before any sample, or a new boot). The first HELLO of a stream joined mid-segment, and
-    /// the HELLO of a reset already inferred from the index, are adopted without a split.
+    /// before any sample, or a new boot): the segment is announced here, whether or not a
+    /// sample ever follows. The first HELLO of a stream joined mid-segment, and the HELLO of a
+    /// reset already inferred from the index, are adopted without a split.
     pub fn hello(&mut self, boot_id: u32) -> bool {
         // The nominal rate only serves the assembler's `dt_s`, which the daemon does not use.
-        self.asm.hello(boot_id, 0).starts_segment()
+        let starts = self.asm.hello(boot_id, 0).starts_segment();
+        self.announced |= starts;
+        starts
     }
 
     /// Places one SAMPLE (`sample_index`, `t_us` as sent).
@@ -115,6 +130,7 @@ impl Tracker {
             t_us: 0,
             lost_before: 0,
             new_segment: false,
+            announce: false,
             duplicate: false,
         };
         let mut t_us = None;
@@ -143,7 +159,7 @@ impl Tracker {
         match cause {
             Some(c) => {
                 p.new_segment = true;
-                self.segments += 1;
+                p.announce = !std::mem::take(&mut self.announced);
                 match c {
                     SegmentCause::GapTooLong { lost } => {
                         p.lost_before = lost;
@@ -214,7 +230,7 @@ mod tests {
             assert_eq!((p.index, p.t_us), (u64::from(i), u64::from(100 + i * 1000)));
         }
         assert_eq!(t.samples_lost, 0);
-        assert_eq!(t.segments, 1);
+        assert_eq!(t.assemble_stats().segments, 1);
     }
 
     #[test]
@@ -243,7 +259,10 @@ mod tests {
         assert_eq!((p.lost_before, p.new_segment), (max, false));
         let p = t.sample(edge + max as u32 + 2, 0);
         assert_eq!((p.lost_before, p.new_segment), (max + 1, true));
-        assert_eq!((t.gaps, t.large_gaps, t.segments), (2, 1, 2));
+        assert_eq!(
+            (t.gaps, t.large_gaps, t.assemble_stats().segments),
+            (2, 1, 2)
+        );
         assert_eq!(t.samples_lost, 2 * max + 1);
     }
 
@@ -265,7 +284,10 @@ mod tests {
         assert_eq!((p.index, p.lost_before), (5, 0));
         let p = t.sample(6, 6000);
         assert_eq!((p.index, p.lost_before, p.new_segment), (6, 0, false));
-        assert_eq!((t.large_gaps, t.resets, t.segments), (1, 1, 3));
+        assert_eq!(
+            (t.large_gaps, t.resets, t.assemble_stats().segments),
+            (1, 1, 3)
+        );
         // the same counts as ingest's assembler: one rule for live and offline
         assert_eq!(t.assemble_stats().samples_lost, t.samples_lost);
     }
@@ -330,7 +352,7 @@ mod tests {
         let p = t.sample(0, 50);
         assert!(p.new_segment);
         assert_eq!(p.lost_before, 0, "a reboot is not a gap");
-        assert_eq!(t.segments, 2);
+        assert_eq!(t.assemble_stats().segments, 2);
     }
 
     #[test]
@@ -353,7 +375,10 @@ mod tests {
         let p = t.sample(11, 1000);
         assert!(!p.duplicate && !p.new_segment);
         assert_eq!((p.index, p.lost_before), (11, 0));
-        assert_eq!((t.duplicates, t.segments, t.samples_lost), (1, 1, 0));
+        assert_eq!(
+            (t.duplicates, t.assemble_stats().segments, t.samples_lost),
+            (1, 1, 0)
+        );
     }
 
     #[test]
@@ -370,7 +395,41 @@ mod tests {
         assert_eq!(p.lost_before, 0);
         assert!(!t.hello(2), "the restarted device's HELLO is adopted");
         assert!(!t.sample(5, 30).new_segment);
-        assert_eq!(t.segments, 2);
+        assert_eq!(t.assemble_stats().segments, 2);
+    }
+
+    /// Every segment is announced once: by the HELLO that starts it, else by its first
+    /// sample; a HELLO of a new boot with nothing after it (a reset at the end of a run) too.
+    #[test]
+    fn each_segment_is_announced_once_a_last_hello_included() {
+        let mut t = Tracker::default();
+        let mut announced = Vec::new();
+        let sample = |t: &mut Tracker, i: u32, a: &mut Vec<&str>| {
+            let p = t.sample(i, i * 1000);
+            assert!(!p.announce || p.new_segment);
+            if p.announce {
+                a.push("sample");
+            }
+        };
+        sample(&mut t, 0, &mut announced); // no HELLO: the first sample announces
+        sample(&mut t, 1, &mut announced);
+        assert!(!t.hello(4), "joined mid-stream: adopted");
+        sample(&mut t, 2, &mut announced);
+        sample(&mut t, 0, &mut announced); // the index going back: announced by the sample
+        if t.hello(5) {
+            announced.push("hello"); // not: the inferred reset's HELLO is adopted
+        }
+        if t.hello(6) {
+            announced.push("hello"); // a new boot, announced by its HELLO ...
+        }
+        sample(&mut t, 0, &mut announced); // ... not again by its first sample
+        sample(&mut t, 1, &mut announced);
+        if t.hello(7) {
+            announced.push("hello"); // a reset as the last thing received
+        }
+        assert_eq!(announced, ["sample", "sample", "hello", "hello"]);
+        // the record holds three segments of samples; the fourth boot has none
+        assert_eq!(t.assemble_stats().segments, 3);
     }
 
     fn hello_frame(boot_id: u32) -> Frame {
@@ -402,6 +461,7 @@ mod tests {
             let mut b = RecordBuilder::new(opts);
             let (mut idx, mut clock) = (rng.gen::<u32>(), rng.gen::<u32>());
             let mut positions = 0u64;
+            let mut started = 0u64;
             let mut last: Option<Placed> = None;
             for _ in 0..400 {
                 let r: f64 = rng.gen();
@@ -424,6 +484,7 @@ mod tests {
                 if p.duplicate {
                     continue;
                 }
+                started += u64::from(p.new_segment);
                 if !p.new_segment {
                     positions += p.lost_before;
                     let prev = last.expect("a sample before");
@@ -438,7 +499,7 @@ mod tests {
             assert_eq!(b.len() as u64, positions, "same record positions");
             assert_eq!(s.samples_lost, t.samples_lost);
             assert_eq!(s.gaps + s.large_gaps, t.gaps);
-            assert_eq!(s.segments, t.segments);
+            assert_eq!(s.segments, started, "the same segments started");
             assert_eq!(s.duplicates, t.duplicates);
             assert_eq!(s.clock_wraps, t.clock_wraps());
         }

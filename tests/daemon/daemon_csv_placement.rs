@@ -170,7 +170,7 @@ fn replay_and_identify_place_every_csv_row_at_the_same_index() {
             tracker.samples_lost,
             tracker.gaps,
             tracker.duplicates,
-            tracker.segments
+            tracker.assemble_stats().segments
         )
     );
 

@@ -134,3 +134,47 @@ fn index_jump_beyond_the_largest_gap_is_a_new_segment_in_replay_as_in_ingest() {
     assert_eq!(record.len() as u64, s["samples"].as_u64().unwrap() - 1);
     assert_eq!(record.missing_count(), 0);
 }
+
+/// A device reset as the very last thing received (a HELLO of a new boot, no sample after
+/// it): announced by a `segment` line like every boot, and counted in `segments` — the
+/// published counter and the published lines agree exactly (the soak's link-fault runs once
+/// saw one line more than the counter).
+#[test]
+fn a_hello_of_a_new_boot_as_the_last_frame_is_one_segment_line_and_counted() {
+    let bytes = recording();
+    let mut frames = Vec::new();
+    Decoder::new().push(&bytes, |f| frames.push(f));
+    let (seq, mut hello) = frames
+        .iter()
+        .find_map(|f| match f.msg {
+            Message::Hello(h) => Some((f.seq, h)),
+            _ => None,
+        })
+        .expect("the recording starts with a HELLO");
+    hello.boot_id = hello.boot_id.wrapping_add(1);
+    let mut buf = [0u8; MAX_FRAME_LEN];
+    let n = encode_frame(seq, &Message::Hello(hello), &mut buf);
+    let mut out = bytes.clone();
+    out.extend_from_slice(&buf[..n]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("reset_at_end.tsp");
+    std::fs::write(&path, &out).unwrap();
+    let run = Command::new(BIN).arg("replay").arg(&path).output().unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let lines: Vec<Value> = String::from_utf8(run.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let segments = kind(&lines, "segment");
+    assert_eq!(segments.len(), 2, "{segments:#?}");
+    assert_eq!(segments[1]["boot_id"], hello.boot_id);
+    assert_eq!(stats(&lines)["segments"], 2, "{}", stats(&lines));
+    // the record's segments of samples are one: the new boot sent none
+    let (_, ingest) = read_record(&out).unwrap();
+    assert_eq!(ingest.assemble.segments, 1);
+}

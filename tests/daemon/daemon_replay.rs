@@ -169,6 +169,43 @@ fn bit_flips_and_garbage_are_counted_exactly_and_nothing_else_is_lost() {
     assert!(of_type(&lines, "model").len() >= 5);
 }
 
+/// Bit flips that hit a pulse's ACK, with the soak's slack for a loaded host (`retry_ms =
+/// 1000`, re-sends after the device's one-second repeat memory): the plan took the pulse as
+/// unanswered and re-sent the IMPULSE, the device fired it a second time, and each such level
+/// ended with a stray pulse the host's window could not complete (`window_interrupted`,
+/// `closed_by: "level_end"`, 1 of 4 pulses; seed 6: 124 pulses fired for the plan's 120).
+/// The device's EVENT IMPULSE_START tells the plan the pulse fired: counted, not re-sent.
+#[test]
+fn a_pulse_whose_ack_is_lost_fires_once_and_every_window_completes() {
+    let mut cfg = stand();
+    cfg.stand.seed = 6;
+    cfg.faults.bit_flip_per_byte = 1e-3;
+    cfg.experiment.levels = vec![0.3, 0.45, 0.6];
+    cfg.experiment.pulses_per_level = 40;
+    cfg.experiment.pulse_spacing_ms = 250;
+    cfg.experiment.retry_ms = 1000;
+    cfg.experiment.max_retries = 10;
+    cfg.experiment.watchdog_ms = 5000;
+    let (bytes, sum) = record_stand(&cfg);
+    // frames other than SAMPLEs were hit (ACKs among them)
+    assert!(sum.faults.corrupted_frames > sum.faults.corrupted_samples + 3);
+    assert_eq!(
+        (sum.firmware.pulses, sum.pulses),
+        (120, 120),
+        "none fired twice"
+    );
+    let (lines, status, err) = replay(&bytes, &[]);
+    assert!(status.success(), "{err}");
+    let cut: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["kind"] == "window_interrupted")
+        .collect();
+    assert!(cut.is_empty(), "{cut:#?}");
+    let s = stats(&lines);
+    assert_eq!(s["pulses"], 120, "{s}");
+    assert_eq!(of_type(&lines, "model").len(), 30);
+}
+
 #[test]
 fn sample_gaps_are_counted_masked_and_never_bridged() {
     let mut cfg = stand();

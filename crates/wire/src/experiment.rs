@@ -16,7 +16,11 @@
 //!
 //! Reliability: one acknowledged command is in flight at a time; without its ACK after
 //! `retry_ms` it is re-sent with the **same seq** (the device answers a repeat as a DUPLICATE and
-//! does not execute it twice), at most `max_retries` times, then [`Notice::LinkFailed`]. An
+//! does not execute it twice — but only for one second and its last 8 commands, heartbeats
+//! included: a later re-send is a new command), at most `max_retries` times, then
+//! [`Notice::LinkFailed`]. An IMPULSE whose ACK is lost is not re-sent once the device's EVENT
+//! IMPULSE_START says it fired (the pulse is counted then): with `retry_ms` near a second a
+//! re-send would fire it a second time, one pulse more at the level than the plan counted. An
 //! IMPULSE answered BUSY is tried again 20 ms later with a new seq; any other refusal ends the
 //! plan with [`Notice::Refused`] and a STOP. A HELLO with a new boot id means the device reset:
 //! [`Notice::DeviceReset`], and the plan is over unless `rearm_on_reset` says to hand-shake, ARM

@@ -19,7 +19,6 @@ pub(super) struct Handler {
     /// Samples dropped because the queue was full (part of `samples_lost`).
     pub(super) overflow_lost: u64,
     pub(super) plan: Option<Box<dyn Plan>>,
-    pub(super) segment_announced: bool,
     pub(super) awaiting_stop: Option<u16>,
     pub(super) stop_acked: bool,
     pub(super) now_us: u64,
@@ -45,14 +44,14 @@ impl Handler {
 
     pub(super) fn on_frame(&mut self, frame: Frame) {
         match &frame.msg {
+            // one `segment` item per segment, as the tracker announces it (its "Announcing")
             Message::Hello(h) if self.tracker.hello(h.boot_id) => {
-                self.segment_announced = true;
                 self.send(Item::Segment { boot_id: h.boot_id });
             }
             Message::Sample(s) => {
                 self.stats.samples += 1;
                 let placed = self.tracker.sample(s.sample_index, s.t_us);
-                if placed.new_segment && !std::mem::take(&mut self.segment_announced) {
+                if placed.announce {
                     self.send(Item::Segment { boot_id: 0 });
                 }
                 // After a new segment: a gap too long to mask (announced, not bridged).

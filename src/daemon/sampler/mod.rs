@@ -195,7 +195,6 @@ impl Sampler {
                 stats: LinkStats::default(),
                 overflow_lost: 0,
                 plan,
-                segment_announced: false,
                 awaiting_stop: None,
                 stop_acked: false,
                 now_us: 0,
@@ -448,7 +447,6 @@ impl Sampler {
         s.samples_lost = self.handler.tracker.samples_lost + self.handler.overflow_lost;
         s.gaps = self.handler.tracker.gaps;
         s.large_gaps = self.handler.tracker.large_gaps;
-        s.segments = self.handler.tracker.segments;
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
         s.record_bytes_written = self.record.as_ref().map(Recorder::bytes_written);

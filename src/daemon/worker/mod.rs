@@ -148,6 +148,7 @@ impl<I: Identifier> Worker<I> {
                 if let Some(w) = cut {
                     self.publish_cut(w);
                 }
+                self.stats.segments += 1;
                 self.emit(&Line::Event(Event::Segment { boot_id }));
             }
             Item::Event(e) => {

@@ -44,6 +44,9 @@ pub struct ExperimentConfig {
     /// Device watchdog sent with ARM, ms, 100..=5000; must exceed `heartbeat_ms` twice over.
     pub watchdog_ms: u16,
     /// Re-send a command with the same seq after this long without ACK, ms, 10..=1000.
+    /// The device answers a re-send as a repeat only within one second and its last 8
+    /// commands (heartbeats included), so a later one is executed again; an IMPULSE the device
+    /// reported firing (EVENT IMPULSE_START) is therefore never re-sent.
     pub retry_ms: u32,
     /// Re-sends before the link is declared failed, 0..=10.
     pub max_retries: u32,

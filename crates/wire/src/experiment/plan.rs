@@ -26,7 +26,8 @@ pub enum Notice {
         /// Throttle fraction.
         level: f64,
     },
-    /// A pulse was acknowledged (it starts at the device time `t_us` of the ACK).
+    /// A pulse was acknowledged (it starts at the device time `t_us` of the ACK), or, when its
+    /// ACK was lost, the device's EVENT IMPULSE_START said it fired (`t_us` of the event).
     PulseFired {
         /// Operating point index.
         index: usize,
@@ -318,6 +319,9 @@ impl Experiment {
                 }
             }
             Message::Ack(a) => self.on_ack(a, now_us),
+            Message::Event(e) if e.code == EventCode::ImpulseStart => {
+                self.on_impulse_start(e.t_us, now_us)
+            }
             Message::Event(e) if e.code == EventCode::WatchdogTrip && !self.is_over() => {
                 self.halt(Notice::WatchdogTripped);
             }
@@ -365,17 +369,7 @@ impl Experiment {
                 let wait = (self.cfg.ramp_ms as u64 + self.cfg.settle_ms as u64) * 1000;
                 self.wait_until_us = Some(now_us + wait);
             }
-            Phase::Pulsing => {
-                let delta = self.cfg.pulse_delta(self.pulses);
-                self.notice(Notice::PulseFired {
-                    index: self.level_idx,
-                    pulse: self.pulses,
-                    delta,
-                    t_us: a.t_us,
-                });
-                self.pulses += 1;
-                self.wait_until_us = Some(now_us + self.cfg.pulse_spacing_ms as u64 * 1000);
-            }
+            Phase::Pulsing => self.pulse_fired(a.t_us, now_us),
             Phase::RampDown => {
                 // Wait for the ramp (and one heartbeat period) before disarming.
                 let wait = self.cfg.ramp_ms as u64 * 1000 + self.cfg.heartbeat_ms as u64 * 1000;
@@ -389,6 +383,41 @@ impl Experiment {
             Phase::Stopping => self.halt(Notice::Stopped),
             _ => {}
         }
+    }
+
+    /// The device's EVENT IMPULSE_START: while an IMPULSE is in flight (its ACK not yet
+    /// received) this is the device saying it executed it. The pulse is counted and the IMPULSE
+    /// is not re-sent: a re-send that comes after the device's repeat memory (PROTOCOL.md §4:
+    /// the last 8 commands, for one second; heartbeats count) is executed as a new command, a
+    /// second pulse the plan never counted — the level then holds one pulse more than
+    /// `pulses_per_level` and the host's last window at that level closes with a stray pulse
+    /// (the soak's `window_interrupted` at `level_end` with 1 of 4 pulses, with `retry_ms =
+    /// 1000`). An ACK that still comes is then a late one, ignored. (The EVENT of a pulse
+    /// already acknowledged finds no IMPULSE in flight: the next one is sent only after
+    /// `pulse_spacing_ms`.)
+    fn on_impulse_start(&mut self, t_us: u32, now_us: u64) {
+        let impulse_in_flight = self
+            .in_flight
+            .is_some_and(|f| matches!(f.msg, Message::Impulse(_)));
+        if self.phase != Phase::Pulsing || self.verifying.is_some() || !impulse_in_flight {
+            return;
+        }
+        self.in_flight = None;
+        self.pulse_fired(t_us, now_us);
+    }
+
+    /// Pulse number `self.pulses` at the current level fired at device time `t_us`: noticed,
+    /// counted, the next one after `pulse_spacing_ms`.
+    fn pulse_fired(&mut self, t_us: u32, now_us: u64) {
+        let delta = self.cfg.pulse_delta(self.pulses);
+        self.notice(Notice::PulseFired {
+            index: self.level_idx,
+            pulse: self.pulses,
+            delta,
+            t_us,
+        });
+        self.pulses += 1;
+        self.wait_until_us = Some(now_us + self.cfg.pulse_spacing_ms as u64 * 1000);
     }
 
     /// A timed wait ended.
