@@ -68,7 +68,7 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
     let width = first_data.map_or(0, |d| fields(lines[d], sep).count());
     let wide = |l: &&str| fields(l, sep).count() >= width;
     let known = |l: &&str| {
-        fields(l, sep).any(|f| columns::lookup(f).is_some() || columns::unitless(f).is_some())
+        fields(l, sep).any(|f| columns::lookup(&f).is_some() || columns::unitless(&f).is_some())
     };
     let candidates = &lines[..before];
     let header = candidates
@@ -77,7 +77,7 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
         .or_else(|| known(&candidates[0]).then_some(0))
         .or_else(|| candidates.iter().position(wide))
         .unwrap_or(0);
-    let mut names: Vec<String> = fields(lines[header], sep).map(str::to_string).collect();
+    let mut names: Vec<String> = fields(lines[header], sep).map(|f| f.into_owned()).collect();
     let units_row = header + 1 < before && is_units_row(lines[header + 1], sep);
     if units_row {
         for (name, unit) in names.iter_mut().zip(fields(lines[header + 1], sep)) {
@@ -105,7 +105,7 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
 fn is_units_row(line: &str, sep: char) -> bool {
     let mut any = false;
     for f in fields(line, sep) {
-        if columns::is_unit(f) {
+        if columns::is_unit(&f) {
             any = true;
         } else if !(f.is_empty() || f == "-") {
             return false;

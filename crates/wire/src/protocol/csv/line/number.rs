@@ -39,9 +39,10 @@ impl DecimalMark {
     /// `1.234,5` for the comma; `0.45`, `1,234.5` for the point) is a vote for it; the mark
     /// with more votes is the file's, [`DecimalMark::Unshown`] when neither has more. Fields
     /// either mark reads alike (`12`) or differently (`1,234`) and text say nothing.
-    pub fn of_fields<'a>(fields: impl IntoIterator<Item = &'a str>) -> Self {
+    pub fn of_fields<S: AsRef<str>>(fields: impl IntoIterator<Item = S>) -> Self {
         let (mut point, mut comma) = (0usize, 0usize);
         for f in fields {
+            let f = f.as_ref();
             match (read_as(f, Self::Point), read_as(f, Self::Comma)) {
                 (Some(_), None) => point += 1,
                 (None, Some(_)) => comma += 1,
