@@ -2,7 +2,7 @@
 //! simulated stand with known parameters ([`TRUTH`]) written as each bench writes its logs —
 //! units in brackets, parentheses, after an underscore or on a row of their own, `;`/tab
 //! separators with decimal commas, a preamble before the header, a BOM, CRLF and quoted
-//! fields (RFC 4180 `""` escapes, stray inch marks: [`quotes`]), time in s, ms, µs or
+//! fields (RFC 4180 `""` escapes, stray inch marks: `dialects/quotes.rs`), time in s, ms, µs or
 //! date-time stamps not starting at 0, duplicated stamps, no time
 //! column, empty trailing columns, sensor cells left empty between sensor updates, a reversed
 //! load cell, eRPM, percentages, 0..1, DShot and raw ESC values. Each [`Dialect`] says what a

@@ -162,6 +162,16 @@ mod tests {
         // Thousands in a tab file with decimal points; in quoted fields of a `,` file.
         let l = layout(&["Time (s)\teRPM", "0.010\t12,345", "0.020\t12,346"]);
         assert_eq!((l.sep, l.mark, l.data_start), ('\t', DecimalMark::Point, 1));
+        // `;` with decimal points and thousands commas.
+        let l = layout(&["Time (s);Thrust (g)", "0.010;1,234.5", "0.020;12,345"]);
+        assert_eq!((l.sep, l.mark, l.data_start), (';', DecimalMark::Point, 1));
+        // Stray and escaped quotes in the header: each name its own field.
+        let l = layout(&[
+            "Time (s),Torque (in-oz\"),\"Thrust \"\"gf\"\"\",Prop",
+            "0.010,1.5,305.1,5\"x4.5",
+        ]);
+        let names = ["Time (s)", "Torque (in-oz\")", "Thrust \"gf\"", "Prop"];
+        assert_eq!(l.names.as_deref(), Some(&names.map(String::from)[..]));
         let l = layout(&["\"t (s)\",\"F (N)\"", "\"0,010\",\"1,234\""]);
         assert_eq!((l.sep, l.mark, l.data_start), (',', DecimalMark::Comma, 1));
         // A header narrower than its rows (trailing separators on data rows only), a text row

@@ -159,6 +159,30 @@ mod tests {
     }
 
     #[test]
+    fn semicolon_files_with_decimal_points_and_thousands_commas() {
+        // A European-locale export with English numbers: `;` separates, `,` groups thousands.
+        let rows = ["1,234.5;0.45;12,345", "1,240.0;0.46;12,400;-1,000.5"];
+        assert!(rows.iter().all(|r| separator(r) == ';'));
+        let mark = DecimalMark::of_fields(rows.iter().flat_map(|r| fields(r, ';')));
+        assert_eq!(mark, DecimalMark::Point);
+        let read = |r: &str| -> Vec<Option<f64>> {
+            fields(r, ';').map(|f| parse_number(&f, mark)).collect()
+        };
+        assert_eq!(
+            read(rows[1]),
+            [Some(1240.0), Some(0.46), Some(12400.0), Some(-1000.5)]
+        );
+        assert_eq!(read(rows[0]), [Some(1234.5), Some(0.45), Some(12345.0)]);
+        // The same shapes with decimal commas are still decimal commas.
+        let eu = ["0,45;12,3;1.234,5", "0,46;12,4;1.300"];
+        assert!(eu.iter().all(|r| separator(r) == ';'));
+        let mark = DecimalMark::of_fields(eu.iter().flat_map(|r| fields(r, ';')));
+        assert_eq!(mark, DecimalMark::Comma);
+        let read: Vec<Option<f64>> = fields(eu[1], ';').map(|f| parse_number(&f, mark)).collect();
+        assert_eq!(read, [Some(0.46), Some(12.4), Some(1300.0)]);
+    }
+
+    #[test]
     fn a_files_fields_show_its_decimal_mark() {
         let mark =
             |rows: &[&str], sep| DecimalMark::of_fields(rows.iter().flat_map(|r| fields(r, sep)));
