@@ -269,9 +269,15 @@ enum Span {
 /// how it is written, and the byte index of the separator that ends it (`None`: it is the
 /// line's last field). A `"` opens a quoted field only as the field's first character after
 /// spaces, and only when a lone `"` closes it on the line; `""` inside is an escaped quote.
+///
+/// Linear in the line: a search for the closing quote that fails leaves only runs of an even
+/// number of `"` after the opening one, so any later field's opening quote (the first of its
+/// run) is closed within its run.
 fn split_field(rest: &str, is_sep: impl Fn(char) -> bool) -> (Span, Option<usize>) {
     let b = rest.as_bytes();
-    let open = rest.len() - rest.trim_start_matches(' ').len();
+    // Spaces before the quote; a tab too unless it is the separator.
+    let blank = |c: char| (c == ' ' || c == '\t') && !is_sep(c);
+    let open = rest.len() - rest.trim_start_matches(blank).len();
     let mut span = Span::Plain;
     let mut from = 0;
     if b.get(open) == Some(&b'"') {

@@ -21,6 +21,9 @@ fn rfc_4180_escaped_quotes_and_separators_inside_a_quoted_field() {
     assert!(matches!(f.next(), Some(Cow::Owned(_))));
     // An empty quoted field, a quoted field that is one escaped quote, spaces around.
     assert_eq!(split("\"\", \"\"\"\" ,x", ','), ["", "\"", "x"]);
+    // Blanks before the opening quote; a tab separator is not one.
+    assert_eq!(split("\t\"a,b\" ,c", ','), ["a,b", "c"]);
+    assert_eq!(split("\t\"a\tb\"\tc", '\t'), ["", "a\tb", "c"]);
     // Text after the closing quote is kept (lenient).
     assert_eq!(split("\"5\" prop,1", ','), ["5 prop", "1"]);
     // In a `;` file: the quoted `;` and the decimal commas stay.
