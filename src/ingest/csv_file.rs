@@ -367,7 +367,9 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         }
         let mut parsed = Vec::with_capacity(used.len());
         for (n, &i) in used.iter().enumerate() {
-            let field = row.get(i).copied().unwrap_or("");
+            let field = row
+                .get(i)
+                .map_or("", |f: &std::borrow::Cow<str>| f.as_ref());
             let mut value = parse_field(field, mark);
             // A time column of time stamps (`18:55:23.120`, `2024-08-13 18:55:23.120`).
             if value.is_none() && n == 0 && picks.time.is_some() {

@@ -189,7 +189,12 @@ fn headerless_files_are_refused_unless_their_columns_are_named() {
     };
     let f = read_csv(two, &o).unwrap();
     assert_eq!(f.input, None, "no input column: response only");
-    assert_eq!(f.record.channel("load_kg").unwrap().data[2], 0.796);
+    // `load_kg` is a load cell in kilogram-force: the thrust, in newtons.
+    let thrust = f
+        .record
+        .channel(propid_wire::record::names::THRUST)
+        .unwrap();
+    assert!((thrust.data[2] - 0.796 * 9.80665).abs() < 1e-12);
     assert!(!f.source.header);
     // Tab separated, quoted names, trailing empty column.
     let tabs = "\"V1\"\t\"V2\"\t\n0.1\t0.2\t\n0.3\t0.4\t\n";

@@ -2,7 +2,8 @@
 //! simulated stand with known parameters ([`TRUTH`]) written as each bench writes its logs —
 //! units in brackets, parentheses, after an underscore or on a row of their own, `;`/tab
 //! separators with decimal commas, a preamble before the header, a BOM, CRLF and quoted
-//! fields, time in s, ms, µs or date-time stamps not starting at 0, duplicated stamps, no time
+//! fields (RFC 4180 `""` escapes, stray inch marks: `dialects/quotes.rs`), time in s, ms, µs or
+//! date-time stamps not starting at 0, duplicated stamps, no time
 //! column, empty trailing columns, sensor cells left empty between sensor updates, a reversed
 //! load cell, eRPM, percentages, 0..1, DShot and raw ESC values. Each [`Dialect`] says what a
 //! reader must make of it (the units, the command's range) or how it must be refused and what
@@ -247,7 +248,8 @@ pub fn write(style: &Style, cols: &[Col], seed: u64) -> String {
             f
         };
         if style.quoted {
-            format!("\"{f}\"")
+            // RFC 4180: a quote inside a quoted field is doubled.
+            format!("\"{}\"", f.replace('"', "\"\""))
         } else {
             f
         }
@@ -333,6 +335,7 @@ pub(crate) fn expect(
 
 mod cases;
 mod numbers;
+mod quotes;
 pub use cases::dialects;
 
 #[cfg(test)]
@@ -386,6 +389,18 @@ mod tests {
             .unwrap()
             .starts_with("\"0,000\",\"30,0\","));
         assert!(text("time_of_day_midnight").contains("\n00:00:00.000,"));
+        let rfc = text("rfc4180_escaped_quotes");
+        assert!(rfc.starts_with("\"Time (s)\",\"Throttle (%)\",\"Thrust \"\"gf\"\"\","));
+        assert!(rfc
+            .lines()
+            .nth(1)
+            .unwrap()
+            .ends_with(",\"10\"\"x4.5, 2-blade\""));
+        let inch = text("inch_marks");
+        assert!(inch.starts_with("Time (s),Torque (in-oz\"),Prop,"));
+        assert!(inch.lines().nth(1).unwrap().contains(",5\"x4.5,"));
+        let semi = text("semicolon_thousands_decimal_point");
+        assert!(semi.lines().nth(1).unwrap().starts_with("0.000;1,300;"));
         // Same seed, same bytes.
         assert_eq!(dialects()[3].text, d[3].text);
     }

@@ -68,7 +68,7 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
     let width = first_data.map_or(0, |d| fields(lines[d], sep).count());
     let wide = |l: &&str| fields(l, sep).count() >= width;
     let known = |l: &&str| {
-        fields(l, sep).any(|f| columns::lookup(f).is_some() || columns::unitless(f).is_some())
+        fields(l, sep).any(|f| columns::lookup(&f).is_some() || columns::unitless(&f).is_some())
     };
     let candidates = &lines[..before];
     let header = candidates
@@ -77,7 +77,7 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
         .or_else(|| known(&candidates[0]).then_some(0))
         .or_else(|| candidates.iter().position(wide))
         .unwrap_or(0);
-    let mut names: Vec<String> = fields(lines[header], sep).map(str::to_string).collect();
+    let mut names: Vec<String> = fields(lines[header], sep).map(|f| f.into_owned()).collect();
     let units_row = header + 1 < before && is_units_row(lines[header + 1], sep);
     if units_row {
         for (name, unit) in names.iter_mut().zip(fields(lines[header + 1], sep)) {
@@ -105,7 +105,7 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
 fn is_units_row(line: &str, sep: char) -> bool {
     let mut any = false;
     for f in fields(line, sep) {
-        if columns::is_unit(f) {
+        if columns::is_unit(&f) {
             any = true;
         } else if !(f.is_empty() || f == "-") {
             return false;
@@ -162,6 +162,16 @@ mod tests {
         // Thousands in a tab file with decimal points; in quoted fields of a `,` file.
         let l = layout(&["Time (s)\teRPM", "0.010\t12,345", "0.020\t12,346"]);
         assert_eq!((l.sep, l.mark, l.data_start), ('\t', DecimalMark::Point, 1));
+        // `;` with decimal points and thousands commas.
+        let l = layout(&["Time (s);Thrust (g)", "0.010;1,234.5", "0.020;12,345"]);
+        assert_eq!((l.sep, l.mark, l.data_start), (';', DecimalMark::Point, 1));
+        // Stray and escaped quotes in the header: each name its own field.
+        let l = layout(&[
+            "Time (s),Torque (in-oz\"),\"Thrust \"\"gf\"\"\",Prop",
+            "0.010,1.5,305.1,5\"x4.5",
+        ]);
+        let names = ["Time (s)", "Torque (in-oz\")", "Thrust \"gf\"", "Prop"];
+        assert_eq!(l.names.as_deref(), Some(&names.map(String::from)[..]));
         let l = layout(&["\"t (s)\",\"F (N)\"", "\"0,010\",\"1,234\""]);
         assert_eq!((l.sep, l.mark, l.data_start), (',', DecimalMark::Comma, 1));
         // A header narrower than its rows (trailing separators on data rows only), a text row

@@ -495,5 +495,7 @@ pub fn dialects() -> Vec<Dialect> {
     );
     let first = out.len() as u64 + 1;
     out.extend(super::numbers::dialects(first));
+    let first = out.len() as u64 + 1;
+    out.extend(super::quotes::dialects(first));
     out
 }

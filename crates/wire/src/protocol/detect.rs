@@ -73,6 +73,7 @@ fn is_csv_line(line: &[u8]) -> bool {
     let (mut numeric, mut blank, mut known, mut n) = (0, 0, false, 0);
     let sep = separator(text);
     for f in fields(text, sep) {
+        let f = f.as_ref();
         n += 1;
         numeric += usize::from(is_number(f));
         blank += usize::from(f.is_empty());

@@ -372,6 +372,10 @@ pub const WORDS: &[(&str, Quantity)] = &[
     ("command", Q::Throttle),
     ("thrust", Q::Thrust),
     ("weight", Q::Thrust),
+    // A load cell's reading named as such (`Load (g)`, `Load cell (kg)`, `loadcell_N`): only
+    // with a force unit (a `Load (%)` is not a thrust).
+    ("load", Q::Thrust),
+    ("loadcell", Q::Thrust),
     ("torque", Q::Torque),
     ("rpm", Q::Rpm),
     ("speed", Q::Rpm),
@@ -415,6 +419,9 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("ozf-in", Q::Torque, U::OunceForceInch),
     ("ozin", Q::Torque, U::OunceForceInch),
     ("oz-in", Q::Torque, U::OunceForceInch),
+    ("inoz", Q::Torque, U::OunceForceInch),
+    ("in-oz", Q::Torque, U::OunceForceInch),
+    ("in-ozf", Q::Torque, U::OunceForceInch),
     ("lbfin", Q::Torque, U::PoundForceInch),
     ("lbf-in", Q::Torque, U::PoundForceInch),
     ("lbfft", Q::Torque, U::PoundForceFoot),
@@ -429,14 +436,16 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("ma", Q::Current, U::Milliampere),
 ];
 
-/// Look a header name up (after [`normalise`]): a whole name ([`NAMES`]), else `word(unit)` or
-/// `word_unit` ([`WORDS`] and [`UNITS`]).
+/// Look a header name up (after [`normalise`]): a whole name ([`NAMES`]), else `word(unit)`,
+/// `word"unit"` (a unit in double quotes: the RFC 4180 header `"Thrust ""gf"""` is
+/// `Thrust "gf"`) or `word_unit` ([`WORDS`] and [`UNITS`]).
 pub fn lookup(name: &str) -> Option<ColumnSpec> {
     let n = normalise(name);
     if let Some(&(_, quantity, unit)) = NAMES.iter().find(|(a, _, _)| *a == n) {
         return Some(ColumnSpec { quantity, unit });
     }
-    let (word, suffix) = match n.strip_suffix(')').and_then(|s| s.split_once('(')) {
+    let enclosed = |open: char, close: char| n.strip_suffix(close)?.split_once(open);
+    let (word, suffix) = match enclosed('(', ')').or_else(|| enclosed('"', '"')) {
         Some(parts) => parts,
         None => n.rsplit_once('_')?,
     };

@@ -54,10 +54,14 @@ pub struct HeaderMap {
 
 impl HeaderMap {
     /// Map the fields of a header line.
-    pub fn from_fields<'a>(fields: impl IntoIterator<Item = &'a str>, o: &ConvOptions) -> Self {
+    pub fn from_fields<S: AsRef<str>>(
+        fields: impl IntoIterator<Item = S>,
+        o: &ConvOptions,
+    ) -> Self {
         let mut map = HeaderMap::default();
         for (index, name) in fields.into_iter().enumerate() {
             map.field_count = index + 1;
+            let name = name.as_ref();
             if let Some(spec) = columns::lookup(name) {
                 map.add(index, name.trim().trim_start_matches('\u{feff}'), spec, o);
             }
@@ -102,7 +106,10 @@ impl HeaderMap {
     }
 
     /// Parse a data line's fields into a row. Text in a mapped field is an error.
-    pub fn row<'a>(&self, fields: impl IntoIterator<Item = &'a str>) -> Result<CsvRow, RowError> {
+    pub fn row<S: AsRef<str>>(
+        &self,
+        fields: impl IntoIterator<Item = S>,
+    ) -> Result<CsvRow, RowError> {
         let mut row = CsvRow::default();
         // `columns` is in field order, so one pass pairs fields and columns.
         let mut cols = self.columns.iter().peekable();
@@ -110,7 +117,7 @@ impl HeaderMap {
             let Some(col) = cols.next_if(|c| c.index == i) else {
                 continue;
             };
-            let f = f.trim();
+            let f = f.as_ref().trim();
             if f.is_empty() {
                 continue;
             }

@@ -13,10 +13,22 @@
 //! 3. What is left, without a UTF-8 byte-order mark and surrounding space, is empty (ignored),
 //!    a `#` comment, or data ([`classify`]).
 //! 4. Data fields are separated by `,`, else by tabs, else by `;` ([`separator`]), outside
-//!    double quotes (a quoted field keeps its separators: `"0,45","12,3"`); each field is
-//!    trimmed and unquoted ([`fields`]). A line whose every `,` (outside quotes) sits between
-//!    two digits and that has a tab or a `;` is a decimal-comma or thousands line (the European
-//!    spreadsheet export `0,25;1503,2`, or `1,234.5\t0.45`): its separator is the tab or `;`.
+//!    quoted fields; each field is trimmed and unquoted ([`fields`]). A line whose every `,`
+//!    (outside quoted fields) sits between two digits and that has a tab or a `;` is a
+//!    decimal-comma or thousands line (the European spreadsheet export `0,25;1503,2`, or
+//!    `1,234.5\t0.45`): its separator is the tab or `;`.
+//!
+//!    Quoting is RFC 4180's, read leniently (one rule, [`split_field`]):
+//!    - a `"` **opens** a quoted field only as the field's first character (after spaces);
+//!      the quoted field keeps separators as they are (`"0,45"`, `"a;b"`), and `""` inside it
+//!      is one `"` (`"Thrust ""gf"""` is `Thrust "gf"`);
+//!    - the first lone `"` **closes** it; text after the closing quote up to the separator is
+//!      kept, appended (`"5" prop` is `5 prop`);
+//!    - a `"` anywhere else is an ordinary character: an inch mark (`Prop 5"x4.5`,
+//!      `Torque (in-oz")`) stays in its field and never joins the fields after it;
+//!    - a `"` that opens a field but is never closed on its line is an ordinary character too
+//!      (`"10x4.5` is the field `"10x4.5`, ending at the next separator): a stray quote cannot
+//!      swallow the rest of the line into one field. A field never continues on the next line.
 //! 5. A number is written with a decimal mark, `.` or `,`, and may group thousands with the
 //!    other mark (`1,234.5`, `1.234,5`, `12,345`): [`DecimalMark`] reads a field both ways. A
 //!    field only one mark reads (`0,45`, `1.234,5`, `12,3`; `0.45`, `1,234.5`) shows the
@@ -29,6 +41,8 @@
 //!    `2024-08-13T18:55:23Z`) is read as seconds by [`parse_clock`] where a column holds them;
 //!    read in order ([`ClockColumn`]), a time of day that falls back by more than 12 h has
 //!    passed midnight (23:59:59.9 then 00:00:00.1 is 0.2 s later).
+
+use std::borrow::Cow;
 
 mod clock;
 mod number;
@@ -202,22 +216,25 @@ fn classify_text(text: &str) -> LineKind<'_> {
     }
 }
 
-/// Field separator of a data line: `,`, else tab, else `;`, counting only those outside double
-/// quotes — unless every such `,` has a digit on both sides (a decimal comma or a thousands
+/// Field separator of a data line: `,`, else tab, else `;`, counting only those outside quoted
+/// fields — unless every such `,` has a digit on both sides (a decimal comma or a thousands
 /// separator) and the line has a tab or a `;` (rule 4 of the [module documentation](self)).
+/// While the separator is not known, a field may start after any of the three.
 pub fn separator(text: &str) -> char {
     let b = text.as_bytes();
     let (mut comma, mut tab, mut semicolon, mut digit_commas) = (false, false, false, true);
-    for (i, c) in outside_quotes(b) {
-        match c {
+    let mut start = 0;
+    while let (_, Some(i)) = split_field(&text[start..], is_candidate) {
+        let i = start + i;
+        match b[i] {
             b',' => {
                 comma = true;
                 digit_commas &= between_digits(b, i);
             }
             b'\t' => tab = true,
-            b';' => semicolon = true,
-            _ => {}
+            _ => semicolon = true,
         }
+        start = i + 1;
     }
     if comma && !((tab || semicolon) && digit_commas) {
         ','
@@ -228,17 +245,9 @@ pub fn separator(text: &str) -> char {
     }
 }
 
-/// The bytes of `b` outside double quotes, with their index (a `"` opens or closes a quote).
-fn outside_quotes(b: &[u8]) -> impl Iterator<Item = (usize, u8)> + '_ {
-    let mut quoted = false;
-    b.iter().enumerate().filter_map(move |(i, &c)| {
-        if c == b'"' {
-            quoted = !quoted;
-            None
-        } else {
-            (!quoted).then_some((i, c))
-        }
-    })
+/// A character [`separator`] may choose.
+fn is_candidate(c: char) -> bool {
+    matches!(c, ',' | '\t' | ';')
 }
 
 /// True when byte `i` of `b` has an ASCII digit on both sides.
@@ -246,7 +255,55 @@ pub(crate) fn between_digits(b: &[u8], i: usize) -> bool {
     i > 0 && b[i - 1].is_ascii_digit() && b.get(i + 1).is_some_and(u8::is_ascii_digit)
 }
 
-/// The fields of a data line, split at `sep` outside double quotes, trimmed and unquoted.
+/// How the first field of a line's rest is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Span {
+    /// Unquoted: every `"` in it is an ordinary character.
+    Plain,
+    /// Quoted: the content is `rest[open + 1..close]` (`""` still doubled), the text after the
+    /// closing quote `rest[close + 1..]` up to the separator.
+    Quoted { open: usize, close: usize },
+}
+
+/// The first field of `rest` by the quoting of rule 4 of the [module documentation](self):
+/// how it is written, and the byte index of the separator that ends it (`None`: it is the
+/// line's last field). A `"` opens a quoted field only as the field's first character after
+/// spaces, and only when a lone `"` closes it on the line; `""` inside is an escaped quote.
+///
+/// Linear in the line: a search for the closing quote that fails leaves only runs of an even
+/// number of `"` after the opening one, so any later field's opening quote (the first of its
+/// run) is closed within its run.
+fn split_field(rest: &str, is_sep: impl Fn(char) -> bool) -> (Span, Option<usize>) {
+    let b = rest.as_bytes();
+    // Spaces before the quote; a tab too unless it is the separator.
+    let blank = |c: char| (c == ' ' || c == '\t') && !is_sep(c);
+    let open = rest.len() - rest.trim_start_matches(blank).len();
+    let mut span = Span::Plain;
+    let mut from = 0;
+    if b.get(open) == Some(&b'"') {
+        let mut i = open + 1;
+        while i < b.len() {
+            match (b[i], b.get(i + 1)) {
+                (b'"', Some(b'"')) => i += 2,
+                (b'"', _) => {
+                    span = Span::Quoted { open, close: i };
+                    from = i + 1;
+                    break;
+                }
+                _ => i += 1,
+            }
+        }
+    }
+    let end = rest[from..]
+        .char_indices()
+        .find(|&(_, c)| is_sep(c))
+        .map(|(i, _)| from + i);
+    (span, end)
+}
+
+/// The fields of a data line, split at `sep` outside quoted fields, trimmed and unquoted (rule
+/// 4 of the [module documentation](self)). A field is borrowed from the line unless it holds an
+/// escaped quote (`""`) or text after its closing quote.
 pub fn fields(text: &str, sep: char) -> Fields<'_> {
     Fields {
         rest: Some(text),
@@ -254,7 +311,8 @@ pub fn fields(text: &str, sep: char) -> Fields<'_> {
     }
 }
 
-/// The iterator of [`fields`] (no allocation: the stream decoder splits every row with it).
+/// The iterator of [`fields`] (no allocation for plain and simply quoted fields: the stream
+/// decoder splits every row with it).
 #[derive(Debug, Clone)]
 pub struct Fields<'a> {
     rest: Option<&'a str>,
@@ -262,18 +320,15 @@ pub struct Fields<'a> {
 }
 
 impl<'a> Iterator for Fields<'a> {
-    type Item = &'a str;
+    type Item = Cow<'a, str>;
 
-    fn next(&mut self) -> Option<&'a str> {
+    fn next(&mut self) -> Option<Cow<'a, str>> {
         let rest = self.rest?;
-        let mut quoted = false;
-        let end = rest.char_indices().find(|&(_, c)| {
-            quoted ^= c == '"';
-            c == self.sep && !quoted
-        });
+        let sep = self.sep;
+        let (span, end) = split_field(rest, |c| c == sep);
         let field = match end {
-            Some((i, c)) => {
-                self.rest = Some(&rest[i + c.len_utf8()..]);
+            Some(i) => {
+                self.rest = Some(&rest[i + sep.len_utf8()..]);
                 &rest[..i]
             }
             None => {
@@ -281,18 +336,34 @@ impl<'a> Iterator for Fields<'a> {
                 rest
             }
         };
-        Some(field.trim().trim_matches('"').trim())
+        Some(match span {
+            Span::Plain => Cow::Borrowed(field.trim()),
+            Span::Quoted { open, close } => {
+                let content = &field[open + 1..close];
+                let after = field[close + 1..].trim_end();
+                if !content.contains("\"\"") && after.is_empty() {
+                    Cow::Borrowed(content.trim())
+                } else {
+                    let text = content.replace("\"\"", "\"") + after;
+                    Cow::Owned(text.trim().to_string())
+                }
+            }
+        })
     }
 }
 
 /// True when every field is empty or a number ([`is_number`]): a data row, not a header.
 pub fn is_numeric(text: &str, sep: char) -> bool {
-    fields(text, sep).all(|f| f.is_empty() || is_number(f))
+    fields(text, sep).all(|f| f.is_empty() || is_number(&f))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn split(line: &str, sep: char) -> Vec<String> {
+        fields(line, sep).map(Cow::into_owned).collect()
+    }
 
     fn lines(max: usize, chunks: &[&[u8]]) -> Vec<String> {
         let mut s = LineSplitter::new(max);
@@ -357,7 +428,7 @@ mod tests {
         assert_eq!(separator("1;2,3"), ';');
         assert_eq!(separator("1;2\t3"), '\t');
         assert_eq!(separator("1;2"), ';');
-        let f: Vec<&str> = fields(" \"Time (s)\" , 2 ,", ',').collect();
+        let f = split(" \"Time (s)\" , 2 ,", ',');
         assert_eq!(f, ["Time (s)", "2", ""]);
         assert!(is_numeric("1,,2.5", ','));
         assert!(!is_numeric("1,x", ','));
@@ -388,12 +459,12 @@ mod tests {
     fn quoted_fields_keep_their_separators() {
         let line = "\"0,45\",\"12,3\",\"1,234.5\", 7 ,";
         assert_eq!(separator(line), ',');
-        let f: Vec<&str> = fields(line, ',').collect();
+        let f = split(line, ',');
         assert_eq!(f, ["0,45", "12,3", "1,234.5", "7", ""]);
-        let f: Vec<&str> = fields("\"a;b\";\"1,5\"", ';').collect();
+        let f = split("\"a;b\";\"1,5\"", ';');
         assert_eq!(f, ["a;b", "1,5"]);
         assert_eq!(separator("\"1,5\";\"2,5\""), ';');
-        assert_eq!(fields("", ',').collect::<Vec<_>>(), [""]);
+        assert_eq!(split("", ','), [""]);
         // Quoted decimal commas in a `,` file: the comma is the file's mark.
         let rows = [
             "\"0,000\",\"30,0\",\"3,0129\"",
@@ -404,3 +475,6 @@ mod tests {
         assert_eq!(parse_number("1,500", mark), Some(1.5));
     }
 }
+
+#[cfg(test)]
+mod quote_tests;

@@ -237,3 +237,65 @@ fn unitless_quantities_units_rows_and_clock_names() {
         .conversion(&ConvOptions::default());
     assert!((lbf_ft.unwrap().factor() - 1.355_817_948).abs() < 1e-8);
 }
+
+/// The names of RCbenchmark / Tyto Series 1580/1585 exports (`Time (s),ESC signal (µs),Servo 1
+/// (µs),…,Torque (N·m),Thrust (gf),Voltage (V),Current (A),Motor Electrical Speed (RPM),Motor
+/// Optical Speed (RPM),Electrical Power (W),…,App message`), other benches' load cells and
+/// commands, and a unit in double quotes.
+#[test]
+fn stand_export_names_and_load_cells_map_to_quantities() {
+    let spec = |quantity, unit| Some(ColumnSpec { quantity, unit });
+    let (q, u) = (Quantity::Thrust, Unit::GramForce);
+    for name in [
+        "Load (g)",
+        "Load cell (g)",
+        "Load Cell [gf]",
+        "loadcell_g",
+        "Thrust \"gf\"",
+    ] {
+        assert_eq!(lookup(name), spec(q, u), "{name}");
+    }
+    let cases = [
+        ("Thrust (kgf)", Quantity::Thrust, Unit::KilogramForce),
+        ("Load (kg)", Quantity::Thrust, Unit::KilogramForce),
+        ("Load cell (N)", Quantity::Thrust, Unit::Newton),
+        ("Torque (N·m)", Quantity::Torque, Unit::NewtonMetre),
+        ("Torque (in-oz)", Quantity::Torque, Unit::OunceForceInch),
+        ("Motor Optical Speed (RPM)", Quantity::Rpm, Unit::Rpm),
+        ("Motor Electrical Speed (RPM)", Quantity::Rpm, Unit::Rpm),
+        ("Voltage (V)", Quantity::Voltage, Unit::Volt),
+        ("Current (A)", Quantity::Current, Unit::Ampere),
+        (
+            "ESC signal (µs)",
+            Quantity::Throttle,
+            Unit::PulseMicrosecond,
+        ),
+        (
+            "ESC signal (μs)",
+            Quantity::Throttle,
+            Unit::PulseMicrosecond,
+        ),
+        ("Throttle (%)", Quantity::Throttle, Unit::Percent),
+        ("PWM (us)", Quantity::Throttle, Unit::PulseMicrosecond),
+        ("PWM (µs)", Quantity::Throttle, Unit::PulseMicrosecond),
+    ];
+    for (name, q, u) in cases {
+        assert_eq!(lookup(name), spec(q, u), "{name}");
+    }
+    // A load without a force unit is no thrust; the other columns of those exports map to
+    // nothing; a unit with a stray inch mark is not guessed.
+    for other in [
+        "Load (%)",
+        "Electrical Power (W)",
+        "Motor Efficiency (%)",
+        "Vibration (g)",
+        "App message",
+        "Torque (in-oz\")",
+        "Thrust \"gf",
+    ] {
+        assert_eq!(lookup(other), None, "{other}");
+    }
+    // A bare `Load` is a thrust of unknown unit (refused naming --columns, never guessed).
+    assert_eq!(unitless("Load"), Some(Quantity::Thrust));
+    assert_eq!(unitless("Load cell"), Some(Quantity::Thrust));
+}

@@ -39,9 +39,10 @@ impl DecimalMark {
     /// `1.234,5` for the comma; `0.45`, `1,234.5` for the point) is a vote for it; the mark
     /// with more votes is the file's, [`DecimalMark::Unshown`] when neither has more. Fields
     /// either mark reads alike (`12`) or differently (`1,234`) and text say nothing.
-    pub fn of_fields<'a>(fields: impl IntoIterator<Item = &'a str>) -> Self {
+    pub fn of_fields<S: AsRef<str>>(fields: impl IntoIterator<Item = S>) -> Self {
         let (mut point, mut comma) = (0usize, 0usize);
         for f in fields {
+            let f = f.as_ref();
             match (read_as(f, Self::Point), read_as(f, Self::Comma)) {
                 (Some(_), None) => point += 1,
                 (None, Some(_)) => comma += 1,
@@ -155,6 +156,30 @@ mod tests {
         assert_eq!(separator("1,234.5\t0.45"), '\t');
         assert_eq!(separator("0,010;1.300,0;42.000"), ';');
         assert!(is_numeric("0,010;1.300,0;42.000", ';'));
+    }
+
+    #[test]
+    fn semicolon_files_with_decimal_points_and_thousands_commas() {
+        // A European-locale export with English numbers: `;` separates, `,` groups thousands.
+        let rows = ["1,234.5;0.45;12,345", "1,240.0;0.46;12,400;-1,000.5"];
+        assert!(rows.iter().all(|r| separator(r) == ';'));
+        let mark = DecimalMark::of_fields(rows.iter().flat_map(|r| fields(r, ';')));
+        assert_eq!(mark, DecimalMark::Point);
+        let read = |r: &str| -> Vec<Option<f64>> {
+            fields(r, ';').map(|f| parse_number(&f, mark)).collect()
+        };
+        assert_eq!(
+            read(rows[1]),
+            [Some(1240.0), Some(0.46), Some(12400.0), Some(-1000.5)]
+        );
+        assert_eq!(read(rows[0]), [Some(1234.5), Some(0.45), Some(12345.0)]);
+        // The same shapes with decimal commas are still decimal commas.
+        let eu = ["0,45;12,3;1.234,5", "0,46;12,4;1.300"];
+        assert!(eu.iter().all(|r| separator(r) == ';'));
+        let mark = DecimalMark::of_fields(eu.iter().flat_map(|r| fields(r, ';')));
+        assert_eq!(mark, DecimalMark::Comma);
+        let read: Vec<Option<f64>> = fields(eu[1], ';').map(|f| parse_number(&f, mark)).collect();
+        assert_eq!(read, [Some(0.46), Some(12.4), Some(1300.0)]);
     }
 
     #[test]

@@ -1,0 +1,137 @@
+//! Dialects of quotes and names (see [`super`]): RFC 4180 escaped quotes, stray inch marks, a
+//! `;` file with decimal points and thousands commas, load cells named as such.
+
+use serde_json::json;
+
+use super::{col, expect, num, write, Col, Dialect, Expect, Sample, Style, G0, PLAIN};
+
+/// The dialects of this file, seeded from `first` on.
+pub(super) fn dialects(first: u64) -> Vec<Dialect> {
+    let t_s: fn(usize, &Sample) -> String = |_, s| num(s.t_s, 3);
+    let pct: fn(usize, &Sample) -> String = |_, s| num(100.0 * s.u, 1);
+    let us: fn(usize, &Sample) -> String = |_, s| num(1000.0 + 1000.0 * s.u, 0);
+    let gf: fn(usize, &Sample) -> String = |_, s| num(s.thrust_n / G0 * 1e3, 2);
+    let mut out = Vec::new();
+    let mut add = |name, style: Style, cols: &[Col], expect: Expect| {
+        out.push(Dialect {
+            name,
+            text: write(&style, cols, first + out.len() as u64),
+            expect,
+        });
+    };
+    let us_range = ([1000.0, 2000.0], "header: µs");
+    let pct_range = ([0.0, 100.0], "header: %");
+    let every_row = |extra: &[(&'static str, serde_json::Value)]| {
+        let mut v = vec![
+            ("/csv/skipped/not_a_number", json!(0)),
+            ("/samples", json!(1050)),
+        ];
+        v.extend(extra.iter().cloned());
+        v
+    };
+    // 28. RFC 4180: every field quoted, `""` for a quote: the header `"Thrust ""gf"""`, a note
+    //     `"10""x4.5, 2-blade"` holding the separator and a quote.
+    add(
+        "rfc4180_escaped_quotes",
+        Style {
+            quoted: true,
+            ..PLAIN
+        },
+        &[
+            col("Time (s)", t_s),
+            col("Throttle (%)", pct),
+            col("Thrust \"gf\"", gf),
+            col("Note, \"prop\"", |_, _| "10\"x4.5, 2-blade".into()),
+        ],
+        Expect {
+            source: every_row(&[]),
+            ..expect(
+                &[
+                    ("throttle", "Throttle (%)", "%", 0.01),
+                    ("thrust", "Thrust \"gf\"", "gf", G0 / 1e3),
+                ],
+                pct_range.0,
+                pct_range.1,
+            )
+        },
+    );
+    // 29. Inch marks, unquoted: a header `Torque (in-oz")` and cells `5"x4.5` before the
+    //     command and thrust columns, a load cell called `Load (g)`.
+    add(
+        "inch_marks",
+        PLAIN,
+        &[
+            col("Time (s)", t_s),
+            col("Torque (in-oz\")", |_, s| {
+                num(s.torque_nm / 0.007_061_552, 3)
+            }),
+            col("Prop", |_, _| "5\"x4.5".into()),
+            col("Throttle (%)", pct),
+            col("Load (g)", gf),
+        ],
+        Expect {
+            source: every_row(&[]),
+            ..expect(
+                &[
+                    ("throttle", "Throttle (%)", "%", 0.01),
+                    ("thrust", "Load (g)", "gf", G0 / 1e3),
+                ],
+                pct_range.0,
+                pct_range.1,
+            )
+        },
+    );
+    // 30. A `;` file with decimal points and thousands commas (a European-locale export with
+    //     English numbers): `0.010;1,300;307.23;6,026`.
+    add(
+        "semicolon_thousands_decimal_point",
+        Style {
+            sep: ';',
+            thousands: true,
+            ..PLAIN
+        },
+        &[
+            col("Time (s)", t_s),
+            col("ESC signal (µs)", us),
+            col("Thrust (g)", gf),
+            col("Motor Optical Speed (RPM)", |_, s| num(s.rpm, 0)),
+        ],
+        Expect {
+            source: every_row(&[]),
+            ..expect(
+                &[
+                    ("throttle", "ESC signal (µs)", "µs", 1e-3),
+                    ("thrust", "Thrust (g)", "gf", G0 / 1e3),
+                    ("rpm", "Motor Optical Speed (RPM)", "RPM", 1.0),
+                ],
+                us_range.0,
+                us_range.1,
+            )
+        },
+    );
+    // 31. A hobby bench: `PWM (us)`, `Load cell (g)`, voltage and current.
+    add(
+        "pwm_us_load_cell",
+        PLAIN,
+        &[
+            col("Time (s)", t_s),
+            col("PWM (us)", us),
+            col("Load cell (g)", gf),
+            col("Voltage (V)", |_, s| num(s.voltage_v, 3)),
+            col("Current (A)", |_, s| num(s.current_a, 3)),
+        ],
+        Expect {
+            source: every_row(&[]),
+            ..expect(
+                &[
+                    ("throttle", "PWM (us)", "µs", 1e-3),
+                    ("thrust", "Load cell (g)", "gf", G0 / 1e3),
+                    ("current", "Current (A)", "A", 1.0),
+                ],
+                us_range.0,
+                us_range.1,
+            )
+        },
+    );
+    out
+}
