@@ -333,6 +333,79 @@ pub(crate) fn expect(
     }
 }
 
+/// What the dialect files share: the column writers most of them use, the command ranges a
+/// header's unit gives, the expectations of a file with every row complete, and the
+/// collector that numbers each dialect's noise seed.
+mod common {
+    use serde_json::{json, Value};
+
+    use super::{num, write, Col, Dialect, Expect, Sample, Style, G0};
+
+    /// Time, seconds.
+    pub(super) fn t_s(_: usize, s: &Sample) -> String {
+        num(s.t_s, 3)
+    }
+
+    /// Throttle, percent.
+    pub(super) fn pct(_: usize, s: &Sample) -> String {
+        num(100.0 * s.u, 1)
+    }
+
+    /// ESC pulse, µs (1000..2000).
+    pub(super) fn us(_: usize, s: &Sample) -> String {
+        num(1000.0 + 1000.0 * s.u, 0)
+    }
+
+    /// Thrust, gram-force.
+    pub(super) fn gf(_: usize, s: &Sample) -> String {
+        num(s.thrust_n / G0 * 1e3, 2)
+    }
+
+    /// The command range and its statement from a `µs` header.
+    pub(super) const US_RANGE: ([f64; 2], &str) = ([1000.0, 2000.0], "header: µs");
+    /// The command range and its statement from a `%` header.
+    pub(super) const PCT_RANGE: ([f64; 2], &str) = ([0.0, 100.0], "header: %");
+
+    /// The `source` expectations of a file whose rows are all complete (nothing skipped, 1050
+    /// samples), and `extra`.
+    pub(super) fn every_row(extra: &[(&'static str, Value)]) -> Vec<(&'static str, Value)> {
+        let mut v = vec![
+            ("/csv/skipped/not_a_number", json!(0)),
+            ("/samples", json!(1050)),
+        ];
+        v.extend(extra.iter().cloned());
+        v
+    }
+
+    /// Dialects in order, the `k`-th seeded `first + k`.
+    pub(super) struct Collector {
+        first: u64,
+        pub(super) out: Vec<Dialect>,
+    }
+
+    impl Collector {
+        /// An empty collection whose first dialect is seeded `first`.
+        pub(super) fn new(first: u64) -> Collector {
+            Collector {
+                first,
+                out: Vec::new(),
+            }
+        }
+
+        /// Writes dialect `name` in `style` with columns `cols`.
+        pub(super) fn add(
+            &mut self,
+            name: &'static str,
+            style: Style,
+            cols: &[Col],
+            expect: Expect,
+        ) {
+            let text = write(&style, cols, self.first + self.out.len() as u64);
+            self.out.push(Dialect { name, text, expect });
+        }
+    }
+}
+
 mod cases;
 mod numbers;
 mod quotes;

@@ -2,29 +2,17 @@
 
 use serde_json::json;
 
+use super::common::{gf, pct, t_s, us, Collector, PCT_RANGE};
 use super::{
-    col, expect, num, sparse, unit, write, Col, Dialect, Expect, Sample, Style, G0, LBF_N, PLAIN,
-    TRUTH,
+    col, expect, num, sparse, unit, Dialect, Expect, Sample, Style, G0, LBF_N, PLAIN, TRUTH,
 };
 
 /// The dialects (see the module documentation), each with what a reader must make of it.
 pub fn dialects() -> Vec<Dialect> {
-    let t_s: fn(usize, &Sample) -> String = |_, s| num(s.t_s, 3);
-    let pct: fn(usize, &Sample) -> String = |_, s| num(100.0 * s.u, 1);
-    let us: fn(usize, &Sample) -> String = |_, s| num(1000.0 + 1000.0 * s.u, 0);
     let n: fn(usize, &Sample) -> String = |_, s| num(s.thrust_n, 4);
-    let gf: fn(usize, &Sample) -> String = |_, s| num(s.thrust_n / G0 * 1e3, 2);
-    let mut out = Vec::new();
-    let mut add = |name, style: Style, cols: &[Col], expect: Expect| {
-        out.push(Dialect {
-            name,
-            text: write(&style, cols, out.len() as u64 + 1),
-            expect,
-        });
-    };
-    let pct_range = ([0.0, 100.0], "header: %");
+    let mut c = Collector::new(1);
     // 1. Tyto/RCbenchmark Series 1585: µs command, kgf, N·m, both speeds, extra columns.
-    add(
+    c.add(
         "tyto_1585_kgf",
         PLAIN,
         &[
@@ -56,7 +44,7 @@ pub fn dialects() -> Vec<Dialect> {
     );
     // 2. Tyto sparse rows: a bare `ESC signal` 0..2047, each sensor on its own rows, an app
     //    message on the first row, 200 rows a second.
-    add(
+    c.add(
         "tyto_sparse_bare_esc",
         Style {
             dt_s: 0.005,
@@ -95,7 +83,7 @@ pub fn dialects() -> Vec<Dialect> {
         },
     );
     // 3. A European spreadsheet: `;`, decimal commas, grams.
-    add(
+    c.add(
         "semicolon_decimal_comma",
         Style {
             sep: ';',
@@ -117,13 +105,13 @@ pub fn dialects() -> Vec<Dialect> {
                     ("throttle", "Throttle (%)", "%", 0.01),
                     ("thrust", "Thrust (g)", "gf", G0 / 1e3),
                 ],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 4. Units on a row of their own under the names.
-    add(
+    c.add(
         "units_row",
         Style {
             units_row: true,
@@ -143,13 +131,13 @@ pub fn dialects() -> Vec<Dialect> {
                     ("thrust", "Thrust (gf)", "gf", G0 / 1e3),
                     ("torque", "Torque (N·mm)", "N·mm", 1e-3),
                 ],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 5. A preamble (motor, propeller, date, a key,value line) before the header.
-    add(
+    c.add(
         "preamble",
         Style {
             preamble: &[
@@ -175,7 +163,7 @@ pub fn dialects() -> Vec<Dialect> {
         },
     );
     // 6. BOM, CRLF, every field quoted.
-    add(
+    c.add(
         "bom_crlf_quoted",
         Style {
             bom: true,
@@ -188,10 +176,10 @@ pub fn dialects() -> Vec<Dialect> {
             col("Throttle (%)", pct),
             col("Thrust (N)", n),
         ],
-        expect(&[("time", "Time (s)", "s", 1.0)], pct_range.0, pct_range.1),
+        expect(&[("time", "Time (s)", "s", 1.0)], PCT_RANGE.0, PCT_RANGE.1),
     );
     // 7. An Arduino logger: milliseconds not starting at 0, pulse width in µs, grams, rpm.
-    add(
+    c.add(
         "arduino_ms_offset",
         PLAIN,
         &[
@@ -212,7 +200,7 @@ pub fn dialects() -> Vec<Dialect> {
         ),
     );
     // 8. A flight controller's clock in µs (Betaflight-style `, ` separators), DShot values.
-    add(
+    c.add(
         "blackbox_dshot_us",
         Style { sep: ',', ..PLAIN },
         &[
@@ -236,7 +224,7 @@ pub fn dialects() -> Vec<Dialect> {
         ),
     );
     // 9. A MATLAB `writetable` with tabs and units after an underscore.
-    add(
+    c.add(
         "matlab_tab_underscore",
         Style { sep: '\t', ..PLAIN },
         &[
@@ -246,12 +234,12 @@ pub fn dialects() -> Vec<Dialect> {
         ],
         expect(
             &[("throttle", "Throttle_pct", "%", 0.01)],
-            pct_range.0,
-            pct_range.1,
+            PCT_RANGE.0,
+            PCT_RANGE.1,
         ),
     );
     // 10. No time column, rows at a constant rate: refused naming --fs, read with it.
-    add(
+    c.add(
         "no_time_constant_rate",
         PLAIN,
         &[col("Throttle (%)", pct), col("Thrust (N)", n)],
@@ -260,13 +248,13 @@ pub fn dialects() -> Vec<Dialect> {
             refused_without_args: Some(vec!["--fs"]),
             ..expect(
                 &[("thrust", "Thrust (N)", "N", 1.0)],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 11. Time stamps rounded to 20 ms on rows every 10 ms (duplicated stamps).
-    add(
+    c.add(
         "duplicated_stamps",
         PLAIN,
         &[
@@ -278,11 +266,11 @@ pub fn dialects() -> Vec<Dialect> {
         ],
         Expect {
             source: vec![("/csv/jitter/non_increasing", json!(525))],
-            ..expect(&[("time", "Time (s)", "s", 1.0)], pct_range.0, pct_range.1)
+            ..expect(&[("time", "Time (s)", "s", 1.0)], PCT_RANGE.0, PCT_RANGE.1)
         },
     );
     // 12. A load cell mounted reversed: thrust negative.
-    add(
+    c.add(
         "reversed_load_cell",
         PLAIN,
         &[
@@ -294,13 +282,13 @@ pub fn dialects() -> Vec<Dialect> {
             gain_n: -TRUTH.gain_n,
             ..expect(
                 &[("thrust", "Thrust (N)", "N", 1.0)],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 13. Throttle 0..1, thrust in lbf, speed in eRPM of a 14-pole motor: --poles needed.
-    add(
+    c.add(
         "erpm_lbf_fraction",
         PLAIN,
         &[
@@ -323,7 +311,7 @@ pub fn dialects() -> Vec<Dialect> {
         },
     );
     // 14. Empty trailing columns, thrust in ozf, torque in lbf·in.
-    add(
+    c.add(
         "trailing_empty_ozf",
         PLAIN,
         &[
@@ -341,12 +329,12 @@ pub fn dialects() -> Vec<Dialect> {
                 ("thrust", "Thrust (ozf)", "ozf", LBF_N / 16.0),
                 ("torque", "Torque (lbf·in)", "lbf·in", LBF_N * 0.0254),
             ],
-            pct_range.0,
-            pct_range.1,
+            PCT_RANGE.0,
+            PCT_RANGE.1,
         ),
     );
     // 15. Date-time stamps, ms resolution, starting in the evening.
-    add(
+    c.add(
         "datetime_stamps",
         PLAIN,
         &[
@@ -361,12 +349,12 @@ pub fn dialects() -> Vec<Dialect> {
         ],
         expect(
             &[("time", "Timestamp", "date-time", 1.0)],
-            pct_range.0,
-            pct_range.1,
+            PCT_RANGE.0,
+            PCT_RANGE.1,
         ),
     );
     // 16. No header at all: refused naming --columns, read with it.
-    add(
+    c.add(
         "no_header",
         Style {
             header: false,
@@ -378,13 +366,13 @@ pub fn dialects() -> Vec<Dialect> {
             refused_without_args: Some(vec!["--columns", "no header"]),
             ..expect(
                 &[("thrust", "thrust_g", "gf", G0 / 1e3)],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 17. A thrust column without a unit: refused naming --columns, read with it.
-    add(
+    c.add(
         "thrust_without_unit",
         PLAIN,
         &[
@@ -397,13 +385,13 @@ pub fn dialects() -> Vec<Dialect> {
             refused_without_args: Some(vec!["--columns", "Thrust", "without a unit"]),
             ..expect(
                 &[("thrust", "Thrust (N)", "N", 1.0)],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 18. A logger's clock without a unit (`time` in ms): refused naming --columns.
-    add(
+    c.add(
         "unitless_millis",
         PLAIN,
         &[
@@ -422,7 +410,7 @@ pub fn dialects() -> Vec<Dialect> {
         },
     );
     // 19. Units in square brackets, SI multiples: rad/s, mV, mA.
-    add(
+    c.add(
         "brackets_rad_s_mv_ma",
         PLAIN,
         &[
@@ -445,14 +433,14 @@ pub fn dialects() -> Vec<Dialect> {
                 ),
                 ("current", "Current [mA]", "mA", 1e-3),
             ],
-            pct_range.0,
-            pct_range.1,
+            PCT_RANGE.0,
+            PCT_RANGE.1,
         ),
     );
     // 20. A flight controller's motor output (`motor[0]`, DShot values) beside a load cell: no
     //    command column the table knows, refused naming --input; read with the column and its
     //    range.
-    add(
+    c.add(
         "blackbox_motor_output",
         PLAIN,
         &[
@@ -474,7 +462,7 @@ pub fn dialects() -> Vec<Dialect> {
     );
     // 21. A `Time` column of times of day (a logger's wall clock), seconds with a decimal comma in
     //     a `;` file.
-    add(
+    c.add(
         "time_of_day_semicolon",
         Style { sep: ';', ..PLAIN },
         &[
@@ -489,10 +477,11 @@ pub fn dialects() -> Vec<Dialect> {
         ],
         expect(
             &[("time", "Time", "date-time", 1.0)],
-            pct_range.0,
-            pct_range.1,
+            PCT_RANGE.0,
+            PCT_RANGE.1,
         ),
     );
+    let mut out = c.out;
     let first = out.len() as u64 + 1;
     out.extend(super::numbers::dialects(first));
     let first = out.len() as u64 + 1;

@@ -4,37 +4,17 @@
 
 use serde_json::json;
 
-use super::{col, expect, num, write, Col, Dialect, Expect, Sample, Style, G0, PLAIN};
+use super::common::{every_row, gf, pct, t_s, us, Collector, PCT_RANGE, US_RANGE};
+use super::{col, expect, num, Dialect, Expect, Sample, Style, G0, PLAIN};
 
 /// The dialects of this file, seeded from `first` on.
 pub(super) fn dialects(first: u64) -> Vec<Dialect> {
-    let t_s: fn(usize, &Sample) -> String = |_, s| num(s.t_s, 3);
-    let pct: fn(usize, &Sample) -> String = |_, s| num(100.0 * s.u, 1);
-    let us: fn(usize, &Sample) -> String = |_, s| num(1000.0 + 1000.0 * s.u, 0);
-    let gf: fn(usize, &Sample) -> String = |_, s| num(s.thrust_n / G0 * 1e3, 2);
     // Electrical rpm of a 14-pole motor: up to 98 000, thousands grouped.
     let erpm: fn(usize, &Sample) -> String = |_, s| num(7.0 * s.rpm, 0);
-    let mut out = Vec::new();
-    let mut add = |name, style: Style, cols: &[Col], expect: Expect| {
-        out.push(Dialect {
-            name,
-            text: write(&style, cols, first + out.len() as u64),
-            expect,
-        });
-    };
-    let us_range = ([1000.0, 2000.0], "header: µs");
-    let pct_range = ([0.0, 100.0], "header: %");
-    let every_row = |extra: &[(&'static str, serde_json::Value)]| {
-        let mut v = vec![
-            ("/csv/skipped/not_a_number", json!(0)),
-            ("/samples", json!(1050)),
-        ];
-        v.extend(extra.iter().cloned());
-        v
-    };
+    let mut c = Collector::new(first);
     // 22. A European spreadsheet with thousands: `;`, `1.300` µs, `98.000` eRPM, `0,010` s
     //     (the `0,010` tells that `1.300` is 1300 and `1,500` s is 1.5 s).
-    add(
+    c.add(
         "semicolon_thousands_decimal_comma",
         Style {
             sep: ';',
@@ -57,14 +37,14 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                     ("thrust", "Thrust (g)", "gf", G0 / 1e3),
                     ("rpm", "eRPM", "eRPM", 2.0 / 14.0),
                 ],
-                us_range.0,
-                us_range.1,
+                US_RANGE.0,
+                US_RANGE.1,
             )
         },
     );
     // 23. A Tyto-style export with every field quoted and thousands grouped: `"1,300.0"` µs,
     //     `"98,000"` eRPM in a `,` file.
-    add(
+    c.add(
         "quoted_thousands",
         Style {
             quoted: true,
@@ -85,13 +65,13 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                     ("throttle", "ESC signal (µs)", "µs", 1e-3),
                     ("rpm", "eRPM", "eRPM", 2.0 / 14.0),
                 ],
-                us_range.0,
-                us_range.1,
+                US_RANGE.0,
+                US_RANGE.1,
             )
         },
     );
     // 24. Tab-separated with thousands and decimal points: `1,300` µs beside `0.010` s.
-    add(
+    c.add(
         "tab_thousands",
         Style {
             sep: '\t',
@@ -112,13 +92,13 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                     ("throttle", "pwm_us", "µs", 1e-3),
                     ("rpm", "Speed (eRPM)", "eRPM", 2.0 / 14.0),
                 ],
-                us_range.0,
-                us_range.1,
+                US_RANGE.0,
+                US_RANGE.1,
             )
         },
     );
     // 25. Decimal commas inside the quoted fields of a `,` file (`"0,45","12,3"`).
-    add(
+    c.add(
         "comma_quoted_decimal_comma",
         Style {
             quoted: true,
@@ -134,13 +114,13 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
             source: every_row(&[("/csv/decimal_mark", json!(","))]),
             ..expect(
                 &[("throttle", "Throttle (%)", "%", 0.01)],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 26. A logger's wall clock (times of day) across midnight: 23:59:57.000 ... 00:00:07.490.
-    add(
+    c.add(
         "time_of_day_midnight",
         PLAIN,
         &[
@@ -157,14 +137,14 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
             source: every_row(&[("/csv/midnights", json!(1))]),
             ..expect(
                 &[("time", "Time", "date-time", 1.0)],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 27. A command column the unit table does not know (`setpoint`, 30..70): refused naming
     //     --input; with it, its range is inferred from the values and said.
-    add(
+    c.add(
         "unknown_unit_input",
         PLAIN,
         &[
@@ -182,5 +162,5 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
             )
         },
     );
-    out
+    c.out
 }

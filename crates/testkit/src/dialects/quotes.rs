@@ -1,37 +1,15 @@
 //! Dialects of quotes and names (see [`super`]): RFC 4180 escaped quotes, stray inch marks, a
 //! `;` file with decimal points and thousands commas, load cells named as such.
 
-use serde_json::json;
-
-use super::{col, expect, num, write, Col, Dialect, Expect, Sample, Style, G0, PLAIN};
+use super::common::{every_row, gf, pct, t_s, us, Collector, PCT_RANGE, US_RANGE};
+use super::{col, expect, num, Dialect, Expect, Style, G0, PLAIN};
 
 /// The dialects of this file, seeded from `first` on.
 pub(super) fn dialects(first: u64) -> Vec<Dialect> {
-    let t_s: fn(usize, &Sample) -> String = |_, s| num(s.t_s, 3);
-    let pct: fn(usize, &Sample) -> String = |_, s| num(100.0 * s.u, 1);
-    let us: fn(usize, &Sample) -> String = |_, s| num(1000.0 + 1000.0 * s.u, 0);
-    let gf: fn(usize, &Sample) -> String = |_, s| num(s.thrust_n / G0 * 1e3, 2);
-    let mut out = Vec::new();
-    let mut add = |name, style: Style, cols: &[Col], expect: Expect| {
-        out.push(Dialect {
-            name,
-            text: write(&style, cols, first + out.len() as u64),
-            expect,
-        });
-    };
-    let us_range = ([1000.0, 2000.0], "header: µs");
-    let pct_range = ([0.0, 100.0], "header: %");
-    let every_row = |extra: &[(&'static str, serde_json::Value)]| {
-        let mut v = vec![
-            ("/csv/skipped/not_a_number", json!(0)),
-            ("/samples", json!(1050)),
-        ];
-        v.extend(extra.iter().cloned());
-        v
-    };
+    let mut c = Collector::new(first);
     // 28. RFC 4180: every field quoted, `""` for a quote: the header `"Thrust ""gf"""`, a note
     //     `"10""x4.5, 2-blade"` holding the separator and a quote.
-    add(
+    c.add(
         "rfc4180_escaped_quotes",
         Style {
             quoted: true,
@@ -50,14 +28,14 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                     ("throttle", "Throttle (%)", "%", 0.01),
                     ("thrust", "Thrust \"gf\"", "gf", G0 / 1e3),
                 ],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 29. Inch marks, unquoted: a header `Torque (in-oz")` and cells `5"x4.5` before the
     //     command and thrust columns, a load cell called `Load (g)`.
-    add(
+    c.add(
         "inch_marks",
         PLAIN,
         &[
@@ -76,14 +54,14 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                     ("throttle", "Throttle (%)", "%", 0.01),
                     ("thrust", "Load (g)", "gf", G0 / 1e3),
                 ],
-                pct_range.0,
-                pct_range.1,
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
     // 30. A `;` file with decimal points and thousands commas (a European-locale export with
     //     English numbers): `0.010;1,300;307.23;6,026`.
-    add(
+    c.add(
         "semicolon_thousands_decimal_point",
         Style {
             sep: ';',
@@ -104,13 +82,13 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                     ("thrust", "Thrust (g)", "gf", G0 / 1e3),
                     ("rpm", "Motor Optical Speed (RPM)", "RPM", 1.0),
                 ],
-                us_range.0,
-                us_range.1,
+                US_RANGE.0,
+                US_RANGE.1,
             )
         },
     );
     // 31. A hobby bench: `PWM (us)`, `Load cell (g)`, voltage and current.
-    add(
+    c.add(
         "pwm_us_load_cell",
         PLAIN,
         &[
@@ -128,10 +106,10 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                     ("thrust", "Load cell (g)", "gf", G0 / 1e3),
                     ("current", "Current (A)", "A", 1.0),
                 ],
-                us_range.0,
-                us_range.1,
+                US_RANGE.0,
+                US_RANGE.1,
             )
         },
     );
-    out
+    c.out
 }
