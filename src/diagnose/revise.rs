@@ -419,6 +419,45 @@ mod tests {
         assert!(kept.cv.mean >= cv.mean);
     }
 
+    /// An addition whose joint fit leaves an earlier term outside its plausible range is
+    /// refused, and the refusal names that term (cf21: a delay beside a series mode whose share
+    /// went to −2.8); the same addition with the earlier term in range passes.
+    #[test]
+    fn an_addition_that_drives_an_earlier_term_implausible_is_refused() {
+        use crate::diagnose::model::Signals;
+        let (u, y) = (vec![0.5; 100], vec![0.0; 100]);
+        let ctx = Ctx {
+            sig: Signals {
+                dt_s: 0.01,
+                u: &u,
+                y: &y,
+                voltage: None,
+                u_ref: 0.5,
+                v_ref: 0.0,
+            },
+            est: 0..100,
+            val: 0..100,
+        };
+        let fit = |model: Model, sse: f64| Fit { model, sse, n: 100 };
+        let mode = |gain: f64| ExtraModeParams {
+            fn_hz: 2.0,
+            zeta: 0.2,
+            gain,
+        };
+        let before = fit(Model::new(Core::default()).with(mode(1.0)), 1.0);
+        let with_delay = |gain: f64| {
+            fit(
+                Model::new(Core::default())
+                    .with(mode(gain))
+                    .with(DeadTimeParams::throttle(3)),
+                0.5,
+            )
+        };
+        let refused = assess(&ctx, &before, &with_delay(-2.8), "dead_time").unwrap_err();
+        assert!(refused.reason.contains("drives extra_mode"), "{refused:?}");
+        assert!(assess(&ctx, &before, &with_delay(1.2), "dead_time").is_ok());
+    }
+
     /// A drift of 0.6 σ over the record under a strong 12 Hz component that no term models (a
     /// sweep through a lightly damped mode, as in the robot arm log): the white-noise score
     /// counts the 12 Hz power as noise and misses the drift; against the residual's level near
