@@ -153,16 +153,20 @@ impl Effect for DeadTime {
         NAME
     }
 
-    /// Delays up to [`max_delay_samples`], each tried with every parameter of the current
+    /// Delays up to [`delay_search_samples`], each tried with every parameter of the current
     /// model refitted jointly (the core's `fn` and `ζ` have absorbed part of the delay, and
-    /// the other effects' parameters shift with it). A coarse grid with a short refit, then
-    /// every delay around the best [`FINE_STARTS`] coarse delays with a longer refit.
+    /// the other effects' parameters shift with it), from the current model and from it with
+    /// the core's lag given back ([`compensated_core`]). A coarse grid with a short refit, then
+    /// every delay around the best [`FINE_STARTS`] coarse delays with a longer refit; with a
+    /// term that reads the voltage, each delay all on one side and all on the other, then the
+    /// best delay's share on the output's side ([`shares`]).
     ///
-    /// The coarse step is [`coarse_step`]: the SSE as a function of the delay is not smooth
-    /// when the core rings (a delay of one period of the core's mode fits almost as well as
-    /// none, a half period fits worst), so the grid must sample that period; a step of 4 on a
-    /// mode of 8 samples per period skips the true delay's narrow valley and lands a whole
-    /// period later (Silverbox at 610 Hz, a 65 Hz resonance: 3 samples found as 11).
+    /// The coarse step is [`coarse_step`], and at least a 32nd of the range (a range raised by
+    /// the steps stays a few dozen fits). The SSE as a function of the delay is not smooth when
+    /// the core rings (a delay of one period of the core's mode fits almost as well as none, a
+    /// half period fits worst), so the grid must sample that period; a step of 4 on a mode of
+    /// 8 samples per period skips the true delay's narrow valley and lands a whole period
+    /// later (Silverbox at 610 Hz, a 65 Hz resonance: 3 samples found as 11).
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
         let dmax = delay_search_samples(ctx.sig.dt_s, ctx.est.len(), steps_delay_samples(&ctx.sig));
         // With a term that reads the voltage, where the delay lies matters (module doc): each
