@@ -62,3 +62,24 @@ impl Ctx<'_> {
         self.est.clone().map(|k| self.sig.y[k] - buf[k]).collect()
     }
 }
+
+#[cfg(test)]
+impl<'a> Ctx<'a> {
+    /// Tests: input `u` and output `y` every `dt_s`, no voltage, the whole record for
+    /// estimation and validation, the static map referred to the input's mean.
+    pub fn whole(dt_s: f64, u: &'a [f64], y: &'a [f64]) -> Ctx<'a> {
+        let n = u.len();
+        Ctx {
+            sig: Signals {
+                dt_s,
+                u,
+                y,
+                voltage: None,
+                u_ref: u.iter().sum::<f64>() / n.max(1) as f64,
+                v_ref: 0.0,
+            },
+            est: 0..n,
+            val: 0..n,
+        }
+    }
+}

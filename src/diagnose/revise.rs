@@ -424,20 +424,8 @@ mod tests {
     /// went to −2.8); the same addition with the earlier term in range passes.
     #[test]
     fn an_addition_that_drives_an_earlier_term_implausible_is_refused() {
-        use crate::diagnose::model::Signals;
         let (u, y) = (vec![0.5; 100], vec![0.0; 100]);
-        let ctx = Ctx {
-            sig: Signals {
-                dt_s: 0.01,
-                u: &u,
-                y: &y,
-                voltage: None,
-                u_ref: 0.5,
-                v_ref: 0.0,
-            },
-            est: 0..100,
-            val: 0..100,
-        };
+        let ctx = Ctx::whole(0.01, &u, &y);
         let fit = |model: Model, sse: f64| Fit { model, sse, n: 100 };
         let mode = |gain: f64| ExtraModeParams {
             fn_hz: 2.0,

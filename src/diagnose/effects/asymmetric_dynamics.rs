@@ -231,7 +231,7 @@ mod tests {
 
     #[test]
     fn a_direction_faster_than_half_a_sample_is_implausible() {
-        use crate::diagnose::model::{Core, Signals};
+        use crate::diagnose::model::Core;
         // Down 9× slower than up around an 8 Hz core: spin-up τ ≈ 7 ms, spin-down ≈ 60 ms.
         let p = AsymmetricDynamicsParams {
             log_ratio: 9.0f64.ln(),
@@ -243,21 +243,7 @@ mod tests {
         })
         .with(p);
         let (u, y) = (vec![0.5; 10], vec![0.0; 10]);
-        let plausible_at = |dt_s: f64| {
-            let ctx = Ctx {
-                sig: Signals {
-                    dt_s,
-                    u: &u,
-                    y: &y,
-                    voltage: None,
-                    u_ref: 0.5,
-                    v_ref: 0.0,
-                },
-                est: 0..10,
-                val: 0..10,
-            };
-            p.plausible(&ctx, &model)
-        };
+        let plausible_at = |dt_s: f64| p.plausible(&Ctx::whole(dt_s, &u, &y), &model);
         // At 50 Hz the spin-up is faster than half a sample (10 ms): not resolvable; at 200 Hz
         // it is, and the directions differ by more than a sample.
         assert!(!plausible_at(0.02));

@@ -35,23 +35,37 @@ pub const UNIDENTIFIABLE_R2: f64 = 0.999;
 /// `R²` of `t` fitted by `[1, u]` over the estimation samples with a measured output, `u` the
 /// command (module doc); 0 when the command is constant there.
 pub fn confounding(ctx: &Ctx) -> f64 {
-    let u = ctx.sig.u;
-    let ks: Vec<usize> = ctx
-        .est
+    let ks = measured_estimation_samples(ctx, 0);
+    let dt = ctx.sig.dt_s;
+    affine_r2(&ks, |k| k as f64 * dt, |k| ctx.sig.u[k])
+}
+
+/// The estimation samples from `first` on whose output is measured.
+pub fn measured_estimation_samples(ctx: &Ctx, first: usize) -> Vec<usize> {
+    ctx.est
         .clone()
-        .filter(|&k| ctx.sig.y[k].is_finite())
-        .collect();
-    let m = ks.len().max(1) as f64;
-    let mean = |f: &dyn Fn(usize) -> f64| ks.iter().map(|&k| f(k)).sum::<f64>() / m;
-    let t = |k: usize| k as f64 * ctx.sig.dt_s;
-    let (mt, ms) = (mean(&t), mean(&|k| u[k]));
-    let sxy = mean(&|k| (t(k) - mt) * (u[k] - ms));
-    let sxx = mean(&|k| (t(k) - mt).powi(2));
-    let syy = mean(&|k| (u[k] - ms).powi(2));
-    if sxx <= 0.0 || syy <= 1e-24 * ms * ms || syy <= 0.0 {
+        .filter(|&k| k >= first && ctx.sig.y.get(k).is_some_and(|y| y.is_finite()))
+        .collect()
+}
+
+/// `R²` of `a` fitted by `[1, b]` over the samples `ks` (the squared correlation of `a` and
+/// `b` there): how far one is an affine function of the other, the measure of both the drift's
+/// and the dead time's identifiability. 0 when either is constant there (to within 1e-12 of
+/// its mean) or with fewer than 3 samples.
+pub fn affine_r2(ks: &[usize], a: impl Fn(usize) -> f64, b: impl Fn(usize) -> f64) -> f64 {
+    if ks.len() < 3 {
         return 0.0;
     }
-    (sxy * sxy / (sxx * syy)).clamp(0.0, 1.0)
+    let m = ks.len() as f64;
+    let mean = |f: &dyn Fn(usize) -> f64| ks.iter().map(|&k| f(k)).sum::<f64>() / m;
+    let (ma, mb) = (mean(&a), mean(&b));
+    let sab = mean(&|k| (a(k) - ma) * (b(k) - mb));
+    let saa = mean(&|k| (a(k) - ma).powi(2));
+    let sbb = mean(&|k| (b(k) - mb).powi(2));
+    if !(saa > 1e-24 * ma * ma && sbb > 1e-24 * mb * mb && saa > 0.0 && sbb > 0.0) {
+        return 0.0;
+    }
+    (sab * sab / (saa * sbb)).clamp(0.0, 1.0)
 }
 
 /// The catalogue entry.

@@ -22,6 +22,7 @@ use serde_json::{json, Map, Value};
 
 use crate::diagnose::ctx::Ctx;
 use crate::diagnose::effect::{to_map, Effect, Place, Term};
+use crate::diagnose::effects::baseline_drift::{affine_r2, measured_estimation_samples};
 use crate::diagnose::fit::Fit;
 use crate::diagnose::model::{Core, Signals};
 
@@ -91,24 +92,11 @@ pub const CONFOUNDING_SHIFT: usize = 2;
 /// be identified (`dead_time_unidentifiable`) instead of saying nothing.
 pub fn confounding(ctx: &Ctx) -> f64 {
     let (u, d) = (ctx.sig.u, CONFOUNDING_SHIFT);
-    let ks: Vec<usize> = ctx
-        .est
-        .clone()
-        .filter(|&k| k >= d && k < u.len() && ctx.sig.y.get(k).is_some_and(|y| y.is_finite()))
+    let ks: Vec<usize> = measured_estimation_samples(ctx, d)
+        .into_iter()
+        .filter(|&k| k < u.len())
         .collect();
-    if ks.len() < 3 {
-        return 0.0;
-    }
-    let m = ks.len() as f64;
-    let mean = |f: &dyn Fn(usize) -> f64| ks.iter().map(|&k| f(k)).sum::<f64>() / m;
-    let (ma, mb) = (mean(&|k| u[k - d]), mean(&|k| u[k]));
-    let sab = mean(&|k| (u[k - d] - ma) * (u[k] - mb));
-    let saa = mean(&|k| (u[k - d] - ma).powi(2));
-    let sbb = mean(&|k| (u[k] - mb).powi(2));
-    if !(saa > 1e-24 * ma * ma && sbb > 1e-24 * mb * mb && saa > 0.0 && sbb > 0.0) {
-        return 0.0;
-    }
-    (sab * sab / (saa * sbb)).clamp(0.0, 1.0)
+    affine_r2(&ks, |k| u[k - d], |k| u[k])
 }
 
 /// The catalogue entry.
@@ -423,20 +411,7 @@ mod tests {
             .map(|k| 0.5 + 0.2 * ((k * 7919 % 101) as f64 / 101.0 - 0.5))
             .collect();
         let y = vec![0.0; n];
-        let r2 = |u: &[f64]| {
-            confounding(&Ctx {
-                sig: Signals {
-                    dt_s: 0.02,
-                    u,
-                    y: &y,
-                    voltage: None,
-                    u_ref: 0.5,
-                    v_ref: 0.0,
-                },
-                est: 0..n,
-                val: n..n,
-            })
-        };
+        let r2 = |u: &[f64]| confounding(&Ctx::whole(0.02, u, &y));
         let unidentifiable = crate::diagnose::effects::baseline_drift::UNIDENTIFIABLE_R2;
         assert!(r2(&ramp) >= unidentifiable, "{}", r2(&ramp));
         assert!(r2(&stairs) < unidentifiable, "{}", r2(&stairs));
