@@ -181,7 +181,10 @@ impl Injection {
     /// the record's duration): a delay of 2–6 samples; a sinusoid of 0.1–0.3 σ between 20
     /// periods per record and a quarter of the sample rate (log-uniform: unrelated to any
     /// staircase or sweep of the log); a drift of 0.3–1 σ over the record, either sign; a sag
-    /// of 0.06–0.12 per volt (thrust ∝ V^1–2 at 16.8 V) on a battery falling 2–3.5 V.
+    /// with thrust ∝ V^n, `n` 1–2 (a propeller's speed ∝ the voltage gives `n` = 2), i.e.
+    /// `g = n / V̄` per volt at the mean voltage `V̄`: of the log's own voltage when it has one
+    /// (0.27–0.54 per volt on a 1-cell log at 3.7 V), else of a battery falling 2–3.5 V from
+    /// 16.8 V (0.066–0.13 per volt).
     pub fn draw(effect: &str, s: &Samples, rng: &mut impl Rng) -> Option<Injection> {
         let sigma = std_dev(&s.y);
         let span = s.u.len() as f64 * s.dt_s;
@@ -205,10 +208,17 @@ impl Injection {
             }
             "supply_sag" => {
                 let v_start = 16.8;
+                let v_end = v_start - rng.gen_range(2.0..3.5);
+                let v_mean = s
+                    .voltage
+                    .as_deref()
+                    .map_or(0.5 * (v_start + v_end), mean)
+                    .abs()
+                    .max(1e-6);
                 Injection::SupplySag {
-                    gain_per_volt: rng.gen_range(0.06..0.12),
+                    gain_per_volt: rng.gen_range(1.0..2.0) / v_mean,
                     v_start,
-                    v_end: v_start - rng.gen_range(2.0..3.5),
+                    v_end,
                 }
             }
             _ => return None,
@@ -492,6 +502,43 @@ mod tests {
             }
         }
         assert!(Injection::draw("extra_mode", &s, &mut StdRng::seed_from_u64(3)).is_none());
+    }
+
+    #[test]
+    fn a_sag_is_a_power_of_the_logs_own_voltage() {
+        let mut s = Samples {
+            dt_s: 0.01,
+            t0_s: 0.0,
+            u: vec![0.0; 100],
+            y: vec![0.0; 100],
+            voltage: None,
+        };
+        // thrust ∝ V^n with n in 1..2: g = n / V̄, with V̄ the synthetic battery's mean ...
+        for seed in 0..20 {
+            let Injection::SupplySag {
+                gain_per_volt,
+                v_start,
+                v_end,
+            } = Injection::draw("supply_sag", &s, &mut StdRng::seed_from_u64(seed)).unwrap()
+            else {
+                panic!("not a sag");
+            };
+            let n = gain_per_volt * 0.5 * (v_start + v_end);
+            assert!((1.0..2.0).contains(&n), "{n}");
+        }
+        // ... or the log's own (a 1-cell log at 3.7 V sags 4.5 times as much per volt).
+        s.voltage = Some(vec![3.7; 100]);
+        for seed in 0..20 {
+            let Some(Injection::SupplySag { gain_per_volt, .. }) =
+                Injection::draw("supply_sag", &s, &mut StdRng::seed_from_u64(seed))
+            else {
+                panic!("not a sag");
+            };
+            assert!(
+                (1.0..2.0).contains(&(gain_per_volt * 3.7)),
+                "{gain_per_volt}"
+            );
+        }
     }
 
     #[test]
