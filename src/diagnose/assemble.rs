@@ -4,7 +4,7 @@
 //! samples, simulated over the whole record).
 
 use super::ctx::Ctx;
-use super::effects::{baseline_drift, dead_time};
+use super::effects::{baseline_drift, dead_time, supply_sag};
 use super::era_start::{self, EraStart};
 use super::fit::Fit;
 use super::folds::{fit_percent, Folds};
@@ -86,6 +86,16 @@ pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraSt
     }
     warnings.extend(verdict::drift_warning(baseline_drift::confounding(ctx)));
     warnings.extend(verdict::dead_time_warning(dead_time::confounding(ctx)));
+    if !findings.iter().any(|f| f.effect == supply_sag::NAME) {
+        if let Some(d) = supply_sag::detectability(ctx, &cur) {
+            let model = if extended.is_some() {
+                "extended"
+            } else {
+                "baseline"
+            };
+            warnings.extend(verdict::supply_sag_warning(&d, model));
+        }
+    }
     Diagnosis {
         source: Default::default(),
         baseline,

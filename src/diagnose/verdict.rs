@@ -36,12 +36,19 @@
 //!   affine function of itself to within `1 − R²` ([`super::effects::dead_time::confounding`],
 //!   `value` = `R²`): a delay is then a shift of the thrust curve or a lag, and finding none
 //!   (or one) says nothing about it.
+//! - `supply_sag_unidentifiable` (the final model, when no `supply_sag` was found): the supply
+//!   voltage's own variation, beyond what the throttle explains, is too small for even a
+//!   propeller-strong voltage dependence to reach the search's score
+//!   ([`super::effects::supply_sag::detectability`], `value` = that score): finding no sag says
+//!   nothing about the supply.
 
 use serde::Serialize;
 
 use super::effects::baseline_drift::UNIDENTIFIABLE_R2;
 use super::effects::dead_time::CONFOUNDING_SHIFT;
+use super::effects::supply_sag::{Detectability, EXPONENT_MAX};
 use super::noise::NoiseFloor;
+use super::search::SCORE_THRESHOLD;
 use super::spectrum::periodogram;
 use super::summary::ModelSummary;
 
@@ -149,6 +156,9 @@ pub enum WarningKind {
     /// A dead time cannot be told from a shift of the thrust curve or a lag (a command smooth
     /// against the sample period).
     DeadTimeUnidentifiable,
+    /// A supply sag cannot be told from the static map (the voltage varies only with the
+    /// throttle, or not at all).
+    SupplySagUnidentifiable,
 }
 
 /// An implausible result (`"warnings"`).
@@ -197,6 +207,32 @@ pub fn dead_time_warning(r2: f64) -> Option<Warning> {
         ),
         model: "baseline",
         value: r2,
+        band_hz: None,
+    })
+}
+
+/// The `supply_sag_unidentifiable` warning of model `model` (`"baseline"` or `"extended"`)
+/// when `d.score`, the most a propeller-strong supply term driven by the voltage's own
+/// variation could score on it ([`super::effects::supply_sag::detectability`]), is below
+/// [`SCORE_THRESHOLD`].
+pub fn supply_sag_warning(d: &Detectability, model: &'static str) -> Option<Warning> {
+    (d.score < SCORE_THRESHOLD).then(|| Warning {
+        kind: WarningKind::SupplySagUnidentifiable,
+        message: format!(
+            "supply sag not identifiable: the supply voltage varies by {:.3} V RMS beyond what \
+             the throttle explains; even with thrust ∝ V^{EXPONENT_MAX} that would change the \
+             output by {:.2} % RMS, which would score {:.0} < {SCORE_THRESHOLD} above the {model} \
+             model's residual ({:.1} % RMS of the output): a sag can be neither found nor ruled \
+             out in this record (the voltage's variation with the throttle cannot be told from \
+             the thrust curve). A supply that discharges across repeated levels, or is stepped, \
+             would show it",
+            d.own_rms_v,
+            100.0 * d.relative_change,
+            d.score,
+            100.0 * d.relative_residual,
+        ),
+        model,
+        value: d.score,
         band_hz: None,
     })
 }

@@ -26,6 +26,12 @@ fn write_staircase(path: &Path) {
 /// The staircase of [`write_staircase`] with its thrust read `late` samples late (a load
 /// cell's filter: the thrust column shifted, the throttle and the voltage at their own time).
 fn write_staircase_read_late(path: &Path, late: usize) {
+    write_staircase_on(path, late, 14.0);
+}
+
+/// The staircase with the supply at `top_v` volts on the top level (16.8 V: a bench supply
+/// that holds, no sag) and its thrust read `late` samples late.
+fn write_staircase_on(path: &Path, late: usize, top_v: f64) {
     let cfg = PlantConfig {
         noise_rms_n: 0.01,
         ..PlantConfig::default()
@@ -36,7 +42,7 @@ fn write_staircase_read_late(path: &Path, late: usize) {
     let mut rows = Vec::new();
     let mut thrust = Vec::new();
     for (i, &u) in LEVELS.iter().enumerate() {
-        let volt = if i + 1 == LEVELS.len() { 14.0 } else { 16.8 };
+        let volt = if i + 1 == LEVELS.len() { top_v } else { 16.8 };
         for k in 0..per {
             let n = i * per + k;
             let m = plant.step(u * (1.0 + GAIN_PER_VOLT * (volt - 16.8)));
@@ -148,5 +154,48 @@ fn a_thrust_read_late_beside_a_voltage_on_time_is_a_delay_on_the_output_side() {
     assert!(
         (g - GAIN_PER_VOLT).abs() < 0.25 * GAIN_PER_VOLT,
         "gain/V {g}"
+    );
+}
+
+/// The kinds of the warnings of a `diagnose --json` output.
+fn warning_kinds(v: &serde_json::Value) -> Vec<String> {
+    v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w["kind"].as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn a_supply_that_never_varies_is_said_to_leave_a_sag_unidentifiable() {
+    // The staircase on a bench supply that holds 16.8 V: no sag is named, and diagnose says a
+    // sag could not have been seen (the voltage has no variation to show one), while on the
+    // sagging supply the sag is named and nothing is said to be unidentifiable.
+    let dir = tempfile::tempdir().unwrap();
+    let diagnose = |top_v: f64| {
+        let csv = dir.path().join(format!("top{top_v}.csv"));
+        write_staircase_on(&csv, 0, top_v);
+        let (code, out, err) = propid(&["diagnose", csv.to_str().unwrap(), "--json"]);
+        assert_eq!(code, 0, "{err}");
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()
+    };
+    let named = |v: &serde_json::Value| {
+        v["findings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|f| f["effect"] == "supply_sag")
+    };
+    let (bench, sagging) = (diagnose(16.8), diagnose(14.0));
+    assert!(!named(&bench), "{bench}");
+    assert!(
+        warning_kinds(&bench).contains(&"supply_sag_unidentifiable".to_string()),
+        "{bench}"
+    );
+    assert!(named(&sagging), "{sagging}");
+    assert!(
+        !warning_kinds(&sagging).contains(&"supply_sag_unidentifiable".to_string()),
+        "{sagging}"
     );
 }

@@ -10,15 +10,26 @@
 //! own variation counts ([`SupplySag::identifiable`]): the extended model is refitted with the
 //! voltage replaced by its smooth function of the throttle ([`voltage_from_throttle`]), and the
 //! real voltage must beat it by the search's own score threshold.
+//!
+//! **Detectability.** Only the voltage's own variation, `V − V̂(u)`, can show a supply term
+//! beside a static map; a bench supply held constant, or a battery whose voltage only dips with
+//! the load, leaves none. [`detectability`] bounds what it could show: the change a gain as
+//! strong as a propeller's (thrust ∝ V^[`EXPONENT_MAX`], `g = 2 / V_r`) driven by
+//! `V − V̂(u)` alone would make to the final model's output, `δ_k = (ŷ_k − c) g (V_k − V̂_k)`,
+//! scored as the search scores an addition that explains it whole on top of the final residual,
+//! `n ln(1 + Σ δ² / SSE)`. Below [`SCORE_THRESHOLD`] no plausible supply term could be named in
+//! this record, and diagnose says so (a `supply_sag_unidentifiable` warning) rather than
+//! nothing.
 
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::diagnose::ctx::Ctx;
 use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
+use crate::diagnose::effects::baseline_drift::measured_estimation_samples;
 use crate::diagnose::effects::dead_time::shares;
 use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{Core, Signals};
+use crate::diagnose::model::{simulate, Core, Signals};
 use crate::diagnose::search::SCORE_THRESHOLD;
 
 /// The published name.
@@ -27,9 +38,63 @@ pub const NAME: &str = "supply_sag";
 /// Exponents `n` of the starts `g_V = n / V_r` (thrust ∝ V^1–2 on a motor; one negative start).
 pub const START_EXPONENTS: [f64; 4] = [-1.0, 0.5, 1.5, 4.0];
 
+/// Exponent `n` of the strongest plausible supply dependence, thrust ∝ V^n: a propeller whose
+/// speed follows the voltage (`ω ∝ K_v V`, thrust ∝ ω²).
+pub const EXPONENT_MAX: f64 = 2.0;
+
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
 pub struct SupplySag;
+
+/// What the voltage's own variation could show ([`detectability`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Detectability {
+    /// The score `n ln(1 + Σ δ² / SSE)` a supply term of exponent [`EXPONENT_MAX`] driven by it
+    /// would reach on top of the fit.
+    pub score: f64,
+    /// RMS of the voltage's own variation `V − V̂(u)`, V.
+    pub own_rms_v: f64,
+    /// RMS of the change `δ` that term would make, relative to the RMS of the output `ŷ − c`.
+    pub relative_change: f64,
+    /// RMS of the fit's residual, relative to the RMS of the output `ŷ − c`.
+    pub relative_residual: f64,
+}
+
+/// The module doc's bound on `fit` over the measured estimation samples; `None` without a
+/// voltage channel, with no measured estimation sample or a fit with no residual.
+pub fn detectability(ctx: &Ctx, fit: &Fit) -> Option<Detectability> {
+    let volt = ctx.sig.voltage?;
+    let ks = measured_estimation_samples(ctx, 0);
+    if ks.is_empty() || fit.sse.is_nan() || fit.sse <= 0.0 {
+        return None;
+    }
+    let vhat = voltage_from_throttle(ctx.sig.u, volt);
+    let mut sim = vec![0.0; ctx.sig.u.len()];
+    simulate(&fit.model, &ctx.sig, &mut sim);
+    let g = EXPONENT_MAX / ctx.sig.v_ref.abs().max(1e-6);
+    let c = fit.model.core.offset;
+    let (mut d2, mut v2, mut y2) = (0.0, 0.0, 0.0);
+    for &k in &ks {
+        let own = volt[k] - vhat[k];
+        d2 += ((sim[k] - c) * g * own).powi(2);
+        v2 += own * own;
+        y2 += (sim[k] - c).powi(2);
+    }
+    let n = ks.len() as f64;
+    let relative = |x: f64| {
+        if y2 > 0.0 {
+            (x / y2).sqrt()
+        } else {
+            f64::INFINITY
+        }
+    };
+    Some(Detectability {
+        score: n * (d2 / fit.sse).ln_1p(),
+        own_rms_v: (v2 / n).sqrt(),
+        relative_change: relative(d2),
+        relative_residual: relative(fit.sse),
+    })
+}
 
 /// The fitted voltage dependence.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -326,6 +391,40 @@ mod tests {
         assert!(gain_per_volt(&f).is_finite());
         let reason = verdict.expect_err("not separable from a static map");
         assert!(reason.contains("follows the throttle"), "{reason}");
+    }
+
+    /// The detectability bound on the baseline of `(u, y, v)` (the whole record).
+    fn detect(u: &[f64], y: &[f64], v: &[f64]) -> Detectability {
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
+        let mut ctx = Ctx::whole(0.01, u, y);
+        ctx.sig.voltage = Some(v);
+        ctx.sig.v_ref = mean(v);
+        let base = crate::diagnose::search::baseline(&ctx, &Default::default(), &[]);
+        detectability(&ctx, &base).expect("a voltage channel")
+    }
+
+    #[test]
+    fn a_sag_is_undetectable_where_the_voltage_has_no_variation_of_its_own() {
+        use crate::diagnose::search::SCORE_THRESHOLD;
+        // A bench supply held at 16 V (a millivolt of ripple), or a voltage that only dips
+        // with the load: even thrust ∝ V² leaves nothing a fit could score.
+        for volt in [
+            &(|k: usize, _: f64| 16.0 + 0.001 * (k as f64 * 0.9).sin())
+                as &dyn Fn(usize, f64) -> f64,
+            &|_, x| 16.8 - 3.0 * x * x,
+        ] {
+            let (u, y, v) = sagging_staircase(volt);
+            let d = detect(&u, &y, &v);
+            assert!(d.score < SCORE_THRESHOLD, "{d:?}");
+            assert!(d.own_rms_v < 0.01, "{d:?}");
+        }
+        // A battery discharging 2.4 V while the levels come back: a propeller-strong term
+        // would change the thrust by several per cent, far above the residual.
+        let (u, y, v) = sagging_staircase(|k, x| 16.8 - 1.5 * x - 2.4 * k as f64 / 1200.0);
+        let d = detect(&u, &y, &v);
+        assert!(d.score > 10.0 * SCORE_THRESHOLD, "{d:?}");
+        assert!((0.5..1.0).contains(&d.own_rms_v), "{d:?}");
+        assert!((0.03..0.2).contains(&d.relative_change), "{d:?}");
     }
 
     #[test]
