@@ -18,6 +18,21 @@
 //! noise of the same RMS: the floor is then *under*-estimated, which only makes the verdict
 //! stricter ([`super::verdict`]) — never a model called explained above the noise.
 //!
+//! **Readings, not interpolation.** The loader carries a sparse channel (a load cell written on
+//! one row in four, or repeating its last reading: [`crate::ingest::held`]) onto the grid by
+//! linear interpolation between its own readings. An interpolated sample lies on the straight
+//! line through its neighbours, so its `d_k` is zero, and at a reading `d_k` is the readings'
+//! own second difference divided by the spacing: pooled as they are, the floor would come out
+//! near zero (a 10-row hold read 10⁻¹⁵ N). A sample lies on the sloped line through its two
+//! neighbours to within [`COLLINEAR`] of their size either by interpolation or, in a quantised
+//! output, by chance (three codes in a row, `q` apart: a few per cent of the samples). When at
+//! least [`INTERPOLATED_SHARE`] of the samples in the holds do (a channel read on every second
+//! row makes half of them so, every fourth three quarters), the output is taken as
+//! interpolated: the differences are taken over its **readings** in each hold, those samples
+//! left out (a constant, which a quantised sensor repeats, is a reading). Otherwise every sample
+//! counts, as before. For white noise the readings' second differences have the same `6σ²` at
+//! any spacing.
+//!
 //! **High-order fit** (fallback, when the holds give fewer than [`MIN_HOLD_SAMPLES`]
 //! differences — random, chirp or multisine inputs — or a median of zero: an output quantised
 //! coarser than its noise). An ARX model of order [`ARX_ORDER`],
@@ -36,6 +51,11 @@ use propid_numerics::segment::{holds, Command, SegmentRules};
 pub const MIN_HOLD_SAMPLES: usize = 30;
 /// Order of the fallback ARX fit.
 pub const ARX_ORDER: usize = 8;
+/// Relative size under which a sloped second difference is taken for interpolation.
+pub const COLLINEAR: f64 = 1e-9;
+/// Share of the samples in the holds on a sloped line through their neighbours from which the
+/// output is taken as interpolated (module doc).
+pub const INTERPOLATED_SHARE: f64 = 1.0 / 3.0;
 /// `Φ⁻¹(3/4)`: median of `|N(0, 1)|`.
 const MAD_NORMAL: f64 = 0.674_489_750_196_081_7;
 
@@ -71,11 +91,36 @@ pub fn from_holds(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
     let rules = SegmentRules::DEFAULT;
     let n = u.len().min(y.len());
     let mut d: Vec<f64> = Vec::new();
-    for run in holds(Command::new(&u[..n]), &rules) {
-        for k in run.start + 1..run.end.saturating_sub(1) {
-            let v = y[k + 1] - 2.0 * y[k] + y[k - 1];
-            if v.is_finite() {
-                d.push(v.abs());
+    let runs: Vec<std::ops::Range<usize>> = holds(Command::new(&u[..n]), &rules)
+        .map(|r| r.start..r.end)
+        .collect();
+    let in_holds = || {
+        runs.iter()
+            .flat_map(|r| r.clone())
+            .filter(|&k| y[k].is_finite())
+    };
+    let on_lines = in_holds().filter(|&k| interpolated(&y[..n], k)).count();
+    let sparse = on_lines as f64 >= INTERPOLATED_SHARE * in_holds().count().max(1) as f64;
+    for run in &runs {
+        if sparse {
+            // Consecutive readings of the hold.
+            let readings: Vec<f64> = run
+                .clone()
+                .filter(|&k| y[k].is_finite() && !interpolated(&y[..n], k))
+                .map(|k| y[k])
+                .collect();
+            d.extend(
+                readings
+                    .windows(3)
+                    .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs()),
+            );
+        } else {
+            // Three adjacent samples inside the hold, all measured.
+            for k in run.start + 1..run.end.saturating_sub(1) {
+                let v = y[k + 1] - 2.0 * y[k] + y[k - 1];
+                if v.is_finite() {
+                    d.push(v.abs());
+                }
             }
         }
     }
@@ -95,6 +140,18 @@ pub fn from_holds(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
         from: FloorSource::SteadyHolds,
         samples: m,
     })
+}
+
+/// True when `y[k]` lies on the sloped straight line through its neighbours to within
+/// [`COLLINEAR`] of their size: the loader's interpolation, or chance in a quantised output
+/// (module doc).
+fn interpolated(y: &[f64], k: usize) -> bool {
+    let (Some(&a), Some(&c)) = (k.checked_sub(1).and_then(|j| y.get(j)), y.get(k + 1)) else {
+        return false;
+    };
+    let b = y[k];
+    let tol = COLLINEAR * a.abs().max(b.abs()).max(c.abs()).max(f64::MIN_POSITIVE);
+    (c - a).abs() > tol && (c - 2.0 * b + a).abs() <= tol
 }
 
 /// The high-order-fit estimate (see the module doc).
@@ -182,6 +239,43 @@ mod tests {
         let f = noise_floor(&u, &y).unwrap();
         assert_eq!(f.from, FloorSource::HighOrderFit);
         assert!((f.rms / 0.05 - 1.0).abs() < 0.2, "{f:?}");
+    }
+
+    #[test]
+    fn a_sparse_channel_is_measured_at_its_readings_not_its_interpolation() {
+        // Readings of 0.01 noise on two levels every 10 rows, linearly interpolated between
+        // (as the loader carries a load cell read on one row in ten): the floor is the
+        // readings' noise, not the interpolation's zero second differences.
+        let u: Vec<f64> = (0..4000)
+            .map(|k| if k < 2000 { 0.3 } else { 0.6 })
+            .collect();
+        let e = noise(401, 0.01, 5);
+        let reading = |j: usize| if j * 10 < 2000 { 1.0 } else { 2.0 } + e[j];
+        let y: Vec<f64> = (0..4000)
+            .map(|k| {
+                let (j, f) = (k / 10, (k % 10) as f64 / 10.0);
+                reading(j) + f * (reading(j + 1) - reading(j))
+            })
+            .collect();
+        let f = from_holds(&u, &y).unwrap();
+        assert!((f.rms / 0.01 - 1.0).abs() < 0.2, "{f:?}");
+        assert!((300..420).contains(&f.samples), "{f:?}");
+    }
+
+    #[test]
+    fn a_quantised_output_keeps_its_chance_straight_lines() {
+        // Noise of 0.02 read in codes of 0.01: some triples are three codes in a row by
+        // chance; they are noise samples like the others and all count.
+        let u = vec![0.5; 3000];
+        let y: Vec<f64> = noise(3000, 0.02, 6)
+            .iter()
+            .map(|e| (e / 0.01).round() * 0.01)
+            .collect();
+        let by_chance = (1..2999).filter(|&k| interpolated(&y, k)).count();
+        assert!(by_chance > 30, "{by_chance}");
+        let f = from_holds(&u, &y).unwrap();
+        assert_eq!(f.samples, 2998, "every sample counts: {f:?}");
+        assert!((f.rms / 0.02 - 1.0).abs() < 0.1, "{f:?}");
     }
 
     #[test]

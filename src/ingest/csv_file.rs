@@ -58,6 +58,7 @@ pub mod command_range;
 mod convert;
 mod layout;
 
+use super::held::{held_period, unhold};
 use super::resample::{to_uniform, Carried, Jitter, ResampleError};
 use columns::{channel, header_columns, Column, Picks};
 pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
@@ -430,6 +431,18 @@ fn build(
         unread,
     } = convert(columns, &mut picks, &mut values, opts)?;
     let time_vals = picks.time.map(|_| values.remove(0));
+    // A measured channel written on every row as its last reading: its repeats are cells not
+    // updated (`super::held`); the command holds its levels by design and is left alone.
+    let n_in = usize::from(picks.input.is_some());
+    let held: Vec<Option<usize>> = values
+        .iter_mut()
+        .enumerate()
+        .map(|(i, ch)| {
+            let period = held_period(ch).filter(|_| i >= n_in)?;
+            unhold(ch, period);
+            Some(period)
+        })
+        .collect();
     let (t0_s, dt_s, jitter, rate_from, carried) = match time_vals {
         Some(t) => {
             let u = to_uniform(&t, &values, opts.fs_hz)?;
@@ -472,9 +485,9 @@ fn build(
     let channels_report = chosen
         .iter()
         .zip(carried)
-        .map(|(&i, c)| (key(i), c))
+        .zip(held)
+        .map(|((&i, c), held_rows)| (key(i), Carried { held_rows, ..c }))
         .collect();
-    let n_in = usize::from(picks.input.is_some());
     let names = |range: std::ops::Range<usize>| -> Vec<String> {
         channels[range].iter().map(|c| c.name.clone()).collect()
     };

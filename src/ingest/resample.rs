@@ -122,6 +122,10 @@ pub struct Carried {
     pub bridged: usize,
     /// Grid points left NaN (in a gap of this channel, or outside its first and last sample).
     pub missing: usize,
+    /// Rows each reading was repeated for, when the channel was written as a held last reading
+    /// ([`super::held`]): its repeats were read as cells not updated (omitted otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub held_rows: Option<usize>,
 }
 
 /// Puts `channels` (one value per row, rows at times `t`; NaN = an empty cell) onto a uniform
@@ -194,6 +198,7 @@ pub fn to_uniform(
             own_dt_s: own_period(&times, &own),
             bridged: bridged_points(&times, &own, &values, grid, dt),
             missing: lost.iter().filter(|m| **m).count(),
+            held_rows: None,
         });
         out.push(values);
     }

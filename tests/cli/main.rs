@@ -12,6 +12,7 @@ mod host_faults_cli;
 mod identify_cli;
 mod identify_dialects;
 mod identify_gain;
+mod identify_held;
 mod identify_quality;
 mod identify_real_data;
 mod identify_sim_recording;
