@@ -130,6 +130,8 @@ pub enum Unit {
     Command,
     /// Newton.
     Newton,
+    /// Millinewton.
+    Millinewton,
     /// Gram-force.
     GramForce,
     /// Kilogram-force.
@@ -142,6 +144,14 @@ pub enum Unit {
     NewtonMetre,
     /// Newton millimetre.
     NewtonMillimetre,
+    /// Newton centimetre.
+    NewtonCentimetre,
+    /// Millinewton metre.
+    MillinewtonMetre,
+    /// Kilogram-force centimetre (a common torque unit of small stands' exports).
+    KilogramForceCentimetre,
+    /// Gram-force centimetre.
+    GramForceCentimetre,
     /// Ounce-force inch.
     OunceForceInch,
     /// Pound-force inch.
@@ -150,6 +160,8 @@ pub enum Unit {
     PoundForceFoot,
     /// Mechanical rev/min.
     Rpm,
+    /// Thousands of mechanical rev/min.
+    KiloRpm,
     /// Electrical rev/min (needs the motor's pole count).
     ElectricalRpm,
     /// Radian per second.
@@ -181,16 +193,22 @@ impl Unit {
             Unit::DShot => "DShot",
             Unit::Command => "none",
             Unit::Newton => "N",
+            Unit::Millinewton => "mN",
             Unit::GramForce => "gf",
             Unit::KilogramForce => "kgf",
             Unit::PoundForce => "lbf",
             Unit::OunceForce => "ozf",
             Unit::NewtonMetre => "N·m",
             Unit::NewtonMillimetre => "N·mm",
+            Unit::NewtonCentimetre => "N·cm",
+            Unit::MillinewtonMetre => "mN·m",
+            Unit::KilogramForceCentimetre => "kgf·cm",
+            Unit::GramForceCentimetre => "gf·cm",
             Unit::OunceForceInch => "ozf·in",
             Unit::PoundForceInch => "lbf·in",
             Unit::PoundForceFoot => "lbf·ft",
             Unit::Rpm => "RPM",
+            Unit::KiloRpm => "kRPM",
             Unit::ElectricalRpm => "eRPM",
             Unit::RadianPerSecond => "rad/s",
             Unit::Hertz => "Hz",
@@ -284,9 +302,16 @@ impl ColumnSpec {
             | Unit::NewtonMetre
             | Unit::Rpm => r(1.0, 1.0),
             Unit::Volt | Unit::Ampere | Unit::Fraction => r(1.0, 1.0),
-            Unit::Millisecond | Unit::NewtonMillimetre | Unit::Millivolt | Unit::Milliampere => {
-                r(1.0, 1e3)
-            }
+            Unit::Millisecond
+            | Unit::NewtonMillimetre
+            | Unit::Millivolt
+            | Unit::Milliampere
+            | Unit::Millinewton
+            | Unit::MillinewtonMetre => r(1.0, 1e3),
+            Unit::NewtonCentimetre => r(1.0, 1e2),
+            Unit::KilogramForceCentimetre => r(G0, 1e2),
+            Unit::GramForceCentimetre => r(G0, 1e5),
+            Unit::KiloRpm => r(1e3, 1.0),
             Unit::Microsecond => r(1.0, 1e6),
             Unit::ThrottleLevel => r(1.0, 1e4),
             Unit::Percent => r(1.0, 1e2),
@@ -326,7 +351,7 @@ pub fn normalise(name: &str) -> String {
             'µ' | 'μ' => out.push('u'),
             '[' => out.push('('),
             ']' => out.push(')'),
-            ' ' | '\t' | '·' | '⋅' | '.' | '*' => {}
+            ' ' | '\t' | '·' | '⋅' | '•' | '∙' | '.' | '*' => {}
             c => out.extend(c.to_lowercase()),
         }
     }
@@ -396,6 +421,7 @@ pub const WORDS: &[(&str, Quantity)] = &[
 /// The unit table: a unit suffix (normalised) of a quantity → its unit.
 pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("s", Q::Time, U::Second),
+    ("sec", Q::Time, U::Second),
     ("ms", Q::Time, U::Millisecond),
     ("us", Q::Time, U::Microsecond),
     ("%", Q::Throttle, U::Percent),
@@ -405,6 +431,7 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("frac", Q::Throttle, U::Fraction),
     ("dshot", Q::Throttle, U::DShot),
     ("n", Q::Thrust, U::Newton),
+    ("mn", Q::Thrust, U::Millinewton),
     ("g", Q::Thrust, U::GramForce),
     ("gf", Q::Thrust, U::GramForce),
     ("kg", Q::Thrust, U::KilogramForce),
@@ -414,7 +441,21 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("oz", Q::Thrust, U::OunceForce),
     ("ozf", Q::Thrust, U::OunceForce),
     ("nm", Q::Torque, U::NewtonMetre),
+    ("n-m", Q::Torque, U::NewtonMetre),
     ("nmm", Q::Torque, U::NewtonMillimetre),
+    ("n-mm", Q::Torque, U::NewtonMillimetre),
+    ("ncm", Q::Torque, U::NewtonCentimetre),
+    ("n-cm", Q::Torque, U::NewtonCentimetre),
+    ("mnm", Q::Torque, U::MillinewtonMetre),
+    ("mn-m", Q::Torque, U::MillinewtonMetre),
+    ("kgfcm", Q::Torque, U::KilogramForceCentimetre),
+    ("kgf-cm", Q::Torque, U::KilogramForceCentimetre),
+    ("kgcm", Q::Torque, U::KilogramForceCentimetre),
+    ("kg-cm", Q::Torque, U::KilogramForceCentimetre),
+    ("gfcm", Q::Torque, U::GramForceCentimetre),
+    ("gf-cm", Q::Torque, U::GramForceCentimetre),
+    ("gcm", Q::Torque, U::GramForceCentimetre),
+    ("g-cm", Q::Torque, U::GramForceCentimetre),
     ("ozfin", Q::Torque, U::OunceForceInch),
     ("ozf-in", Q::Torque, U::OunceForceInch),
     ("ozin", Q::Torque, U::OunceForceInch),
@@ -427,9 +468,12 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("lbfft", Q::Torque, U::PoundForceFoot),
     ("lbf-ft", Q::Torque, U::PoundForceFoot),
     ("rpm", Q::Rpm, U::Rpm),
+    ("krpm", Q::Rpm, U::KiloRpm),
     ("erpm", Q::Rpm, U::ElectricalRpm),
     ("rad/s", Q::Rpm, U::RadianPerSecond),
     ("hz", Q::Rpm, U::Hertz),
+    ("rps", Q::Rpm, U::Hertz),
+    ("rev/s", Q::Rpm, U::Hertz),
     ("v", Q::Voltage, U::Volt),
     ("mv", Q::Voltage, U::Millivolt),
     ("a", Q::Current, U::Ampere),

@@ -179,6 +179,67 @@ fn new_units_convert_to_si() {
 }
 
 #[test]
+fn small_stands_units_read_and_convert() {
+    use Quantity as Q;
+    use Unit as U;
+    // Small motors' stands write torque in kgf·cm, gf·cm, mN·m or N·cm, thrust in mN, speed in
+    // kRPM or rev/s, and a dot of any kind (`N•m`, `N∙m`, `N-m`) in the unit.
+    let cases = [
+        ("Thrust (mN)", Q::Thrust, U::Millinewton, 250.0, 0.25),
+        (
+            "Torque (kgf·cm)",
+            Q::Torque,
+            U::KilogramForceCentimetre,
+            1.0,
+            0.0980665,
+        ),
+        (
+            "torque_kg-cm",
+            Q::Torque,
+            U::KilogramForceCentimetre,
+            10.0,
+            0.980665,
+        ),
+        (
+            "Torque (gf.cm)",
+            Q::Torque,
+            U::GramForceCentimetre,
+            1000.0,
+            0.0980665,
+        ),
+        (
+            "Torque [g-cm]",
+            Q::Torque,
+            U::GramForceCentimetre,
+            100.0,
+            0.00980665,
+        ),
+        ("Torque (mN·m)", Q::Torque, U::MillinewtonMetre, 12.0, 0.012),
+        ("Torque (N·cm)", Q::Torque, U::NewtonCentimetre, 5.0, 0.05),
+        ("Torque (N•m)", Q::Torque, U::NewtonMetre, 0.2, 0.2),
+        ("Torque (N∙m)", Q::Torque, U::NewtonMetre, 0.2, 0.2),
+        ("torque_N-m", Q::Torque, U::NewtonMetre, 0.2, 0.2),
+        ("Speed (kRPM)", Q::Rpm, U::KiloRpm, 12.5, 12_500.0),
+        ("speed (rps)", Q::Rpm, U::Hertz, 100.0, 6000.0),
+        ("Speed (rev/s)", Q::Rpm, U::Hertz, 100.0, 6000.0),
+        ("time (sec)", Q::Time, U::Second, 1.5, 1.5),
+    ];
+    let o = ConvOptions::default();
+    for (name, quantity, unit, raw, si) in cases {
+        let spec = lookup(name);
+        assert_eq!(spec, Some(ColumnSpec { quantity, unit }), "{name}");
+        let got = spec.unwrap().conversion(&o).unwrap().apply(raw);
+        assert!(
+            (got - si).abs() <= 1e-12 * si.abs(),
+            "{name}: {got} against {si}"
+        );
+    }
+    for name in ["Thrust (kgf·cm)", "Torque (mN)", "Speed (kgf)"] {
+        assert_eq!(lookup(name), None, "{name}");
+    }
+}
+
+#[test]
 fn command_scales_are_declared_by_a_unit_or_left_to_the_values() {
     let scales = |name: &str| lookup(name).unwrap().unit.command_scales();
     assert_eq!(
@@ -210,7 +271,7 @@ fn unitless_quantities_units_rows_and_clock_names() {
     assert_eq!(unitless("Thrust (gf)"), None);
     assert_eq!(unitless("rpm"), None);
     assert_eq!(unitless("Motor"), None);
-    assert_eq!(units_of(Quantity::Thrust), "N, gf, kgf, lbf, ozf");
+    assert_eq!(units_of(Quantity::Thrust), "N, mN, gf, kgf, lbf, ozf");
     for u in ["s", "%", "gf", "N·mm", "[rad/s]", "(µs)", "mA"] {
         assert!(is_unit(u), "{u}");
     }
