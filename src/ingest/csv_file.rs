@@ -66,7 +66,8 @@ use convert::{convert, Converted};
 use layout::{layout, Layout};
 use propid_wire::protocol::csv::columns::{ColumnSpec, Quantity, Scale, Unit};
 use propid_wire::protocol::csv::line::{
-    classify_str, fields, parse_number, text_lines, ClockColumn, DecimalMark, LineKind,
+    classify_str, fields, is_missing_marker, parse_number, text_lines, ClockColumn, DecimalMark,
+    LineKind,
 };
 use propid_wire::record::{Channel, Record};
 
@@ -533,10 +534,11 @@ fn build(
     })
 }
 
-/// An empty field is "not measured" (NaN); text is `None`; a number is read by the dialect's
-/// rule ([`parse_number`] with the file's decimal mark).
+/// An empty field, or a missing marker (`-`, `N/A`, `NULL`, ...: [`is_missing_marker`]), is
+/// "not measured" (NaN); other text is `None`; a number is read by the dialect's rule
+/// ([`parse_number`] with the file's decimal mark).
 fn parse_field(f: &str, mark: DecimalMark) -> Option<f64> {
-    if f.is_empty() {
+    if f.is_empty() || is_missing_marker(f) {
         return Some(f64::NAN);
     }
     parse_number(f, mark)

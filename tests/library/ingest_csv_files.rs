@@ -241,6 +241,40 @@ fn a_dropped_reading_is_missing_in_its_channel_only() {
 }
 
 #[test]
+fn missing_markers_are_empty_cells_not_unreadable_rows() {
+    // A load cell that did not report is written `N/A`, `-` or `NULL` (the first data row
+    // already has one): each is a missing value of its channel, the row and the command stay.
+    let mut text = String::from("Time (s),ESC signal (µs),Thrust (gf),Voltage (V)\n");
+    for k in 0..40 {
+        let thrust = match k % 4 {
+            0 => format!("{}", 100 + k),
+            1 => "N/A".into(),
+            2 => "-".into(),
+            _ => "NULL".into(),
+        };
+        let volt = if k % 2 == 0 { "16.0" } else { "nan" };
+        text.push_str(&format!("{},1400,{thrust},{volt}\n", 0.01 * k as f64));
+    }
+    let o = CsvFileOptions {
+        optional: vec!["voltage_V".into()],
+        ..opts()
+    };
+    let f = read_csv(&text, &o).unwrap();
+    assert_eq!(f.record.len(), 40);
+    assert_eq!(f.source.skipped.total(), 0);
+    assert!(f.source.header);
+    let c = &f.source.channels["thrust"];
+    assert_eq!(c.values, 10, "{c:?}");
+    let y = &f.record.channel("thrust_N").unwrap().data;
+    assert!(
+        (y[2] - 102.0 * 9.80665e-3).abs() < 1e-9,
+        "interpolated: {}",
+        y[2]
+    );
+    assert_eq!(f.source.channels["voltage"].values, 20);
+}
+
+#[test]
 fn sensors_at_their_own_rates_are_carried_not_dropped() {
     // A row for every command update (100 Hz); the load cell fills one row in five, the
     // current one in ten: the record keeps every row, each channel at its own rate.

@@ -4,8 +4,9 @@
 //! Exports put other things than a header first (`Motor: X2212`, `Date,2024-03-01`, a blank
 //! line) and sometimes the units on a row of their own under the names (`Time,Thrust` then
 //! `s,gf`). The rule:
-//! 1. The first **data row** is the first line of two or more fields that are all empty or
-//!    numbers ([`is_numeric`], decimal commas included); its separator ([`separator`]) is the
+//! 1. The first **data row** is the first line of two or more fields that are all empty,
+//!    numbers ([`is_number`], decimal commas included) or missing markers (`-`, `N/A`, `NULL`:
+//!    [`is_missing_marker`]), at least one a number; its separator ([`separator`]) is the
 //!    file's.
 //! 2. A file whose first line is a data row has no header.
 //! 3. Otherwise the **header** is, among the lines before the first data row, the first one with
@@ -20,7 +21,9 @@
 //!    fields that either mark reads (`1,234`, `1.300`).
 
 use propid_wire::protocol::csv::columns;
-use propid_wire::protocol::csv::line::{fields, is_numeric, separator, DecimalMark};
+use propid_wire::protocol::csv::line::{
+    fields, is_missing_marker, is_number, separator, DecimalMark,
+};
 
 /// The layout of a file's lines (comments and blank lines already left out).
 #[derive(Debug, Clone, PartialEq)]
@@ -41,9 +44,13 @@ pub(super) struct Layout {
 
 /// The layout of `lines` (rules of the module documentation); `lines` is not empty.
 pub(super) fn layout(lines: &[&str]) -> Layout {
+    // A data row: numbers, empty cells and missing markers (`-`, `N/A`: a sensor that did not
+    // report), at least one number.
     let is_data = |l: &str| {
         let sep = separator(l);
-        fields(l, sep).count() >= 2 && is_numeric(l, sep)
+        fields(l, sep).count() >= 2
+            && fields(l, sep).all(|f| f.is_empty() || is_number(&f) || is_missing_marker(&f))
+            && fields(l, sep).any(|f| is_number(&f))
     };
     let first_data = lines.iter().position(|l| is_data(l));
     let sep = separator(lines[first_data.unwrap_or(0)]);

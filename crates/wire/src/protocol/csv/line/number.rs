@@ -115,6 +115,18 @@ pub fn parse_number(field: &str, mark: DecimalMark) -> Option<f64> {
     }
 }
 
+/// Cell texts an exported log writes for "no value" (compared without case, trimmed): a
+/// spreadsheet's `#N/A`, a database's `NULL`, pandas' `NaN` and `None`, a person's `-` or `n/a`.
+/// In a file they are an empty cell: a missing value of that channel only, never text that
+/// makes the row unreadable.
+pub const MISSING_MARKERS: [&str; 8] = ["-", "--", "n/a", "na", "#n/a", "null", "none", "nan"];
+
+/// True when `field` is one of [`MISSING_MARKERS`].
+pub fn is_missing_marker(field: &str) -> bool {
+    let f = field.trim();
+    MISSING_MARKERS.iter().any(|m| f.eq_ignore_ascii_case(m))
+}
+
 /// True when `field` is a number written with either decimal mark.
 pub fn is_number(field: &str) -> bool {
     read_as(field, DecimalMark::Point).is_some() || read_as(field, DecimalMark::Comma).is_some()
@@ -124,6 +136,18 @@ pub fn is_number(field: &str) -> bool {
 mod tests {
     use super::super::{fields, is_numeric, separator};
     use super::*;
+
+    #[test]
+    fn missing_markers_are_known_without_case_and_numbers_are_not_markers() {
+        for m in [
+            "-", "--", "N/A", "n/a", "NA", "#N/A", "NULL", "None", "NaN", " nan ",
+        ] {
+            assert!(is_missing_marker(m), "{m}");
+        }
+        for f in ["", "0", "-1", "1-2", "n", "none yet", "x"] {
+            assert!(!is_missing_marker(f), "{f}");
+        }
+    }
 
     #[test]
     fn thousands_separators_with_either_decimal_mark() {
