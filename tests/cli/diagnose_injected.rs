@@ -180,3 +180,18 @@ fn a_drift_or_a_delay_in_a_one_way_ramp_is_said_unidentifiable() {
 fn a_delay_hidden_in_a_motor_stand_log_is_found_on_top_of_its_own() {
     hidden_effect_is_found_on_top("dead_time", &["vanderploeg 90PERCENT"], 2, true);
 }
+
+/// The motor-stand logs with a supply voltage, when present: their thrust scaled by the
+/// measured voltage as a propeller's would be (thrust ∝ V^n, `n` 1–2, on top of the stand's own
+/// supply dependence). The vanderploeg staircase names its own sag already (the injected one
+/// adds to it); on dantonio's ramp the voltage both follows the load and discharges, and only
+/// its discharge tells a sag from the thrust curve (docs/injection.md gives both logs' rates).
+#[test]
+fn a_supply_sag_hidden_in_a_motor_stand_log_is_found_with_its_gain() {
+    hidden_effect_is_found_on_top(
+        "supply_sag",
+        &["vanderploeg 90PERCENT", "dantonio ramp"],
+        2,
+        true,
+    );
+}

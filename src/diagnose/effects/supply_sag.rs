@@ -9,7 +9,11 @@
 //! then measures the map's curvature, not the supply. The term is taken only when the voltage's
 //! own variation counts ([`SupplySag::identifiable`]): the extended model is refitted with the
 //! voltage replaced by its smooth function of the throttle ([`voltage_from_throttle`]), and the
-//! real voltage must beat it by the search's own score threshold.
+//! real voltage must beat it by the search's own score threshold — unless that alternative
+//! needs a thrust that falls as the throttle rises ([`map_turns_back`]): a supply that
+//! collapses on the top level (a current-limited bench supply, a battery at its limit) gives
+//! less thrust there than on the level below. The voltage explains that; a propeller's static
+//! map cannot, so the smooth function of the throttle is no alternative there.
 //!
 //! **Detectability.** Only the voltage's own variation, `V − V̂(u)`, can show a supply term
 //! beside a static map; a bench supply held constant, or a battery whose voltage only dips with
@@ -154,12 +158,16 @@ impl Effect for SupplySag {
     /// The module doc's test: `after` refitted with the voltage replaced by
     /// [`voltage_from_throttle`] (from `after`'s values and from this effect's own starts on
     /// `before`); the real voltage must lower the SSE by a score `n ln(SSE_alt / SSE_after)` of
-    /// at least [`SCORE_THRESHOLD`].
+    /// at least [`SCORE_THRESHOLD`], or the alternative must be no static map: a thrust that
+    /// falls as the throttle rises ([`map_turns_back`]: a supply that collapses on the top
+    /// level gives less thrust there than on the level below, which the voltage explains and
+    /// no propeller's map does).
     fn identifiable(&self, ctx: &Ctx, before: &Fit, after: &Fit) -> Result<(), String> {
         let Some(volt) = ctx.sig.voltage else {
             return Ok(());
         };
-        let vhat = voltage_from_throttle(ctx.sig.u, volt);
+        let quad = VoltageOfThrottle::fit(ctx.sig.u, volt);
+        let vhat: Vec<f64> = ctx.sig.u.iter().map(|&u| quad.at(u)).collect();
         let alt = Ctx {
             sig: Signals {
                 voltage: Some(&vhat),
@@ -173,7 +181,7 @@ impl Effect for SupplySag {
             f = g;
         }
         let own = after.n as f64 * (f.sse / after.sse).ln();
-        if own >= SCORE_THRESHOLD {
+        if own >= SCORE_THRESHOLD || map_turns_back(&alt, &f.model, &quad) {
             return Ok(());
         }
         Err(format!(
@@ -191,35 +199,119 @@ impl Effect for SupplySag {
 /// throttle) are such functions; a voltage that collapses on one level only, or discharges
 /// while a staircase comes back down, is not. A throttle that does not vary gives the mean
 /// voltage (a small ridge keeps the solution defined when the throttle takes two values).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VoltageOfThrottle {
+    /// Mean and standard deviation of the throttle (the standardisation).
+    u_mean: f64,
+    u_std: f64,
+    /// `a, b, c`; `b = c = 0` when the throttle does not vary.
+    coef: [f64; 3],
+}
+
+impl VoltageOfThrottle {
+    /// The fit over the samples of `u` and `v`.
+    pub fn fit(u: &[f64], v: &[f64]) -> VoltageOfThrottle {
+        let n = u.len().min(v.len());
+        let (u, v) = (&u[..n], &v[..n]);
+        let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
+        let (mu, mv) = (mean(u), mean(v));
+        let su = (u.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / n.max(1) as f64).sqrt();
+        let flat = VoltageOfThrottle {
+            u_mean: mu,
+            u_std: 1.0,
+            coef: [mv, 0.0, 0.0],
+        };
+        if !(su > 0.0 && su.is_finite()) {
+            return flat;
+        }
+        let mut ata = nalgebra::Matrix3::<f64>::zeros();
+        let mut aty = nalgebra::Vector3::<f64>::zeros();
+        for (&uk, &vk) in u.iter().zip(v) {
+            let xk = (uk - mu) / su;
+            let row = nalgebra::Vector3::new(1.0, xk, xk * xk);
+            ata += row * row.transpose();
+            aty += row * vk;
+        }
+        // A small ridge: with two distinct throttles x² is a multiple of the constant.
+        let ridge = 1e-9 * ata.diagonal().max();
+        for i in 0..3 {
+            ata[(i, i)] += ridge;
+        }
+        match ata.cholesky().map(|c| c.solve(&aty)) {
+            Some(c) if c.iter().all(|a| a.is_finite()) => VoltageOfThrottle {
+                u_mean: mu,
+                u_std: su,
+                coef: [c[0], c[1], c[2]],
+            },
+            _ => flat,
+        }
+    }
+
+    /// `V̂` at throttle `u`.
+    pub fn at(&self, u: f64) -> f64 {
+        let x = (u - self.u_mean) / self.u_std;
+        self.coef[0] + self.coef[1] * x + self.coef[2] * x * x
+    }
+}
+
+/// `V̂` of every sample ([`VoltageOfThrottle`] fitted over `u` and `v`).
 pub fn voltage_from_throttle(u: &[f64], v: &[f64]) -> Vec<f64> {
-    let n = u.len().min(v.len());
-    let (u, v) = (&u[..n], &v[..n]);
-    let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len().max(1) as f64;
-    let (mu, mv) = (mean(u), mean(v));
-    let su = (u.iter().map(|x| (x - mu).powi(2)).sum::<f64>() / n.max(1) as f64).sqrt();
-    if !(su > 0.0 && su.is_finite()) {
-        return vec![mv; n];
+    let q = VoltageOfThrottle::fit(u, v);
+    u.iter().take(v.len()).map(|&x| q.at(x)).collect()
+}
+
+/// Levels at which a model's steady output is evaluated across the throttle's range.
+pub const MAP_LEVELS: usize = 16;
+/// Largest fall of a steady output against the throttle, as a share of its span, that still
+/// counts as a map that does not turn back (noise of the fit).
+pub const MAP_REVERSAL: f64 = 0.02;
+
+/// True when model `m`'s steady output, with the supply at `vhat(u)`, turns back against the
+/// throttle somewhere in the estimation samples' throttle range: falls by more than
+/// [`MAP_REVERSAL`] of its span where its overall trend rises (or rises where it falls). A
+/// propeller's thrust does not fall as the throttle rises at a fixed supply, so a "static map"
+/// that must do so is not one. The steady output at a level is the model's first simulated
+/// sample with the input held there (the states start in steady state).
+pub fn map_turns_back(
+    ctx: &Ctx,
+    m: &crate::diagnose::model::Model,
+    vhat: &VoltageOfThrottle,
+) -> bool {
+    let us = ctx
+        .est
+        .clone()
+        .map(|k| ctx.sig.u[k])
+        .filter(|u| u.is_finite());
+    let (lo, hi) = us.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), u| {
+        (a.min(u), b.max(u))
+    });
+    if !(hi > lo) {
+        return false;
     }
-    let x: Vec<f64> = u.iter().map(|&a| (a - mu) / su).collect();
-    let mut ata = nalgebra::Matrix3::<f64>::zeros();
-    let mut aty = nalgebra::Vector3::<f64>::zeros();
-    for (&xk, &vk) in x.iter().zip(v) {
-        let row = nalgebra::Vector3::new(1.0, xk, xk * xk);
-        ata += row * row.transpose();
-        aty += row * vk;
+    let steady: Vec<f64> = (0..MAP_LEVELS)
+        .map(|i| {
+            let u = [lo + (hi - lo) * i as f64 / (MAP_LEVELS - 1) as f64];
+            let v = [vhat.at(u[0])];
+            let sig = Signals {
+                u: &u,
+                y: &u,
+                voltage: Some(&v),
+                ..ctx.sig
+            };
+            let mut out = [0.0];
+            simulate(m, &sig, &mut out);
+            out[0]
+        })
+        .collect();
+    let (first, last) = (steady[0], steady[MAP_LEVELS - 1]);
+    let span = steady.iter().fold(0.0f64, |s, &y| s.max((y - first).abs()));
+    if !(span > 0.0 && span.is_finite()) {
+        return false;
     }
-    // A small ridge: with two distinct throttles x² is a multiple of the constant.
-    let ridge = 1e-9 * ata.diagonal().max();
-    for i in 0..3 {
-        ata[(i, i)] += ridge;
-    }
-    match ata.cholesky().map(|c| c.solve(&aty)) {
-        Some(c) if c.iter().all(|a| a.is_finite()) => x
-            .iter()
-            .map(|&xk| c[0] + c[1] * xk + c[2] * xk * xk)
-            .collect(),
-        _ => vec![mv; n],
-    }
+    let sign = if last >= first { 1.0 } else { -1.0 };
+    steady
+        .windows(2)
+        .any(|w| sign * (w[1] - w[0]) < -MAP_REVERSAL * span)
 }
 
 impl Term for SupplySagParams {
@@ -317,8 +409,15 @@ mod tests {
     /// a supply sag of 0.1 per volt on voltage `volt(k, u)`, a small deterministic noise
     /// added; the baseline fitted; returns (u, y, v).
     fn sagging_staircase(volt: impl Fn(usize, f64) -> f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        sagging_levels(&[0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65], volt)
+    }
+
+    /// [`sagging_staircase`] over `levels`.
+    fn sagging_levels(
+        levels: &[f64],
+        volt: impl Fn(usize, f64) -> f64,
+    ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         use crate::diagnose::model::simulate;
-        let levels = [0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65];
         let u: Vec<f64> = levels
             .iter()
             .flat_map(|&l| std::iter::repeat(l).take(150))
@@ -391,6 +490,37 @@ mod tests {
         assert!(gain_per_volt(&f).is_finite());
         let reason = verdict.expect_err("not separable from a static map");
         assert!(reason.contains("follows the throttle"), "{reason}");
+    }
+
+    #[test]
+    fn a_supply_that_collapses_on_the_top_level_is_a_sag_not_a_map() {
+        // Three levels, 16.8 V on all but the top one (0.8), 13 V there: the voltage is a
+        // function of the throttle (a quadratic through three levels follows it exactly), but
+        // the thrust at 0.8 falls below the thrust at 0.6, which the voltage explains and no
+        // propeller's static map does.
+        let volt = |_: usize, x: f64| if x >= 0.8 { 13.0 } else { 16.8 };
+        let (u, y, v) = sagging_levels(&[0.3, 0.6, 0.8, 0.3, 0.8, 0.6, 0.3, 0.8], volt);
+        let (f, verdict) = fit_sag(&u, &y, &v);
+        assert_eq!(verdict, Ok(()));
+        let g = gain_per_volt(&f);
+        assert!((g / 0.1 - 1.0).abs() < 0.1, "{g}");
+        // The smooth function of the throttle that stands in for the voltage turns back ...
+        let quad = VoltageOfThrottle::fit(&u, &v);
+        let mut ctx = Ctx::whole(0.01, &u, &y);
+        ctx.sig.voltage = Some(&v);
+        ctx.sig.v_ref = v.iter().sum::<f64>() / v.len() as f64;
+        assert!(map_turns_back(&ctx, &f.model, &quad));
+        // ... while with an IR drop that only dips (thrust still rising) it does not.
+        let (u, y, v) = sagging_staircase(|_, x| 16.8 - 3.0 * x * x);
+        let (f, _) = fit_sag(&u, &y, &v);
+        let mut ctx = Ctx::whole(0.01, &u, &y);
+        ctx.sig.voltage = Some(&v);
+        ctx.sig.v_ref = v.iter().sum::<f64>() / v.len() as f64;
+        assert!(!map_turns_back(
+            &ctx,
+            &f.model,
+            &VoltageOfThrottle::fit(&u, &v)
+        ));
     }
 
     /// The detectability bound on the baseline of `(u, y, v)` (the whole record).
