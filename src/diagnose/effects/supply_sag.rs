@@ -285,7 +285,7 @@ pub fn map_turns_back(
     let (lo, hi) = us.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), u| {
         (a.min(u), b.max(u))
     });
-    if !(hi > lo) {
+    if hi <= lo {
         return false;
     }
     let steady: Vec<f64> = (0..MAP_LEVELS)
@@ -305,7 +305,7 @@ pub fn map_turns_back(
         .collect();
     let (first, last) = (steady[0], steady[MAP_LEVELS - 1]);
     let span = steady.iter().fold(0.0f64, |s, &y| s.max((y - first).abs()));
-    if !(span > 0.0 && span.is_finite()) {
+    if span.is_nan() || span <= 0.0 || span.is_infinite() {
         return false;
     }
     let sign = if last >= first { 1.0 } else { -1.0 };
