@@ -58,7 +58,7 @@ pub mod command_range;
 mod convert;
 mod layout;
 
-use super::held::{held_period, unhold};
+use super::held::{held_period, hold_command, unhold};
 use super::resample::{to_uniform, Carried, Jitter, ResampleError};
 use columns::{channel, header_columns, Column, Picks};
 pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
@@ -433,13 +433,17 @@ fn build(
     } = convert(columns, &mut picks, &mut values, opts)?;
     let time_vals = picks.time.map(|_| values.remove(0));
     // A measured channel written on every row as its last reading: its repeats are cells not
-    // updated (`super::held`); the command holds its levels by design and is left alone.
+    // updated; a command written only where it changes holds until the next (`super::held`).
     let n_in = usize::from(picks.input.is_some());
+    let command_held = values
+        .first_mut()
+        .filter(|_| n_in == 1)
+        .map_or(0, |c| hold_command(c));
     let held: Vec<Option<usize>> = values
         .iter_mut()
         .enumerate()
         .map(|(i, ch)| {
-            let period = held_period(ch).filter(|_| i >= n_in)?;
+            let period = (i >= n_in).then(|| held_period(ch)).flatten()?;
             unhold(ch, period);
             Some(period)
         })
@@ -487,7 +491,16 @@ fn build(
         .iter()
         .zip(carried)
         .zip(held)
-        .map(|((&i, c), held_rows)| (key(i), Carried { held_rows, ..c }))
+        .enumerate()
+        .map(|(j, ((&i, c), held_rows))| {
+            let command_held = if j == 0 { command_held } else { 0 };
+            let c = Carried {
+                held_rows,
+                command_held,
+                ..c
+            };
+            (key(i), c)
+        })
         .collect();
     let names = |range: std::ops::Range<usize>| -> Vec<String> {
         channels[range].iter().map(|c| c.name.clone()).collect()

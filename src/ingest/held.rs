@@ -23,6 +23,12 @@
 //! **Reading** ([`unhold`]). The first cell of each run is a reading; so is every `L`-th cell of
 //! a run longer than `L + 1` (a reading that did not change: the sensor at rest, still
 //! reporting); the other cells are left empty (NaN).
+//!
+//! **The command is the other way round** ([`hold_command`]). A logger that writes the command
+//! only on the rows where it changes leaves its other cells empty; an ESC keeps its last
+//! command, so each empty cell after the first command takes the last one written (a zero-order
+//! hold). Interpolated like a sensor, a step would become a ramp between two changes, and the
+//! rows after the last change would be missing.
 
 /// Fewest runs of repeats for a channel to be called held.
 pub const MIN_RUNS: usize = 20;
@@ -92,6 +98,22 @@ pub fn unhold(values: &mut [f64], period: usize) -> usize {
     }
     flush(&mut run, values);
     emptied
+}
+
+/// Fills every empty (NaN) cell of the command `values` after its first number with the last
+/// number before it (module doc); returns the cells filled.
+pub fn hold_command(values: &mut [f64]) -> usize {
+    let mut last: Option<f64> = None;
+    let mut filled = 0;
+    for v in values.iter_mut() {
+        if v.is_finite() {
+            last = Some(*v);
+        } else if let Some(l) = last {
+            *v = l;
+            filled += 1;
+        }
+    }
+    filled
 }
 
 #[cfg(test)]
@@ -168,6 +190,15 @@ mod tests {
         assert_eq!(held_period(&ramp), None);
         assert_eq!(held_period(&[1.0; 500]), None);
         assert_eq!(held_period(&held(10, 0, 150)), None);
+    }
+
+    #[test]
+    fn a_command_written_on_its_changes_holds_until_the_next() {
+        let nan = f64::NAN;
+        let mut cmd = [nan, 0.2, nan, nan, 0.6, nan, 0.3, nan];
+        assert_eq!(hold_command(&mut cmd), 4);
+        assert!(cmd[0].is_nan(), "nothing before the first command");
+        assert_eq!(&cmd[1..], &[0.2, 0.2, 0.2, 0.6, 0.6, 0.3, 0.3]);
     }
 
     #[test]

@@ -126,6 +126,14 @@ pub struct Carried {
     /// ([`super::held`]): its repeats were read as cells not updated (omitted otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub held_rows: Option<usize>,
+    /// Empty cells of the command that took the last command written (a command logged on its
+    /// changes only, [`super::held::hold_command`]; omitted when 0).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub command_held: usize,
+}
+
+fn is_zero(v: &usize) -> bool {
+    *v == 0
 }
 
 /// Puts `channels` (one value per row, rows at times `t`; NaN = an empty cell) onto a uniform
@@ -199,6 +207,7 @@ pub fn to_uniform(
             bridged: bridged_points(&times, &own, &values, grid, dt),
             missing: lost.iter().filter(|m| **m).count(),
             held_rows: None,
+            command_held: 0,
         });
         out.push(values);
     }

@@ -275,6 +275,30 @@ fn missing_markers_are_empty_cells_not_unreadable_rows() {
 }
 
 #[test]
+fn a_command_logged_on_its_changes_holds_until_the_next() {
+    // The throttle written only on the rows where it changes (every 50 rows), the thrust on
+    // every row: the command is a staircase held to the end, not ramps between its changes.
+    let mut text = String::from("Time (s),Throttle (%),Thrust (gf)\n");
+    for k in 0..200 {
+        let level = [20, 40, 60, 30][k / 50];
+        let cmd = if k % 50 == 0 {
+            level.to_string()
+        } else {
+            String::new()
+        };
+        text.push_str(&format!("{},{cmd},{}\n", 0.01 * k as f64, 10 * level));
+    }
+    let f = read_csv(&text, &opts()).unwrap();
+    let u = &f.record.channel("throttle").unwrap().data;
+    for (k, &v) in u.iter().enumerate() {
+        assert_eq!(v, [0.2, 0.4, 0.6, 0.3][k / 50], "{k}");
+    }
+    assert_eq!(f.record.missing_count(), 0);
+    assert_eq!(f.source.channels["throttle"].command_held, 196);
+    assert_eq!(f.source.channels["thrust"].command_held, 0);
+}
+
+#[test]
 fn sensors_at_their_own_rates_are_carried_not_dropped() {
     // A row for every command update (100 Hz); the load cell fills one row in five, the
     // current one in ten: the record keeps every row, each channel at its own rate.
