@@ -1,7 +1,8 @@
 //! A slow load cell written on every row as its last reading, repeated (Bitcraze's system-ID
 //! deck logs its thrust this way: one new value in ten rows): read at its own rate, the
 //! repeats taken as cells not updated (`src/ingest/held.rs`), instead of as a staircase that
-//! lags by half its period.
+//! lags by half its period; and a command logged only where it changes, held until the next
+//! change instead of interpolated into ramps.
 
 use std::path::Path;
 
@@ -78,5 +79,55 @@ fn a_load_cell_repeating_its_last_reading_is_read_at_its_own_rate() {
     assert!(
         (mean - truth).abs() < 0.25 * HOLD_ROWS as f64 * DT_S,
         "mean dead time {mean:.3} s against {truth} s: {dead:?}"
+    );
+    // The human summary says how the thrust was read.
+    let (code, out, err) = propid(&["identify", csv.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("held      thrust repeats each reading for 10 rows: read at its own rate"),
+        "{out}"
+    );
+}
+
+#[test]
+fn a_command_logged_on_its_changes_gives_steps_not_ramps() {
+    // The throttle written only on the rows where it changes, the thrust on every row: the
+    // steps are found at the changes, and the summary says the command was held.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("on_change.csv");
+    let a = (-DT_S / TAU_S).exp();
+    let levels = [0.2, 0.4, 0.6, 0.3, 0.5];
+    let mut x = 10.0 * levels[0];
+    let mut s = String::from("time_s,throttle,thrust_N\n");
+    for k in 0..1000 {
+        let u = levels[k / 200];
+        let cmd = if k % 200 == 0 {
+            u.to_string()
+        } else {
+            String::new()
+        };
+        s.push_str(&format!("{:.2},{cmd},{x:.5}\n", k as f64 * DT_S));
+        x = a * x + (1.0 - a) * 10.0 * u;
+    }
+    std::fs::write(&csv, s).unwrap();
+    let (code, out, err) = propid(&["identify", csv.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let steps = v["steps"].as_array().unwrap();
+    let at: Vec<f64> = steps.iter().map(|s| s["t_s"].as_f64().unwrap()).collect();
+    assert_eq!(at.len(), 4, "{at:?}");
+    for (i, t) in at.iter().enumerate() {
+        assert!((t - 2.0 * (i + 1) as f64).abs() < 0.015, "{at:?}");
+    }
+    for s in steps {
+        let tau = s["time_constant_s"].as_f64().unwrap();
+        assert!((tau / TAU_S - 1.0).abs() < 0.1, "{s}");
+    }
+    assert_eq!(v["source"]["missing"], 0, "{}", v["source"]);
+    let (code, out, err) = propid(&["identify", csv.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("held      throttle written only where it changes: 995 empty cells"),
+        "{out}"
     );
 }

@@ -194,6 +194,24 @@ impl<'a> Output<'a> {
                 s.start_up_transient as f64 / s.rate_hz
             );
         }
+        for (key, c) in s.csv.iter().flat_map(|c| &c.channels) {
+            if let Some(rows) = c.held_rows {
+                let _ = writeln!(
+                    o,
+                    "held      {key} repeats each reading for {rows} rows: read at its own rate \
+                     ({} readings, interpolated between them)",
+                    c.values
+                );
+            }
+            if c.command_held > 0 {
+                let _ = writeln!(
+                    o,
+                    "held      {key} written only where it changes: {} empty cells hold the last \
+                     command",
+                    c.command_held
+                );
+            }
+        }
         if let Some(j) = s.csv.as_ref().and_then(|c| c.jitter.as_ref()) {
             let _ = writeln!(
                 o,
