@@ -5,10 +5,10 @@
 //!
 //! A held value is as old as the hold: carried as it is, a sensor read every `L` rows lags by
 //! about `L / 2` rows on average and moves in steps, a dead time and a staircase that look like
-//! dynamics (on the Bitcraze log the thrust seemed to start 16 rows after the command, and a
-//! 2 Hz "mode" rang at every step). Read as what it is — one reading per run of repeats, at the
-//! row where it first appears — the channel goes through [`super::resample`] at its own rate
-//! like a channel with empty cells: interpolated between its own readings, never held.
+//! dynamics (the Bitcraze log's steps read a dead time of 0.23 s so, 0.17 s read at the load
+//! cell's own rate). Read as what it is — one reading per run of repeats, at the row where it
+//! first appears — the channel goes through [`super::resample`] at its own rate like a channel
+//! with empty cells: interpolated between its own readings, never held.
 //!
 //! **Rule** ([`held_period`]). Over the channel's numbers in row order, the runs of exactly
 //! equal consecutive values have lengths `m_1, m_2, …`; `L` is their median. The channel is
