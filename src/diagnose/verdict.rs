@@ -156,8 +156,8 @@ pub enum WarningKind {
     /// A dead time cannot be told from a shift of the thrust curve or a lag (a command smooth
     /// against the sample period).
     DeadTimeUnidentifiable,
-    /// A supply sag cannot be told from the static map (the voltage varies only with the
-    /// throttle, or not at all).
+    /// A supply sag could not show in this record: the voltage varies only with the throttle
+    /// (or not at all), or the model's residual is larger than any plausible sag's change.
     SupplySagUnidentifiable,
 }
 
