@@ -59,7 +59,7 @@ mod convert;
 mod layout;
 
 use super::held::{held_period, hold_command, unhold};
-use super::resample::{to_uniform, Carried, Jitter, ResampleError};
+use super::resample::{is_zero_usize, to_uniform, Carried, Jitter, ResampleError};
 use columns::{channel, header_columns, Column, Picks};
 pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
 use convert::{convert, Converted};
@@ -232,10 +232,6 @@ pub struct ColumnUnit {
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
-}
-
-fn is_zero_usize(v: &usize) -> bool {
-    *v == 0
 }
 
 /// Where the data came from and what was done to it (published beside the model).

@@ -128,11 +128,12 @@ pub struct Carried {
     pub held_rows: Option<usize>,
     /// Empty cells of the command that took the last command written (a command logged on its
     /// changes only, [`super::held::hold_command`]; omitted when 0).
-    #[serde(skip_serializing_if = "is_zero")]
+    #[serde(skip_serializing_if = "is_zero_usize")]
     pub command_held: usize,
 }
 
-fn is_zero(v: &usize) -> bool {
+/// For `skip_serializing_if`: a count of 0 (also the CSV report's).
+pub(crate) fn is_zero_usize(v: &usize) -> bool {
     *v == 0
 }
 
