@@ -196,3 +196,39 @@ fn a_supply_sag_hidden_in_a_motor_stand_log_is_found_with_its_gain() {
         true,
     );
 }
+
+/// Bitcraze's cf21 staircase, when present: its load cell lags the command by about ten samples
+/// already, which a series mode imitates as well as a delay; with a further 2–6 samples hidden
+/// in it, the mode that fits best has share g > 1 (an inverse response, the Padé stand-in for a
+/// delay: `extra_mode::MAX_SHARE`) and must not be taken: the delay is named, longer than the
+/// one hidden (it adds to the log's own, which the clean log does not name).
+#[test]
+fn a_delay_hidden_behind_a_slow_load_cell_is_named_as_a_delay_not_a_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("injected.csv");
+    for (path, log) in logs(&["bitcraze cf21"]) {
+        let s = samples(&path, &log);
+        for k in 0..2 {
+            let inj =
+                Injection::draw("dead_time", &s, &mut StdRng::seed_from_u64(1000 + k)).unwrap();
+            let Injection::DeadTime { samples: d } = inj else {
+                unreachable!("{inj:?}")
+            };
+            let got = findings(&file, &inject(&s, &inj));
+            let delay = got
+                .iter()
+                .find(|f| f["effect"] == "dead_time")
+                .and_then(|f| f["delay_samples"].as_f64());
+            assert!(
+                delay.is_some_and(|x| x > d as f64),
+                "{}: {d} samples hidden; findings {got:?}",
+                log.name
+            );
+            let inverse = got
+                .iter()
+                .filter(|f| f["effect"] == "extra_mode")
+                .any(|f| f["gain"].as_f64().is_some_and(|g| g > 1.05));
+            assert!(!inverse, "a mode with an inverse response: {got:?}");
+        }
+    }
+}
