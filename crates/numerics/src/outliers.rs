@@ -63,6 +63,50 @@ pub fn isolated_outliers(y: &[f64], missing: &[bool], command: &[f64]) -> Vec<us
     find_outliers(y, missing, command, &mut scratch).to_vec()
 }
 
+/// [`isolated_outliers`] of a channel read at some of its samples only: `interpolated[k]` is
+/// true where a reader filled the value in between two of the channel's readings (a load cell
+/// written on one row in ten; empty: every sample a reading). An interpolated sample lies on
+/// the line through its neighbours (`r = 0`): pooled with the readings, the robust scale would
+/// be that zero and every reading's own noise would stand out as a spike. The rule therefore
+/// judges the readings as the sequence they are, the command taken at the same samples (its
+/// guard then spans [`COMMAND_GUARD`] readings either side). A reading found is returned with
+/// the interpolated samples between it and its neighbouring readings, which were carried from
+/// it; indices ascending.
+pub fn isolated_outliers_of_readings(
+    y: &[f64],
+    missing: &[bool],
+    command: &[f64],
+    interpolated: &[bool],
+) -> Vec<usize> {
+    if !interpolated.contains(&true) {
+        return isolated_outliers(y, missing, command);
+    }
+    let at: Vec<usize> = (0..y.len())
+        .filter(|&k| !interpolated.get(k).copied().unwrap_or(false))
+        .collect();
+    let ys: Vec<f64> = at.iter().map(|&k| y[k]).collect();
+    let ms: Vec<bool> = if missing.is_empty() {
+        Vec::new()
+    } else {
+        at.iter()
+            .map(|&k| missing.get(k).copied().unwrap_or(false))
+            .collect()
+    };
+    let cs: Vec<f64> = if command.is_empty() {
+        Vec::new()
+    } else {
+        at.iter()
+            .map(|&k| command.get(k).copied().unwrap_or(f64::NAN))
+            .collect()
+    };
+    let mut out = Vec::new();
+    for j in isolated_outliers(&ys, &ms, &cs) {
+        // Never the first or last reading (the rule does not judge them), so both exist.
+        out.extend(at[j - 1] + 1..at[j + 1]);
+    }
+    out
+}
+
 /// The buffers [`find_outliers`] works in: allocated once for records of up to `capacity`
 /// samples (the daemon's window), so that judging a window allocates nothing.
 #[derive(Debug, Clone, Default)]
@@ -362,5 +406,42 @@ mod tests {
         assert_eq!(isolated_outliers(&y, &[], &[]), vec![333]);
         // a constant channel: nothing to judge against
         assert!(isolated_outliers(&[5.4; 100], &[], &[]).is_empty());
+    }
+
+    #[test]
+    fn a_channel_read_every_tenth_sample_is_judged_at_its_readings() {
+        // The pulse record read every 10 samples, interpolated between: pooled, the
+        // interpolated samples' zero residuals make readings' noise look like spikes.
+        let (u, y) = record(4000);
+        let interpolated: Vec<bool> = (0..4000).map(|k| k % 10 != 0).collect();
+        let lined: Vec<f64> = (0..4000)
+            .map(|k| {
+                let (a, f) = (k - k % 10, (k % 10) as f64 / 10.0);
+                let b = (a + 10).min(3990);
+                y[a] + f * (y[b] - y[a])
+            })
+            .collect();
+        let pooled = isolated_outliers(&lined, &[], &u);
+        assert!(
+            pooled.len() > 5,
+            "the pooled rule flags readings: {pooled:?}"
+        );
+        assert!(isolated_outliers_of_readings(&lined, &[], &u, &interpolated).is_empty());
+        // A wrong reading is found, with the samples carried from it.
+        let mut bad = lined.clone();
+        bad[1330] = 10.0;
+        for k in 1321..1330 {
+            bad[k] = lined[1320] + (k - 1320) as f64 / 10.0 * (10.0 - lined[1320]);
+        }
+        for k in 1331..1340 {
+            bad[k] = 10.0 + (k - 1330) as f64 / 10.0 * (lined[1340] - 10.0);
+        }
+        let found = isolated_outliers_of_readings(&bad, &[], &u, &interpolated);
+        assert_eq!(found, (1321..1340).collect::<Vec<_>>());
+        // Every sample a reading: the rule as it is.
+        assert_eq!(
+            isolated_outliers_of_readings(&y, &[], &u, &[]),
+            isolated_outliers(&y, &[], &u)
+        );
     }
 }
