@@ -278,9 +278,16 @@ fn real_data(dir: &Path) {
         };
         let row = load(&args).map_err(|e| e.to_string()).and_then(|s| {
             let opts = diagnose::Options::default();
-            diagnose::diagnose(s.dt_s, &s.u, &s.y, s.voltage.as_deref(), &opts)
-                .map(|d| (s, d))
-                .map_err(|e| e.to_string())
+            diagnose::diagnose(
+                s.dt_s,
+                &s.u,
+                &s.y,
+                &s.interpolated,
+                s.voltage.as_deref(),
+                &opts,
+            )
+            .map(|d| (s, d))
+            .map_err(|e| e.to_string())
         });
         match row {
             Ok((s, d)) => {
@@ -399,7 +406,8 @@ fn main() {
             let Ok((cfg, m)) = synth::case(name, i) else {
                 continue;
             };
-            let Ok(d) = diagnose::diagnose(synth::DT_S, &m.u, &m.y, Some(&m.voltage), &opts) else {
+            let Ok(d) = diagnose::diagnose(synth::DT_S, &m.u, &m.y, &[], Some(&m.voltage), &opts)
+            else {
                 continue;
             };
             if d.findings.iter().any(|f| f.effect == name) {
@@ -452,7 +460,8 @@ fn main() {
         let Ok((_, m)) = synth::case("clean", i) else {
             continue;
         };
-        let Ok(d) = diagnose::diagnose(synth::DT_S, &m.u, &m.y, Some(&m.voltage), &opts) else {
+        let Ok(d) = diagnose::diagnose(synth::DT_S, &m.u, &m.y, &[], Some(&m.voltage), &opts)
+        else {
             continue;
         };
         fits.push(d.baseline.fit_percent);

@@ -62,6 +62,9 @@ pub struct Signals {
     pub u: Vec<f64>,
     /// Output, NaN where missing.
     pub y: Vec<f64>,
+    /// The output's samples interpolated between its readings (empty: every sample a reading;
+    /// [`propid_wire::record::Channel::interpolated`]).
+    pub interpolated: Vec<bool>,
     /// Supply voltage, if the file has it.
     pub voltage: Option<Vec<f64>>,
     /// What the input is.
@@ -80,7 +83,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
         estimation_fraction: args.estimation_fraction,
         ..Default::default()
     };
-    let d = diagnose::diagnose(s.dt_s, &s.u, &s.y, s.voltage.as_deref(), &opts)?;
+    let d = diagnose::diagnose(
+        s.dt_s,
+        &s.u,
+        &s.y,
+        &s.interpolated,
+        s.voltage.as_deref(),
+        &opts,
+    )?;
     if let Some(dir) = &args.report {
         let title = args.file.display().to_string();
         report::write(dir, &title, &s.output_name, &d)
@@ -240,6 +250,10 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
     let output_name = file.outputs.first().cloned().unwrap_or_default();
     let mut y = file.data(&output_name);
     mark_missing(&mut y, &rec.missing);
+    let interpolated = rec
+        .channel(&output_name)
+        .map(|c| c.interpolated.clone())
+        .unwrap_or_default();
     let voltage = file
         .optional
         .first()
@@ -260,6 +274,7 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
         dt_s: rec.dt_s,
         u: fill_gaps(u),
         y,
+        interpolated,
         voltage,
         input_name,
         output_name,

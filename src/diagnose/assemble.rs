@@ -23,8 +23,15 @@ fn validate(ctx: &Ctx, f: &Fit, sim: &mut Vec<f64>) -> f64 {
     fit_percent(ctx.sig.y, sim, ctx.val.clone()).0
 }
 
-/// The diagnosis from the search's result and the core's model (when it gave one).
-pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraStart>) -> Diagnosis {
+/// The diagnosis from the search's result, the core's model (when it gave one) and the
+/// output's noise floor ([`noise::noise_floor`]).
+pub fn assemble(
+    ctx: &Ctx,
+    folds: &Folds,
+    searched: Searched,
+    era: Option<&EraStart>,
+    noise_floor: Option<noise::NoiseFloor>,
+) -> Diagnosis {
     let dt = ctx.sig.dt_s;
     let effects = searched.effects();
     let Searched {
@@ -73,7 +80,6 @@ pub fn assemble(ctx: &Ctx, folds: &Folds, searched: Searched, era: Option<&EraSt
         };
         (Some(ext), Some(gain), Some(rms_e))
     };
-    let noise_floor = noise::noise_floor(ctx.sig.u, ctx.sig.y);
     let residual = Residual {
         baseline_rms: rms_b,
         extended_rms: rms_e,

@@ -47,7 +47,7 @@ use serde_json::Value;
 use ctx::Ctx;
 pub use error::DiagnoseError;
 use model::{Core, Signals};
-use propid_numerics::outliers::isolated_outliers;
+use propid_numerics::outliers::isolated_outliers_of_readings;
 use propid_numerics::segment::SegmentRules;
 use propid_numerics::startup::start_transient;
 use propid_wire::record::{names, Record};
@@ -129,17 +129,22 @@ pub fn diagnose_record(
     } else {
         None
     };
-    diagnose(rec.dt_s, &u, &y, volt.as_deref(), opts)
+    let interpolated = rec.channel(output).map_or(&[][..], |c| &c.interpolated[..]);
+    diagnose(rec.dt_s, &u, &y, interpolated, volt.as_deref(), opts)
 }
 
-/// Diagnoses sampled signals: input `u` (finite), output `y` (`NaN` = missing), optional
-/// supply voltage (finite). The output's isolated outliers ([`propid_numerics::outliers`]) and
-/// a start-up transient ([`propid_numerics::startup`]) are left out as missing and counted in
+/// Diagnoses sampled signals: input `u` (finite), output `y` (`NaN` = missing), the output's
+/// samples a reader interpolated between its readings (`interpolated[k]`; empty: every sample
+/// a reading, [`propid_wire::record::Channel::interpolated`]; they count in the fit, not in the
+/// noise floor, [`noise`], nor as outliers), optional supply voltage (finite). The output's
+/// isolated outliers ([`propid_numerics::outliers`], judged at its readings) and a start-up
+/// transient ([`propid_numerics::startup`]) are left out as missing and counted in
 /// [`Diagnosis::source`]. See the module doc for the method.
 pub fn diagnose(
     dt_s: f64,
     u: &[f64],
     y: &[f64],
+    interpolated: &[bool],
     voltage: Option<&[f64]>,
     opts: &Options,
 ) -> Result<Diagnosis, DiagnoseError> {
@@ -177,9 +182,10 @@ pub fn diagnose(
     let (u, y) = (&u[..n], &y[..n]);
     // Isolated outliers are left out like missing samples (the rule of `propid identify` and
     // the daemon, the command's changes guarded): one wrong sample would otherwise be
-    // "explained" by an effect or pull every fit.
+    // "explained" by an effect or pull every fit. An interpolated output is judged at its
+    // readings.
     let missing = y.iter().filter(|v| v.is_nan()).count();
-    let found = isolated_outliers(y, &[], u);
+    let found = isolated_outliers_of_readings(y, &[], u, interpolated);
     let mut y_kept = y.to_vec();
     for &k in &found {
         y_kept[k] = f64::NAN;
@@ -226,7 +232,8 @@ pub fn diagnose(
             core: era.as_ref().err().cloned(),
         }
     })?;
-    let mut d = assemble::assemble(&ctx, &folds, searched, era.as_ref().ok());
+    let floor = noise::noise_floor(u, y, interpolated);
+    let mut d = assemble::assemble(&ctx, &folds, searched, era.as_ref().ok(), floor);
     d.source = source;
     Ok(d)
 }
@@ -289,6 +296,7 @@ mod tests {
             synth::DT_S,
             &m.u,
             &m.y,
+            &[],
             Some(&m.voltage),
             &Options::default(),
         )
@@ -328,7 +336,7 @@ mod tests {
                 let Ok((_, m)) = synth::case(name, i) else {
                     continue;
                 };
-                let found = isolated_outliers(&m.y, &[], &m.u);
+                let found = propid_numerics::outliers::isolated_outliers(&m.y, &[], &m.u);
                 assert!(found.is_empty(), "{name} #{i}: {found:?}");
                 let t = start_transient(&m.y, &[], &m.u, &SegmentRules::DEFAULT);
                 assert_eq!(t, None, "{name} #{i}");

@@ -20,18 +20,14 @@
 //!
 //! **Readings, not interpolation.** The loader carries a sparse channel (a load cell written on
 //! one row in four, or repeating its last reading: [`crate::ingest::held`]) onto the grid by
-//! linear interpolation between its own readings. An interpolated sample lies on the straight
-//! line through its neighbours, so its `d_k` is zero, and at a reading `d_k` is the readings'
-//! own second difference divided by the spacing: pooled as they are, the floor would come out
-//! near zero (a 10-row hold read 10⁻¹⁵ N). A sample lies on the sloped line through its two
-//! neighbours to within [`COLLINEAR`] of their size either by interpolation or, in a quantised
-//! output, by chance (three codes in a row, `q` apart: a few per cent of the samples). When at
-//! least [`INTERPOLATED_SHARE`] of the samples in the holds do (a channel read on every second
-//! row makes half of them so, every fourth three quarters), the output is taken as
-//! interpolated: the differences are taken over its **readings** in each hold, those samples
-//! left out (a constant, which a quantised sensor repeats, is a reading). Otherwise every sample
-//! counts, as before. For white noise the readings' second differences have the same `6σ²` at
-//! any spacing.
+//! linear interpolation between its own readings, and says which samples it interpolated
+//! ([`propid_wire::record::Channel::interpolated`], the one record of it). An interpolated
+//! sample lies on the straight line through its neighbours, so its `d_k` is zero: pooled with
+//! the readings, the floor would come out near zero (Bitcraze's 10-row hold read 10⁻¹⁵ N). The
+//! differences are therefore taken over the output's **readings** in each hold (consecutive
+//! readings, a missing sample breaking the chain); for white noise the readings' second
+//! differences have the same `6σ²` at any spacing. An output read on every row (every TSP/1
+//! record, a dense CSV column, a quantised sensor repeating a code) has every sample a reading.
 //!
 //! **High-order fit** (fallback, when the holds give fewer than [`MIN_HOLD_SAMPLES`]
 //! differences — random, chirp or multisine inputs — or a median of zero: an output quantised
@@ -40,7 +36,10 @@
 //! record (rows with a missing sample skipped); the floor is its one-step residual RMS,
 //! `√(SSE / (m − p))` with `m` rows and `p = 2n + 1` parameters. Order 8 follows a 2nd-order
 //! plant with a few samples of delay and an extra mode; its one-step prediction error is the
-//! part of the output no linear model of the input predicts.
+//! part of the output no linear model of the input predicts. An interpolated output is fitted
+//! over its readings alone, the input taken at the same samples: an interpolated sample lies
+//! on the line to the *next* reading, so as a regressor it would hand the fit the very reading
+//! it is to predict (a held load cell's floor read 10⁻¹⁶ N so).
 
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -51,11 +50,6 @@ use propid_numerics::segment::{holds, Command, SegmentRules};
 pub const MIN_HOLD_SAMPLES: usize = 30;
 /// Order of the fallback ARX fit.
 pub const ARX_ORDER: usize = 8;
-/// Relative size under which a sloped second difference is taken for interpolation.
-pub const COLLINEAR: f64 = 1e-9;
-/// Share of the samples in the holds on a sloped line through their neighbours from which the
-/// output is taken as interpolated (module doc).
-pub const INTERPOLATED_SHARE: f64 = 1.0 / 3.0;
 /// `Φ⁻¹(3/4)`: median of `|N(0, 1)|`.
 const MAD_NORMAL: f64 = 0.674_489_750_196_081_7;
 
@@ -81,45 +75,35 @@ pub struct NoiseFloor {
     pub samples: usize,
 }
 
-/// The noise floor of output `y` (`NaN` = missing) driven by `u`.
-pub fn noise_floor(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
-    from_holds(u, y).or_else(|| from_arx(u, y))
+/// The noise floor of output `y` (`NaN` = missing) driven by `u`; `interpolated[k]` marks a
+/// sample the reader interpolated between the output's readings (empty: every sample a
+/// reading).
+pub fn noise_floor(u: &[f64], y: &[f64], interpolated: &[bool]) -> Option<NoiseFloor> {
+    from_holds(u, y, interpolated).or_else(|| from_arx(u, y, interpolated))
+}
+
+/// Whether `y[k]` is a reading: not marked in `interpolated` (module doc).
+fn reading(interpolated: &[bool], k: usize) -> bool {
+    !interpolated.get(k).copied().unwrap_or(false)
 }
 
 /// The steady-hold estimate (see the module doc), `None` below [`MIN_HOLD_SAMPLES`].
-pub fn from_holds(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
+pub fn from_holds(u: &[f64], y: &[f64], interpolated: &[bool]) -> Option<NoiseFloor> {
     let rules = SegmentRules::DEFAULT;
     let n = u.len().min(y.len());
     let mut d: Vec<f64> = Vec::new();
-    let runs: Vec<std::ops::Range<usize>> = holds(Command::new(&u[..n]), &rules)
-        .map(|r| r.start..r.end)
-        .collect();
-    let in_holds = || {
-        runs.iter()
-            .flat_map(|r| r.clone())
-            .filter(|&k| y[k].is_finite())
-    };
-    let on_lines = in_holds().filter(|&k| interpolated(&y[..n], k)).count();
-    let sparse = on_lines as f64 >= INTERPOLATED_SHARE * in_holds().count().max(1) as f64;
-    for run in &runs {
-        if sparse {
-            // Consecutive readings of the hold.
-            let readings: Vec<f64> = run
-                .clone()
-                .filter(|&k| y[k].is_finite() && !interpolated(&y[..n], k))
-                .map(|k| y[k])
-                .collect();
-            d.extend(
-                readings
-                    .windows(3)
-                    .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs()),
-            );
-        } else {
-            // Three adjacent samples inside the hold, all measured.
-            for k in run.start + 1..run.end.saturating_sub(1) {
-                let v = y[k + 1] - 2.0 * y[k] + y[k - 1];
-                if v.is_finite() {
-                    d.push(v.abs());
+    for run in holds(Command::new(&u[..n]), &rules) {
+        // Consecutive readings of the hold, a missing sample breaking the chain.
+        let mut chain = [f64::NAN; 3];
+        let mut len = 0usize;
+        for (k, &v) in y.iter().enumerate().take(run.end).skip(run.start) {
+            if !v.is_finite() {
+                len = 0;
+            } else if reading(interpolated, k) {
+                chain = [chain[1], chain[2], v];
+                len += 1;
+                if len >= 3 {
+                    d.push((chain[2] - 2.0 * chain[1] + chain[0]).abs());
                 }
             }
         }
@@ -142,20 +126,14 @@ pub fn from_holds(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
     })
 }
 
-/// True when `y[k]` lies on the sloped straight line through its neighbours to within
-/// [`COLLINEAR`] of their size: the loader's interpolation, or chance in a quantised output
-/// (module doc).
-fn interpolated(y: &[f64], k: usize) -> bool {
-    let (Some(&a), Some(&c)) = (k.checked_sub(1).and_then(|j| y.get(j)), y.get(k + 1)) else {
-        return false;
-    };
-    let b = y[k];
-    let tol = COLLINEAR * a.abs().max(b.abs()).max(c.abs()).max(f64::MIN_POSITIVE);
-    (c - a).abs() > tol && (c - 2.0 * b + a).abs() <= tol
-}
-
-/// The high-order-fit estimate (see the module doc).
-pub fn from_arx(u: &[f64], y: &[f64]) -> Option<NoiseFloor> {
+/// The high-order-fit estimate (see the module doc), over the output's readings and the input
+/// at the same samples when some of the output was interpolated.
+pub fn from_arx(u: &[f64], y: &[f64], interpolated: &[bool]) -> Option<NoiseFloor> {
+    if interpolated.contains(&true) {
+        let at = (0..u.len().min(y.len())).filter(|&k| reading(interpolated, k));
+        let (u, y): (Vec<f64>, Vec<f64>) = at.map(|k| (u[k], y[k])).unzip();
+        return from_arx(&u, &y, &[]);
+    }
     let n = ARX_ORDER;
     let p = 2 * n + 1;
     let len = u.len().min(y.len());
@@ -216,7 +194,7 @@ mod tests {
                 x + 0.001 * k as f64 + e[k]
             })
             .collect();
-        let f = noise_floor(&u, &y).unwrap();
+        let f = noise_floor(&u, &y, &[]).unwrap();
         assert_eq!(f.from, FloorSource::SteadyHolds);
         assert!((f.rms / 0.02 - 1.0).abs() < 0.1, "{f:?}");
         assert!(f.samples > 2900, "{f:?}");
@@ -235,8 +213,8 @@ mod tests {
                 nx + e[k]
             })
             .collect();
-        assert!(from_holds(&u, &y).is_none());
-        let f = noise_floor(&u, &y).unwrap();
+        assert!(from_holds(&u, &y, &[]).is_none());
+        let f = noise_floor(&u, &y, &[]).unwrap();
         assert_eq!(f.from, FloorSource::HighOrderFit);
         assert!((f.rms / 0.05 - 1.0).abs() < 0.2, "{f:?}");
     }
@@ -244,36 +222,41 @@ mod tests {
     #[test]
     fn a_sparse_channel_is_measured_at_its_readings_not_its_interpolation() {
         // Readings of 0.01 noise on two levels every 10 rows, linearly interpolated between
-        // (as the loader carries a load cell read on one row in ten): the floor is the
-        // readings' noise, not the interpolation's zero second differences.
+        // (as the loader carries a load cell read on one row in ten, and marks what it
+        // interpolated): the floor is the readings' noise, not the interpolation's zero second
+        // differences, which it would be without the mark.
         let u: Vec<f64> = (0..4000)
             .map(|k| if k < 2000 { 0.3 } else { 0.6 })
             .collect();
         let e = noise(401, 0.01, 5);
-        let reading = |j: usize| if j * 10 < 2000 { 1.0 } else { 2.0 } + e[j];
+        let reading = |j: usize| if j * 10 <= 2000 { 1.0 } else { 2.0 } + e[j];
         let y: Vec<f64> = (0..4000)
             .map(|k| {
                 let (j, f) = (k / 10, (k % 10) as f64 / 10.0);
                 reading(j) + f * (reading(j + 1) - reading(j))
             })
             .collect();
-        let f = from_holds(&u, &y).unwrap();
+        let interpolated: Vec<bool> = (0..4000).map(|k| k % 10 != 0).collect();
+        let f = from_holds(&u, &y, &interpolated).unwrap();
         assert!((f.rms / 0.01 - 1.0).abs() < 0.2, "{f:?}");
         assert!((300..420).contains(&f.samples), "{f:?}");
+        let unmarked = from_holds(&u, &y, &[]).unwrap();
+        assert!(unmarked.rms < 0.2 * 0.01, "{unmarked:?}");
+        let arx = from_arx(&u, &y, &interpolated).unwrap();
+        assert!(arx.samples < 400, "only the readings: {arx:?}");
+        assert!((arx.rms / 0.01 - 1.0).abs() < 0.3, "{arx:?}");
     }
 
     #[test]
-    fn a_quantised_output_keeps_its_chance_straight_lines() {
+    fn a_quantised_output_read_on_every_row_counts_every_sample() {
         // Noise of 0.02 read in codes of 0.01: some triples are three codes in a row by
-        // chance; they are noise samples like the others and all count.
+        // chance; they are readings like the others and all count.
         let u = vec![0.5; 3000];
         let y: Vec<f64> = noise(3000, 0.02, 6)
             .iter()
             .map(|e| (e / 0.01).round() * 0.01)
             .collect();
-        let by_chance = (1..2999).filter(|&k| interpolated(&y, k)).count();
-        assert!(by_chance > 30, "{by_chance}");
-        let f = from_holds(&u, &y).unwrap();
+        let f = from_holds(&u, &y, &[]).unwrap();
         assert_eq!(f.samples, 2998, "every sample counts: {f:?}");
         assert!((f.rms / 0.02 - 1.0).abs() < 0.1, "{f:?}");
     }
@@ -285,7 +268,7 @@ mod tests {
         for v in y.iter_mut().step_by(7) {
             *v = f64::NAN;
         }
-        let f = noise_floor(&u, &y).unwrap();
+        let f = noise_floor(&u, &y, &[]).unwrap();
         assert!(
             f.rms.is_finite() && (f.rms / 0.01 - 1.0).abs() < 0.2,
             "{f:?}"

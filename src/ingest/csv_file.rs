@@ -59,6 +59,7 @@ mod convert;
 mod layout;
 
 use super::held::{held_period, hold_command, unhold};
+use super::interpolated::exporter_interpolated;
 use super::resample::{is_zero_usize, to_uniform, Carried, Jitter, ResampleError};
 use columns::{channel, header_columns, Column, Picks};
 pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
@@ -444,7 +445,7 @@ fn build(
             Some(period)
         })
         .collect();
-    let (t0_s, dt_s, jitter, rate_from, carried) = match time_vals {
+    let (t0_s, dt_s, jitter, rate_from, carried, mut bridged) = match time_vals {
         Some(t) => {
             let u = to_uniform(&t, &values, opts.fs_hz)?;
             values = u.channels;
@@ -453,7 +454,14 @@ fn build(
             } else {
                 "time column"
             };
-            (u.t0_s, u.jitter.dt_s, Some(u.jitter), from, u.carried)
+            (
+                u.t0_s,
+                u.jitter.dt_s,
+                Some(u.jitter),
+                from,
+                u.carried,
+                u.bridged,
+            )
         }
         None => {
             let fs = opts.fs_hz.ok_or(CsvFileError::NeedRate)?;
@@ -464,9 +472,25 @@ fn build(
             let t: Vec<f64> = (0..rows).map(|k| k as f64 / fs).collect();
             let u = to_uniform(&t, &values, Some(fs))?;
             values = u.channels;
-            (0.0, 1.0 / fs, None, "--fs", u.carried)
+            (0.0, 1.0 / fs, None, "--fs", u.carried, u.bridged)
         }
     };
+    // A measured channel the exporter interpolated onto every row: its values stay, marked as
+    // not read (`super::interpolated`).
+    let lined: Vec<usize> = values
+        .iter()
+        .zip(bridged.iter_mut())
+        .enumerate()
+        .map(|(i, (ch, mask))| {
+            let marked = (i >= n_in && !mask.contains(&true))
+                .then(|| exporter_interpolated(ch))
+                .flatten();
+            marked.map_or(0, |m| {
+                *mask = m;
+                mask.iter().filter(|b| **b).count()
+            })
+        })
+        .collect();
     // The samples where the input or an output has no value are missing; the optional channels
     // keep their own NaNs.
     let identified = values.len() - picks.optional.len();
@@ -480,19 +504,22 @@ fn build(
     let channels: Vec<Channel> = chosen
         .iter()
         .zip(values)
-        .map(|(&i, data)| channel(&columns[i], data))
+        .zip(bridged)
+        .map(|((&i, data), interpolated)| channel(&columns[i], data, interpolated))
         .collect();
     let key = |i: usize| columns::key(&columns[i]);
     let channels_report = chosen
         .iter()
         .zip(carried)
         .zip(held)
+        .zip(lined)
         .enumerate()
-        .map(|(j, ((&i, c), held_rows))| {
+        .map(|(j, (((&i, c), held_rows), interpolated_rows))| {
             let command_held = if j == 0 { command_held } else { 0 };
             let c = Carried {
                 held_rows,
                 command_held,
+                interpolated_rows,
                 ..c
             };
             (key(i), c)

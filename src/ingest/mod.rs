@@ -6,11 +6,13 @@
 //!   segments and events ([`SampleAssembler`]), and the growing record ([`RecordBuilder`]).
 //! - [`clock`]: unwrapping the 32-bit device counters.
 //! - [`csv_file`]: CSV files (exported stand logs, benchmark archives) with column choice,
-//!   [`held`] for a slow sensor written on every row as its last reading, [`resample`] for
+//!   [`held`] for a slow sensor written on every row as its last reading, [`interpolated`] for
+//!   one the exporter interpolated onto every row, [`resample`] for
 //!   irregular timestamps, and [`steps`] found from a response-only record.
 
 pub mod csv_file;
 pub mod held;
+pub mod interpolated;
 pub mod resample;
 pub mod steps;
 pub mod tsp;

@@ -103,6 +103,10 @@ pub struct Uniform {
     pub t0_s: f64,
     /// One vector per input channel, on the grid; NaN where that channel has no value.
     pub channels: Vec<Vec<f64>>,
+    /// Per channel, in the order of `channels`: true at the grid points filled by
+    /// interpolation across the channel's own empty cells (not one of its readings; counted in
+    /// [`Carried::bridged`]).
+    pub bridged: Vec<Vec<bool>>,
     /// Grid points in a gap of the rows themselves (no row near: a logging pause).
     pub missing: Vec<bool>,
     /// How each channel was carried onto the grid, in the order of `channels`.
@@ -130,6 +134,10 @@ pub struct Carried {
     /// changes only, [`super::held::hold_command`]; omitted when 0).
     #[serde(skip_serializing_if = "is_zero_usize")]
     pub command_held: usize,
+    /// Rows the exporter had interpolated between the channel's readings, values kept and
+    /// marked as not read ([`super::interpolated`]; omitted when 0).
+    #[serde(skip_serializing_if = "is_zero_usize")]
+    pub interpolated_rows: usize,
 }
 
 /// For `skip_serializing_if`: a count of 0 (also the CSV report's).
@@ -199,22 +207,27 @@ pub fn to_uniform(
     }
     let mut out = Vec::with_capacity(kept.len());
     let mut carried = Vec::with_capacity(kept.len());
+    let mut bridged = Vec::with_capacity(kept.len());
     for c in &kept {
         let own: Vec<usize> = (0..c.len()).filter(|&i| c[i].is_finite()).collect();
         let (values, lost) = carry(&times, &own, c, grid, dt);
+        let mask = bridged_points(&times, &own, &values, grid, dt);
         carried.push(Carried {
             values: own.len(),
             own_dt_s: own_period(&times, &own),
-            bridged: bridged_points(&times, &own, &values, grid, dt),
+            bridged: mask.iter().filter(|b| **b).count(),
             missing: lost.iter().filter(|m| **m).count(),
             held_rows: None,
             command_held: 0,
+            interpolated_rows: 0,
         });
         out.push(values);
+        bridged.push(mask);
     }
     Ok(Uniform {
         t0_s: times[0],
         channels: out,
+        bridged,
         missing,
         carried,
         jitter,
@@ -290,22 +303,20 @@ fn own_period(times: &[f64], own: &[usize]) -> Option<f64> {
     (!d.is_empty()).then(|| percentile(&mut d, 0.5))
 }
 
-/// Grid points whose value was interpolated between two own samples with an empty cell
-/// between them.
-fn bridged_points(times: &[f64], own: &[usize], values: &[f64], grid: Grid, dt: f64) -> usize {
+/// The grid points whose value was interpolated between two own samples with an empty cell
+/// between them (true there): the channel's values that are not its readings.
+fn bridged_points(times: &[f64], own: &[usize], values: &[f64], grid: Grid, dt: f64) -> Vec<bool> {
     let mut j = 0;
-    let mut count = 0;
-    for (k, v) in values.iter().enumerate() {
+    let mut mask = vec![false; values.len()];
+    for (k, (v, b)) in values.iter().zip(mask.iter_mut()).enumerate() {
         let tk = grid.time(times, k, dt);
         while j + 2 < own.len() && times[own[j + 1]] <= tk {
             j += 1;
         }
         let on_own = grid == Grid::Rows && own.binary_search(&k).is_ok();
-        if v.is_finite() && !on_own && own.len() >= 2 && own[j + 1] - own[j] > 1 {
-            count += 1;
-        }
+        *b = v.is_finite() && !on_own && own.len() >= 2 && own[j + 1] - own[j] > 1;
     }
-    count
+    mask
 }
 
 /// Indices of the rows whose time is finite and strictly after the last kept one.
@@ -433,6 +444,11 @@ mod tests {
         );
         assert_eq!(c.missing, 1 + 3);
         assert_eq!(u.carried[0].bridged, 0);
+        for (k, &b) in u.bridged[1].iter().enumerate() {
+            let reading = k % 4 == 1 || !y[k].is_finite();
+            assert_eq!(b, !reading, "{k}: the mask marks exactly what was bridged");
+        }
+        assert!(u.bridged[0].iter().all(|b| !b), "every row a reading");
         assert!(
             u.missing.iter().all(|m| !m),
             "the rows themselves have no gap"

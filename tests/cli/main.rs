@@ -13,6 +13,7 @@ mod identify_cli;
 mod identify_dialects;
 mod identify_gain;
 mod identify_held;
+mod identify_interpolated;
 mod identify_quality;
 mod identify_real_data;
 mod identify_sim_recording;

@@ -19,6 +19,7 @@ fn run(name: &str, i: u64) -> (PlantConfig, Diagnosis) {
         synth::DT_S,
         &m.u,
         &m.y,
+        &[],
         Some(&m.voltage),
         &Default::default(),
     )

@@ -7,11 +7,7 @@ use propid_sim::synth;
 use propid_wire::record::{names, Channel, Record};
 
 fn record(u: Vec<f64>, y: Vec<f64>, missing: Vec<bool>) -> Record {
-    let ch = |name: &str, unit: &str, data| Channel {
-        name: name.into(),
-        unit: unit.into(),
-        data,
-    };
+    let ch = |name: &str, unit: &str, data| Channel::read(name, unit, data);
     Record {
         dt_s: synth::DT_S,
         t0_s: 0.0,
@@ -71,28 +67,28 @@ fn short_constant_and_non_finite_inputs_are_refused() {
     let u = vec![0.5; 1000];
     let y: Vec<f64> = (0..1000).map(|k| (k as f64).sin()).collect();
     assert_eq!(
-        diagnose::diagnose(0.01, &u, &y, None, &o).unwrap_err(),
+        diagnose::diagnose(0.01, &u, &y, &[], None, &o).unwrap_err(),
         DiagnoseError::Constant("input")
     );
     let u2: Vec<f64> = (0..1000)
         .map(|k| 0.5 + 0.1 * ((k / 50) % 2) as f64)
         .collect();
     assert_eq!(
-        diagnose::diagnose(0.01, &u2, &vec![1.0; 1000], None, &o).unwrap_err(),
+        diagnose::diagnose(0.01, &u2, &vec![1.0; 1000], &[], None, &o).unwrap_err(),
         DiagnoseError::Constant("output")
     );
     assert!(matches!(
-        diagnose::diagnose(0.01, &u2[..50], &y[..50], None, &o),
+        diagnose::diagnose(0.01, &u2[..50], &y[..50], &[], None, &o),
         Err(DiagnoseError::TooShort { .. })
     ));
     assert!(matches!(
-        diagnose::diagnose(0.0, &u2, &y, None, &o),
+        diagnose::diagnose(0.0, &u2, &y, &[], None, &o),
         Err(DiagnoseError::BadSamplePeriod(_))
     ));
     let mut u3 = u2.clone();
     u3[5] = f64::INFINITY;
     assert!(matches!(
-        diagnose::diagnose(0.01, &u3, &y, None, &o),
+        diagnose::diagnose(0.01, &u3, &y, &[], None, &o),
         Err(DiagnoseError::NonFinite { index: 5, .. })
     ));
 }
@@ -112,6 +108,7 @@ fn a_clipping_sensor_is_named_with_its_level() {
             synth::DT_S,
             &m.u,
             &m.y,
+            &[],
             Some(&m.voltage),
             &Options::default(),
         )

@@ -7,7 +7,7 @@ use propid::diagnose::{self, noise::FloorSource, Diagnosis};
 use propid_sim::synth;
 
 fn run(u: &[f64], y: &[f64], v: &[f64]) -> Diagnosis {
-    diagnose::diagnose(synth::DT_S, u, y, Some(v), &Default::default()).expect("diagnosis")
+    diagnose::diagnose(synth::DT_S, u, y, &[], Some(v), &Default::default()).expect("diagnosis")
 }
 
 #[test]

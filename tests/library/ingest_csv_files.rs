@@ -299,6 +299,23 @@ fn a_command_logged_on_its_changes_holds_until_the_next() {
 }
 
 #[test]
+fn a_load_cell_repeating_its_last_reading_is_marked_read_at_its_runs_starts() {
+    // The thrust written on every row as its last reading, a new one every 10 rows: the record
+    // marks every repeat as interpolated, every run's first row as a reading.
+    let mut text = String::from("Time (s),Throttle (%),Thrust (N)\n");
+    for k in 0..400 {
+        let reading = 1.0 + 0.1 * ((k / 10) % 7) as f64;
+        text.push_str(&format!("{},50,{reading}\n", 0.01 * k as f64));
+    }
+    let f = read_csv(&text, &opts()).unwrap();
+    assert_eq!(f.source.channels["thrust"].held_rows, Some(10));
+    let ch = f.record.channel("thrust_N").unwrap();
+    for k in 0..391 {
+        assert_eq!(ch.is_reading(k), k % 10 == 0, "{k}");
+    }
+}
+
+#[test]
 fn sensors_at_their_own_rates_are_carried_not_dropped() {
     // A row for every command update (100 Hz); the load cell fills one row in five, the
     // current one in ten: the record keeps every row, each channel at its own rate.
@@ -341,6 +358,20 @@ fn sensors_at_their_own_rates_are_carried_not_dropped() {
     assert_eq!(c.values, 40);
     assert!((c.own_dt_s.unwrap() - 0.05).abs() < 1e-9);
     assert_eq!(c.bridged, 196 - 40);
+    let ch = f.record.channel("thrust_N").unwrap();
+    for k in 2..198 {
+        assert_eq!(
+            ch.is_reading(k),
+            k % 5 == 2,
+            "{k}: the record says what was read"
+        );
+    }
+    assert!(f
+        .record
+        .channel("throttle")
+        .unwrap()
+        .interpolated
+        .is_empty());
     let a = &f.record.channel("current_A").unwrap().data;
     assert!((a[50] - 2.5).abs() < 1e-9, "{}", a[50]);
     let u = &f.source.units;

@@ -41,6 +41,29 @@ pub struct Channel {
     pub unit: String,
     /// One value per sample; `NaN` exactly where the record marks the sample missing.
     pub data: Vec<f64>,
+    /// True at the samples whose value a reader interpolated between two of the channel's own
+    /// readings (a sensor written on fewer rows than the record has, or repeating its last
+    /// reading): not a measurement at that instant. Empty when every value is a reading (every
+    /// TSP/1 record). What needs the readings themselves (a noise floor) takes them from here.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub interpolated: Vec<bool>,
+}
+
+impl Channel {
+    /// A channel whose every value is a reading.
+    pub fn read(name: impl Into<String>, unit: impl Into<String>, data: Vec<f64>) -> Channel {
+        Channel {
+            name: name.into(),
+            unit: unit.into(),
+            data,
+            interpolated: Vec::new(),
+        }
+    }
+
+    /// Whether sample `k` is a reading (not interpolated; it may still be missing).
+    pub fn is_reading(&self, k: usize) -> bool {
+        !self.interpolated.get(k).copied().unwrap_or(false)
+    }
 }
 
 /// What happened at a sample, as the device (or a reader) reported it.

@@ -10,7 +10,7 @@ use crate::cli::CliError;
 use crate::ingest::csv_file::{ColumnUnit, CsvSource};
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
-use propid_numerics::outliers::{find_outliers, OutlierScratch};
+use propid_numerics::outliers::{find_outliers, isolated_outliers_of_readings, OutlierScratch};
 use propid_numerics::segment::SegmentRules;
 use propid_numerics::startup::start_transient;
 use propid_wire::protocol::detect::WireFormat;
@@ -25,6 +25,9 @@ pub struct Loaded {
     pub input: Vec<f64>,
     /// The outputs.
     pub outputs: Vec<Vec<f64>>,
+    /// Per output, the samples interpolated between its readings (empty: every sample a
+    /// reading; [`propid_wire::record::Channel::interpolated`]).
+    pub interpolated: Vec<Vec<bool>>,
     /// Missing samples.
     pub missing: Vec<bool>,
     /// Device pulse starts (TSP/1 events), if any.
@@ -126,6 +129,15 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
     let file = shared::load(&args.file, &req)?;
     let rec = &file.record;
     let outputs: Vec<Vec<f64>> = file.outputs.iter().map(|n| file.data(n)).collect();
+    let interpolated: Vec<Vec<bool>> = file
+        .outputs
+        .iter()
+        .map(|n| {
+            rec.channel(n)
+                .map(|c| c.interpolated.clone())
+                .unwrap_or_default()
+        })
+        .collect();
     let (input, input_name, steps) = match &file.input {
         Some(n) => {
             let label = match &file.origin {
@@ -181,6 +193,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         dt_s: rec.dt_s,
         input,
         outputs,
+        interpolated,
         missing: rec.missing.clone(),
         pulse_starts: (!starts.is_empty()).then_some(starts),
         commanded,
@@ -214,8 +227,14 @@ pub fn leave_out_outliers(loaded: &mut Loaded) -> usize {
     let command: &[f64] = if loaded.commanded { &loaded.input } else { &[] };
     let mut flagged = vec![false; loaded.missing.len().max(loaded.input.len())];
     let mut scratch = OutlierScratch::with_capacity(flagged.len());
-    for y in &loaded.outputs {
-        for &k in find_outliers(y, &loaded.missing, command, &mut scratch) {
+    for (i, y) in loaded.outputs.iter().enumerate() {
+        let marks = loaded.interpolated.get(i).map_or(&[][..], |m| &m[..]);
+        let found: Vec<usize> = if marks.contains(&true) {
+            isolated_outliers_of_readings(y, &loaded.missing, command, marks)
+        } else {
+            find_outliers(y, &loaded.missing, command, &mut scratch).to_vec()
+        };
+        for k in found {
             if let Some(f) = flagged.get_mut(k) {
                 *f = true;
             }

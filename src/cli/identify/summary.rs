@@ -203,6 +203,14 @@ impl<'a> Output<'a> {
                     c.values
                 );
             }
+            if c.interpolated_rows > 0 {
+                let _ = writeln!(
+                    o,
+                    "lines     {key} was interpolated by the exporter on {} of its rows: kept, \
+                     marked as not read (its noise is measured at its readings)",
+                    c.interpolated_rows
+                );
+            }
             if c.command_held > 0 {
                 let _ = writeln!(
                     o,

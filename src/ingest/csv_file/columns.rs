@@ -135,22 +135,25 @@ fn find(columns: &[Column], name: &str) -> Option<usize> {
 }
 
 /// The record channel of a column: its canonical name and unit when it has one, else its own
-/// name.
-pub(super) fn channel(col: &Column, data: Vec<f64>) -> Channel {
-    match col
+/// name; `interpolated` marks the values carried between its readings.
+pub(super) fn channel(col: &Column, data: Vec<f64>, interpolated: Vec<bool>) -> Channel {
+    let (name, unit) = match col
         .spec
         .and_then(|s| s.quantity.channel_name().map(|n| (n, s)))
     {
-        Some((name, spec)) => Channel {
-            name: name.to_string(),
-            unit: spec.quantity.canonical_unit().to_string(),
-            data,
-        },
-        None => Channel {
-            name: col.name.clone(),
-            unit: "?".into(),
-            data,
-        },
+        Some((name, spec)) => (name.to_string(), spec.quantity.canonical_unit().to_string()),
+        None => (col.name.clone(), "?".to_string()),
+    };
+    let interpolated = if interpolated.contains(&true) {
+        interpolated
+    } else {
+        Vec::new()
+    };
+    Channel {
+        name,
+        unit,
+        data,
+        interpolated,
     }
 }
 

@@ -187,11 +187,7 @@ impl RecordBuilder {
             .zip(st.data)
             .zip(present)
             .filter(|(_, p)| *p)
-            .map(|(((name, unit, _), data), _)| Channel {
-                name: name.to_string(),
-                unit: unit.to_string(),
-                data,
-            })
+            .map(|(((name, unit, _), data), _)| Channel::read(*name, *unit, data))
             .collect();
         let record = Record {
             dt_s,
