@@ -152,6 +152,20 @@ pub enum CsvFileError {
         /// The column.
         column: String,
     },
+    /// More than one sensor of the quantity the input or the output is picked by (a stand with
+    /// a load cell per motor): which one is not guessed.
+    #[error(
+        "the file has more than one {quantity} column ({columns}): give {option} for the one to \
+         use"
+    )]
+    TwoSensors {
+        /// The quantity's key (`thrust`, `throttle`).
+        quantity: &'static str,
+        /// Its columns.
+        columns: String,
+        /// The option that picks one.
+        option: &'static str,
+    },
     /// A requested (or the default) column is absent.
     #[error("no {what} column {wanted}; columns in the file: {available}")]
     MissingColumn {

@@ -2,10 +2,11 @@
 //! simulated stand with known parameters ([`TRUTH`]) written as each bench writes its logs —
 //! units in brackets, parentheses, after an underscore or on a row of their own, `;`/tab
 //! separators with decimal commas, a preamble before the header, a BOM, CRLF and quoted
-//! fields (RFC 4180 `""` escapes, stray inch marks: `dialects/quotes.rs`), time in s, ms, µs or
-//! date-time stamps not starting at 0, duplicated stamps, no time
+//! fields (RFC 4180 `""` escapes, stray inch marks: `dialects/quotes.rs`), time in s, ms, µs,
+//! minutes, Unix time stamps or date-time stamps not starting at 0, duplicated stamps, no time
 //! column, empty trailing columns, sensor cells left empty between sensor updates, a reversed
-//! load cell, eRPM, percentages, 0..1, DShot and raw ESC values. Each [`Dialect`] says what a
+//! load cell, eRPM, percentages, 0..1, DShot and raw ESC values, a motor's index in the
+//! names and a load cell per motor (`dialects/clocks.rs`). Each [`Dialect`] says what a
 //! reader must make of it (the units, the command's range) or how it must be refused and what
 //! fixes it. Written from the dialects' features, not copied from any bench's file.
 //!
@@ -407,6 +408,7 @@ mod common {
 }
 
 mod cases;
+mod clocks;
 mod numbers;
 mod quotes;
 pub use cases::dialects;

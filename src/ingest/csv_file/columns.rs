@@ -53,11 +53,11 @@ impl Picks {
                     })?,
                 )
             }
-            InputChoice::Command => by_quantity(Quantity::Throttle),
+            InputChoice::Command => one_sensor(columns, Quantity::Throttle, "--input NAME")?,
             InputChoice::None => None,
         };
         let outputs: Vec<usize> = if opts.outputs.is_empty() {
-            let thrust = by_quantity(Quantity::Thrust);
+            let thrust = one_sensor(columns, Quantity::Thrust, "--output NAME")?;
             if let (None, Some(e)) = (thrust, unitless_thrust(columns)) {
                 return Err(e);
             }
@@ -117,6 +117,36 @@ impl Picks {
             .chain(self.outputs.iter())
             .chain(self.optional.iter())
     }
+}
+
+/// The column of quantity `q` when the file has one sensor of it (its first column: one
+/// sensor may be written in two units, `Thrust (kgf)` and `Thrust (N)`); two sensors of it
+/// (`Motor 1 Thrust (N)`, `Motor 2 Thrust (N)`; [`csv_columns::sensor_word`]) are not chosen
+/// between: an error naming them and `option`.
+fn one_sensor(
+    columns: &[Column],
+    q: Quantity,
+    option: &'static str,
+) -> Result<Option<usize>, CsvFileError> {
+    let of_q: Vec<usize> = (0..columns.len())
+        .filter(|&i| columns[i].spec.is_some_and(|s| s.quantity == q))
+        .collect();
+    let Some(&first) = of_q.first() else {
+        return Ok(None);
+    };
+    let sensor = |i: usize| csv_columns::sensor_word(&columns[i].name);
+    if of_q.iter().all(|&i| sensor(i) == sensor(first)) {
+        return Ok(Some(first));
+    }
+    Err(CsvFileError::TwoSensors {
+        quantity: q.key(),
+        columns: of_q
+            .iter()
+            .map(|&i| columns[i].name.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        option,
+    })
 }
 
 /// A column by its name as written, its normalised name, or its canonical channel name.

@@ -11,7 +11,9 @@ use super::{
     command_range, ColumnUnit, CommandRange, CsvFileError, CsvFileOptions, GivenRanges, Unread,
     DEFAULT_ESC_US,
 };
-use propid_wire::protocol::csv::columns::{Affine, ConvError, ConvOptions, Quantity};
+use propid_wire::protocol::csv::columns::{
+    Affine, ColumnSpec, ConvError, ConvOptions, Quantity, Unit,
+};
 
 /// What [`convert`] did: the units report, the command's scale, the optional columns left out.
 pub(super) struct Converted {
@@ -70,6 +72,18 @@ pub(super) fn convert(
                     column: col.name.clone(),
                     source,
                 })
+            }
+            // Unix time stamps in ms, µs or ns (a logger's `timestamp`, with or without a
+            // unit in its name): their size says which.
+            (
+                None,
+                None
+                | Some(ColumnSpec {
+                    unit: Unit::Clock, ..
+                }),
+            ) if picks.time == Some(i) && epoch_unit(&values[n]).is_some() => {
+                let (div, unit) = epoch_unit(&values[n]).unwrap_or((1.0, "s"));
+                (Affine::ratio_of(1.0, div), unit.to_string())
             }
             (None, None) if picks.time == Some(i) && counts_ticks(&values[n]) => {
                 return Err(CsvFileError::UnitlessTime {
@@ -153,6 +167,29 @@ fn counts_ticks(t: &[f64]) -> bool {
     let mid = steps.len() / 2;
     let (_, median, _) = steps.select_nth_unstable_by(mid, f64::total_cmp);
     *median >= 1.0
+}
+
+/// Earliest and latest plausible Unix time of a log, s (2000-01-01, 2100-01-01).
+const UNIX_SPAN_S: [f64; 2] = [946_684_800.0, 4_102_444_800.0];
+
+/// The divisor to seconds and the unit of a time column of Unix time stamps in milliseconds,
+/// microseconds or nanoseconds, when every number of it is one (between 2000 and 2100 in that
+/// unit: the three ranges are a thousandfold apart, and no clock since boot reaches them: 10¹²
+/// ms is 31 years). Seconds are not inferred: a count of 10⁹ could be a microsecond counter 17
+/// minutes after boot as well.
+fn epoch_unit(t: &[f64]) -> Option<(f64, &'static str)> {
+    let mut finite = t.iter().copied().filter(|v| v.is_finite()).peekable();
+    finite.peek()?;
+    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    [
+        (1e3, "ms (Unix time)"),
+        (1e6, "µs (Unix time)"),
+        (1e9, "ns (Unix time)"),
+    ]
+    .into_iter()
+    .find(|(div, _)| lo >= UNIX_SPAN_S[0] * div && hi <= UNIX_SPAN_S[1] * div)
 }
 
 /// The unit of a column the table does not know: seconds for a time column found by its name

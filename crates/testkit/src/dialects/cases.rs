@@ -486,5 +486,7 @@ pub fn dialects() -> Vec<Dialect> {
     out.extend(super::numbers::dialects(first));
     let first = out.len() as u64 + 1;
     out.extend(super::quotes::dialects(first));
+    let first = out.len() as u64 + 1;
+    out.extend(super::clocks::dialects(first));
     out
 }

@@ -109,6 +109,8 @@ pub enum Unit {
     Millisecond,
     /// Microseconds.
     Microsecond,
+    /// Minutes.
+    Minute,
     /// A time-of-day or date-time stamp (`18:55:23.120`, `2024-08-13 18:55:23.120`), read as
     /// seconds ([`parse_clock`](super::line::parse_clock)).
     Clock,
@@ -184,6 +186,7 @@ impl Unit {
         match self {
             Unit::Second => "s",
             Unit::Millisecond => "ms",
+            Unit::Minute => "min",
             Unit::Clock => "date-time",
             Unit::Microsecond | Unit::PulseMicrosecond => "µs",
             Unit::Count => "1",
@@ -279,6 +282,11 @@ impl Affine {
         }
     }
 
+    /// `raw · mul / div` (no offset).
+    pub const fn ratio_of(mul: f64, div: f64) -> Self {
+        Self::ratio(mul, div)
+    }
+
     /// Apply to a raw value.
     pub fn apply(&self, raw: f64) -> f64 {
         (raw - self.zero) * self.mul / self.div
@@ -313,6 +321,7 @@ impl ColumnSpec {
             Unit::GramForceCentimetre => r(G0, 1e5),
             Unit::KiloRpm => r(1e3, 1.0),
             Unit::Microsecond => r(1.0, 1e6),
+            Unit::Minute => r(60.0, 1.0),
             Unit::ThrottleLevel => r(1.0, 1e4),
             Unit::Percent => r(1.0, 1e2),
             Unit::GramForce => r(G0, 1e3),
@@ -373,6 +382,9 @@ pub const NAMES: &[(&str, Quantity, Unit)] = &[
     ("date/time", Q::Time, U::Clock),
     ("date_time", Q::Time, U::Clock),
     ("clock", Q::Time, U::Clock),
+    // An Arduino's clock functions, the usual names of a hobby logger's time column.
+    ("millis", Q::Time, U::Millisecond),
+    ("micros", Q::Time, U::Microsecond),
     ("throttle", Q::Throttle, U::ThrottleLevel),
     ("escsignal", Q::Throttle, U::Command),
     ("esc", Q::Throttle, U::Command),
@@ -397,6 +409,9 @@ pub const WORDS: &[(&str, Quantity)] = &[
     ("command", Q::Throttle),
     ("thrust", Q::Thrust),
     ("weight", Q::Thrust),
+    // The load cell's force (`Force (N)`): a thrust stand measures one (a multi-axis
+    // `Force X (N)` is not this word).
+    ("force", Q::Thrust),
     // A load cell's reading named as such (`Load (g)`, `Load cell (kg)`, `loadcell_N`): only
     // with a force unit (a `Load (%)` is not a thrust).
     ("load", Q::Thrust),
@@ -424,6 +439,7 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("sec", Q::Time, U::Second),
     ("ms", Q::Time, U::Millisecond),
     ("us", Q::Time, U::Microsecond),
+    ("min", Q::Time, U::Minute),
     ("%", Q::Throttle, U::Percent),
     ("pct", Q::Throttle, U::Percent),
     ("us", Q::Throttle, U::PulseMicrosecond),
@@ -488,16 +504,59 @@ pub fn lookup(name: &str) -> Option<ColumnSpec> {
     if let Some(&(_, quantity, unit)) = NAMES.iter().find(|(a, _, _)| *a == n) {
         return Some(ColumnSpec { quantity, unit });
     }
-    let enclosed = |open: char, close: char| n.strip_suffix(close)?.split_once(open);
-    let (word, suffix) = match enclosed('(', ')').or_else(|| enclosed('"', '"')) {
-        Some(parts) => parts,
-        None => n.rsplit_once('_')?,
-    };
-    let &(_, quantity) = WORDS.iter().find(|(w, _)| *w == word)?;
+    let (word, suffix) = word_and_unit(&n)?;
+    let quantity = quantity_of_word(word)?;
     UNITS
         .iter()
         .find(|(s, q, _)| *s == suffix && *q == quantity)
         .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
+}
+
+/// A normalised name split into its word and its unit suffix: `word(unit)`, `word"unit"` or
+/// `word_unit`.
+fn word_and_unit(n: &str) -> Option<(&str, &str)> {
+    let enclosed = |open: char, close: char| n.strip_suffix(close)?.split_once(open);
+    enclosed('(', ')')
+        .or_else(|| enclosed('"', '"'))
+        .or_else(|| n.rsplit_once('_'))
+}
+
+/// The quantity of a name's word ([`WORDS`]), also with a motor's or a sensor's index around
+/// it: `Motor 1 Thrust (N)`, `m2_thrust_g`, `ESC 1 (µs)`, `Thrust 2 (N)` ([`sensor_word`]).
+fn quantity_of_word(word: &str) -> Option<Quantity> {
+    let of = |w: &str| WORDS.iter().find(|(x, _)| *x == w).map(|&(_, q)| q);
+    of(word).or_else(|| of(strip_index(word)?))
+}
+
+/// `word` without a motor's or a sensor's index (`motor1thrust`, `m1_thrust`, `esc2`,
+/// `thrust_3` → `thrust`, `thrust`, `esc`, `thrust`); `None` when it has none.
+fn strip_index(word: &str) -> Option<&str> {
+    let digits = |s: &str| s.len() - s.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+    for prefix in ["motor", "m", "esc"] {
+        if let Some(rest) = word.strip_prefix(prefix) {
+            let d = digits(rest);
+            if d > 0 {
+                let rest = &rest[d..];
+                let rest = rest.strip_prefix('_').unwrap_or(rest);
+                if !rest.is_empty() {
+                    return Some(rest);
+                }
+            }
+        }
+    }
+    let base = word.trim_end_matches(|c: char| c.is_ascii_digit());
+    (base.len() < word.len() && !base.is_empty()).then(|| base.strip_suffix('_').unwrap_or(base))
+}
+
+/// The sensor a column names: its normalised name without the unit (`Thrust (gf)` and
+/// `Thrust (N)` name one sensor, `Motor 1 Thrust (N)` and `Motor 2 Thrust (N)` two). A reader
+/// picking a column by its quantity refuses to choose between two sensors.
+pub fn sensor_word(name: &str) -> String {
+    let n = normalise(name);
+    match word_and_unit(&n) {
+        Some((word, suffix)) if UNITS.iter().any(|(s, _, _)| *s == suffix) => word.to_string(),
+        _ => n,
+    }
 }
 
 /// A header name that is a quantity word without a unit (`Thrust`, `Torque`, `Current`; not a
@@ -507,8 +566,7 @@ pub fn unitless(name: &str) -> Option<Quantity> {
     if lookup(name).is_some() {
         return None;
     }
-    let n = normalise(name);
-    WORDS.iter().find(|(w, _)| *w == n).map(|&(_, q)| q)
+    quantity_of_word(&normalise(name))
 }
 
 /// The units a quantity's column may be written in (the suffixes of [`UNITS`] as a person

@@ -141,7 +141,6 @@ fn new_units_and_command_names_map() {
     for name in [
         "Thrust (N·m)",
         "Torque (gf)",
-        "force_N",
         "m1_thrust",
         "m1_erpm",
         "thrust",
@@ -359,4 +358,44 @@ fn stand_export_names_and_load_cells_map_to_quantities() {
     // A bare `Load` is a thrust of unknown unit (refused naming --columns, never guessed).
     assert_eq!(unitless("Load"), Some(Quantity::Thrust));
     assert_eq!(unitless("Load cell"), Some(Quantity::Thrust));
+}
+
+#[test]
+fn a_motors_index_clocks_and_forces_are_read() {
+    let spec = |quantity, unit| Some(ColumnSpec { quantity, unit });
+    let cases = [
+        ("Motor 1 Thrust (N)", Quantity::Thrust, Unit::Newton),
+        ("m2_thrust_g", Quantity::Thrust, Unit::GramForce),
+        ("Thrust 2 (N)", Quantity::Thrust, Unit::Newton),
+        ("thrust_3 (kgf)", Quantity::Thrust, Unit::KilogramForce),
+        (
+            "Motor 1 ESC (µs)",
+            Quantity::Throttle,
+            Unit::PulseMicrosecond,
+        ),
+        ("ESC 1 (µs)", Quantity::Throttle, Unit::PulseMicrosecond),
+        ("Force (N)", Quantity::Thrust, Unit::Newton),
+        ("millis", Quantity::Time, Unit::Millisecond),
+        ("micros", Quantity::Time, Unit::Microsecond),
+        ("Time (min)", Quantity::Time, Unit::Minute),
+    ];
+    for (name, q, u) in cases {
+        assert_eq!(lookup(name), spec(q, u), "{name}");
+    }
+    // An axis is no index; a word with digits inside is not a motor's.
+    for other in ["Force X (N)", "Fz (N)", "motor (%)", "m_thrust_x (N)"] {
+        assert_eq!(lookup(other), None, "{other}");
+    }
+    assert_eq!(
+        lookup("Motor Optical Speed (RPM)"),
+        spec(Quantity::Rpm, Unit::Rpm)
+    );
+    // One sensor in two units, two sensors in one.
+    assert_eq!(sensor_word("Thrust (kgf)"), sensor_word("Thrust (N)"));
+    assert_ne!(
+        sensor_word("Motor 1 Thrust (N)"),
+        sensor_word("Motor 2 Thrust (N)")
+    );
+    assert_ne!(sensor_word("m1_thrust_g"), sensor_word("m2_thrust_g"));
+    assert_eq!(unitless("Motor 1 Thrust"), Some(Quantity::Thrust));
 }
