@@ -278,16 +278,7 @@ fn real_data(dir: &Path) {
         };
         let row = load(&args).map_err(|e| e.to_string()).and_then(|s| {
             let opts = diagnose::Options::default();
-            diagnose::diagnose(
-                s.dt_s,
-                &s.u,
-                &s.y,
-                &s.interpolated,
-                s.voltage.as_deref(),
-                &opts,
-            )
-            .map(|d| (s, d))
-            .map_err(|e| e.to_string())
+            s.diagnose(&opts).map(|d| (s, d)).map_err(|e| e.to_string())
         });
         match row {
             Ok((s, d)) => {

@@ -73,6 +73,20 @@ pub struct Signals {
     pub output_name: String,
 }
 
+impl Signals {
+    /// [`diagnose::diagnose`] of these signals.
+    pub fn diagnose(&self, opts: &diagnose::Options) -> Result<Diagnosis, DiagnoseError> {
+        diagnose::diagnose(
+            self.dt_s,
+            &self.u,
+            &self.y,
+            &self.interpolated,
+            self.voltage.as_deref(),
+            opts,
+        )
+    }
+}
+
 /// Runs `propid diagnose`.
 pub fn run(args: Args) -> Result<(), CliError> {
     if !(0.3..=0.9).contains(&args.estimation_fraction) {
@@ -83,14 +97,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         estimation_fraction: args.estimation_fraction,
         ..Default::default()
     };
-    let d = diagnose::diagnose(
-        s.dt_s,
-        &s.u,
-        &s.y,
-        &s.interpolated,
-        s.voltage.as_deref(),
-        &opts,
-    )?;
+    let d = s.diagnose(&opts)?;
     if let Some(dir) = &args.report {
         let title = args.file.display().to_string();
         report::write(dir, &title, &s.output_name, &d)

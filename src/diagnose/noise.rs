@@ -172,15 +172,7 @@ pub fn from_arx(u: &[f64], y: &[f64], interpolated: &[bool]) -> Option<NoiseFloo
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::rngs::StdRng;
-    use rand::SeedableRng;
-    use rand_distr::{Distribution, Normal};
-
-    fn noise(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
-        let mut rng = StdRng::seed_from_u64(seed);
-        let d = Normal::new(0.0, sigma).unwrap();
-        (0..n).map(|_| d.sample(&mut rng)).collect()
-    }
+    use propid_testkit::gaussian as noise;
 
     #[test]
     fn holds_measure_white_noise_under_steps_and_a_drift() {

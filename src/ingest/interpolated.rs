@@ -56,15 +56,7 @@ pub fn exporter_interpolated(y: &[f64]) -> Option<Vec<bool>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::rngs::StdRng;
-    use rand::SeedableRng;
-    use rand_distr::{Distribution, Normal};
-
-    fn noise(n: usize, sigma: f64, seed: u64) -> Vec<f64> {
-        let mut rng = StdRng::seed_from_u64(seed);
-        let d = Normal::new(0.0, sigma).unwrap();
-        (0..n).map(|_| d.sample(&mut rng)).collect()
-    }
+    use propid_testkit::gaussian as noise;
 
     #[test]
     fn readings_interpolated_onto_every_row_are_marked_between_the_readings() {

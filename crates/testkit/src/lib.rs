@@ -139,6 +139,13 @@ pub fn add_noise(y: &mut [f64], sd: f64, seed: u64) {
     }
 }
 
+/// `n` samples of Gaussian noise of standard deviation `sd`, seeded (what [`add_noise`] adds).
+pub fn gaussian(n: usize, sd: f64, seed: u64) -> Vec<f64> {
+    let mut v = vec![0.0; n];
+    add_noise(&mut v, sd, seed);
+    v
+}
+
 /// The identification input of a record without gaps: throttle `u` and output channels `y`
 /// at period `dt_s`, nothing missing, no device pulse starts (pulses are found from `u`).
 pub fn record_input<'a>(dt_s: f64, u: &'a [f64], y: &'a [&'a [f64]]) -> PulseInput<'a> {
