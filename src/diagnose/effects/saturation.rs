@@ -14,6 +14,12 @@ use crate::diagnose::model::{Core, Signals};
 /// The published name.
 pub const NAME: &str = "saturation";
 
+/// Distinct values under a flat top that must be a continuous signal's ([`Saturation`]'s
+/// detection).
+pub const UNDER_TOP: usize = 3;
+/// Most occurrences of each of them.
+pub const UNDER_TOP_REPEATS: usize = 2;
+
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
 pub struct Saturation;
@@ -54,7 +60,12 @@ impl Effect for Saturation {
     }
 
     /// A sensor clip: the largest reading of the estimation part repeats on at least 20
-    /// samples and 0.5 % of them (a flat top). Its score is the number of clipped samples.
+    /// samples and 0.5 % of them (a flat top), and the readings just under it are a continuous
+    /// signal's: each of the [`UNDER_TOP`] largest values below the top occurs at most
+    /// [`UNDER_TOP_REPEATS`] times (a signal cut off at the top). A level settled onto from
+    /// below and rounded (a noise-free log's `5.999999` nine times under its `6.0`) or a
+    /// quantised load cell resting on its top code (whose neighbouring codes repeat as often)
+    /// repeats its top as well, and is no clip. Its score is the number of clipped samples.
     fn detect(&self, ctx: &Ctx) -> Option<Detected> {
         let ys = &ctx.sig.y[ctx.est.clone()];
         let top = ys
@@ -67,7 +78,27 @@ impl Effect for Saturation {
         }
         let tol = 1e-9 * top.abs().max(1e-12);
         let count = ys.iter().filter(|v| (*v - top).abs() <= tol).count();
-        (count >= 20 && count * 200 >= ys.len()).then(|| Detected {
+        let mut under: Vec<f64> = ys
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite() && top - *v > tol)
+            .collect();
+        under.sort_by(|a, b| b.total_cmp(a));
+        let mut repeats: Vec<(f64, usize)> = Vec::new();
+        for v in under {
+            let same = repeats.last().is_some_and(|&(last, _)| last - v <= tol);
+            if same {
+                if let Some((_, n)) = repeats.last_mut() {
+                    *n += 1;
+                }
+            } else if repeats.len() == UNDER_TOP {
+                break;
+            } else {
+                repeats.push((v, 1));
+            }
+        }
+        let cut_off = repeats.iter().all(|&(_, n)| n <= UNDER_TOP_REPEATS);
+        (count >= 20 && count * 200 >= ys.len() && cut_off).then(|| Detected {
             term: Box::new(SaturationParams {
                 level: top,
                 clipped: Clipped::Sensor { samples: count },
@@ -221,5 +252,32 @@ mod tests {
             serde_json::to_string(&terms).unwrap(),
             r#"{"sensor_clip":12.5}"#
         );
+    }
+
+    /// A noisy response cut off at 5.0 is a clip; the same level settled onto from below
+    /// without noise (rounded to 6 decimals), or a load cell quantised to 0.01 resting on its
+    /// top code, repeats its top as often and is none.
+    #[test]
+    fn a_flat_top_is_a_clip_only_when_the_signal_under_it_is_continuous() {
+        let n = 2000;
+        let u = vec![0.5; n];
+        let noise = propid_testkit::gaussian(n, 0.05, 7);
+        let detect = |y: &[f64]| Saturation.detect(&Ctx::whole(0.01, &u, y)).is_some();
+        let wave: Vec<f64> = (0..n)
+            .map(|k| 4.5 + (k as f64 * 0.02).sin() + noise[k])
+            .collect();
+        let clipped: Vec<f64> = wave.iter().map(|v| v.min(5.0)).collect();
+        assert!(detect(&clipped));
+        let settled: Vec<f64> = (0..n)
+            .map(|k| {
+                let v = 6.0 * (1.0 - (-(k as f64) / 80.0).exp());
+                (v * 1e6).round() / 1e6
+            })
+            .collect();
+        assert!(!detect(&settled));
+        let coded: Vec<f64> = (0..n)
+            .map(|k| ((6.0 + 0.004 * noise[k] / 0.05) / 0.01).round() * 0.01)
+            .collect();
+        assert!(!detect(&coded));
     }
 }
