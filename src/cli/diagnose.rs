@@ -6,7 +6,7 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use super::load::{self as shared, steps_from_response, LoadedFile, Request};
+use super::load::{self as shared, steps_from_response, LoadedFile, Request, NO_INPUT};
 use super::{CliError, UsageError};
 use crate::diagnose::noise::FloorSource;
 use crate::diagnose::verdict::VerdictKind;
@@ -232,7 +232,9 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
 
 /// Reads FILE with the loader `propid identify` uses ([`crate::cli::load`]; the output
 /// defaults to thrust, the supply voltage is read when the file has it), then makes the
-/// [`Signals`] diagnose works on ([`signals`]).
+/// [`Signals`] diagnose works on ([`signals`]). An input named with `--input` that is not a
+/// command keeps that name (a shaker's `force_N` is read as the record's force channel,
+/// `thrust_N`, but is no thrust).
 pub fn load(args: &Args) -> Result<Signals, CliError> {
     let outputs = [args.output.clone().unwrap_or(names::THRUST.into())];
     let req = Request {
@@ -245,7 +247,13 @@ pub fn load(args: &Args) -> Result<Signals, CliError> {
         input_range: args.input_range.as_deref(),
         poles: args.poles,
     };
-    signals(&shared::load(&args.file, &req)?)
+    let mut s = signals(&shared::load(&args.file, &req)?)?;
+    if let Some(name) = args.input.as_ref().filter(|n| n.as_str() != NO_INPUT) {
+        if s.input_name != names::THROTTLE {
+            s.input_name = name.clone();
+        }
+    }
+    Ok(s)
 }
 
 /// Diagnose's step after the shared load: the output NaN at every sample marked missing; the

@@ -158,3 +158,41 @@ fn bad_input_gives_clear_errors_and_exit_codes() {
     ]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// An input that is no command but a force (a shaker's `force_N`, read as the record's force
+/// channel) keeps the name it was given in the summary, not the channel's `thrust_N`.
+#[test]
+fn a_named_input_that_is_no_command_keeps_its_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("shaker.csv");
+    let m = synth::run(
+        &synth::case("clean", 4).unwrap().0,
+        &synth::throttle_plan(),
+        5,
+    )
+    .unwrap();
+    let mut s = String::from("t_us,force_N,acc\n");
+    for k in 0..m.u.len() {
+        let t_us = (k as f64 * synth::DT_S * 1e6).round() as u64;
+        s.push_str(&format!("{t_us},{:.4},{:.4}\n", 10.0 * m.u[k], m.y[k]));
+    }
+    std::fs::write(&csv, s).unwrap();
+    let out = propid(&[
+        "diagnose",
+        csv.to_str().unwrap(),
+        "--input",
+        "force_N",
+        "--output",
+        "acc",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.lines().next().unwrap().contains("force_N → acc"),
+        "{text}"
+    );
+}
