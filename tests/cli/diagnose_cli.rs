@@ -196,3 +196,44 @@ fn a_named_input_that_is_no_command_keeps_its_name() {
         "{text}"
     );
 }
+
+/// A staircase logged from the instant its first level was commanded: the thrust spins up from
+/// rest under the first level (2 s at 100 Hz), which the command does not show. The spin-up is
+/// left out as a start-up transient, and the stand's own dead time and map are named with the
+/// residual at the noise (before, the spin-up's misfit hid the delay and the verdict was
+/// `unexplained` at 4.7 × the floor).
+#[test]
+fn a_spin_up_from_rest_under_the_first_level_is_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("spin_up.csv");
+    let levels = [0.2, 0.4, 0.6, 0.3, 0.5, 0.7, 0.45];
+    let u: Vec<f64> = levels
+        .iter()
+        .flat_map(|&l| std::iter::repeat(l).take(200))
+        .collect();
+    let noise = propid_testkit::gaussian(u.len(), 0.01, 1);
+    let a = (-0.01f64 / 0.08).exp();
+    let mut x = 0.0;
+    let mut s = String::from("Time (s),Throttle (%),Thrust (N)\n");
+    for k in 0..u.len() {
+        x = a * x + (1.0 - a) * 10.0 * u[k.saturating_sub(3)].powf(1.5);
+        s.push_str(&format!(
+            "{:.2},{:.1},{:.4}\n",
+            k as f64 * 0.01,
+            100.0 * u[k],
+            x + noise[k]
+        ));
+    }
+    std::fs::write(&csv, s).unwrap();
+    let v = json_of(&propid(&["diagnose", csv.to_str().unwrap(), "--json"]));
+    let cut = v["source"]["start_up_transient"].as_u64().unwrap_or(0);
+    assert!((10..=100).contains(&cut), "{}", v["source"]);
+    let delay = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["effect"] == "dead_time")
+        .and_then(|f| f["delay_samples"].as_u64());
+    assert_eq!(delay, Some(2), "{}", v["findings"]);
+    assert_ne!(v["verdict"]["kind"], "unexplained", "{}", v["verdict"]);
+}
