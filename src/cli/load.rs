@@ -23,6 +23,7 @@ use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource,
 use crate::ingest::steps::{find_steps, StepFinding};
 use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
 use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
+use propid_wire::protocol::csv::encoding::{decode, Encoding};
 use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};
 
@@ -164,12 +165,21 @@ pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFil
     if bytes.is_empty() {
         return Err(LoadError::Empty { file: name }.into());
     }
+    // A UTF-16 text (its NUL bytes would look binary) is read as the UTF-8 it decodes to.
+    let utf8;
+    let (bytes, utf16) = match decode(bytes) {
+        (text, e @ (Encoding::Utf16Le | Encoding::Utf16Be)) if is_text(&text) => {
+            utf8 = text.into_owned().into_bytes();
+            (&utf8[..], Some(e))
+        }
+        _ => (bytes, None),
+    };
     match detect(bytes, true) {
         Detection::Format(WireFormat::Binary) => load_tsp(req, name, bytes),
         // A CSV stream is placed by the stream placer, as `replay` places it; any other CSV
         // file is an exported log, read by its own time column.
         _ if req.columns.is_none() && is_csv_stream(bytes) => load_tsp(req, name, bytes),
-        _ => load_csv(req, name, bytes),
+        _ => load_csv(req, name, bytes, utf16),
     }
 }
 
@@ -223,8 +233,15 @@ fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
 }
 
 /// A CSV file: the columns asked for, with the optional ones the file has.
-fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, CliError> {
-    let text = String::from_utf8_lossy(bytes);
+/// `was` is the encoding the bytes were decoded from already (UTF-16), if any.
+fn load_csv(
+    req: &Request,
+    name: String,
+    bytes: &[u8],
+    was: Option<Encoding>,
+) -> Result<LoadedFile, CliError> {
+    let (text, encoding) = decode(bytes);
+    let encoding = was.unwrap_or(encoding);
     let pair = |v: Option<&[f64]>, bad: UsageError| match v {
         Some(&[lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Ok(Some((lo, hi))),
         Some(_) => Err(bad),
@@ -247,10 +264,11 @@ fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
             p => p,
         },
     };
-    let file = read_csv(&text, &opts).map_err(|source| LoadError::Csv {
+    let mut file = read_csv(&text, &opts).map_err(|source| LoadError::Csv {
         file: name.clone(),
         source,
     })?;
+    file.source.encoding = (encoding != Encoding::Utf8).then_some(encoding);
     Ok(LoadedFile {
         name,
         record: file.record,
@@ -259,6 +277,14 @@ fn load_csv(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
         outputs: file.outputs,
         optional: file.optional,
     })
+}
+
+/// True when decoded text is text: no replacement character and no control character but a
+/// tab or a line end (a binary recording that happens to start like a UTF-16 mark is not).
+fn is_text(text: &str) -> bool {
+    !text
+        .chars()
+        .any(|c| c == '\u{fffd}' || (c.is_control() && !matches!(c, '\t' | '\r' | '\n')))
 }
 
 /// Why no input could be found from the response.

@@ -66,6 +66,7 @@ pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
 use convert::{convert, Converted};
 use layout::{layout, Layout};
 use propid_wire::protocol::csv::columns::{ColumnSpec, Quantity, Scale, Unit};
+use propid_wire::protocol::csv::encoding::Encoding;
 use propid_wire::protocol::csv::line::{
     classify_str, fields, is_missing_marker, parse_number, text_lines, ClockColumn, DecimalMark,
     LineKind,
@@ -285,6 +286,10 @@ pub struct CsvSource {
     /// Midnights a time column of times of day passed (a day added after each).
     #[serde(skip_serializing_if = "is_zero_usize")]
     pub midnights: usize,
+    /// The file's encoding when it is not UTF-8 (`"windows-1252"`, `"utf-16le"`, ...;
+    /// [`propid_wire::protocol::csv::encoding`]); set by the file loader, omitted for UTF-8.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub encoding: Option<Encoding>,
     /// How each channel read was carried onto the time base, by its key (`thrust`, ...): own
     /// samples, own period, samples bridged across empty cells, samples left NaN.
     pub channels: BTreeMap<String, Carried>,
@@ -564,6 +569,7 @@ fn build(
         units_row: layout.units_row,
         decimal_mark: (layout.mark == DecimalMark::Comma).then_some(","),
         midnights,
+        encoding: None,
         channels: channels_report,
         units,
         input_range,

@@ -11,6 +11,7 @@ mod diagnose_staircase;
 mod host_faults_cli;
 mod identify_cli;
 mod identify_dialects;
+mod identify_encodings;
 mod identify_gain;
 mod identify_held;
 mod identify_interpolated;

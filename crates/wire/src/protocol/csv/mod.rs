@@ -17,6 +17,7 @@ pub mod columns;
 pub mod command;
 pub mod decoder;
 pub mod device;
+pub mod encoding;
 pub mod header;
 pub mod line;
 
