@@ -368,3 +368,31 @@ fn random_input_has_no_steps_and_no_static_map() {
     assert_eq!(v["steps"].as_array().unwrap().len(), 0);
     assert!(v["static_map"].as_object().unwrap().is_empty());
 }
+
+/// Two runs written into one file, the second with its own header line and a clock that starts
+/// again: the rows that cannot be read are not lost in silence — the summary says how many rows
+/// were skipped and why, and how many were dropped because their time went back.
+#[test]
+fn a_second_run_appended_to_a_file_is_said_not_silently_dropped() {
+    let dir = tempfile::tempdir().unwrap();
+    let plant = Plant::new(6.0, 0.7, 3.0, 0.004);
+    let u: Vec<f64> = (0..2000).map(|k| 0.2 + 0.1 * (k / 400) as f64).collect();
+    let f = write_csv(dir.path(), "run.csv", &plant, &u);
+    let text = std::fs::read_to_string(&f).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let both = format!("{}\n{}\n", lines.join("\n"), lines[..501].join("\n"));
+    std::fs::write(&f, both).unwrap();
+    let v = json(&["identify", f.to_str().unwrap(), "--json"]);
+    let csv = &v["source"]["csv"];
+    assert_eq!(
+        csv["skipped"]["not_a_number"], 1,
+        "the second header: {csv}"
+    );
+    assert_eq!(csv["jitter"]["non_increasing"], 500, "{csv}");
+    let (_, human, _) = propid(&["identify", f.to_str().unwrap()]);
+    assert!(
+        human.contains("skipped: 0 with a bad checksum, 1 with text in a number field"),
+        "{human}"
+    );
+    assert!(human.contains("500 rows dropped"), "{human}");
+}

@@ -220,6 +220,21 @@ impl<'a> Output<'a> {
                 );
             }
         }
+        if let Some(c) = s.csv.as_ref() {
+            if let Some(e) = c.encoding {
+                let name = serde_json::to_value(e).unwrap_or_default();
+                let _ = writeln!(o, "encoding  {}", name.as_str().unwrap_or("?"));
+            }
+            let k = &c.skipped;
+            if k.total() > 0 {
+                let _ = writeln!(
+                    o,
+                    "rows      {} read; skipped: {} with a bad checksum, {} with text in a number \
+                     field, {} too short",
+                    c.rows, k.bad_checksum, k.not_a_number, k.short_row
+                );
+            }
+        }
         if let Some(j) = s.csv.as_ref().and_then(|c| c.jitter.as_ref()) {
             let _ = writeln!(
                 o,
@@ -230,6 +245,14 @@ impl<'a> Output<'a> {
                 j.rms_jitter_s,
                 if j.resampled { ", resampled" } else { "" }
             );
+            if j.non_increasing > 0 {
+                let _ = writeln!(
+                    o,
+                    "          {} rows dropped: their time did not increase (repeated stamps, \
+                     or the clock going back: a second run appended?)",
+                    j.non_increasing
+                );
+            }
         }
         if let Some(steps) = &s.steps {
             let _ = writeln!(o, "steps     {} found from the response:", steps.len());
