@@ -492,3 +492,34 @@ fn an_input_of_unknown_unit_is_read_from_its_values_or_raw_when_a_signal() {
         ("?", 1.0)
     );
 }
+
+#[test]
+fn unix_time_stamps_are_read_by_their_size_and_a_counter_is_not_guessed() {
+    let file = |stamp: &dyn Fn(usize) -> String| {
+        let mut text = String::from("time,throttle (%),thrust (N)\n");
+        for k in 0..400 {
+            let level = if k < 200 { 30 } else { 60 };
+            text.push_str(&format!("{},{level},{}\n", stamp(k), 0.1 * level as f64));
+        }
+        text
+    };
+    // Unix seconds with a fraction: s (Unix time), counted from the first stamp.
+    let f = read_csv(
+        &file(&|k| format!("{:.3}", 1_732_449_600.5 + 0.005 * k as f64)),
+        &opts(),
+    )
+    .unwrap();
+    let t = &f.source.units["time"];
+    assert_eq!((t.unit.as_str(), t.factor), ("s (Unix time)", 1.0));
+    assert_eq!(t.zero, 1_732_449_600.5);
+    assert_eq!(f.record.t0_s, 0.0);
+    assert!((f.record.dt_s - 0.005).abs() < 1e-6, "{}", f.record.dt_s);
+    // Unix milliseconds, whole: exact to the millisecond once counted from the first.
+    let f = read_csv(&file(&|k| (1_732_449_600_123 + 5 * k).to_string()), &opts()).unwrap();
+    assert_eq!(f.source.units["time"].unit, "ms (Unix time)");
+    assert!((f.record.dt_s - 0.005).abs() < 1e-15, "{}", f.record.dt_s);
+    // Whole numbers near 10⁹ stepping by 5000: a µs counter 17 minutes after boot, or Unix
+    // seconds logged every 83 minutes? Not guessed.
+    let e = read_csv(&file(&|k| (1_000_000_000 + 5000 * k).to_string()), &opts()).unwrap_err();
+    assert!(matches!(e, CsvFileError::UnitlessTime { .. }), "{e}");
+}

@@ -73,17 +73,25 @@ pub(super) fn convert(
                     source,
                 })
             }
-            // Unix time stamps in ms, µs or ns (a logger's `timestamp`, with or without a
-            // unit in its name): their size says which.
+            // Unix time stamps in s (with a fraction), ms, µs or ns (a logger's `timestamp`,
+            // with or without a unit in its name): their size says which.
             (
                 None,
                 None
                 | Some(ColumnSpec {
                     unit: Unit::Clock, ..
                 }),
-            ) if picks.time == Some(i) && epoch_unit(&values[n]).is_some() => {
-                let (div, unit) = epoch_unit(&values[n]).unwrap_or((1.0, "s"));
-                (Affine::ratio_of(1.0, div), unit.to_string())
+            ) if picks.time == Some(i) && epoch_unit(&values[n], col.spec.is_none()).is_some() => {
+                let (div, unit, first) =
+                    epoch_unit(&values[n], col.spec.is_none()).unwrap_or((1.0, "s", 0.0));
+                // Counted from the first stamp (its `zero`), so that 10¹² ms keep their
+                // resolution as seconds.
+                let affine = Affine {
+                    zero: first,
+                    mul: 1.0,
+                    div,
+                };
+                (affine, unit.to_string())
             }
             (None, None) if picks.time == Some(i) && counts_ticks(&values[n]) => {
                 return Err(CsvFileError::UnitlessTime {
@@ -175,21 +183,27 @@ const UNIX_SPAN_S: [f64; 2] = [946_684_800.0, 4_102_444_800.0];
 /// The divisor to seconds and the unit of a time column of Unix time stamps in milliseconds,
 /// microseconds or nanoseconds, when every number of it is one (between 2000 and 2100 in that
 /// unit: the three ranges are a thousandfold apart, and no clock since boot reaches them: 10¹²
-/// ms is 31 years). Seconds are not inferred: a count of 10⁹ could be a microsecond counter 17
-/// minutes after boot as well.
-fn epoch_unit(t: &[f64]) -> Option<(f64, &'static str)> {
+/// ms is 31 years). Whole seconds are not inferred: a count of 10⁹ could be a microsecond
+/// counter 17 minutes after boot as well; seconds with a fraction (`1732449600.125`, no counter
+/// writes them) are, and said, in a column without a unit (`seconds`: false for a date-time
+/// column, whose stamps the reader has made Unix seconds already). Also the first stamp.
+fn epoch_unit(t: &[f64], seconds: bool) -> Option<(f64, &'static str, f64)> {
     let mut finite = t.iter().copied().filter(|v| v.is_finite()).peekable();
-    finite.peek()?;
-    let (lo, hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
+    let first = *finite.peek()?;
+    let (lo, hi, fraction) = finite
+        .fold((f64::INFINITY, f64::NEG_INFINITY, false), |(a, b, f), v| {
+            (a.min(v), b.max(v), f || v.fract() != 0.0)
+        });
     [
+        (1.0, "s (Unix time)"),
         (1e3, "ms (Unix time)"),
         (1e6, "µs (Unix time)"),
         (1e9, "ns (Unix time)"),
     ]
     .into_iter()
+    .filter(|(div, _)| *div > 1.0 || (fraction && seconds))
     .find(|(div, _)| lo >= UNIX_SPAN_S[0] * div && hi <= UNIX_SPAN_S[1] * div)
+    .map(|(div, unit)| (div, unit, first))
 }
 
 /// The unit of a column the table does not know: seconds for a time column found by its name

@@ -282,11 +282,6 @@ impl Affine {
         }
     }
 
-    /// `raw · mul / div` (no offset).
-    pub const fn ratio_of(mul: f64, div: f64) -> Self {
-        Self::ratio(mul, div)
-    }
-
     /// Apply to a raw value.
     pub fn apply(&self, raw: f64) -> f64 {
         (raw - self.zero) * self.mul / self.div
