@@ -153,8 +153,8 @@ pub enum CsvFileError {
         /// The column.
         column: String,
     },
-    /// More than one sensor of the quantity the input or the output is picked by (a stand with
-    /// a load cell per motor): which one is not guessed.
+    /// The same sensor for several motors, of the quantity the input or the output is picked
+    /// by (a stand with a load cell per motor): which one is not guessed.
     #[error(
         "the file has more than one {quantity} column ({columns}): give {option} for the one to \
          use"

@@ -119,10 +119,10 @@ impl Picks {
     }
 }
 
-/// The column of quantity `q` when the file has one sensor of it (its first column: one
-/// sensor may be written in two units, `Thrust (kgf)` and `Thrust (N)`); two sensors of it
-/// (`Motor 1 Thrust (N)`, `Motor 2 Thrust (N)`; [`csv_columns::sensor_word`]) are not chosen
-/// between: an error naming them and `option`.
+/// The first column of quantity `q` (one sensor may be written in two units, `Thrust (kgf)`
+/// and `Thrust (N)`), unless the file has the same sensor for several motors (`Motor 1 Thrust
+/// (N)`, `Motor 2 Thrust (N)`; [`csv_columns::indexed_alike`]): which motor is not guessed, an
+/// error names them and `option`.
 fn one_sensor(
     columns: &[Column],
     q: Quantity,
@@ -134,8 +134,11 @@ fn one_sensor(
     let Some(&first) = of_q.first() else {
         return Ok(None);
     };
-    let sensor = |i: usize| csv_columns::sensor_word(&columns[i].name);
-    if of_q.iter().all(|&i| sensor(i) == sensor(first)) {
+    let name = |i: usize| columns[i].name.as_str();
+    if !of_q
+        .iter()
+        .any(|&i| csv_columns::indexed_alike(name(i), name(first)))
+    {
         return Ok(Some(first));
     }
     Err(CsvFileError::TwoSensors {

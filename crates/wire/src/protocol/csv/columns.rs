@@ -544,14 +544,22 @@ fn strip_index(word: &str) -> Option<&str> {
 }
 
 /// The sensor a column names: its normalised name without the unit (`Thrust (gf)` and
-/// `Thrust (N)` name one sensor, `Motor 1 Thrust (N)` and `Motor 2 Thrust (N)` two). A reader
-/// picking a column by its quantity refuses to choose between two sensors.
+/// `Thrust (N)` name one sensor, `Motor 1 Thrust (N)` and `Motor 2 Thrust (N)` two).
 pub fn sensor_word(name: &str) -> String {
     let n = normalise(name);
     match word_and_unit(&n) {
         Some((word, suffix)) if UNITS.iter().any(|(s, _, _)| *s == suffix) => word.to_string(),
         _ => n,
     }
+}
+
+/// True when two columns are one kind of sensor told apart by an index only (`Motor 1 Thrust
+/// (N)` and `Motor 2 Thrust (N)`, `m1_thrust_g` and `m2_thrust_g`: a load cell per motor). A
+/// reader picking a column by its quantity refuses to choose between them.
+pub fn indexed_alike(a: &str, b: &str) -> bool {
+    let (wa, wb) = (sensor_word(a), sensor_word(b));
+    let base = |w: &str| strip_index(w).map(str::to_string);
+    wa != wb && base(&wa).is_some() && base(&wa) == base(&wb)
 }
 
 /// A header name that is a quantity word without a unit (`Thrust`, `Torque`, `Current`; not a

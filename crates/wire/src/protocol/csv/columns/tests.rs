@@ -390,12 +390,13 @@ fn a_motors_index_clocks_and_forces_are_read() {
         lookup("Motor Optical Speed (RPM)"),
         spec(Quantity::Rpm, Unit::Rpm)
     );
-    // One sensor in two units, two sensors in one.
+    // One sensor in two units; one sensor for each of two motors; two words.
     assert_eq!(sensor_word("Thrust (kgf)"), sensor_word("Thrust (N)"));
-    assert_ne!(
-        sensor_word("Motor 1 Thrust (N)"),
-        sensor_word("Motor 2 Thrust (N)")
-    );
-    assert_ne!(sensor_word("m1_thrust_g"), sensor_word("m2_thrust_g"));
+    assert!(!indexed_alike("Thrust (kgf)", "Thrust (N)"));
+    assert!(indexed_alike("Motor 1 Thrust (N)", "Motor 2 Thrust (N)"));
+    assert!(indexed_alike("m1_thrust_g", "m2_thrust_g"));
+    assert!(indexed_alike("Thrust 1 (N)", "Thrust 2 (N)"));
+    assert!(!indexed_alike("Thrust (N)", "Force (N)"));
+    assert!(!indexed_alike("Motor 1 Thrust (N)", "Motor 1 Thrust (gf)"));
     assert_eq!(unitless("Motor 1 Thrust"), Some(Quantity::Thrust));
 }
