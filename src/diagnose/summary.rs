@@ -146,6 +146,7 @@ impl ModelSummary {
             hankel_block_rows: core.map_or(0, |r| r.hankel_block_rows),
             hankel_block_cols: core.map_or(0, |r| r.hankel_block_cols),
             svd: core.map_or("none".to_string(), |r| r.svd.clone()),
+            order_stepped_down_from: None,
         };
         ModelSummary {
             report,

@@ -54,6 +54,8 @@ pub struct Model {
     pub(crate) std_fn: f64,
     pub(crate) std_zeta: f64,
     pub(crate) std_dc: Vec<f64>,
+    /// The automatic order's count above the noise when it stepped down from it.
+    pub(crate) stepped_down_from: Option<usize>,
 }
 
 impl Model {
@@ -94,6 +96,7 @@ impl Model {
             std_fn: f64::NAN,
             std_zeta: f64::NAN,
             std_dc: vec![f64::NAN; max_q * max_p],
+            stepped_down_from: None,
         }
     }
 
@@ -187,6 +190,15 @@ impl Model {
             d: DMatrix::from_column_slice(q, p, &self.d[..q * p]),
             dt_s: self.dt_s,
         }
+    }
+
+    /// True when every continuous pole settles (`Re(s) < 0`, finite): the rule of
+    /// [`crate::quality`]'s `unstable_pole`, asked of the automatic order
+    /// ([`crate::order::model_order::settled_order`]).
+    pub(crate) fn poles_settle(&self) -> bool {
+        self.poles_s[..self.n]
+            .iter()
+            .all(|s| s.re.is_finite() && s.re < 0.0)
     }
 
     /// Poles, eigenvectors, fn/ζ, time constants and indicators of the realised `A` (with
@@ -384,6 +396,7 @@ impl Model {
             hankel_block_rows: self.dims.r,
             hankel_block_cols: self.dims.c,
             svd: self.path.as_str().to_string(),
+            order_stepped_down_from: self.stepped_down_from,
         }
     }
 }

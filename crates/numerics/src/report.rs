@@ -197,4 +197,9 @@ pub struct ModelReport {
     pub hankel_block_cols: usize,
     /// SVD path taken: "dense" or "truncated".
     pub svd: String,
+    /// The count of singular values above the noise when the automatic order stepped down
+    /// from it to `order`, the largest whose poles all settle
+    /// ([`crate::order::model_order::settled_order`]); absent when it did not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub order_stepped_down_from: Option<usize>,
 }

@@ -282,7 +282,19 @@ impl<'a> Output<'a> {
                 let _ = writeln!(o, "path      pulse ({} pulses averaged)", m.pulses);
             }
         }
-        let _ = writeln!(o, "order     {}", m.order);
+        match m.order_stepped_down_from {
+            Some(count) => {
+                let _ = writeln!(
+                    o,
+                    "order     {} ({count} singular values above the noise; the orders above {} \
+                     realised a pole that does not settle: noise, stepped down)",
+                    m.order, m.order
+                );
+            }
+            None => {
+                let _ = writeln!(o, "order     {}", m.order);
+            }
+        }
         let _ = writeln!(o, "fn        {:.4} Hz", m.fn_hz);
         let _ = writeln!(o, "zeta      {:.4}", m.zeta);
         let _ = writeln!(o, "tau       {}", taus(&m.time_constants_s));

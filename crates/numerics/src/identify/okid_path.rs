@@ -13,7 +13,9 @@
 //! (the regression one alone when a half cannot be identified). The Hankel size follows from
 //! where the sequence sinks below it ([`hankel_size::auto_dims`] with [`Span::OkidFloor`]),
 //! and the order from the singular values above the noise
-//! ([`model_order::order_above_noise`]), the same rules as the pulse path with this σ.
+//! ([`model_order::order_above_noise`]), the same rules as the pulse path with this σ,
+//! stepping down like the pulse path's to the largest order that settles
+//! ([`model_order::settled_order`]).
 //!
 //! **DC gain.** The realisation's gain is checked against the sequence's own `Σ Y_k` and, when
 //! ERA's truncation lost it, `B` and `D` are re-fitted to hold it ([`super::gain`]; published
@@ -162,6 +164,7 @@ pub fn identify_okid_with(
         };
         if ws.identify_markov(&markov, input.dt_s, &probe).is_ok() {
             opts.order = Some(okid_order(&ws.to_report(), &r, limits.max_order));
+            opts.order_is_a_ceiling = true;
         }
     }
     ws.identify_markov(&markov, input.dt_s, &opts)?;

@@ -9,6 +9,17 @@
 //! [`super::noise_floor`]). A given order is kept when `H(0)` has at least that rank above
 //! rounding ([`choose`]); [`check_order`] refuses, before anything is sized, an order the
 //! record cannot support at all.
+//!
+//! **The automatic order settles** ([`settled_order`]). The count above the noise is an
+//! estimate: a noise level read a little low lets a singular value of noise in, and its
+//! realisation is often a pole pair near the Nyquist frequency just outside the unit circle
+//! (measured: a staircase of a first-order stand with a 2-sample dead time, order 5 with
+//! `z = −0.996 ± 0.190i`, `|z| = 1.014`; orders 3 and 4 settle and give the same time
+//! constant and gain). A motor–propeller settles, so an automatic order steps down from the
+//! count to the largest order whose poles all settle (`Re(s) < 0`, the rule of
+//! [`crate::quality`]), and the report says from which count
+//! (`order_stepped_down_from`). When no order down to 1 settles, the count stands and the
+//! quality check refuses the model as before. A given order is never changed.
 
 use super::hankel_size::HankelSize;
 use super::THRESHOLDS;
@@ -103,6 +114,26 @@ pub fn choose(
     Ok(n)
 }
 
+/// The automatic order that settles (see the module documentation): `count` when
+/// `settles(count)`, else the largest order below it for which `settles` is true, else
+/// `count`. `settles(n)` realises order `n` and says whether its poles all settle; it is
+/// asked once per order, from `count` down, and last of the answer returned (so the
+/// realisation left behind is the returned order's).
+pub fn settled_order<E>(
+    count: usize,
+    mut settles: impl FnMut(usize) -> Result<bool, E>,
+) -> Result<usize, E> {
+    for n in (1..=count).rev() {
+        if settles(n)? {
+            return Ok(n);
+        }
+    }
+    if count > 1 {
+        settles(count)?;
+    }
+    Ok(count)
+}
+
 /// Refuses a requested `order` larger than `n` samples (or Markov blocks) with `q` outputs and
 /// `p` inputs can support, before any workspace is sized from it. ERA's Hankel `H(0)` of `r × c`
 /// blocks from `Y_1 .. Y_{r+c−1}` (and `H(1)` one block further) needs `r + c ≤ n − 1`; its
@@ -157,6 +188,36 @@ mod tests {
         );
         // Unknown noise counts as zero: only rounding is cut.
         assert_eq!(pooled_noise(&[f64::NAN, 0.3]), (0.09f64 / 2.0).sqrt());
+    }
+
+    #[test]
+    fn the_automatic_order_steps_down_to_the_largest_that_settles() {
+        // Orders 5 and 4 realise a pole that does not settle, 3 settles: 3, asked last.
+        let mut asked = Vec::new();
+        let n = settled_order::<()>(5, |n| {
+            asked.push(n);
+            Ok(n <= 3)
+        });
+        assert_eq!((n, asked), (Ok(3), vec![5, 4, 3]));
+        // The count settles: kept, asked once.
+        let mut asked = Vec::new();
+        let n = settled_order::<()>(2, |n| {
+            asked.push(n);
+            Ok(true)
+        });
+        assert_eq!((n, asked), (Ok(2), vec![2]));
+        // None settles: the count stands, realised again last.
+        let mut asked = Vec::new();
+        let n = settled_order::<()>(3, |n| {
+            asked.push(n);
+            Ok(false)
+        });
+        assert_eq!((n, asked), (Ok(3), vec![3, 2, 1, 3]));
+        // A realisation that fails stops the search with its error.
+        assert_eq!(
+            settled_order(3, |n| if n == 2 { Err("x") } else { Ok(false) }),
+            Err("x")
+        );
     }
 
     #[test]

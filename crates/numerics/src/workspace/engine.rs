@@ -167,13 +167,32 @@ impl Engine {
         m.std_fn = f64::NAN;
         m.std_zeta = f64::NAN;
         m.std_dc.fill(f64::NAN);
+        m.stepped_down_from = None;
+        if opts.order.is_some() && !opts.order_is_a_ceiling {
+            return self.realize_order(markov, n);
+        }
+        let settled = model_order::settled_order(n, |k| {
+            self.realize_order(markov, k)?;
+            Ok::<bool, IdentError>(self.model.poles_settle())
+        })?;
+        if settled < n {
+            self.model.stepped_down_from = Some(n);
+        }
+        Ok(())
+    }
+
+    /// Realises order `n` from the SVD of the last [`run`](Self::run) and analyses its modes.
+    fn realize_order(&mut self, markov: &MarkovSeq, n: usize) -> Result<(), IdentError> {
+        let m = &mut self.model;
+        m.n = n;
         let out = AbcdMut {
             a: &mut m.a,
             b: &mut m.b,
             c: &mut m.c,
             d: &mut m.d,
         };
-        self.era.realize(markov, dims, (n, path), &m.sigma, out)?;
+        self.era
+            .realize(markov, m.dims, (n, m.path), &m.sigma, out)?;
         m.analyse_modes(self.era.u(), self.era.v())
     }
 

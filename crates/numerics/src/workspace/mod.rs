@@ -90,6 +90,10 @@ pub struct IdentOptions {
     pub max_pulse_width: usize,
     /// Compute the jackknife uncertainty (one re-identification per pulse).
     pub jackknife: bool,
+    /// `order` is an automatic rule's count of singular values above the noise (OKID's: its
+    /// noise floor is known only after the regression), not the caller's: a ceiling that
+    /// steps down like an automatic order ([`crate::order::model_order::settled_order`]).
+    pub order_is_a_ceiling: bool,
 }
 
 impl Default for IdentOptions {
@@ -100,6 +104,7 @@ impl Default for IdentOptions {
             hankel_blocks: None,
             max_pulse_width: crate::segment::SegmentRules::DEFAULT.max_pulse_samples,
             jackknife: true,
+            order_is_a_ceiling: false,
         }
     }
 }

@@ -5,6 +5,7 @@ mod core_exact;
 mod core_indicators;
 mod core_low_snr;
 mod core_noise;
+mod core_order_settles;
 mod okid_identify;
 mod okid_noise;
 mod okid_recovery;
