@@ -7,8 +7,10 @@
 //! spaces, `·`, `⋅`, `.`, `*` removed. `Torque (N·m)`, `torque(nm)` and `TORQUE [N.m]` all become
 //! `torque(nm)`. [`lookup`] then finds the name in the table of whole names ([`NAMES`]: the §6
 //! names without a unit suffix and command names without a unit), else splits it into a
-//! quantity word and a unit suffix, `word(unit)` or `word_unit`, and looks both up ([`WORDS`],
-//! [`UNITS`]): `Thrust (gf)`, `thrust_lbf`, `Torque (N·mm)`, `Motor Speed (rad/s)`.
+//! quantity word and a unit suffix, `word(unit)`, `word_unit` or `word / unit`, and looks both
+//! up ([`WORDS`], [`UNITS`]): `Thrust (gf)`, `thrust_lbf`, `Torque (N·mm)`, `Motor Speed
+//! (rad/s)`, `Thrust / N`. A qualifier may precede the word (`Battery Voltage (V)`, `Motor
+//! RPM`), unless it makes the column no reading (`Target RPM`, `Max Current (A)`).
 //!
 //! The conversion to canonical units (throttle fraction, s, N, N·m, rev/min, V, A) is affine,
 //! `canonical = (raw - zero) * mul / div`; some units need options ([`ConvOptions`]). A
@@ -387,8 +389,15 @@ pub const NAMES: &[(&str, Quantity, Unit)] = &[
     ("cmd", Q::Throttle, U::Command),
     ("command", Q::Throttle, U::Command),
     ("dshot", Q::Throttle, U::DShot),
+    ("signal", Q::Throttle, U::Command),
+    ("duty", Q::Throttle, U::Command),
+    ("dutycycle", Q::Throttle, U::Command),
     ("rpm", Q::Rpm, U::Rpm),
     ("erpm", Q::Rpm, U::ElectricalRpm),
+    ("krpm", Q::Rpm, U::KiloRpm),
+    // Hobby loggers' supply columns, named by their unit.
+    ("volts", Q::Voltage, U::Volt),
+    ("amps", Q::Current, U::Ampere),
 ];
 
 /// Quantity words of `word(unit)` / `word_unit` names (§6, RCbenchmark / Tyto Series
@@ -402,8 +411,16 @@ pub const WORDS: &[(&str, Quantity)] = &[
     ("pwm", Q::Throttle),
     ("cmd", Q::Throttle),
     ("command", Q::Throttle),
+    // A generic command's names (`Signal (µs)`, `Input (%)`, `Duty cycle (%)`).
+    ("signal", Q::Throttle),
+    ("input", Q::Throttle),
+    ("duty", Q::Throttle),
+    ("dutycycle", Q::Throttle),
     ("thrust", Q::Thrust),
     ("weight", Q::Thrust),
+    // Small stands' names for the load cell's reading (`Pull (kg)`, `Lift (g)`).
+    ("pull", Q::Thrust),
+    ("lift", Q::Thrust),
     // The load cell's force (`Force (N)`): a thrust stand measures one (a multi-axis
     // `Force X (N)` is not this word).
     ("force", Q::Thrust),
@@ -420,8 +437,13 @@ pub const WORDS: &[(&str, Quantity)] = &[
     // the pole pairs configured in its app: a mechanical rpm (it equals the optical speed in
     // the exports we have). `(eRPM)` would say otherwise.
     ("motorelectricalspeed", Q::Rpm),
+    ("omega", Q::Rpm),
+    ("angularvelocity", Q::Rpm),
+    ("elapsed", Q::Time),
+    ("timestamp", Q::Time),
     ("voltage", Q::Voltage),
     ("vbat", Q::Voltage),
+    ("battery", Q::Voltage),
     // Betaflight blackbox CSV (`vbatLatest (V)`, `amperageLatest (A)`).
     ("vbatlatest", Q::Voltage),
     ("current", Q::Current),
@@ -435,12 +457,21 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("ms", Q::Time, U::Millisecond),
     ("us", Q::Time, U::Microsecond),
     ("min", Q::Time, U::Minute),
+    ("secs", Q::Time, U::Second),
+    ("seconds", Q::Time, U::Second),
+    ("msec", Q::Time, U::Millisecond),
+    ("usec", Q::Time, U::Microsecond),
     ("%", Q::Throttle, U::Percent),
     ("pct", Q::Throttle, U::Percent),
     ("us", Q::Throttle, U::PulseMicrosecond),
     ("0-1", Q::Throttle, U::Fraction),
     ("frac", Q::Throttle, U::Fraction),
     ("dshot", Q::Throttle, U::DShot),
+    ("0-100", Q::Throttle, U::Percent),
+    // A dimensionless command (`Throttle (1)`, `cmd [-]`: see [`lookup`], `ESC (raw)`): its
+    // scale is decided from its values.
+    ("1", Q::Throttle, U::Command),
+    ("raw", Q::Throttle, U::Command),
     ("n", Q::Thrust, U::Newton),
     ("mn", Q::Thrust, U::Millinewton),
     ("g", Q::Thrust, U::GramForce),
@@ -451,6 +482,11 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("lbf", Q::Thrust, U::PoundForce),
     ("oz", Q::Thrust, U::OunceForce),
     ("ozf", Q::Thrust, U::OunceForce),
+    ("newton", Q::Thrust, U::Newton),
+    ("newtons", Q::Thrust, U::Newton),
+    ("grams", Q::Thrust, U::GramForce),
+    ("gram", Q::Thrust, U::GramForce),
+    ("lbs", Q::Thrust, U::PoundForce),
     ("nm", Q::Torque, U::NewtonMetre),
     ("n-m", Q::Torque, U::NewtonMetre),
     ("nmm", Q::Torque, U::NewtonMillimetre),
@@ -481,46 +517,132 @@ pub const UNITS: &[(&str, Quantity, Unit)] = &[
     ("rpm", Q::Rpm, U::Rpm),
     ("krpm", Q::Rpm, U::KiloRpm),
     ("erpm", Q::Rpm, U::ElectricalRpm),
+    ("r/min", Q::Rpm, U::Rpm),
+    ("rev/min", Q::Rpm, U::Rpm),
+    ("1/min", Q::Rpm, U::Rpm),
     ("rad/s", Q::Rpm, U::RadianPerSecond),
+    ("rad/sec", Q::Rpm, U::RadianPerSecond),
     ("hz", Q::Rpm, U::Hertz),
     ("rps", Q::Rpm, U::Hertz),
     ("rev/s", Q::Rpm, U::Hertz),
     ("v", Q::Voltage, U::Volt),
+    ("volt", Q::Voltage, U::Volt),
+    ("volts", Q::Voltage, U::Volt),
     ("mv", Q::Voltage, U::Millivolt),
     ("a", Q::Current, U::Ampere),
+    ("amp", Q::Current, U::Ampere),
+    ("amps", Q::Current, U::Ampere),
     ("ma", Q::Current, U::Milliampere),
 ];
 
 /// Look a header name up (after [`normalise`]): a whole name ([`NAMES`]), else `word(unit)`,
 /// `word"unit"` (a unit in double quotes: the RFC 4180 header `"Thrust ""gf"""` is
-/// `Thrust "gf"`) or `word_unit` ([`WORDS`] and [`UNITS`]).
+/// `Thrust "gf"`) or `word_unit` ([`WORDS`] and [`UNITS`]), else a whole name with a
+/// qualifier ([`qualified_name`]: `Motor RPM`, `RPM (optical)`).
 pub fn lookup(name: &str) -> Option<ColumnSpec> {
     let n = normalise(name);
-    if let Some(&(_, quantity, unit)) = NAMES.iter().find(|(a, _, _)| *a == n) {
-        return Some(ColumnSpec { quantity, unit });
+    let whole = |n: &str| {
+        NAMES
+            .iter()
+            .find(|(a, _, _)| *a == n)
+            .map(|&(_, quantity, unit)| ColumnSpec { quantity, unit })
+    };
+    if let Some(spec) = whole(&n) {
+        return Some(spec);
     }
-    let (word, suffix) = word_and_unit(&n)?;
-    let quantity = quantity_of_word(word)?;
-    UNITS
-        .iter()
-        .find(|(s, q, _)| *s == suffix && *q == quantity)
-        .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
+    let with_unit = word_and_unit(&n).and_then(|(word, suffix)| {
+        let quantity = quantity_of_word(word)?;
+        // `[-]`, an engineer's "dimensionless" (not in the unit table: a `-` cell of a units
+        // row is an empty one).
+        let suffix = if suffix == "-" { "1" } else { suffix };
+        UNITS
+            .iter()
+            .find(|(s, q, _)| *s == suffix && *q == quantity)
+            .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
+    });
+    with_unit.or_else(|| qualified_name(&n).and_then(whole))
 }
 
-/// A normalised name split into its word and its unit suffix: `word(unit)`, `word"unit"` or
-/// `word_unit`.
+/// The whole name ([`NAMES`]) a qualified name stands for: a unit-named speed after a
+/// qualifier (`Motor RPM`, `motor_erpm`, `ESC eRPM`), or a whole name followed by a qualifier
+/// that is no unit (`RPM (optical)`, `ESC signal (motor)`). A qualifier that makes it no
+/// reading (`Target RPM`: [`NOT_A_READING`]) is none, and so is a name whose spaces were the
+/// only clue: `Blade RPM` would read as `blad` + `eRPM`, so a qualifier ending in `e` or `k`
+/// before `rpm` is not guessed.
+fn qualified_name(n: &str) -> Option<&'static str> {
+    if let Some((word, qualifier)) = word_and_unit(n) {
+        if !is_unit(qualifier) && qualifier.chars().all(|c| c.is_alphanumeric() || c == '_') {
+            return NAMES.iter().map(|e| e.0).find(|&a| a == word);
+        }
+    }
+    const SPEED_OWNERS: [&str; 5] = ["motor", "esc", "rotor", "prop", "shaft"];
+    ["erpm", "krpm", "rpm"].into_iter().find(|&w| {
+        let Some(p) = n.strip_suffix(w) else {
+            return false;
+        };
+        let q = p.trim_end_matches('_');
+        let told_apart = p.ends_with('_')
+            || SPEED_OWNERS.contains(&q)
+            || (w == "rpm" && !q.ends_with(['e', 'k']));
+        is_qualifier(q) && told_apart && !NOT_A_READING.iter().any(|m| q.contains(m))
+    })
+}
+
+/// Quantity words that a qualifier may precede (`Motor Thrust`, `Battery Voltage`, `Rotor
+/// Speed`, `Elapsed Time`, `ESC Throttle`). A load cell's generic words are not among them:
+/// only a bare `Force` is the stand's load cell; a `Drag Force`, a `Side Force` or a
+/// benchmark's `vir_force` (a motor's force command) is not its thrust.
+const QUALIFIABLE: &[&str] = &[
+    "time", "throttle", "command", "cmd", "signal", "thrust", "torque", "speed", "voltage",
+    "current",
+];
+
+/// Qualifiers that make a column no reading of its quantity: a set-point (`Target Speed`), a
+/// limit (`Max Current`), a figure computed from the readings (`Rise Time`, `Thrust Error`).
+/// They do not apply to the command, whose set-point it is (`Target Throttle`).
+const NOT_A_READING: &[&str] = &[
+    "target", "setpoint", "desired", "demand", "ref", "cmd", "command", "max", "min", "limit",
+    "offset", "error", "rise", "settl", "dwell", "delay", "dead", "loop",
+];
+
+/// True for a qualifier before a quantity word: letters (and `_`) only, not empty.
+fn is_qualifier(p: &str) -> bool {
+    !p.is_empty() && p.chars().all(|c| c.is_alphabetic() || c == '_')
+}
+
+/// A normalised name split into its word and its unit suffix: `word(unit)`, `word"unit"`,
+/// `word_unit` or `word/unit` (the quantity-over-unit of a table's column, `t / s`, `F / N`,
+/// `omega / rad/s`: only where what follows the first `/` is a unit of the unit table).
 fn word_and_unit(n: &str) -> Option<(&str, &str)> {
     let enclosed = |open: char, close: char| n.strip_suffix(close)?.split_once(open);
     enclosed('(', ')')
         .or_else(|| enclosed('"', '"'))
         .or_else(|| n.rsplit_once('_'))
+        .or_else(|| {
+            n.split_once('/')
+                .filter(|(_, u)| UNITS.iter().any(|(s, _, _)| s == u))
+        })
 }
 
 /// The quantity of a name's word ([`WORDS`]), also with a motor's or a sensor's index around
-/// it: `Motor 1 Thrust (N)`, `m2_thrust_g`, `ESC 1 (µs)`, `Thrust 2 (N)` ([`sensor_word`]).
+/// it (`Motor 1 Thrust (N)`, `m2_thrust_g`, `ESC 1 (µs)`, `Thrust 2 (N)`: [`sensor_word`]) or a
+/// qualifier before it (`Motor Thrust (N)`, `Battery Voltage (V)`, `Rotor Speed (rad/s)`:
+/// [`QUALIFIABLE`], [`NOT_A_READING`]).
 fn quantity_of_word(word: &str) -> Option<Quantity> {
     let of = |w: &str| WORDS.iter().find(|(x, _)| *x == w).map(|&(_, q)| q);
-    of(word).or_else(|| of(strip_index(word)?))
+    let qualified = |w: &str| {
+        QUALIFIABLE.iter().find_map(|&q| {
+            let p = w.strip_suffix(q)?.trim_end_matches('_');
+            let quantity = of(q)?;
+            let a_reading =
+                quantity == Quantity::Throttle || !NOT_A_READING.iter().any(|m| p.contains(m));
+            (is_qualifier(p) && a_reading).then_some(quantity)
+        })
+    };
+    of(word)
+        .or_else(|| of(strip_index(word)?))
+        .or_else(|| qualified(word))
+        .or_else(|| qualified(strip_index(word)?))
 }
 
 /// `word` without a motor's or a sensor's index (`motor1thrust`, `m1_thrust`, `esc2`,

@@ -400,3 +400,73 @@ fn a_motors_index_clocks_and_forces_are_read() {
     assert!(!indexed_alike("Motor 1 Thrust (N)", "Motor 1 Thrust (gf)"));
     assert_eq!(unitless("Motor 1 Thrust"), Some(Quantity::Thrust));
 }
+
+/// Names other benches give: a qualifier before a quantity's word, small stands' words for
+/// the load cell and the command, unit spellings; and the qualifiers that make a column no
+/// reading, or whose word cannot be told from the spaces a normalised name has lost.
+#[test]
+fn qualified_and_small_stands_names_map_and_set_points_do_not() {
+    let spec = |quantity, unit| Some(ColumnSpec { quantity, unit });
+    let cases = [
+        ("Motor Thrust (N)", Quantity::Thrust, Unit::Newton),
+        ("Pull (kg)", Quantity::Thrust, Unit::KilogramForce),
+        ("lift_g", Quantity::Thrust, Unit::GramForce),
+        ("Thrust (grams)", Quantity::Thrust, Unit::GramForce),
+        ("Motor RPM", Quantity::Rpm, Unit::Rpm),
+        ("motor_rpm", Quantity::Rpm, Unit::Rpm),
+        ("ESC eRPM", Quantity::Rpm, Unit::ElectricalRpm),
+        ("motor_erpm", Quantity::Rpm, Unit::ElectricalRpm),
+        ("RPM (optical)", Quantity::Rpm, Unit::Rpm),
+        ("Rotor speed [rad/s]", Quantity::Rpm, Unit::RadianPerSecond),
+        ("omega (rad/sec)", Quantity::Rpm, Unit::RadianPerSecond),
+        ("Speed (r/min)", Quantity::Rpm, Unit::Rpm),
+        ("Battery Voltage (V)", Quantity::Voltage, Unit::Volt),
+        ("Battery (V)", Quantity::Voltage, Unit::Volt),
+        ("Volts", Quantity::Voltage, Unit::Volt),
+        ("Motor Current (A)", Quantity::Current, Unit::Ampere),
+        ("Amps", Quantity::Current, Unit::Ampere),
+        ("Elapsed Time (s)", Quantity::Time, Unit::Second),
+        ("Timestamp (ms)", Quantity::Time, Unit::Millisecond),
+        ("time (seconds)", Quantity::Time, Unit::Second),
+        ("Signal [us]", Quantity::Throttle, Unit::PulseMicrosecond),
+        ("Input (%)", Quantity::Throttle, Unit::Percent),
+        ("Duty cycle", Quantity::Throttle, Unit::Command),
+        ("Duty cycle (%)", Quantity::Throttle, Unit::Percent),
+        ("cmd [-]", Quantity::Throttle, Unit::Command),
+        ("Throttle (0-100)", Quantity::Throttle, Unit::Percent),
+        ("ESC Throttle (%)", Quantity::Throttle, Unit::Percent),
+        ("Target Throttle (%)", Quantity::Throttle, Unit::Percent),
+        ("t / s", Quantity::Time, Unit::Second),
+        ("Thrust / N", Quantity::Thrust, Unit::Newton),
+        ("omega / rad/s", Quantity::Rpm, Unit::RadianPerSecond),
+        ("Throttle/%", Quantity::Throttle, Unit::Percent),
+    ];
+    for (name, q, u) in cases {
+        assert_eq!(lookup(name), spec(q, u), "{name}");
+    }
+    for other in [
+        // Set-points, limits and figures computed from the readings.
+        "Target RPM",
+        "Target Speed (RPM)",
+        "Max Current (A)",
+        "Rise Time (s)",
+        "Thrust Setpoint (N)",
+        // `blad` + `eRPM` or `blade` + `RPM`: not guessed.
+        "Blade RPM",
+        "Average RPM",
+        // A quantity's word with a unit of another.
+        "Input (V)",
+        "Pull (%)",
+        "Wind speed (m/s)",
+        // An axis, a word after the quantity's, a force that is no load cell's.
+        "Thrust X (N)",
+        "Drag Force (N)",
+        "Thrust error (N)",
+        "Thrust/Weight",
+        "Thrust/Power (g/W)",
+    ] {
+        assert_eq!(lookup(other), None, "{other}");
+    }
+    assert_eq!(unitless("Motor Thrust"), Some(Quantity::Thrust));
+    assert_eq!(unitless("Pull"), Some(Quantity::Thrust));
+}
