@@ -68,7 +68,7 @@ use layout::{layout, Layout};
 use propid_wire::protocol::csv::columns::{ColumnSpec, Quantity, Scale, Unit};
 use propid_wire::protocol::csv::encoding::Encoding;
 use propid_wire::protocol::csv::line::{
-    classify_str, fields, is_missing_marker, parse_number, text_lines, ClockColumn, DecimalMark,
+    classify_str, fields, is_missing_marker, parse_cell, text_lines, ClockColumn, DecimalMark,
     LineKind,
 };
 use propid_wire::record::{Channel, Record};
@@ -194,8 +194,15 @@ pub enum CsvFileError {
     #[error("time base: {0}")]
     Time(#[from] ResampleError),
     /// Fewer than two usable rows.
-    #[error("only {0} usable data row(s)")]
-    TooFewRows(usize),
+    #[error("only {rows} usable data row(s){why}")]
+    TooFewRows {
+        /// The usable rows.
+        rows: usize,
+        /// Why the others were not: the first unreadable cell of a needed column (`: 1400
+        /// rows with a cell that is no number, the first "4,5e" in Thrust (N) (line 2)`), or
+        /// nothing.
+        why: String,
+    },
     /// A column needs an option to be converted (e.g. electrical rpm needs the pole count).
     #[error("column {column}: {reason}")]
     Conversion {
@@ -376,7 +383,9 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     let mut row = Vec::new();
     let mut clock = false;
     let mut stamps = ClockColumn::default();
-    'rows: for line in data {
+    // The first cell of a needed column that was no number (its text, column and line).
+    let mut first_unread: Option<(String, usize, usize)> = None;
+    'rows: for (line_no, line) in data.iter().enumerate() {
         row.clear();
         row.extend(fields(line, sep));
         if used[..required].iter().any(|&i| i >= row.len()) {
@@ -398,6 +407,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
                 (Some(v), _) => parsed.push(v),
                 (None, true) => {
                     skipped.not_a_number += 1;
+                    first_unread.get_or_insert((field.to_string(), i, line_no));
                     continue 'rows;
                 }
                 // Text in a channel only read beside the others: that channel's value is missing.
@@ -408,7 +418,22 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     }
     let rows = values[0].len();
     if rows < 2 {
-        return Err(CsvFileError::TooFewRows(rows));
+        let why = match first_unread {
+            Some((text, i, n)) => format!(
+                ": {} row(s) with a cell that is no number, the first {text:?} in {} (data row {})",
+                skipped.not_a_number,
+                columns[i].name,
+                n + 1
+            ),
+            None if skipped.short_row > 0 => {
+                format!(
+                    ": {} row(s) too short for the columns used",
+                    skipped.short_row
+                )
+            }
+            None => String::new(),
+        };
+        return Err(CsvFileError::TooFewRows { rows, why });
     }
     if let (true, Some(t)) = (clock, picks.time) {
         columns[t].spec = Some(ColumnSpec {
@@ -592,10 +617,10 @@ fn build(
 
 /// An empty field, or a missing marker (`-`, `N/A`, `NULL`, ...: [`is_missing_marker`]), is
 /// "not measured" (NaN); other text is `None`; a number is read by the dialect's rule
-/// ([`parse_number`] with the file's decimal mark).
+/// ([`parse_cell`] with the file's decimal mark: `45%` is 45).
 fn parse_field(f: &str, mark: DecimalMark) -> Option<f64> {
     if f.is_empty() || is_missing_marker(f) {
         return Some(f64::NAN);
     }
-    parse_number(f, mark)
+    parse_cell(f, mark)
 }

@@ -160,9 +160,14 @@ fn empty_files_are_errors() {
         read_csv("t_s,throttle,thrust_N\n", &opts()),
         Err(CsvFileError::Empty)
     );
-    assert_eq!(
-        read_csv("t_s,throttle,thrust_N\n0,1,x\n0.1,1,y\n", &opts()),
-        Err(CsvFileError::TooFewRows(0))
+    // Rows whose needed cells are no numbers: the error says which cell first.
+    let e = read_csv("t_s,throttle,thrust_N\n0,1,x\n0.1,1,y\n", &opts()).unwrap_err();
+    assert!(matches!(e, CsvFileError::TooFewRows { rows: 0, .. }), "{e}");
+    assert!(
+        e.to_string().ends_with(
+            ": 2 row(s) with a cell that is no number, the first \"x\" in thrust_N (data row 1)"
+        ),
+        "{e}"
     );
 }
 

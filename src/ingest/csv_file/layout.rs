@@ -5,9 +5,9 @@
 //! line) and sometimes the units on a row of their own under the names (`Time,Thrust` then
 //! `s,gf`). The rule:
 //! 1. The first **data row** is the first line of two or more fields that are all empty,
-//!    numbers ([`is_number`], decimal commas included) or missing markers (`-`, `N/A`, `NULL`:
-//!    [`is_missing_marker`]), at least one a number; its separator ([`separator`]) is the
-//!    file's.
+//!    numbers ([`is_cell_number`]: decimal commas and a trailing `%` included), time stamps
+//!    ([`parse_clock`]) or missing markers (`-`, `N/A`, `NULL`: [`is_missing_marker`]), at
+//!    least one a number; its separator ([`separator`]) is the file's.
 //! 2. A file whose first line is a data row has no header.
 //! 3. Otherwise the **header** is, among the lines before the first data row, the first one with
 //!    at least as many fields as that row and a name the alias table knows; else the first line
@@ -22,7 +22,7 @@
 
 use propid_wire::protocol::csv::columns;
 use propid_wire::protocol::csv::line::{
-    fields, is_missing_marker, is_number, separator, DecimalMark,
+    fields, is_cell_number, is_missing_marker, is_number, parse_clock, separator, DecimalMark,
 };
 
 /// The layout of a file's lines (comments and blank lines already left out).
@@ -49,7 +49,12 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
     let is_data = |l: &str| {
         let sep = separator(l);
         fields(l, sep).count() >= 2
-            && fields(l, sep).all(|f| f.is_empty() || is_number(&f) || is_missing_marker(&f))
+            && fields(l, sep).all(|f| {
+                f.is_empty()
+                    || is_cell_number(&f)
+                    || is_missing_marker(&f)
+                    || parse_clock(&f).is_some()
+            })
             && fields(l, sep).any(|f| is_number(&f))
     };
     let first_data = lines.iter().position(|l| is_data(l));

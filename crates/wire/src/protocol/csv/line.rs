@@ -47,7 +47,10 @@ use std::borrow::Cow;
 mod clock;
 mod number;
 pub use clock::{parse_clock, ClockColumn};
-pub use number::{is_missing_marker, is_number, parse_number, DecimalMark, MISSING_MARKERS};
+pub use number::{
+    is_cell_number, is_missing_marker, is_number, parse_cell, parse_number, DecimalMark,
+    MISSING_MARKERS,
+};
 
 /// Longest line the protocol allows, characters (without the newline).
 pub const MAX_LINE: usize = 255;

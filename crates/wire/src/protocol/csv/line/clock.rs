@@ -1,9 +1,12 @@
 //! Time stamps of the CSV dialect, rule 5 of the [line rules](super): times of day and
 //! date-times as seconds, and a column of times of day read across midnight.
 
-/// A time stamp as seconds: `HH:MM:SS[.fff]` (seconds of the day) or
+/// A time stamp as seconds: `HH:MM:SS[.fff]` (seconds of the day),
 /// `YYYY-MM-DD[T| ]HH:MM:SS[.fff][Z]` (seconds since 1970-01-01, UTC as written: no time zone
-/// is applied). A decimal comma is accepted in the seconds. `None` for anything else.
+/// is applied) or `M:SS.fff` (a stopwatch's minutes and seconds since the start, minutes past
+/// 59 too: `75:02.5`; the fraction is what tells it from a time of day without seconds,
+/// `18:55`, which is refused). A decimal comma is accepted in the seconds. `None` for anything
+/// else.
 pub fn parse_clock(field: &str) -> Option<f64> {
     clock(field).map(|c| c.seconds)
 }
@@ -20,15 +23,31 @@ fn clock(field: &str) -> Option<Clock> {
         Some((d, t)) => (Some(d), t.trim()),
         None => (None, field),
     };
-    let mut hms = time.split(':');
-    let h: u32 = hms.next()?.parse().ok()?;
-    let m: u32 = hms.next()?.parse().ok()?;
-    let sec = hms.next()?.replacen(',', ".", 1);
-    let sec: f64 = sec.parse().ok()?;
-    if hms.next().is_some() || h > 23 || m > 59 || !(0.0..61.0).contains(&sec) {
-        return None;
-    }
-    let day_s = f64::from(h * 3600 + m * 60) + sec;
+    let parts: Vec<&str> = time.split(':').collect();
+    let whole = |p: &str| -> Option<u32> {
+        (!p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()))
+            .then(|| p.parse().ok())
+            .flatten()
+    };
+    let seconds = |p: &str| -> Option<f64> {
+        let p = p.replacen(',', ".", 1);
+        let s: f64 = p.parse().ok()?;
+        (p.as_bytes().first()?.is_ascii_digit() && (0.0..61.0).contains(&s)).then_some(s)
+    };
+    let day_s = match parts[..] {
+        [h, m, s] => {
+            let (h, m, s) = (whole(h)?, whole(m)?, seconds(s)?);
+            if h > 23 || m > 59 {
+                return None;
+            }
+            f64::from(h * 3600 + m * 60) + s
+        }
+        // Minutes and seconds since a start: a fraction, no date.
+        [m, s] if date.is_none() && s.contains(['.', ',']) => {
+            f64::from(whole(m)?.checked_mul(60)?) + seconds(s)?
+        }
+        _ => return None,
+    };
     let Some(date) = date else {
         return Some(Clock {
             seconds: day_s,
@@ -103,6 +122,20 @@ mod tests {
     #[test]
     fn clock_stamps_as_seconds() {
         assert_eq!(parse_clock("18:55:23.5"), Some(68_123.5));
+        // A stopwatch's minutes and seconds, minutes past an hour too.
+        assert_eq!(parse_clock("00:01.250"), Some(1.25));
+        assert_eq!(parse_clock("75:02,5"), Some(4502.5));
+        for not in [
+            "1:2:3:4",
+            "12:",
+            ":30",
+            "1:75",
+            "-1:30",
+            "2024-08-13 12:30",
+            "1:+5",
+        ] {
+            assert_eq!(parse_clock(not), None, "{not}");
+        }
         assert_eq!(parse_clock("1970-01-02 00:00:01"), Some(86_401.0));
         assert_eq!(parse_clock("2000-03-01T00:00:00Z"), Some(951_868_800.0));
         let a = parse_clock("2024-08-13 18:55:23,120").unwrap();

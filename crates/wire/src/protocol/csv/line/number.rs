@@ -115,6 +115,24 @@ pub fn parse_number(field: &str, mark: DecimalMark) -> Option<f64> {
     }
 }
 
+/// A cell as a number ([`parse_number`]), also with a percent sign after it (`45%`, `45 %`: a
+/// spreadsheet's percent format keeps the sign in the text it exports; the number is the
+/// percentage, the column's unit says what it is of).
+pub fn parse_cell(field: &str, mark: DecimalMark) -> Option<f64> {
+    parse_number(field, mark).or_else(|| parse_number(percent(field)?, mark))
+}
+
+/// True when `field` is a number written with either decimal mark, also with a percent sign
+/// after it ([`parse_cell`]).
+pub fn is_cell_number(field: &str) -> bool {
+    is_number(field) || percent(field).is_some_and(is_number)
+}
+
+/// The number before a trailing percent sign, `None` without one.
+fn percent(field: &str) -> Option<&str> {
+    field.strip_suffix('%').map(str::trim_end)
+}
+
 /// Cell texts an exported log writes for "no value" (compared without case, trimmed): a
 /// spreadsheet's `#N/A`, a database's `NULL`, pandas' `NaN` and `None`, a person's `-` or `n/a`.
 /// In a file they are an empty cell: a missing value of that channel only, never text that
@@ -229,5 +247,19 @@ mod tests {
         assert_eq!(parse_number("1,234,567", unshown), Some(1_234_567.0));
         assert_eq!(parse_number("1.234,5", unshown), Some(1234.5));
         assert_eq!(parse_number("12", unshown), Some(12.0));
+    }
+
+    #[test]
+    fn a_percent_sign_after_a_cells_number_is_read_past() {
+        assert_eq!(parse_cell("45%", DecimalMark::Point), Some(45.0));
+        assert_eq!(parse_cell("45 %", DecimalMark::Point), Some(45.0));
+        assert_eq!(parse_cell("4,5%", DecimalMark::Comma), Some(4.5));
+        assert_eq!(parse_cell("0.45", DecimalMark::Point), Some(0.45));
+        for not in ["%", "abc%", "45%%", "% 45", "4 5%"] {
+            assert_eq!(parse_cell(not, DecimalMark::Point), None, "{not}");
+            assert!(!is_cell_number(not), "{not}");
+        }
+        assert!(is_cell_number("12,5 %"));
+        assert!(!is_number("12,5 %"));
     }
 }
