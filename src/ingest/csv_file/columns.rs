@@ -89,9 +89,15 @@ impl Picks {
             Some(time.ok_or(CsvFileError::NeedRate)?)
         };
         let mut optional: Vec<usize> = Vec::new();
+        // A quantity already read is not read twice (a `Force (N)` beside the output `Thrust
+        // (N)` would be a second thrust channel).
+        let quantity = |i: usize| columns[i].spec.map(|s| s.quantity);
         for name in &opts.optional {
             let taken = |i: &usize| {
-                Some(*i) == time || Some(*i) == input || outputs.contains(i) || optional.contains(i)
+                let used = || input.iter().chain(&outputs).chain(&optional);
+                Some(*i) == time
+                    || used().any(|j| j == i)
+                    || (quantity(*i).is_some() && used().any(|&j| quantity(j) == quantity(*i)))
             };
             if let Some(i) = find(columns, name).filter(|i| !taken(i)) {
                 optional.push(i);
@@ -122,7 +128,9 @@ impl Picks {
 /// The first column of quantity `q` (one sensor may be written in two units, `Thrust (kgf)`
 /// and `Thrust (N)`), unless the file has the same sensor for several motors (`Motor 1 Thrust
 /// (N)`, `Motor 2 Thrust (N)`; [`csv_columns::indexed_alike`]): which motor is not guessed, an
-/// error names them and `option`.
+/// error names them and `option`. A column named a thrust is taken before one named by a
+/// force's generic words (`Thrust (N)` before a `Force (N)`, `Load (g)` or `Lift (g)` left of
+/// it: a second load cell, a drag or a weight).
 fn one_sensor(
     columns: &[Column],
     q: Quantity,
@@ -139,7 +147,11 @@ fn one_sensor(
         .iter()
         .any(|&i| csv_columns::indexed_alike(name(i), name(first)))
     {
-        return Ok(Some(first));
+        let named_thrust = of_q.iter().copied().find(|&i| {
+            q == Quantity::Thrust
+                && csv_columns::sensor_word(name(i)).ends_with(Quantity::Thrust.key())
+        });
+        return Ok(Some(named_thrust.unwrap_or(first)));
     }
     Err(CsvFileError::TwoSensors {
         quantity: q.key(),

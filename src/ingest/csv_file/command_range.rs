@@ -9,7 +9,10 @@
 //! 3. A header that declares the unit (`ESC signal (µs)`, `throttle (%)`, `throttle (0-1)`,
 //!    `dshot`: [`CommandScales::Declared`]) gives the scale (`"header: µs"`); the values must
 //!    lie in it (within [`TOLERANCE`] of its span), else the file is refused with the option to
-//!    give (`--esc-us` for µs: an ESC calibrated to 1100..1900 µs is common).
+//!    give (`--esc-us` for µs: an ESC calibrated to 1100..1900 µs is common). Values that are
+//!    all fractions within 0..1 under a wider declared scale (`Throttle (%)` holding 0.40,
+//!    0.45) are refused naming `--input-range 0,1`: under a hundredth of full throttle spins
+//!    no propeller, but the file cannot say which the exporter meant.
 //! 4. Otherwise (`throttle`, `ESC signal`, `pwm`, `cmd` without a unit:
 //!    [`CommandScales::FromValues`]) the values decide among the candidate scales of the unit
 //!    table: a candidate **fits** when every value lies in it (within [`TOLERANCE`]) and the
@@ -107,6 +110,28 @@ pub enum RangeError {
         scale: &'static str,
         /// The option to give.
         option: &'static str,
+    },
+    /// Every value lies within 0..1 and one has a fraction, under a header that declares a
+    /// wider scale (`Throttle (%)` holding 0.40, 0.45): fractions or a fraction of a percent
+    /// are not told apart from the file.
+    #[error(
+        "values {lo}..{hi} are fractions of 0..1 under a header that declares {scale}: give \
+         --input-range 0,1 if they are fractions of full throttle (--input-range {raw_min},{raw_max} \
+         if they are {unit})"
+    )]
+    FractionsUnderDeclared {
+        /// Smallest value.
+        lo: f64,
+        /// Largest value.
+        hi: f64,
+        /// The declared scale.
+        scale: &'static str,
+        /// Its unit.
+        unit: &'static str,
+        /// Its raw value at throttle 0.
+        raw_min: f64,
+        /// Its raw value at throttle 1.
+        raw_max: f64,
     },
     /// No candidate scale fits the values, or several do.
     #[error(
@@ -206,7 +231,19 @@ fn from_values(scales: CommandScales, values: &[f64]) -> Result<CommandRange, Ra
         let tol = TOLERANCE * (s.raw_max - s.raw_min);
         lo >= s.raw_min - tol && hi <= s.raw_max + tol
     };
+    let fractions =
+        || hi <= 1.0 && lo >= 0.0 && values.iter().any(|v| v.is_finite() && v.fract() != 0.0);
     match scales {
+        CommandScales::Declared(s) if s.raw_max - s.raw_min > 1.0 && fractions() => {
+            Err(RangeError::FractionsUnderDeclared {
+                lo,
+                hi,
+                scale: s.label,
+                unit: s.unit,
+                raw_min: s.raw_min,
+                raw_max: s.raw_max,
+            })
+        }
         CommandScales::Declared(s) if holds(&s) => Ok(CommandRange {
             raw_min: s.raw_min,
             raw_max: s.raw_max,
@@ -284,6 +321,28 @@ mod tests {
         assert!(e.to_string().contains("--input-range MIN,MAX"), "{e}");
         let e = decide(Unit::Fraction, &[0.0, 40.0]).unwrap_err();
         assert!(e.to_string().contains("0..1"), "{e}");
+    }
+
+    #[test]
+    fn fractions_under_a_percent_header_are_refused_naming_the_fraction_range() {
+        let e = decide(Unit::Percent, &stairs(0.1, 0.9)).unwrap_err();
+        assert!(
+            matches!(e, RangeError::FractionsUnderDeclared { .. }),
+            "{e}"
+        );
+        let text = e.to_string();
+        assert!(text.contains("--input-range 0,1"), "{text}");
+        assert!(text.contains("--input-range 0,100"), "{text}");
+        // Whole percents, and percents past 1, keep the header's scale.
+        assert_eq!(range(Unit::Percent, &[0.0, 1.0, 1.0]).1, 100.0);
+        assert_eq!(range(Unit::Percent, &[0.5, 1.5, 2.5]).1, 100.0);
+        // Given the fraction range, the column is read with it.
+        let given = GivenRanges {
+            input_range: Some((0.0, 1.0)),
+            esc_us: None,
+        };
+        let r = command_range(Unit::Percent, &stairs(0.1, 0.9), &given);
+        assert_eq!(r.map(|r| r.map(|r| r.raw_max)), Some(Ok(1.0)));
     }
 
     #[test]
