@@ -6,7 +6,9 @@
 //! minutes, Unix time stamps or date-time stamps not starting at 0, duplicated stamps, no time
 //! column, empty trailing columns, sensor cells left empty between sensor updates, a reversed
 //! load cell, eRPM, percentages, 0..1, DShot and raw ESC values, a motor's index in the
-//! names and a load cell per motor (`dialects/clocks.rs`). Each [`Dialect`] says what a
+//! names and a load cell per motor (`dialects/clocks.rs`), qualified and small stands' names,
+//! a stopwatch's time, percent signs in cells and fractions under a `%` header
+//! (`dialects/names.rs`). Each [`Dialect`] says what a
 //! reader must make of it (the units, the command's range) or how it must be refused and what
 //! fixes it. Written from the dialects' features, not copied from any bench's file.
 //!
@@ -409,6 +411,7 @@ mod common {
 
 mod cases;
 mod clocks;
+mod names;
 mod numbers;
 mod quotes;
 pub use cases::dialects;

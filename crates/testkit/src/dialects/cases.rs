@@ -488,5 +488,7 @@ pub fn dialects() -> Vec<Dialect> {
     out.extend(super::quotes::dialects(first));
     let first = out.len() as u64 + 1;
     out.extend(super::clocks::dialects(first));
+    let first = out.len() as u64 + 1;
+    out.extend(super::names::dialects(first));
     out
 }
