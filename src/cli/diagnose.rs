@@ -71,18 +71,25 @@ pub struct Signals {
     pub input_name: String,
     /// What the output is.
     pub output_name: String,
+    /// Whether the input is a stand's command ([`LoadedFile::input_is_a_command`]).
+    pub input_is_a_command: bool,
 }
 
 impl Signals {
-    /// [`diagnose::diagnose`] of these signals.
+    /// [`diagnose::diagnose`] of these signals (with what the input is:
+    /// [`diagnose::Options::input_is_a_command`]).
     pub fn diagnose(&self, opts: &diagnose::Options) -> Result<Diagnosis, DiagnoseError> {
+        let opts = diagnose::Options {
+            input_is_a_command: self.input_is_a_command,
+            ..*opts
+        };
         diagnose::diagnose(
             self.dt_s,
             &self.u,
             &self.y,
             &self.interpolated,
             self.voltage.as_deref(),
-            opts,
+            &opts,
         )
     }
 }
@@ -293,6 +300,7 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
         voltage,
         input_name,
         output_name,
+        input_is_a_command: file.input_is_a_command(),
     })
 }
 

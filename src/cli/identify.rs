@@ -45,7 +45,7 @@ use propid_numerics::identify::{identify_any_with, AnyInput};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
-use propid_numerics::segment::{Command, SegmentRules};
+use propid_numerics::segment::Command;
 use propid_numerics::stabilization::StabOptions;
 use propid_numerics::stand::{stand_figures, steady_levels, OutputChannel, StandFigures};
 use propid_numerics::static_map::{level_slope, LevelSlope};
@@ -131,9 +131,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let mut loaded = load::load(&args)?;
     load::leave_out_outliers(&mut loaded);
     load::leave_out_start_transient(&mut loaded);
+    let rules = loaded.segment_rules();
     let ident = IdentOptions {
         order: args.order,
         svd: args.svd,
+        max_pulse_width: rules.max_pulse_samples,
         ..IdentOptions::default()
     };
     let u: Vec<&[f64]> = vec![loaded.input.as_slice()];
@@ -166,7 +168,11 @@ pub fn run(args: Args) -> Result<(), CliError> {
             return Err(e.into());
         }
     };
-    let ops = operating_points(&input, &ident, &OpOptions::default());
+    let op_opts = OpOptions {
+        segment: rules,
+        ..OpOptions::default()
+    };
+    let ops = operating_points(&input, &ident, &op_opts);
     let levels = levels_slope(&loaded);
     let out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref());
     if let Some(dir) = &args.report {
@@ -193,7 +199,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
 fn levels_slope(loaded: &load::Loaded) -> Option<LevelSlope> {
     let y = loaded.outputs.first()?;
     let cmd = Command::with_missing(&loaded.input, &loaded.missing);
-    level_slope(&steady_levels(cmd, &SegmentRules::DEFAULT, y))
+    level_slope(&steady_levels(cmd, &loaded.segment_rules(), y))
 }
 
 /// The step figures and static maps of `args.file` as `identify` computes them (they need no
@@ -210,7 +216,7 @@ fn stand_for(loaded: &load::Loaded) -> StandFigures {
     stand_figures(
         Command::with_missing(&loaded.input, &loaded.missing),
         loaded.dt_s,
-        &SegmentRules::DEFAULT,
+        &loaded.segment_rules(),
         loaded.outputs.first().map_or(&[][..], Vec::as_slice),
         &loaded
             .stand

@@ -6,6 +6,7 @@ use std::ops::Range;
 
 use super::fit::{levenberg_marquardt, linear_refit, Fit};
 use super::model::{simulate, Core, Model, Signals};
+use propid_numerics::segment::SegmentRules;
 
 /// The data, the estimation range and the validation range.
 #[derive(Debug, Clone)]
@@ -16,6 +17,10 @@ pub struct Ctx<'a> {
     pub est: Range<usize>,
     /// Validation samples.
     pub val: Range<usize>,
+    /// The segmentation's rules for this record (its holds, levels and steps): at its rate
+    /// for a stand's command ([`SegmentRules::at_rate`]), by the sample count alone for a
+    /// signal in its own units ([`super::Options::input_is_a_command`]).
+    pub rules: SegmentRules,
 }
 
 impl Ctx<'_> {
@@ -80,6 +85,7 @@ impl<'a> Ctx<'a> {
             },
             est: 0..n,
             val: 0..n,
+            rules: propid_numerics::segment::SegmentRules::DEFAULT,
         }
     }
 }

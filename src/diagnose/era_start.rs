@@ -81,6 +81,7 @@ pub fn era_start(ctx: &Ctx) -> Result<EraStart, CoreRefusal> {
     let opts = IdentOptions {
         order: Some(2),
         jackknife: false,
+        max_pulse_width: ctx.rules.max_pulse_samples,
         ..IdentOptions::default()
     };
     let (okid, stab) = (OkidOptions::default(), StabOptions::default());
@@ -159,6 +160,7 @@ mod tests {
             },
             est: 0..280,
             val: 280..400,
+            rules: propid_numerics::segment::SegmentRules::DEFAULT,
         };
         let e = era_start(&ctx).unwrap_err();
         assert!(matches!(e, CoreRefusal::Refused(_)), "{e:?}");

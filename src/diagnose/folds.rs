@@ -80,12 +80,18 @@ pub struct Folds {
 
 impl Folds {
     /// The folds of the command `u` with output `y` (`NaN` = missing; see the module doc);
-    /// `estimation_fraction` is the head's share when the command has no steps.
-    pub fn from_input(u: &[f64], y: &[f64], estimation_fraction: f64) -> Folds {
+    /// `estimation_fraction` is the head's share when the command has no steps; `rules` are
+    /// the segmentation's at the record's rate.
+    pub fn from_input(
+        u: &[f64],
+        y: &[f64],
+        estimation_fraction: f64,
+        rules: &SegmentRules,
+    ) -> Folds {
         let n = u.len().min(y.len());
         let u = &u[..n];
         let measured = |r: &Range<usize>| y[r.clone()].iter().filter(|v| v.is_finite()).count();
-        let lv = levels(Command::new(u), &SegmentRules::DEFAULT);
+        let lv = levels(Command::new(u), rules);
         if lv.len() >= MIN_FOLDS {
             let mut cuts: Vec<usize> = if 2 * lv.len() <= MAX_FOLDS {
                 // Few levels: each level is two blocks, the step into it with the first half
@@ -224,7 +230,7 @@ mod tests {
     #[test]
     fn a_short_staircase_is_cut_at_its_steps_and_the_middle_of_each_hold() {
         let u = staircase(&[0.1, 0.3, 0.5, 0.7, 0.9], 100);
-        let f = Folds::from_input(&u, &u, 0.7);
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
         assert_eq!(f.method, Method::BlockedCv);
         let want: Vec<Range<usize>> = (0..10).map(|i| 50 * i..50 * (i + 1)).collect();
         assert_eq!(f.folds, want);
@@ -238,7 +244,7 @@ mod tests {
     fn many_levels_are_grouped_into_consecutive_blocks_of_whole_levels() {
         let lv: Vec<f64> = (0..25).map(|i| 0.1 + 0.03 * i as f64).collect();
         let u = staircase(&lv, 50);
-        let f = Folds::from_input(&u, &u, 0.7);
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
         assert_eq!(f.folds.len(), MAX_FOLDS);
         // Every cut is at a step, the folds tile the record.
         assert_eq!(f.folds[0].start, 0);
@@ -254,7 +260,7 @@ mod tests {
         let mut u = vec![0.0; 10]; // shorter than a level: no level of its own
         u.extend(staircase(&[0.4, 0.6, 0.5], 200));
         u[10 + 50] = 0.45; // a one-sample pulse on the first level
-        let f = Folds::from_input(&u, &u, 0.7);
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
         assert_eq!(
             f.folds,
             vec![0..110, 110..210, 210..310, 310..410, 410..510, 510..610]
@@ -264,14 +270,14 @@ mod tests {
     #[test]
     fn a_record_without_steps_keeps_the_hold_out_tail() {
         let u: Vec<f64> = (0..1000).map(|k| (k as f64 * 0.37).sin()).collect();
-        let f = Folds::from_input(&u, &u, 0.7);
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
         assert_eq!(f.method, Method::Holdout);
         assert_eq!(f.folds.len(), 1);
         assert_eq!(f.folds[0], 700..1000);
         assert_eq!(f.estimation, 0..700);
         // Two levels are not enough for folds either.
         let u = staircase(&[0.2, 0.6], 300);
-        let f = Folds::from_input(&u, &u, 0.5);
+        let f = Folds::from_input(&u, &u, 0.5, &SegmentRules::DEFAULT);
         assert_eq!(f.method, Method::Holdout);
         assert_eq!(f.folds.len(), 1);
         assert_eq!(f.folds[0], 300..600);
@@ -284,7 +290,7 @@ mod tests {
         for v in &mut y[305..] {
             *v = f64::NAN; // the last level's output was not measured
         }
-        let f = Folds::from_input(&u, &y, 0.7);
+        let f = Folds::from_input(&u, &y, 0.7, &SegmentRules::DEFAULT);
         assert_eq!(
             f.folds,
             vec![0..50, 50..100, 100..150, 150..200, 200..250, 250..400]

@@ -68,6 +68,12 @@ pub struct Options {
     pub estimation_fraction: f64,
     /// Most effects named.
     pub max_effects: usize,
+    /// The input is a stand's command (a throttle, an ESC signal): its holds are levels by the
+    /// motor–propeller's time scale as well as by their sample count
+    /// ([`SegmentRules::at_rate`]). `false` for a signal in its own units (a benchmark's pump
+    /// voltage: cascaded tanks take minutes to settle), whose holds are levels by the sample
+    /// count alone.
+    pub input_is_a_command: bool,
 }
 
 impl Default for Options {
@@ -75,6 +81,7 @@ impl Default for Options {
         Options {
             estimation_fraction: 0.7,
             max_effects: 3,
+            input_is_a_command: true,
         }
     }
 }
@@ -192,7 +199,11 @@ pub fn diagnose(
     }
     // A start-up transient is left out too (the rule of `propid identify`): the output
     // settling under the first level for a reason the command does not show.
-    let transient = start_transient(&y_kept, &[], u, &SegmentRules::DEFAULT).map_or(0, |t| t.end);
+    let rules = match opts.input_is_a_command {
+        true => SegmentRules::DEFAULT.at_rate(dt_s),
+        false => SegmentRules::DEFAULT,
+    };
+    let transient = start_transient(&y_kept, &[], u, &rules).map_or(0, |t| t.end);
     y_kept[..transient].iter_mut().for_each(|v| *v = f64::NAN);
     let y = &y_kept[..];
     let source = Source {
@@ -201,7 +212,7 @@ pub fn diagnose(
         outliers: found.len(),
         start_up_transient: transient,
     };
-    let folds = folds::Folds::from_input(u, y, opts.estimation_fraction);
+    let folds = folds::Folds::from_input(u, y, opts.estimation_fraction, &rules);
     let est = folds.estimation.clone();
     let val = match folds.method {
         folds::Method::Holdout => est.end..n,
@@ -224,7 +235,12 @@ pub fn diagnose(
         u_ref: mean(&u[est.clone()]).max(1e-6),
         v_ref: voltage.map_or(0.0, |v| mean(&v[..n])),
     };
-    let ctx = Ctx { sig, est, val };
+    let ctx = Ctx {
+        sig,
+        est,
+        val,
+        rules,
+    };
     let era = era_start::era_start(&ctx);
     let starts: Vec<Core> = era.iter().map(|e| e.core).collect();
     let searched = search::search(&ctx, &folds, &starts, opts.max_effects).ok_or_else(|| {
@@ -232,7 +248,7 @@ pub fn diagnose(
             core: era.as_ref().err().cloned(),
         }
     })?;
-    let floor = noise::noise_floor(u, y, interpolated);
+    let floor = noise::noise_floor(u, y, interpolated, &rules);
     let mut d = assemble::assemble(&ctx, &folds, searched, era.as_ref().ok(), floor);
     d.source = source;
     Ok(d)

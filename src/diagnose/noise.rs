@@ -77,9 +77,14 @@ pub struct NoiseFloor {
 
 /// The noise floor of output `y` (`NaN` = missing) driven by `u`; `interpolated[k]` marks a
 /// sample the reader interpolated between the output's readings (empty: every sample a
-/// reading).
-pub fn noise_floor(u: &[f64], y: &[f64], interpolated: &[bool]) -> Option<NoiseFloor> {
-    from_holds(u, y, interpolated).or_else(|| from_arx(u, y, interpolated))
+/// reading); `rules` are the segmentation's at the record's rate (its holds).
+pub fn noise_floor(
+    u: &[f64],
+    y: &[f64],
+    interpolated: &[bool],
+    rules: &SegmentRules,
+) -> Option<NoiseFloor> {
+    from_holds(u, y, interpolated, rules).or_else(|| from_arx(u, y, interpolated))
 }
 
 /// Whether `y[k]` is a reading: not marked in `interpolated` (module doc).
@@ -88,11 +93,15 @@ fn reading(interpolated: &[bool], k: usize) -> bool {
 }
 
 /// The steady-hold estimate (see the module doc), `None` below [`MIN_HOLD_SAMPLES`].
-pub fn from_holds(u: &[f64], y: &[f64], interpolated: &[bool]) -> Option<NoiseFloor> {
-    let rules = SegmentRules::DEFAULT;
+pub fn from_holds(
+    u: &[f64],
+    y: &[f64],
+    interpolated: &[bool],
+    rules: &SegmentRules,
+) -> Option<NoiseFloor> {
     let n = u.len().min(y.len());
     let mut d: Vec<f64> = Vec::new();
-    for run in holds(Command::new(&u[..n]), &rules) {
+    for run in holds(Command::new(&u[..n]), rules) {
         // Consecutive readings of the hold, a missing sample breaking the chain.
         let mut chain = [f64::NAN; 3];
         let mut len = 0usize;
@@ -186,7 +195,7 @@ mod tests {
                 x + 0.001 * k as f64 + e[k]
             })
             .collect();
-        let f = noise_floor(&u, &y, &[]).unwrap();
+        let f = noise_floor(&u, &y, &[], &SegmentRules::DEFAULT).unwrap();
         assert_eq!(f.from, FloorSource::SteadyHolds);
         assert!((f.rms / 0.02 - 1.0).abs() < 0.1, "{f:?}");
         assert!(f.samples > 2900, "{f:?}");
@@ -205,8 +214,8 @@ mod tests {
                 nx + e[k]
             })
             .collect();
-        assert!(from_holds(&u, &y, &[]).is_none());
-        let f = noise_floor(&u, &y, &[]).unwrap();
+        assert!(from_holds(&u, &y, &[], &SegmentRules::DEFAULT).is_none());
+        let f = noise_floor(&u, &y, &[], &SegmentRules::DEFAULT).unwrap();
         assert_eq!(f.from, FloorSource::HighOrderFit);
         assert!((f.rms / 0.05 - 1.0).abs() < 0.2, "{f:?}");
     }
@@ -229,10 +238,10 @@ mod tests {
             })
             .collect();
         let interpolated: Vec<bool> = (0..4000).map(|k| k % 10 != 0).collect();
-        let f = from_holds(&u, &y, &interpolated).unwrap();
+        let f = from_holds(&u, &y, &interpolated, &SegmentRules::DEFAULT).unwrap();
         assert!((f.rms / 0.01 - 1.0).abs() < 0.2, "{f:?}");
         assert!((300..420).contains(&f.samples), "{f:?}");
-        let unmarked = from_holds(&u, &y, &[]).unwrap();
+        let unmarked = from_holds(&u, &y, &[], &SegmentRules::DEFAULT).unwrap();
         assert!(unmarked.rms < 0.2 * 0.01, "{unmarked:?}");
         let arx = from_arx(&u, &y, &interpolated).unwrap();
         assert!(arx.samples < 400, "only the readings: {arx:?}");
@@ -248,7 +257,7 @@ mod tests {
             .iter()
             .map(|e| (e / 0.01).round() * 0.01)
             .collect();
-        let f = from_holds(&u, &y, &[]).unwrap();
+        let f = from_holds(&u, &y, &[], &SegmentRules::DEFAULT).unwrap();
         assert_eq!(f.samples, 2998, "every sample counts: {f:?}");
         assert!((f.rms / 0.02 - 1.0).abs() < 0.1, "{f:?}");
     }
@@ -260,7 +269,7 @@ mod tests {
         for v in y.iter_mut().step_by(7) {
             *v = f64::NAN;
         }
-        let f = noise_floor(&u, &y, &[]).unwrap();
+        let f = noise_floor(&u, &y, &[], &SegmentRules::DEFAULT).unwrap();
         assert!(
             f.rms.is_finite() && (f.rms / 0.01 - 1.0).abs() < 0.2,
             "{f:?}"

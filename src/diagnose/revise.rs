@@ -381,7 +381,8 @@ mod tests {
         for (k, v) in y.iter_mut().enumerate() {
             *v += 0.002 * ((k as f64 * 1.7).sin() + (k as f64 * 0.37).cos());
         }
-        let folds = Folds::from_input(&u, &y, 0.7);
+        let rules = propid_numerics::segment::SegmentRules::DEFAULT;
+        let folds = Folds::from_input(&u, &y, 0.7, &rules);
         let mean = u.iter().sum::<f64>() / u.len() as f64;
         let ctx = Ctx {
             sig: Signals {
@@ -394,6 +395,7 @@ mod tests {
             },
             est: folds.estimation.clone(),
             val: 0..u.len(),
+            rules: propid_numerics::segment::SegmentRules::DEFAULT,
         };
         let base = ctx.best_of(
             [1.0, 2.0, 4.0, 8.0].map(|f| {
@@ -525,6 +527,7 @@ mod tests {
                 },
                 est: 0..n,
                 val: 0..n,
+                rules: propid_numerics::segment::SegmentRules::DEFAULT,
             };
             // The model predicts the mean (no gain); the drift term adds the true line.
             let core = Core {

@@ -34,10 +34,25 @@ pub struct Loaded {
     pub pulse_starts: Option<Vec<usize>>,
     /// Whether `input` is a command read from the file (not steps found from the response).
     pub commanded: bool,
+    /// Whether `input` is a stand's command ([`crate::cli::load::LoadedFile::input_is_a_command`]).
+    pub input_is_a_command: bool,
     /// The static map's channels the file has: key, unit, samples (NaN = not measured).
     pub stand: Vec<(&'static str, &'static str, Vec<f64>)>,
     /// Description for the output.
     pub source: Source,
+}
+
+impl Loaded {
+    /// The segmentation's rules for this record: the one set, at its rate for a stand's
+    /// command ([`SegmentRules::at_rate`]: a pulse at most a third of a second long too), by
+    /// the sample count alone for a signal in its own units
+    /// ([`crate::cli::load::LoadedFile::input_is_a_command`]).
+    pub fn segment_rules(&self) -> SegmentRules {
+        match self.input_is_a_command {
+            true => SegmentRules::DEFAULT.at_rate(self.dt_s),
+            false => SegmentRules::DEFAULT,
+        }
+    }
 }
 
 /// `"source"` in the JSON output.
@@ -172,6 +187,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         rec.impulse_starts().collect()
     };
     let commanded = file.input.is_some();
+    let input_is_a_command = file.input_is_a_command();
     let stand = STAND_CHANNELS
         .iter()
         .filter(|c| rec.channel(c.1).is_some())
@@ -197,6 +213,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         missing: rec.missing.clone(),
         pulse_starts: (!starts.is_empty()).then_some(starts),
         commanded,
+        input_is_a_command,
         stand,
         source: Source {
             file: file.name,
@@ -252,7 +269,7 @@ pub fn leave_out_outliers(loaded: &mut Loaded) -> usize {
 /// outputs and the stand's channels, never corrected. Returns how many samples (from the
 /// record's start).
 pub fn leave_out_start_transient(loaded: &mut Loaded) -> usize {
-    let rules = SegmentRules::DEFAULT;
+    let rules = loaded.segment_rules();
     let end = loaded
         .outputs
         .iter()

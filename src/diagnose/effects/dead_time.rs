@@ -59,8 +59,8 @@ pub fn delay_search_samples(dt_s: f64, est_len: usize, steps_delay: Option<f64>)
 /// The dead time the command's clean steps show, samples: the median of the steps'
 /// first-order-plus-dead-time delays ([`propid_numerics::step_response`], found with the one
 /// segmentation); `None` without a step that has one.
-pub fn steps_delay_samples(sig: &Signals) -> Option<f64> {
-    let steps = segment::steps(Command::new(sig.u), &SegmentRules::DEFAULT);
+pub fn steps_delay_samples(sig: &Signals, rules: &SegmentRules) -> Option<f64> {
+    let steps = segment::steps(Command::new(sig.u), rules);
     let mut d: Vec<f64> = steps
         .iter()
         .filter_map(|s| step_figures(sig.y, sig.dt_s, s).dead_time_s)
@@ -156,7 +156,11 @@ impl Effect for DeadTime {
     /// 8 samples per period skips the true delay's narrow valley and lands a whole period
     /// later (Silverbox at 610 Hz, a 65 Hz resonance: 3 samples found as 11).
     fn extend(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
-        let dmax = delay_search_samples(ctx.sig.dt_s, ctx.est.len(), steps_delay_samples(&ctx.sig));
+        let dmax = delay_search_samples(
+            ctx.sig.dt_s,
+            ctx.est.len(),
+            steps_delay_samples(&ctx.sig, &ctx.rules),
+        );
         // With a term that reads the voltage, where the delay lies matters (module doc): each
         // delay is tried all on the throttle's side and all on the output's, and the best
         // delay's share is refined.
@@ -448,13 +452,13 @@ mod tests {
             u_ref: 0.35,
             v_ref: 0.0,
         };
-        let d = steps_delay_samples(&sig).expect("three steps");
+        let d = steps_delay_samples(&sig, &SegmentRules::DEFAULT).expect("three steps");
         assert!((d - 5.0).abs() < 1.0, "{d}");
         let flat = Signals {
             u: &[0.5; 400],
             ..sig
         };
-        assert_eq!(steps_delay_samples(&flat), None);
+        assert_eq!(steps_delay_samples(&flat, &SegmentRules::DEFAULT), None);
     }
 
     #[test]

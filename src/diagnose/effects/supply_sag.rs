@@ -175,6 +175,7 @@ impl Effect for SupplySag {
             },
             est: ctx.est.clone(),
             val: ctx.val.clone(),
+            rules: ctx.rules,
         };
         let mut f = alt.best_of([after.model.clone()], 1);
         if let Some(g) = self.extend(&alt, before).filter(|g| g.sse < f.sse) {
@@ -460,6 +461,7 @@ mod tests {
             },
             est: 0..u.len(),
             val: 0..u.len(),
+            rules: propid_numerics::segment::SegmentRules::DEFAULT,
         };
         let base = crate::diagnose::search::baseline(&ctx, &Default::default(), &[]);
         let after = SupplySag.extend(&ctx, &base).expect("a voltage channel");

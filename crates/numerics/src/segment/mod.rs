@@ -11,7 +11,8 @@
 //! - **Run**: from a measured sample, every following sample at the same level as that first
 //!   one; the next measured sample that is not starts the next run ([`Runs`]). Missing samples
 //!   belong to the run they fall in; missing samples at the record's start to the first run.
-//! - **Pulse**: a run of `1 ..= max_pulse_samples` samples whose value is not the same level
+//! - **Pulse**: a run of `1 ..= max_pulse_samples` samples (at most [`MAX_PULSE_S`] long too,
+//!   for a record of known rate: [`SegmentRules::at_rate`]) whose value is not the same level
 //!   as the last measured value `L` before it, followed by a measured sample at `L` again. The
 //!   run that starts there (back at the level) is not itself a pulse. Its amplitude is the
 //!   run's value minus `L` ([`PulseRun`]). A run that changes level and does not come back in
@@ -49,5 +50,5 @@ pub use record::{
     holds, is_piecewise_constant, is_ramp, is_ramped_staircase, levels, pulse_at, pulses,
     ramp_windows, steps, Level, Pulses, Step,
 };
-pub use rules::{ResponseStepRules, SegmentRules};
+pub use rules::{ResponseStepRules, SegmentRules, MAX_PULSE_S};
 pub use runs::{run_end, run_start, Command, Run, Runs};

@@ -42,6 +42,11 @@ pub struct SegmentRules {
     pub response: ResponseStepRules,
 }
 
+/// Longest pulse in time, s ([`SegmentRules::at_rate`]): a third of a second. A
+/// motor–propeller settles within 0.1–0.3 s (time constants of 20–100 ms), so a command held
+/// longer is a level the response settles on, not a pulse, whatever the log's rate.
+pub const MAX_PULSE_S: f64 = 1.0 / 3.0;
+
 /// Thresholds of the steps found from a response alone (the method is documented where it
 /// runs: the application's `ingest::steps`). `σ` is the noise of the smoothed response, `R`
 /// its 1st-to-99th percentile range, `thr = max(noise_sigmas·σ, range_fraction·R)`.
@@ -93,6 +98,31 @@ impl SegmentRules {
         max_pulse_samples: 64,
         ..SegmentRules::DEFAULT
     };
+
+    /// These rules for a record sampled every `dt_s` seconds: a pulse also lasts at most
+    /// [`MAX_PULSE_S`] (`n` samples last `n·dt_s`), so that a slow log's levels are levels. At
+    /// 100 Hz and faster `max_pulse_samples` (32) is the shorter and nothing changes; a 10 Hz
+    /// bench log holding each level 3 s (30 samples) had no level at all under 32 samples, and
+    /// so no steps, no static map and no operating points. A sample longer than a pulse (a
+    /// stand's table of steady averages, one row per command) makes every run a level
+    /// (`max_pulse_samples` 0). A `dt_s` that is not a finite positive number leaves the rules
+    /// as they are.
+    pub fn at_rate(self, dt_s: f64) -> SegmentRules {
+        if !(dt_s.is_finite() && dt_s > 0.0) {
+            return self;
+        }
+        // A hair over the quotient, so that 1/30 s samples give 10, not 9.
+        let in_time = (MAX_PULSE_S / dt_s * (1.0 + 1e-9)).floor();
+        let in_time = if in_time < self.max_pulse_samples as f64 {
+            in_time as usize
+        } else {
+            self.max_pulse_samples
+        };
+        SegmentRules {
+            max_pulse_samples: in_time,
+            ..self
+        }
+    }
 
     /// Whether `a` and `b` are the same level: `|a − b| ≤ level_tolerance` (false when either
     /// is NaN).

@@ -348,3 +348,38 @@ fn steps_are_held_levels_next_to_each_other_and_holds_are_the_steady_runs() {
 }
 
 mod oracles;
+
+#[test]
+fn at_a_slow_rate_a_pulse_is_at_most_a_third_of_a_second_and_longer_holds_are_levels() {
+    let at = |dt: f64| R.at_rate(dt).max_pulse_samples;
+    // 100 Hz and faster: 32 samples is the shorter; 10 Hz: 3 samples (0.3 s); a sample
+    // longer than a third of a second: no pulse, every run a level.
+    let rates = (
+        at(0.001),
+        at(0.01),
+        at(0.02),
+        at(1.0 / 30.0),
+        at(0.1),
+        at(0.5),
+    );
+    assert_eq!(rates, (32, 32, 16, 10, 3, 0));
+    assert_eq!(R.at_rate(f64::NAN), R);
+    assert_eq!(R.at_rate(0.0), R);
+    // A 10 Hz log holding each level 3 s: no level under the sample count alone, every level
+    // and every step at its rate.
+    let u = seq(&[(0.3, 30), (0.5, 30), (0.4, 30), (0.7, 30), (0.5, 30)]);
+    let cmd = Command::new(&u);
+    assert!(levels(cmd, &R).is_empty());
+    let slow = R.at_rate(0.1);
+    assert_eq!(levels(cmd, &slow).len(), 5);
+    assert_eq!(steps(cmd, &slow).len(), 4);
+    // A one-sample pulse is still a pulse at 10 Hz.
+    let p = seq(&[(0.25, 30), (0.5, 1), (0.25, 30)]);
+    assert_eq!(found(&p, &slow), vec![(30, 1, 0.25)]);
+    // A table of steady averages, a row every 5 s: every row its own level, no pulse.
+    let table = [0.1, 0.2, 0.3, 0.2, 0.4];
+    let steady = R.at_rate(5.0);
+    assert_eq!(levels(Command::new(&table), &steady).len(), 5);
+    assert_eq!(found(&table, &steady), vec![]);
+    assert_eq!(holds(Command::new(&table), &steady).count(), 5);
+}

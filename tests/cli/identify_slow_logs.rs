@@ -1,0 +1,95 @@
+//! Logs slower than a motor's response (issue 11: "steps and staircases, as a propulsion
+//! engineer reads them", at the rates hobby stands log): a level is a hold longer than a pulse
+//! in time as well as in samples (`SegmentRules::at_rate`), so a 20 Hz or a 10 Hz staircase
+//! holding each level 1.5 s (30 or 15 samples, under the 32-sample pulse limit) has its steps,
+//! static map and cross-validation folds, and a table of steady averages (a row every few
+//! seconds) a level per row. The simulated stand of `propid_testkit::dialects` (gain 10 N,
+//! time constant 0.08 s, dead time 0.02 s).
+
+use serde_json::Value;
+
+use crate::support::propid;
+use propid_testkit::dialects::{stand, LEVELS, TRUTH};
+
+/// The stand sampled every `dt_s`, `Time (s),Throttle (%),Thrust (N)`.
+fn write_log(dir: &std::path::Path, dt_s: f64) -> String {
+    let mut text = String::from("Time (s),Throttle (%),Thrust (N)\n");
+    for s in stand(dt_s, 7) {
+        text.push_str(&format!(
+            "{:.3},{:.1},{:.4}\n",
+            s.t_s,
+            100.0 * s.u,
+            s.thrust_n
+        ));
+    }
+    let path = dir.join(format!("stand_{}ms.csv", (1e3 * dt_s).round()));
+    std::fs::write(&path, text).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+fn json(args: &[&str]) -> Value {
+    let (code, out, err) = propid(args);
+    assert_eq!(code, 0, "{args:?}: {err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+#[test]
+fn a_slow_staircase_has_its_steps_its_map_and_its_folds() {
+    let dir = tempfile::tempdir().unwrap();
+    for dt in [0.05, 0.1] {
+        let file = write_log(dir.path(), dt);
+        let v = json(&["identify", &file, "--json"]);
+        let steps = v["steps"].as_array().unwrap();
+        assert_eq!(steps.len(), LEVELS.len() - 1, "{dt}: {}", v["steps"]);
+        let levels = v["static_map"]["thrust"]["levels"].as_array().unwrap();
+        assert_eq!(levels.len(), LEVELS.len(), "{dt}");
+        for (l, &u) in levels.iter().zip(&LEVELS) {
+            let mean = l["mean"].as_f64().unwrap();
+            assert!((mean - TRUTH.gain_n * u).abs() < 0.05, "{dt}: {l}");
+        }
+        for st in steps {
+            match dt {
+                // 20 Hz resolves the 0.08 s time constant.
+                0.05 => {
+                    let tau = st["time_constant_s"].as_f64().unwrap();
+                    assert!((tau / TRUTH.tau_s - 1.0).abs() < 0.25, "{st}");
+                }
+                // At 10 Hz it is shorter than a sample: said, not a number.
+                _ => {
+                    assert_eq!(st["resolvable"], false, "{st}");
+                    assert!(st["time_constant_s"].is_null(), "{st}");
+                }
+            }
+        }
+        // Diagnose needs 200 samples: the 20 Hz log has 210. Its folds are cut at the steps.
+        if dt == 0.05 {
+            let d = json(&["diagnose", &file, "--json"]);
+            assert_eq!(
+                d["validation"]["method"], "blocked_cv",
+                "{}",
+                d["validation"]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_table_of_steady_averages_has_a_level_per_row() {
+    // One row per command, every 5 s, each the steady thrust of a propeller (T ∝ u²).
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("Time (s),ESC signal (µs),Thrust (N)\n");
+    let commands = [1150, 1200, 1250, 1300, 1350, 1400, 1450, 1500, 1550, 1600];
+    for (i, &c) in commands.iter().enumerate() {
+        let u = (f64::from(c) - 1000.0) / 1000.0;
+        text.push_str(&format!("{},{c},{:.4}\n", 5 * i, 12.0 * u * u));
+    }
+    let path = dir.path().join("steady_averages.csv");
+    std::fs::write(&path, text).unwrap();
+    let (_, out, err) = propid(&["identify", path.to_str().unwrap(), "--json"]);
+    let v: Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {err}"));
+    let levels = v["static_map"]["thrust"]["levels"].as_array().unwrap();
+    assert_eq!(levels.len(), commands.len(), "{}", v["static_map"]);
+    let power = &v["static_map"]["thrust"]["power"];
+    let e = power["exponent"].as_f64().unwrap();
+    assert!((e - 2.0).abs() < 0.05, "{power}");
+}
