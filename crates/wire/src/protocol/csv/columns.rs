@@ -639,11 +639,23 @@ fn quantity_of_word(word: &str) -> Option<Quantity> {
             (is_qualifier(p) && a_reading).then_some(quantity)
         })
     };
+    // A command's word followed by a set-point's (`throttle_setpoint`, `ESC command`, `pwm
+    // cmd`): the command itself.
+    let set_point = |w: &str| {
+        SET_POINT_WORDS.iter().find_map(|&sp| {
+            let q = of(w.strip_suffix(sp)?.trim_end_matches('_'))?;
+            (q == Quantity::Throttle).then_some(q)
+        })
+    };
     of(word)
         .or_else(|| of(strip_index(word)?))
         .or_else(|| qualified(word))
         .or_else(|| qualified(strip_index(word)?))
+        .or_else(|| set_point(word))
 }
+
+/// Words that name a set-point after a command's word (`Throttle setpoint (%)`).
+const SET_POINT_WORDS: &[&str] = &["setpoint", "command", "cmd", "target", "demand", "ref"];
 
 /// `word` without a motor's or a sensor's index (`motor1thrust`, `m1_thrust`, `esc2`,
 /// `thrust_3` → `thrust`, `thrust`, `esc`, `thrust`); `None` when it has none.

@@ -440,6 +440,13 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         ("Thrust / N", Quantity::Thrust, Unit::Newton),
         ("omega / rad/s", Quantity::Rpm, Unit::RadianPerSecond),
         ("Throttle/%", Quantity::Throttle, Unit::Percent),
+        ("throttle_setpoint_pct", Quantity::Throttle, Unit::Percent),
+        (
+            "ESC command (µs)",
+            Quantity::Throttle,
+            Unit::PulseMicrosecond,
+        ),
+        ("Throttle command (%)", Quantity::Throttle, Unit::Percent),
     ];
     for (name, q, u) in cases {
         assert_eq!(lookup(name), spec(q, u), "{name}");
@@ -463,6 +470,8 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         "Drag Force (N)",
         "Thrust error (N)",
         "Thrust/Weight",
+        "Thrust setpoint (N)",
+        "speed_target_rpm",
         "Thrust/Power (g/W)",
     ] {
         assert_eq!(lookup(other), None, "{other}");
