@@ -19,7 +19,6 @@
 use std::path::Path;
 
 use super::{CliError, UsageError};
-use crate::ingest::csv_file::command_range::RAW_SIGNAL;
 use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
 use crate::ingest::steps::{find_steps, StepFinding};
 use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
@@ -137,14 +136,10 @@ pub struct LoadedFile {
 impl LoadedFile {
     /// Whether the input is a stand's command (a throttle, an ESC signal; the levels of steps
     /// found from the response): every input but a CSV column read as a signal in its own
-    /// units ([`RAW_SIGNAL`]: a benchmark's pump voltage or force). A command's holds are
-    /// levels by the motor's time scale too ([`propid_numerics::segment::SegmentRules::at_rate`]).
+    /// units ([`CsvSource::input_is_a_command`]).
     pub fn input_is_a_command(&self) -> bool {
         match &self.origin {
-            Origin::Csv(src) => src
-                .input_range
-                .as_ref()
-                .map_or(true, |r| r.from != RAW_SIGNAL),
+            Origin::Csv(src) => src.input_is_a_command(),
             Origin::Tsp1(_) => true,
         }
     }

@@ -315,6 +315,18 @@ pub struct CsvSource {
     pub unread: Vec<Unread>,
 }
 
+impl CsvSource {
+    /// Whether the input column is a stand's command (a throttle, an ESC signal, read on a
+    /// command's scale: [`command_range::is_a_command`]), not a measured signal (a benchmark's
+    /// pump voltage, a shaker's force); `true` without an input column (steps found from the
+    /// response are a command's levels). A command's holds are levels by the motor's time
+    /// scale too ([`propid_numerics::segment::SegmentRules::at_rate`]), and it is held, never
+    /// interpolated, between its rows.
+    pub fn input_is_a_command(&self) -> bool {
+        self.input.is_none() || command_range::is_a_command(self.input_range.as_ref())
+    }
+}
+
 /// A column left out, and why.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Unread {
@@ -489,9 +501,13 @@ fn build(
             Some(period)
         })
         .collect();
+    // A command is carried onto the grid by holding it (an ESC keeps its last command), any
+    // other channel by interpolating it (`super::resample`).
+    let is_command = command_range::is_a_command(input_range.as_ref());
+    let carry_held: Vec<bool> = (0..values.len()).map(|i| i < n_in && is_command).collect();
     let (t0_s, dt_s, jitter, rate_from, carried, mut bridged) = match time_vals {
         Some(t) => {
-            let u = to_uniform(&t, &values, opts.fs_hz)?;
+            let u = to_uniform(&t, &values, opts.fs_hz, &carry_held)?;
             values = u.channels;
             let from = if opts.fs_hz.is_some() {
                 "--fs"
@@ -514,7 +530,7 @@ fn build(
             }
             // Rows at the given rate are the grid; each channel is carried at its own rate.
             let t: Vec<f64> = (0..rows).map(|k| k as f64 / fs).collect();
-            let u = to_uniform(&t, &values, Some(fs))?;
+            let u = to_uniform(&t, &values, Some(fs), &carry_held)?;
             values = u.channels;
             (0.0, 1.0 / fs, None, "--fs", u.carried, u.bridged)
         }

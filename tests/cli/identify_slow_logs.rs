@@ -73,23 +73,42 @@ fn a_slow_staircase_has_its_steps_its_map_and_its_folds() {
     }
 }
 
-#[test]
-fn a_table_of_steady_averages_has_a_level_per_row() {
-    // One row per command, every 5 s, each the steady thrust of a propeller (T ∝ u²).
-    let dir = tempfile::tempdir().unwrap();
+/// A stand's step table, `Time (s),ESC signal (µs),Thrust (N)`: one row per command at
+/// `times`, each the steady thrust of a propeller (T = 12·u²); identify's JSON.
+fn step_table(dir: &std::path::Path, name: &str, times: &[f64]) -> Value {
     let mut text = String::from("Time (s),ESC signal (µs),Thrust (N)\n");
-    let commands = [1150, 1200, 1250, 1300, 1350, 1400, 1450, 1500, 1550, 1600];
-    for (i, &c) in commands.iter().enumerate() {
-        let u = (f64::from(c) - 1000.0) / 1000.0;
-        text.push_str(&format!("{},{c},{:.4}\n", 5 * i, 12.0 * u * u));
+    for (i, t) in times.iter().enumerate() {
+        let c = 1150 + 50 * i;
+        let u = (c as f64 - 1000.0) / 1000.0;
+        text.push_str(&format!("{t},{c},{:.4}\n", 12.0 * u * u));
     }
-    let path = dir.path().join("steady_averages.csv");
+    let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     let (_, out, err) = propid(&["identify", path.to_str().unwrap(), "--json"]);
-    let v: Value = serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {err}"));
+    serde_json::from_str(&out).unwrap_or_else(|e| panic!("{e}: {err}"))
+}
+
+#[test]
+fn a_table_of_steady_averages_has_a_level_per_row_at_the_commands_it_ran() {
+    let dir = tempfile::tempdir().unwrap();
+    // A row every 5 s: every row a level, the map's exponent the propeller's.
+    let even: Vec<f64> = (0..10).map(|i| 5.0 * f64::from(i)).collect();
+    let v = step_table(dir.path(), "even.csv", &even);
     let levels = v["static_map"]["thrust"]["levels"].as_array().unwrap();
-    assert_eq!(levels.len(), commands.len(), "{}", v["static_map"]);
+    assert_eq!(levels.len(), even.len(), "{}", v["static_map"]);
     let power = &v["static_map"]["thrust"]["power"];
     let e = power["exponent"].as_f64().unwrap();
     assert!((e - 2.0).abs() < 0.05, "{power}");
+    // Rows further apart at higher throttle (longer holds): put on a 5 s grid, the command is
+    // held between its rows, so every level is at a command the stand ran (interpolated, a
+    // grid point between 1450 and 1500 µs was a level at 1475 µs, never sent).
+    let uneven = [0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 36.5, 44.0, 52.5];
+    let v = step_table(dir.path(), "uneven.csv", &uneven);
+    assert_eq!(v["source"]["csv"]["jitter"]["resampled"], true);
+    let levels = v["static_map"]["thrust"]["levels"].as_array().unwrap();
+    assert!(levels.len() >= 8, "{}", v["static_map"]);
+    for l in levels {
+        let raw = 1000.0 + 1000.0 * l["throttle"].as_f64().unwrap();
+        assert!((raw - 50.0 * (raw / 50.0).round()).abs() < 1e-6, "{l}");
+    }
 }

@@ -191,6 +191,13 @@ pub fn command_range(
 /// and are signed or fractional (rule 5 of the module documentation).
 pub const RAW_SIGNAL: &str = "raw: signed or fractional values, no command range";
 
+/// Whether an input column read with `range` is a stand's command: read on a command's scale,
+/// any but [`RAW_SIGNAL`] (a signal taken in its own units). A column without one (a force in
+/// N named with `--input`: a shaker's) is a measured signal, no command.
+pub fn is_a_command(range: Option<&CommandRange>) -> bool {
+    range.is_some_and(|r| r.from != RAW_SIGNAL)
+}
+
 /// The scale of an `--input` column the unit table does not know (rule 5 of the module
 /// documentation): as a bare command's, except that signed or fractional values fitting no
 /// command scale are taken raw (factor 1, said in [`CommandRange::from`]).
