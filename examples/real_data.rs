@@ -22,7 +22,7 @@ use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
-use propid_numerics::quality::judge_gain;
+use propid_numerics::quality::{judge_gain, judge_sample_period};
 use propid_numerics::segment::{Command, SegmentRules};
 use propid_numerics::stand::steady_levels;
 use propid_numerics::static_map::level_slope;
@@ -331,7 +331,8 @@ state; fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖) on the held-out samples;
 than the mean, negative is worse; *diverges*: below −1000 %, an unstable or drifting model).
 Order chosen automatically. *DC gain* is `refused` where it contradicts the slope of the
 estimation part's own steady levels (`propid identify`'s `dc_gain_contradicts_levels`, exit
-4). Rates in Hz; `τ` are the time
+4), or where a stand's command is sampled more slowly than a motor settles (a third of a
+second: `sample_period_too_long`, every sample a steady state). Rates in Hz; `τ` are the time
 constants of the real poles; `fn`/`ζ` of the dominant oscillatory pair (– if none). *Static
 map* and *steps* are `propid identify`'s `static_map` and `steps` of the whole record (they
 need no model, so they are shown when the identification fails too): the power law
@@ -432,9 +433,22 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
         missing: &rec.missing[..n_est],
         pulse_starts: None,
     };
-    let ident = IdentOptions::default();
+    // The segmentation of `propid identify`: at the record's rate for a stand's command.
+    let command = file.source.input_is_a_command();
+    let rules = match command {
+        true => SegmentRules::DEFAULT.at_rate(rec.dt_s),
+        false => SegmentRules::DEFAULT,
+    };
+    let ident = IdentOptions {
+        max_pulse_width: rules.max_pulse_samples,
+        ..IdentOptions::default()
+    };
     let model = identify_any(&input, &ident, &OkidOptions::default()).map_err(|e| e.to_string())?;
-    let ops = operating_points(&input, &ident, &OpOptions::default());
+    let op_opts = OpOptions {
+        segment: rules,
+        ..OpOptions::default()
+    };
+    let ops = operating_points(&input, &ident, &op_opts);
     if !ops.points.is_empty() {
         notes.push(format!("{} OP ({})", ops.points.len(), ops.kind));
     }
@@ -446,9 +460,15 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
     // The same check as `propid identify`'s quality gate: the gain against the slope of the
     // estimation part's own steady levels.
     let cmd = Command::with_missing(&u[..n_est], &rec.missing[..n_est]);
-    let levels = steady_levels(cmd, &SegmentRules::DEFAULT, &ys[0][..n_est]);
+    let levels = steady_levels(cmd, &rules, &ys[0][..n_est]);
     let refused = level_slope(&levels).and_then(|s| judge_gain(r, &s));
-    if let Some(c) = refused {
+    let too_slow = judge_sample_period(rec.dt_s).filter(|_| command);
+    if too_slow.is_some() {
+        notes.push(format!(
+            "refused (sample_period_too_long): a sample every {:.2} s, every sample a steady state",
+            rec.dt_s
+        ));
+    } else if let Some(c) = refused {
         notes.push(format!(
             "refused (dc_gain_contradicts_levels): model {:.4}, levels' slope {:.4}",
             c.dc_gain, c.slope.slope
@@ -475,7 +495,7 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
         num(r.fn_hz, 3),
         num(r.zeta, 3),
         list(&r.time_constants_s),
-        if refused.is_some() {
+        if refused.is_some() || too_slow.is_some() {
             "refused".to_string()
         } else {
             gain(&r.dc_gain)

@@ -58,6 +58,9 @@ pub enum Flaw {
     /// The DC gain has the other sign than the record's steady levels, or is more than
     /// [`LEVEL_GAIN_FACTOR`] times off their slope ([`judge_gain`]).
     DcGainContradictsLevels,
+    /// A stand's command sampled more slowly than a motor–propeller settles
+    /// ([`judge_sample_period`]): every sample is a steady state, the record holds no dynamics.
+    SamplePeriodTooLong,
 }
 
 impl Flaw {
@@ -67,6 +70,7 @@ impl Flaw {
             Flaw::UnstablePole => "unstable_pole",
             Flaw::DcGainUncertain => "dc_gain_uncertain",
             Flaw::DcGainContradictsLevels => "dc_gain_contradicts_levels",
+            Flaw::SamplePeriodTooLong => "sample_period_too_long",
         }
     }
 }
@@ -99,6 +103,18 @@ pub fn judge(model: &ModelReport) -> Vec<Flaw> {
         }
     }
     flaws
+}
+
+/// Whether a record of a stand's command sampled every `dt_s` can show a motor–propeller's
+/// dynamics: not when a sample lasts longer than the response takes to settle
+/// ([`crate::segment::MAX_PULSE_S`], a third of a second; [`Flaw::SamplePeriodTooLong`]).
+/// Such a log (a stand's table of steady averages, a slow ramp logged at 2 Hz) holds a static
+/// map and nothing else: a model fitted to it has time constants of the sampling, not of the
+/// plant (measured: τ = 33.9 s from a table with a row every 5 s; τ = 10.1 s from a ramp
+/// logged at 2.1 Hz). Asked only of a command's record: a signal in its own units (a tank's
+/// pump voltage) may drive a plant as slow as its samples.
+pub fn judge_sample_period(dt_s: f64) -> Option<Flaw> {
+    (dt_s > crate::segment::MAX_PULSE_S).then_some(Flaw::SamplePeriodTooLong)
 }
 
 /// A DC gain the steady levels do not support ([`Flaw::DcGainContradictsLevels`]).
@@ -156,6 +172,16 @@ pub fn judge_gain(model: &ModelReport, slope: &LevelSlope) -> Option<GainContrad
 mod tests {
     use super::*;
     use serde_json::{json, Value};
+
+    #[test]
+    fn a_command_sampled_more_slowly_than_a_motor_settles_holds_no_dynamics() {
+        assert_eq!(judge_sample_period(0.001), None);
+        assert_eq!(judge_sample_period(0.1), None);
+        assert_eq!(judge_sample_period(0.3), None);
+        assert_eq!(judge_sample_period(0.5), Some(Flaw::SamplePeriodTooLong));
+        assert_eq!(judge_sample_period(5.0), Some(Flaw::SamplePeriodTooLong));
+        assert_eq!(Flaw::SamplePeriodTooLong.name(), "sample_period_too_long");
+    }
 
     /// A complete, stable 2nd-order model report with the fields of `overrides` replaced.
     fn report(overrides: Value) -> ModelReport {

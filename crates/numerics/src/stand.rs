@@ -8,6 +8,9 @@
 //!   windows, each at its mean command and mean output (quasi-static: a ramp slow against the
 //!   plant's time constants, which the record cannot check by itself).
 //! - Anything else (pulses on one level, random or multisine input) gives neither.
+//! - A record whose every sample outlasts the response (rules at a rate slower than a third of
+//!   a second: [`SegmentRules::samples_are_steady`], a stand's table of steady averages) gives
+//!   its static map and its steps without figures ([`SAMPLES_ARE_STEADY`]).
 
 use std::collections::BTreeMap;
 
@@ -57,6 +60,10 @@ pub struct StandFigures {
     /// Per output key.
     pub static_map: BTreeMap<&'static str, StaticMap>,
 }
+
+/// The note of a step whose samples are each a steady state ([`SegmentRules::samples_are_steady`]).
+pub const SAMPLES_ARE_STEADY: &str =
+    "a sample lasts longer than the response takes to settle: the step shows no dynamics";
 
 /// Where the steady levels are read: over holds, or over a ramp's windows.
 enum Over {
@@ -116,7 +123,13 @@ pub fn stand_figures(
     };
     let step_figs = steps
         .iter()
-        .map(|s| step_figures(step_output, dt_s, s))
+        .map(|s| {
+            let mut f = step_figures(step_output, dt_s, s);
+            if rules.samples_are_steady() {
+                f = f.unsupported(SAMPLES_ARE_STEADY);
+            }
+            f
+        })
         .collect();
     let mut maps: BTreeMap<&'static str, StaticMap> = outputs
         .iter()
@@ -251,5 +264,26 @@ mod tests {
         let f = stand_figures(Command::new(&r), 0.01, &SegmentRules::DEFAULT, &y, &out);
         assert_eq!(f.command, "none");
         assert!(f.static_map.is_empty());
+    }
+
+    #[test]
+    fn a_table_of_steady_averages_has_its_map_and_steps_without_figures() {
+        // A row every 5 s, each a steady thrust (T = 12·u²), the output lagging a sample.
+        let u = [0.15, 0.2, 0.25, 0.3, 0.35, 0.4];
+        let y: Vec<f64> = u.iter().map(|v| 12.0 * v * v).collect();
+        let out = [OutputChannel {
+            key: "thrust",
+            unit: "N",
+            y: &y,
+        }];
+        let steady = SegmentRules::DEFAULT.at_rate(5.0);
+        let f = stand_figures(Command::new(&u), 5.0, &steady, &y, &out);
+        assert_eq!(f.static_map["thrust"].levels.len(), u.len());
+        assert_eq!(f.steps.len(), u.len() - 1);
+        for s in &f.steps {
+            assert_eq!((s.dead_time_s, s.time_constant_s), (None, None), "{s:?}");
+            assert_eq!(s.rise_10_90_s, None);
+            assert_eq!(s.note, Some(SAMPLES_ARE_STEADY));
+        }
     }
 }

@@ -118,6 +118,22 @@ fn crossing(r: &[f64], level: f64, dt_s: f64) -> Option<f64> {
     None
 }
 
+impl StepFigures {
+    /// The step with no figure, only its time, levels and values, and `why` as its note.
+    pub fn unsupported(self, why: &'static str) -> StepFigures {
+        StepFigures {
+            dead_time_s: None,
+            time_constant_s: None,
+            resolvable: false,
+            rise_10_90_s: None,
+            settling_90_s: None,
+            overshoot_pct: None,
+            note: Some(why),
+            ..self
+        }
+    }
+}
+
 /// The figures of one step of output `y` sampled every `dt_s` (NaN = missing sample).
 pub fn step_figures(y: &[f64], dt_s: f64, step: &Step) -> StepFigures {
     let direction = if step.to >= step.from {

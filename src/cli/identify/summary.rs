@@ -8,7 +8,7 @@ use super::load::{Loaded, Source};
 use crate::ingest::csv_file::command_range::RAW_SIGNAL;
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
-use propid_numerics::quality::{judge, judge_gain, Flaw};
+use propid_numerics::quality::{judge, judge_gain, judge_sample_period, Flaw};
 use propid_numerics::report::Gain;
 use propid_numerics::stabilization::Stabilization;
 use propid_numerics::stand::StandFigures;
@@ -87,15 +87,30 @@ pub const HINT: &str = "not the plant's model: the pulse responses are not resol
     transient, a drift); use a record that starts settled, wider or larger pulses, more pulses";
 
 impl Quality {
-    /// The verdict on `model`: the daemon's checks ([`judge`]), and its DC gain against the
-    /// slope of the record's steady levels when it has some ([`judge_gain`]).
-    pub fn of(model: &propid_numerics::ModelReport, levels: Option<&LevelSlope>) -> Quality {
+    /// The verdict on `model`: the daemon's checks ([`judge`]), its DC gain against the
+    /// slope of the record's steady levels when it has some ([`judge_gain`]), and, for a stand's
+    /// command (`command`), whether the record's sample period can show dynamics at all
+    /// ([`judge_sample_period`]).
+    pub fn of(
+        model: &propid_numerics::ModelReport,
+        levels: Option<&LevelSlope>,
+        command: bool,
+    ) -> Quality {
         let mut flaws = judge(model);
         let contradiction = levels.and_then(|s| judge_gain(model, s));
         let mut hints = Vec::new();
         if let Some(c) = contradiction {
             flaws.push(Flaw::DcGainContradictsLevels);
             hints.push(c.to_string());
+        }
+        if let Some(f) = judge_sample_period(model.dt_s).filter(|_| command) {
+            flaws.push(f);
+            hints.push(format!(
+                "a sample every {:.3} s is longer than a motor-propeller takes to settle (a \
+                 third of a second): every sample is a steady state and the record holds no \
+                 dynamics; its static map is what it shows",
+                model.dt_s
+            ));
         }
         if flaws.len() > hints.len() {
             hints.push(HINT.to_string());
@@ -137,7 +152,7 @@ impl<'a> Output<'a> {
             steps: &stand.steps,
             static_map: &stand.static_map,
             stabilization: model.stabilization.as_ref(),
-            quality: Quality::of(&model.report, levels),
+            quality: Quality::of(&model.report, levels, loaded.input_is_a_command),
             warnings: warnings_of(&model.report, loaded.commanded),
         }
     }

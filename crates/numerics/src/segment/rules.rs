@@ -124,6 +124,14 @@ impl SegmentRules {
         }
     }
 
+    /// True when a single sample outlasts a pulse (`max_pulse_samples` 0: rules
+    /// [`at_rate`](Self::at_rate) of a record sampled more slowly than [`MAX_PULSE_S`]): every
+    /// sample of a held command is a steady state, and the response to a step is complete by
+    /// the next sample, so a step shows no dynamics.
+    pub fn samples_are_steady(&self) -> bool {
+        self.max_pulse_samples == 0
+    }
+
     /// Whether `a` and `b` are the same level: `|a − b| ≤ level_tolerance` (false when either
     /// is NaN).
     pub fn same(&self, a: f64, b: f64) -> bool {
