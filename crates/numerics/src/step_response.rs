@@ -119,43 +119,43 @@ fn crossing(r: &[f64], level: f64, dt_s: f64) -> Option<f64> {
 }
 
 impl StepFigures {
-    /// The step with no figure, only its time, levels and values, and `why` as its note.
-    pub fn unsupported(self, why: &'static str) -> StepFigures {
+    /// A step at `t_s` from command `from` to `to`, with no value and no figure yet.
+    fn blank(t_s: f64, from: f64, to: f64) -> StepFigures {
         StepFigures {
+            t_s,
+            from,
+            to,
+            direction: if to >= from {
+                Direction::Up
+            } else {
+                Direction::Down
+            },
+            initial: f64::NAN,
+            r#final: f64::NAN,
             dead_time_s: None,
             time_constant_s: None,
             resolvable: false,
             rise_10_90_s: None,
             settling_90_s: None,
             overshoot_pct: None,
+            note: None,
+        }
+    }
+
+    /// The step with no figure, only its time, levels and values, and `why` as its note.
+    pub fn unsupported(self, why: &'static str) -> StepFigures {
+        StepFigures {
+            initial: self.initial,
+            r#final: self.r#final,
             note: Some(why),
-            ..self
+            ..StepFigures::blank(self.t_s, self.from, self.to)
         }
     }
 }
 
 /// The figures of one step of output `y` sampled every `dt_s` (NaN = missing sample).
 pub fn step_figures(y: &[f64], dt_s: f64, step: &Step) -> StepFigures {
-    let direction = if step.to >= step.from {
-        Direction::Up
-    } else {
-        Direction::Down
-    };
-    let mut out = StepFigures {
-        t_s: step.at as f64 * dt_s,
-        from: step.from,
-        to: step.to,
-        direction,
-        initial: f64::NAN,
-        r#final: f64::NAN,
-        dead_time_s: None,
-        time_constant_s: None,
-        resolvable: false,
-        rise_10_90_s: None,
-        settling_90_s: None,
-        overshoot_pct: None,
-        note: None,
-    };
+    let mut out = StepFigures::blank(step.at as f64 * dt_s, step.from, step.to);
     let end = step.after_end.min(y.len());
     if !(dt_s.is_finite() && dt_s > 0.0) || step.before_start >= step.at || step.at >= end {
         out.note = Some("the step has no samples on one side");
