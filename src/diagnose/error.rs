@@ -32,6 +32,14 @@ pub enum DiagnoseError {
         "the sample period {0} s is outside 0 < dt <= 490000 s (a time column in ns read as s?)"
     )]
     BadSamplePeriod(f64),
+    /// A stand's command sampled more slowly than a motor–propeller settles
+    /// ([`propid_numerics::quality::judge_sample_period`]): every sample is a steady state.
+    #[error(
+        "a sample every {0:.3} s is longer than a motor-propeller takes to settle (a third of a \
+         second): every sample is a steady state and the record holds no dynamics to diagnose \
+         (`propid identify` prints its static map)"
+    )]
+    SamplePeriodTooLong(f64),
     /// Input or output does not vary: nothing to identify.
     #[error("the {0} is constant on the estimation part: nothing to identify")]
     Constant(&'static str),

@@ -48,6 +48,7 @@ use ctx::Ctx;
 pub use error::DiagnoseError;
 use model::{Core, Signals};
 use propid_numerics::outliers::isolated_outliers_of_readings;
+use propid_numerics::quality::judge_sample_period;
 use propid_numerics::segment::SegmentRules;
 use propid_numerics::startup::start_transient;
 use propid_wire::record::{names, Record};
@@ -167,6 +168,11 @@ pub fn diagnose(
             got: n,
             need: MIN_SAMPLES,
         });
+    }
+    // A command sampled more slowly than the plant settles shows no dynamics: every finding
+    // would be the sampling's (a "dead time" of 11 samples on a 1 Hz table of steady states).
+    if opts.input_is_a_command && judge_sample_period(dt_s).is_some() {
+        return Err(DiagnoseError::SamplePeriodTooLong(dt_s));
     }
     if let Some(k) = u[..n].iter().position(|v| !v.is_finite()) {
         return Err(DiagnoseError::NonFinite {

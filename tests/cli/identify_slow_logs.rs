@@ -112,3 +112,34 @@ fn a_table_of_steady_averages_has_a_level_per_row_at_the_commands_it_ran() {
         assert!((raw - 50.0 * (raw / 50.0).round()).abs() < 1e-6, "{l}");
     }
 }
+
+#[test]
+fn diagnose_refuses_a_command_sampled_more_slowly_than_a_motor_settles() {
+    // 400 rows a second apart, a steady thrust each: no dynamics to name (before, a 1 Hz
+    // table was "explained" by an 11-second dead time and a 0.2 Hz disturbance).
+    let dir = tempfile::tempdir().unwrap();
+    let levels = [20.0, 40.0, 30.0, 60.0, 50.0];
+    let row = |k: usize| levels[(k / 7) % levels.len()];
+    let mut text = String::from("Time (s),Throttle (%),Thrust (N)\n");
+    for k in 0..400 {
+        let u: f64 = row(k);
+        text.push_str(&format!("{k},{u},{:.4}\n", 0.001 * u * u));
+    }
+    let path = dir.path().join("slow_1hz.csv");
+    std::fs::write(&path, text).unwrap();
+    let (code, out, err) = propid(&["diagnose", path.to_str().unwrap()]);
+    assert_eq!(code, 4, "{out}{err}");
+    assert!(err.contains("holds no dynamics"), "{err}");
+    // A signal in its own units (a benchmark's signed drive voltage) may drive a plant as slow
+    // as its samples: not refused by this rule.
+    let mut text = String::from("Time (s),drive_V,level_m\n");
+    for k in 0..400 {
+        let v = row(k) / 10.0 - 4.5;
+        text.push_str(&format!("{k},{v:.2},{:.4}\n", 0.3 * v + 0.001 * k as f64));
+    }
+    let path = dir.path().join("slow_signal.csv");
+    std::fs::write(&path, text).unwrap();
+    let args = ["diagnose", path.to_str().unwrap(), "--input", "drive_V"];
+    let (code, _, err) = propid(&[&args[..], &["--output", "level_m"]].concat());
+    assert_eq!(code, 0, "{err}");
+}
