@@ -584,7 +584,7 @@ fn qualified_name(n: &str) -> Option<&'static str> {
         let told_apart = p.ends_with('_')
             || SPEED_OWNERS.contains(&q)
             || (w == "rpm" && !q.ends_with(['e', 'k']));
-        is_qualifier(q) && told_apart && !NOT_A_READING.iter().any(|m| q.contains(m))
+        is_qualifier(q) && told_apart && !no_reading(q)
     })
 }
 
@@ -604,6 +604,16 @@ const NOT_A_READING: &[&str] = &[
     "target", "setpoint", "desired", "demand", "ref", "cmd", "command", "max", "min", "limit",
     "offset", "error", "rise", "settl", "dwell", "delay", "dead", "loop",
 ];
+
+/// True when qualifier `p` starts or ends with a word of [`NOT_A_READING`] (`Max Current`,
+/// `Motor target speed`); a word inside another is no such word (`Terminal Voltage` holds
+/// `min`).
+fn no_reading(p: &str) -> bool {
+    let p = p.trim_matches('_');
+    NOT_A_READING
+        .iter()
+        .any(|m| p.starts_with(m) || p.ends_with(m))
+}
 
 /// True for a qualifier before a quantity word: letters (and `_`) only, not empty.
 fn is_qualifier(p: &str) -> bool {
@@ -634,8 +644,7 @@ fn quantity_of_word(word: &str) -> Option<Quantity> {
         QUALIFIABLE.iter().find_map(|&q| {
             let p = w.strip_suffix(q)?.trim_end_matches('_');
             let quantity = of(q)?;
-            let a_reading =
-                quantity == Quantity::Throttle || !NOT_A_READING.iter().any(|m| p.contains(m));
+            let a_reading = quantity == Quantity::Throttle || !no_reading(p);
             (is_qualifier(p) && a_reading).then_some(quantity)
         })
     };

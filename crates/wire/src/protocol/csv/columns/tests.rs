@@ -441,6 +441,7 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         ("omega / rad/s", Quantity::Rpm, Unit::RadianPerSecond),
         ("Throttle/%", Quantity::Throttle, Unit::Percent),
         ("throttle_setpoint_pct", Quantity::Throttle, Unit::Percent),
+        ("Terminal Voltage (V)", Quantity::Voltage, Unit::Volt),
         (
             "ESC command (µs)",
             Quantity::Throttle,
@@ -471,6 +472,9 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         "Thrust error (N)",
         "Thrust/Weight",
         "Thrust setpoint (N)",
+        "Motor max current (A)",
+        "motor_target_rpm",
+        "Settling Time (s)",
         "speed_target_rpm",
         "Thrust/Power (g/W)",
     ] {
