@@ -199,8 +199,8 @@ pub enum CsvFileError {
         /// The usable rows.
         rows: usize,
         /// Why the others were not: the first unreadable cell of a needed column (`: 1400
-        /// rows with a cell that is no number, the first "4,5e" in Thrust (N) (line 2)`), or
-        /// nothing.
+        /// row(s) with a cell that is no number, the first "4,5e" in Thrust (N) (data row
+        /// 1)`), rows too short for the columns used, or nothing.
         why: String,
     },
     /// A column needs an option to be converted (e.g. electrical rpm needs the pole count).
