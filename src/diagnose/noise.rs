@@ -44,6 +44,7 @@
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
+use propid_numerics::outliers::is_reading;
 use propid_numerics::segment::{holds, Command, SegmentRules};
 
 /// Fewest pooled second differences for the hold estimate.
@@ -87,11 +88,6 @@ pub fn noise_floor(
     from_holds(u, y, interpolated, rules).or_else(|| from_arx(u, y, interpolated))
 }
 
-/// Whether `y[k]` is a reading: not marked in `interpolated` (module doc).
-fn reading(interpolated: &[bool], k: usize) -> bool {
-    !interpolated.get(k).copied().unwrap_or(false)
-}
-
 /// The steady-hold estimate (see the module doc), `None` below [`MIN_HOLD_SAMPLES`].
 pub fn from_holds(
     u: &[f64],
@@ -108,7 +104,7 @@ pub fn from_holds(
         for (k, &v) in y.iter().enumerate().take(run.end).skip(run.start) {
             if !v.is_finite() {
                 len = 0;
-            } else if reading(interpolated, k) {
+            } else if is_reading(interpolated, k) {
                 chain = [chain[1], chain[2], v];
                 len += 1;
                 if len >= 3 {
@@ -139,7 +135,7 @@ pub fn from_holds(
 /// at the same samples when some of the output was interpolated.
 pub fn from_arx(u: &[f64], y: &[f64], interpolated: &[bool]) -> Option<NoiseFloor> {
     if interpolated.contains(&true) {
-        let at = (0..u.len().min(y.len())).filter(|&k| reading(interpolated, k));
+        let at = (0..u.len().min(y.len())).filter(|&k| is_reading(interpolated, k));
         let (u, y): (Vec<f64>, Vec<f64>) = at.map(|k| (u[k], y[k])).unzip();
         return from_arx(&u, &y, &[]);
     }

@@ -3,6 +3,7 @@
 //! or a counted, skipped row.
 
 use propid::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, InputChoice};
+use propid_numerics::outliers::is_reading;
 use propid_wire::protocol::csv::checksum;
 
 fn with_checksum(line: &str) -> String {
@@ -316,7 +317,7 @@ fn a_load_cell_repeating_its_last_reading_is_marked_read_at_its_runs_starts() {
     assert_eq!(f.source.channels["thrust"].held_rows, Some(10));
     let ch = f.record.channel("thrust_N").unwrap();
     for k in 0..391 {
-        assert_eq!(ch.is_reading(k), k % 10 == 0, "{k}");
+        assert_eq!(is_reading(&ch.interpolated, k), k % 10 == 0, "{k}");
     }
 }
 
@@ -366,7 +367,7 @@ fn sensors_at_their_own_rates_are_carried_not_dropped() {
     let ch = f.record.channel("thrust_N").unwrap();
     for k in 2..198 {
         assert_eq!(
-            ch.is_reading(k),
+            is_reading(&ch.interpolated, k),
             k % 5 == 2,
             "{k}: the record says what was read"
         );

@@ -63,6 +63,13 @@ pub fn isolated_outliers(y: &[f64], missing: &[bool], command: &[f64]) -> Vec<us
     find_outliers(y, missing, command, &mut scratch).to_vec()
 }
 
+/// Whether sample `k` of a channel is one of its readings: not marked in `interpolated` (true
+/// where a reader filled the value in between two readings; empty: every sample a reading,
+/// `Channel::interpolated` of the wire record).
+pub fn is_reading(interpolated: &[bool], k: usize) -> bool {
+    !interpolated.get(k).copied().unwrap_or(false)
+}
+
 /// [`isolated_outliers`] of a channel read at some of its samples only: `interpolated[k]` is
 /// true where a reader filled the value in between two of the channel's readings (a load cell
 /// written on one row in ten; empty: every sample a reading). An interpolated sample lies on
@@ -82,7 +89,7 @@ pub fn isolated_outliers_of_readings(
         return isolated_outliers(y, missing, command);
     }
     let at: Vec<usize> = (0..y.len())
-        .filter(|&k| !interpolated.get(k).copied().unwrap_or(false))
+        .filter(|&k| is_reading(interpolated, k))
         .collect();
     let ys: Vec<f64> = at.iter().map(|&k| y[k]).collect();
     let ms: Vec<bool> = if missing.is_empty() {

@@ -59,11 +59,6 @@ impl Channel {
             interpolated: Vec::new(),
         }
     }
-
-    /// Whether sample `k` is a reading (not interpolated; it may still be missing).
-    pub fn is_reading(&self, k: usize) -> bool {
-        !self.interpolated.get(k).copied().unwrap_or(false)
-    }
 }
 
 /// What happened at a sample, as the device (or a reader) reported it.
