@@ -435,10 +435,7 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
     };
     // The segmentation of `propid identify`: at the record's rate for a stand's command.
     let command = file.source.input_is_a_command();
-    let rules = match command {
-        true => SegmentRules::DEFAULT.at_rate(rec.dt_s),
-        false => SegmentRules::DEFAULT,
-    };
+    let rules = SegmentRules::for_record(rec.dt_s, command);
     let ident = IdentOptions {
         max_pulse_width: rules.max_pulse_samples,
         ..IdentOptions::default()

@@ -134,6 +134,7 @@ pub fn assemble(
         rejected,
         traces: Traces {
             dt_s: dt,
+            rules: ctx.rules,
             u: ctx.sig.u.to_vec(),
             y: ctx.sig.y.to_vec(),
             baseline: sim_b,

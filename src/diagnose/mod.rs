@@ -205,10 +205,7 @@ pub fn diagnose(
     }
     // A start-up transient is left out too (the rule of `propid identify`): the output
     // settling under the first level for a reason the command does not show.
-    let rules = match opts.input_is_a_command {
-        true => SegmentRules::DEFAULT.at_rate(dt_s),
-        false => SegmentRules::DEFAULT,
-    };
+    let rules = SegmentRules::for_record(dt_s, opts.input_is_a_command);
     let transient = start_transient(&y_kept, &[], u, &rules).map_or(0, |t| t.end);
     y_kept[..transient].iter_mut().for_each(|v| *v = f64::NAN);
     let y = &y_kept[..];

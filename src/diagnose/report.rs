@@ -115,10 +115,10 @@ fn time_series(t: &Traces, v: &[f64], range: std::ops::Range<usize>) -> Vec<(f64
     range.map(|k| (k as f64 * t.dt_s, v[k])).collect()
 }
 
-/// Pulses in the input sampled every `dt_s` ([`segment::pulses`] under the rules at that rate,
-/// [`SegmentRules::at_rate`]). Returns `(start, amplitude)`.
-pub fn find_pulses(u: &[f64], dt_s: f64) -> Vec<(usize, f64)> {
-    segment::pulses(Command::new(u), &SegmentRules::DEFAULT.at_rate(dt_s))
+/// Pulses in the input ([`segment::pulses`] under the diagnosis' `rules`). Returns `(start,
+/// amplitude)`.
+pub fn find_pulses(u: &[f64], rules: &SegmentRules) -> Vec<(usize, f64)> {
+    segment::pulses(Command::new(u), rules)
         .map(|p| (p.start, p.amplitude))
         .collect()
 }
@@ -209,7 +209,7 @@ pub fn write(dir: &Path, title: &str, output: &str, d: &Diagnosis) -> io::Result
         false,
     )?;
     let window = ((0.3 / t.dt_s).round() as usize).max(5);
-    let pulses = find_pulses(&t.u, t.dt_s);
+    let pulses = find_pulses(&t.u, &t.rules);
     let resp = |y: &[f64]| {
         pulses
             .iter()
@@ -335,10 +335,13 @@ mod tests {
         u[50..55].iter_mut().for_each(|v| *v = 0.6);
         u[100] = 0.45;
         u[200..].iter_mut().for_each(|v| *v = 0.7); // a step, never returns
-        let p = find_pulses(&u, 0.001);
+        let p = find_pulses(&u, &SegmentRules::DEFAULT.at_rate(0.001));
         assert_eq!(p.len(), 2, "{p:?}");
         // At 10 Hz a run of five samples is half a second: a level, no pulse.
-        assert_eq!(find_pulses(&u, 0.1).len(), 1);
+        assert_eq!(
+            find_pulses(&u, &SegmentRules::DEFAULT.at_rate(0.1)).len(),
+            1
+        );
         assert_eq!(p[0].0, 50);
         assert!((p[0].1 - 0.1).abs() < 1e-12);
         assert_eq!(p[1].0, 100);

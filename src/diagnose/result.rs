@@ -188,6 +188,8 @@ pub struct Diagnosis {
 pub struct Traces {
     /// Sample period, seconds.
     pub dt_s: f64,
+    /// The segmentation's rules the diagnosis used ([`crate::diagnose::ctx::Ctx::rules`]).
+    pub rules: propid_numerics::segment::SegmentRules,
     /// Input.
     pub u: Vec<f64>,
     /// Measured output.

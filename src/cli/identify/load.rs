@@ -48,10 +48,7 @@ impl Loaded {
     /// the sample count alone for a signal in its own units
     /// ([`crate::cli::load::LoadedFile::input_is_a_command`]).
     pub fn segment_rules(&self) -> SegmentRules {
-        match self.input_is_a_command {
-            true => SegmentRules::DEFAULT.at_rate(self.dt_s),
-            false => SegmentRules::DEFAULT,
-        }
+        SegmentRules::for_record(self.dt_s, self.input_is_a_command)
     }
 }
 

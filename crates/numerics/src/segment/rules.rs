@@ -124,6 +124,18 @@ impl SegmentRules {
         }
     }
 
+    /// The rules for a record sampled every `dt_s` whose input is a stand's command
+    /// (`command`: [`at_rate`](Self::at_rate), the motor–propeller's time scale) or a signal
+    /// in its own units (the defaults, by the sample count alone: a benchmark's pump voltage
+    /// drives a plant that may settle over minutes). The one choice identify, diagnose and the
+    /// real-data table make.
+    pub fn for_record(dt_s: f64, command: bool) -> SegmentRules {
+        match command {
+            true => SegmentRules::DEFAULT.at_rate(dt_s),
+            false => SegmentRules::DEFAULT,
+        }
+    }
+
     /// True when a single sample outlasts a pulse (`max_pulse_samples` 0: rules
     /// [`at_rate`](Self::at_rate) of a record sampled more slowly than [`MAX_PULSE_S`]): every
     /// sample of a held command is a steady state, and the response to a step is complete by
