@@ -23,7 +23,7 @@ use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource,
 use crate::ingest::steps::{find_steps, StepFinding};
 use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
 use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
-use propid_wire::protocol::csv::encoding::{decode, Encoding};
+use propid_wire::protocol::csv::encoding::{decode, utf16_mark, Encoding};
 use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};
 
@@ -175,10 +175,11 @@ pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFil
     if bytes.is_empty() {
         return Err(LoadError::Empty { file: name }.into());
     }
-    // A UTF-16 text (its NUL bytes would look binary) is read as the UTF-8 it decodes to.
+    // A UTF-16 text (its NUL bytes would look binary) is read as the UTF-8 it decodes to;
+    // anything else is decoded once, by the reader that takes it as text.
     let utf8;
-    let (bytes, utf16) = match decode(bytes) {
-        (text, e @ (Encoding::Utf16Le | Encoding::Utf16Be)) if is_text(&text) => {
+    let (bytes, utf16) = match utf16_mark(bytes).map(|_| decode(bytes)) {
+        Some((text, e)) if is_text(&text) => {
             utf8 = text.into_owned().into_bytes();
             (&utf8[..], Some(e))
         }

@@ -36,6 +36,15 @@ const CP1252_80: [char; 32] = [
     'ž', 'Ÿ',
 ];
 
+/// The UTF-16 encoding `bytes` announce by their byte order mark, if they do.
+pub fn utf16_mark(bytes: &[u8]) -> Option<Encoding> {
+    match bytes {
+        [0xFF, 0xFE, ..] => Some(Encoding::Utf16Le),
+        [0xFE, 0xFF, ..] => Some(Encoding::Utf16Be),
+        _ => None,
+    }
+}
+
 /// The text of `bytes` and the encoding it was read in (module doc). UTF-8 is borrowed.
 pub fn decode(bytes: &[u8]) -> (Cow<'_, str>, Encoding) {
     let utf16 = |be: bool| {
@@ -51,10 +60,9 @@ pub fn decode(bytes: &[u8]) -> (Cow<'_, str>, Encoding) {
             .map(|c| c.unwrap_or('\u{fffd}'))
             .collect::<String>()
     };
-    match bytes {
-        [0xFF, 0xFE, ..] => (Cow::Owned(utf16(false)), Encoding::Utf16Le),
-        [0xFE, 0xFF, ..] => (Cow::Owned(utf16(true)), Encoding::Utf16Be),
-        _ => match std::str::from_utf8(bytes) {
+    match utf16_mark(bytes) {
+        Some(e) => (Cow::Owned(utf16(e == Encoding::Utf16Be)), e),
+        None => match std::str::from_utf8(bytes) {
             Ok(text) => (Cow::Borrowed(text), Encoding::Utf8),
             Err(_) => {
                 let text = bytes
