@@ -436,12 +436,6 @@ mod tests {
             })
             .min_by(|a, b| a.sse.total_cmp(&b.sse))
             .unwrap();
-        eprintln!(
-            "LAG {:?} {} base {}",
-            mode(&greedy.model),
-            greedy.sse,
-            base.sse
-        );
         assert!(
             greedy.sse < base.sse,
             "a lag in series takes up part of the delay too"

@@ -27,9 +27,9 @@
 //!    next, so the command in force at a grid time is the last row's at or before it, and a
 //!    value between two commands (1587.5 µs between 1550 and 1600) was never sent. Measured on
 //!    the vanderploeg 90PERCENT log (rows 22 ms apart with 2.5 ms of jitter): held, the
-//!    diagnosis names the same three effects with the same 2-sample delay and a residual RMS
-//!    of 0.0288 N instead of 0.0313 N; a table of steady averages (a row every 5–19 s) has
-//!    its levels at the commands it ran.
+//!    diagnosis names the same three effects with the same 2-sample delay and an estimation
+//!    residual RMS of 0.0288 N instead of 0.0313 N; a table of steady averages (a row every
+//!    5–19 s) has its levels at the commands it ran.
 //! 5. A channel's **own rate** bounds what is bridged: its own period `dt_c` is the median
 //!    spacing of its own samples; a grid point whose two own samples are more than
 //!    `1.5·max(dt, dt_c)` apart, and which lies more than `0.75·dt` from both, is in a gap of
