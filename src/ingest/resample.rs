@@ -38,6 +38,16 @@
 //!    filled has `dt_c = dt` and follows the rows exactly as before; grid points before a
 //!    channel's first or after its last own sample are NaN (nothing is extrapolated).
 //!
+//! 6. A **table of steady states** is carried by holding, every channel and across every
+//!    spacing: when the command is held and the rows are further apart than a response takes
+//!    to settle ([`SegmentRules::samples_are_steady`] at the median spacing: a stand's table of
+//!    steady averages, one row per command every 5–19 s), each row is a level the stand
+//!    measured at the command it ran, and it stands until the next row. Interpolated, the
+//!    output between two rows would blend two levels under one command (vanderploeg's 1550 µs
+//!    level read as 3.63 N between its row's 3.12 N and the next level's 3.80 N), and the gap
+//!    rule of step 5 would drop every level that took longer than one and a half median
+//!    spacings to settle. Each grid point is then a copy of one row ([`Jitter::steady_rows`]).
+//!
 //! Why interpolation rather than holding the last value: a held value is as old as the
 //! channel's period, so a slow channel held onto a fast grid lags by half its period on average
 //! and by a whole one just after each change — a bias in dead time and phase that looks like
@@ -49,6 +59,7 @@
 //! The jitter (median, 5th and 95th percentile and largest spacing, RMS deviation from the grid
 //! period) is reported so that the user can judge the timing of the source.
 
+use propid_numerics::segment::SegmentRules;
 use serde::Serialize;
 
 /// How regular the timestamps were and what was done about it.
@@ -72,6 +83,10 @@ pub struct Jitter {
     pub resampled: bool,
     /// Grid points marked missing (gaps wider than 1.5 periods).
     pub gap_samples: usize,
+    /// The rows are a table of steady states, every channel held from row to row (module
+    /// documentation, step 6; omitted when false).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub steady_rows: bool,
 }
 
 /// Why the timestamps cannot be used.
@@ -188,6 +203,7 @@ pub fn to_uniform(
         non_increasing: t.len() - keep.len(),
         resampled: false,
         gap_samples: 0,
+        steady_rows: held.contains(&true) && SegmentRules::DEFAULT.at_rate(dt).samples_are_steady(),
     };
     let kept: Vec<Vec<f64>> = channels
         .iter()
@@ -198,7 +214,13 @@ pub fn to_uniform(
     } else {
         // Bound the grid before allocating it: a rate far above the logging rate (`--fs 1e300`)
         // would otherwise overflow the length or exhaust memory.
-        let points = ((times[times.len() - 1] - times[0]) / dt).floor() + 1.0;
+        // A table of steady states keeps its last row: the grid reaches past it (step 6).
+        let span = (times[times.len() - 1] - times[0]) / dt;
+        let points = if jitter.steady_rows {
+            span.ceil()
+        } else {
+            span.floor()
+        } + 1.0;
         let limit = MAX_GRID_POINTS;
         if !(points.is_finite() && points <= limit as f64) {
             return Err(ResampleError::TooManyPoints {
@@ -210,7 +232,15 @@ pub fn to_uniform(
         Grid::Uniform(points as usize)
     };
     let all_rows: Vec<usize> = (0..times.len()).collect();
-    let (_, missing) = carry(&times, &all_rows, (&[], Carry::Interpolate), grid, dt);
+    // A table of steady states holds every channel and has no gap (step 6).
+    let steady = jitter.steady_rows;
+    let (_, missing) = carry(
+        &times,
+        &all_rows,
+        (&[], Carry::Interpolate, steady),
+        grid,
+        dt,
+    );
     if let Grid::Uniform(_) = grid {
         jitter.resampled = true;
         jitter.gap_samples = missing.iter().filter(|m| **m).count();
@@ -222,9 +252,10 @@ pub fn to_uniform(
         let own: Vec<usize> = (0..c.len()).filter(|&i| c[i].is_finite()).collect();
         let how = match held.get(i) {
             Some(true) => Carry::Hold,
+            _ if steady => Carry::Hold,
             _ => Carry::Interpolate,
         };
-        let (values, lost) = carry(&times, &own, (c, how), grid, dt);
+        let (values, lost) = carry(&times, &own, (c, how, steady), grid, dt);
         let mask = bridged_points(&times, &own, &values, grid, dt);
         carried.push(Carried {
             values: own.len(),
@@ -282,19 +313,22 @@ enum Carry {
 }
 
 /// One channel onto the grid from its own samples `own` (indices into the kept rows `times`,
-/// ascending; values in `c`, or `c` empty for the rows' own gap mask alone), carried `how`:
-/// the values and the grid points in a gap. Steps 4 and 5 of the module documentation; a
-/// channel whose every row is its own gives exactly the rows (on the rows' grid) or their
-/// interpolation (or hold).
+/// ascending; values in `c`, or `c` empty for the rows' own gap mask alone), carried `how`,
+/// across every spacing when `steady` (no gap: step 6): the values and the grid points in a
+/// gap. Steps 4 and 5 of the module documentation; a channel whose every row is its own gives
+/// exactly the rows (on the rows' grid) or their interpolation (or hold).
 fn carry(
     times: &[f64],
     own: &[usize],
-    (c, how): (&[f64], Carry),
+    (c, how, steady): (&[f64], Carry, bool),
     grid: Grid,
     dt: f64,
 ) -> (Vec<f64>, Vec<bool>) {
     let n = grid.len(times.len());
-    let bound = 1.5 * dt.max(own_period(times, own).unwrap_or(dt));
+    let bound = match steady {
+        true => f64::INFINITY,
+        false => 1.5 * dt.max(own_period(times, own).unwrap_or(dt)),
+    };
     let mut values = Vec::with_capacity(if c.is_empty() { 0 } else { n });
     let mut gap = vec![true; n];
     let value = |i: usize| c.get(i).copied().unwrap_or(0.0);
@@ -313,7 +347,9 @@ fn carry(
         } else {
             let (a, b) = (own[j], own[j + 1]);
             let (ta, tb) = (times[a], times[b]);
-            let outside = ta - tk > 1e-9 * dt || tk - tb > 1e-9 * dt;
+            // A steady row stands until the next, the last for one grid period (step 6).
+            let after = if steady { dt } else { 1e-9 * dt };
+            let outside = ta - tk > 1e-9 * dt || tk - tb > after;
             let in_own_gap = tb - ta > bound && (tk - ta).min(tb - tk) > 0.75 * dt;
             (!outside && !in_own_gap).then(|| match how {
                 Carry::Interpolate => {
@@ -412,6 +448,32 @@ mod tests {
         }
         assert!((u.jitter.max_dt_s - 0.028).abs() < 1e-9);
         assert_eq!(u.jitter.gap_samples, 0);
+    }
+
+    #[test]
+    fn a_table_of_steady_states_is_held_row_to_row_without_gaps() {
+        // One row per command, 5 s apart and then further (a stand waiting to settle): every
+        // grid point is a copy of one row, no level is lost to a gap, the last row is kept.
+        let t = [0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 39.0, 54.0, 70.0];
+        let cmd: Vec<f64> = (0..t.len()).map(|i| 0.1 * i as f64).collect();
+        let y: Vec<f64> = cmd.iter().map(|u| 12.0 * u * u).collect();
+        let u = to_uniform(&t, &[cmd.clone(), y.clone()], None, &[true, false]).unwrap();
+        assert!(u.jitter.steady_rows && u.jitter.resampled);
+        assert_eq!(u.jitter.gap_samples, 0);
+        assert!(u.missing.iter().all(|m| !m));
+        for k in 0..u.missing.len() {
+            let tk = u.t0_s + u.jitter.dt_s * k as f64;
+            let row = t.iter().rposition(|&ti| ti <= tk + 1e-9).unwrap();
+            assert_eq!(u.channels[0][k], cmd[row], "{tk}");
+            assert_eq!(u.channels[1][k], y[row], "{tk}");
+        }
+        let last = u.channels[1].last().unwrap();
+        assert_eq!(*last, y[y.len() - 1]);
+        // The same rows without a held command are a measured signal: interpolated, and the
+        // spacings wider than 1.5 periods are gaps.
+        let u = to_uniform(&t, &[y], None, &[false]).unwrap();
+        assert!(!u.jitter.steady_rows);
+        assert!(u.jitter.gap_samples > 0);
     }
 
     #[test]

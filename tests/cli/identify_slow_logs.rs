@@ -99,17 +99,27 @@ fn a_table_of_steady_averages_has_a_level_per_row_at_the_commands_it_ran() {
     let power = &v["static_map"]["thrust"]["power"];
     let e = power["exponent"].as_f64().unwrap();
     assert!((e - 2.0).abs() < 0.05, "{power}");
-    // Rows further apart at higher throttle (longer holds): put on a 5 s grid, the command is
-    // held between its rows, so every level is at a command the stand ran (interpolated, a
-    // grid point between 1450 and 1500 µs was a level at 1475 µs, never sent).
-    let uneven = [0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 36.5, 44.0, 52.5];
+    // Rows further apart at higher throttle (the stand waits longer to settle, 5 to 19 s as
+    // vanderploeg's StepsTestV2 tables): every row is still a level at the command it ran, its
+    // mean the row's thrust. Before, the rows were put on a 5 s grid with the thrust
+    // interpolated: a level between two rows blended two levels under one command, and the
+    // levels after a spacing wider than 7.5 s were dropped as a gap.
+    let uneven = [
+        0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0, 49.0, 64.0, 80.0, 97.0, 115.0, 134.0,
+    ];
     let v = step_table(dir.path(), "uneven.csv", &uneven);
-    assert_eq!(v["source"]["csv"]["jitter"]["resampled"], true);
+    let jitter = &v["source"]["csv"]["jitter"];
+    assert_eq!(jitter["steady_rows"], true, "{jitter}");
     let levels = v["static_map"]["thrust"]["levels"].as_array().unwrap();
-    assert!(levels.len() >= 8, "{}", v["static_map"]);
-    for l in levels {
-        let raw = 1000.0 + 1000.0 * l["throttle"].as_f64().unwrap();
-        assert!((raw - 50.0 * (raw / 50.0).round()).abs() < 1e-6, "{l}");
+    assert_eq!(levels.len(), uneven.len(), "{}", v["static_map"]);
+    for (i, l) in levels.iter().enumerate() {
+        let u = (150.0 + 50.0 * i as f64) / 1000.0;
+        assert!((l["throttle"].as_f64().unwrap() - u).abs() < 1e-9, "{l}");
+        let row = (12.0 * u * u * 1e4).round() / 1e4;
+        assert!(
+            (l["mean"].as_f64().unwrap() - row).abs() < 1e-9,
+            "{l} vs {row}"
+        );
     }
 }
 
