@@ -13,7 +13,11 @@
 //!   Seborg, Edgar & Mellichamp, *Process Dynamics and Control*, §7.2):
 //!   `τ = 1.5 (t₆₃ − t₂₈)`, `θ = t₆₃ − τ` (θ clipped at 0). A time constant shorter than one
 //!   sample period cannot be told from a pure delay: it is reported as `None` with
-//!   `resolvable = false`, never as a number.
+//!   `resolvable = false`, never as a number. A dead time shorter than one sample period is
+//!   within the uncertainty of when the command changed (anywhere between the sample before
+//!   the step and the step's first): its value stays as a bound and
+//!   `dead_time_below_sample` says so (the summary prints `< dt`), so that `0.000` is never
+//!   read as a measured absence of delay.
 //! - **Rise time** `t₉₀ − t₁₀`; **settling time** the time after which `r` stays within
 //!   ±[`SETTLING_BAND`] of 1 until the end of the hold; **overshoot** `100·(max r − 1)` when
 //!   positive, else 0.
@@ -63,6 +67,10 @@ pub struct StepFigures {
     pub r#final: f64,
     /// Dead time θ, s.
     pub dead_time_s: Option<f64>,
+    /// `θ` is shorter than one sample period: a bound (`θ < dt`), not a measurement (omitted
+    /// when false; module doc).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub dead_time_below_sample: bool,
     /// Time constant τ, s (`None` when not resolvable or not supported).
     pub time_constant_s: Option<f64>,
     /// Whether τ is longer than the sample period allows to tell (`false`: `τ < dt`).
@@ -133,6 +141,7 @@ impl StepFigures {
             initial: f64::NAN,
             r#final: f64::NAN,
             dead_time_s: None,
+            dead_time_below_sample: false,
             time_constant_s: None,
             resolvable: false,
             rise_10_90_s: None,
@@ -202,6 +211,7 @@ pub fn step_figures(y: &[f64], dt_s: f64, step: &Step) -> StepFigures {
             out.dead_time_s = Some(t63.max(0.0));
             out.note = Some("the time constant is shorter than one sample period");
         }
+        out.dead_time_below_sample = out.dead_time_s.is_some_and(|d| d < dt_s);
     }
     // Settling: the last sample outside the band; settled from the next one.
     let last_out = r
@@ -274,6 +284,25 @@ mod tests {
         assert_eq!(f.direction, Direction::Down);
         assert!((f.time_constant_s.unwrap() - 0.15).abs() < 0.01, "{f:?}");
         assert!((f.dead_time_s.unwrap() - 0.03).abs() < 0.01, "{f:?}");
+    }
+
+    #[test]
+    fn a_dead_time_below_one_sample_is_a_bound() {
+        // No delay and half a sample of it: both below the sample period, flagged; two
+        // samples of it: measured, not flagged.
+        let dt = 0.02;
+        for (theta, below) in [(0.0, true), (0.01, true), (0.04, false)] {
+            let y = fopdt(300, 100, dt, 0.0, 1.0, theta, 0.1);
+            let f = step_figures(&y, dt, &step(100, 300, 0.2, 0.5));
+            assert_eq!(f.dead_time_below_sample, below, "{theta}: {f:?}");
+            assert!(f.resolvable);
+            let json = serde_json::to_value(&f).unwrap();
+            assert_eq!(
+                json.get("dead_time_below_sample").is_some(),
+                below,
+                "{json}"
+            );
+        }
     }
 
     #[test]

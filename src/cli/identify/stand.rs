@@ -31,8 +31,8 @@ fn pm(v: f64, sd: Option<f64>) -> String {
 
 /// Two table cells (the real-data tables): the static map of thrust (else of the first output)
 /// — number of levels, power law `k`, `u0`, exponent `e`, `expo a`, unit — and the steps —
-/// how many, the median dead time and time constant (s) of those that resolve them; `–` for
-/// none.
+/// how many, the median dead time (`< dt` when below a sample) and time constant (s) of those
+/// that resolve them; `–` for none.
 pub fn brief(f: &StandFigures) -> (String, String) {
     let map = f
         .static_map
@@ -64,14 +64,18 @@ pub fn brief(f: &StandFigures) -> (String, String) {
     let steps = if f.steps.is_empty() {
         "–".to_string()
     } else {
-        let dead: Vec<f64> = f.steps.iter().filter_map(|s| s.dead_time_s).collect();
+        let mut dead: Vec<(f64, bool)> = f
+            .steps
+            .iter()
+            .filter_map(|s| s.dead_time_s.map(|d| (d, s.dead_time_below_sample)))
+            .collect();
+        dead.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let dead = match dead.get(dead.len() / 2) {
+            Some((_, true)) => "< dt".to_string(),
+            m => num(m.map(|d| d.0), 3),
+        };
         let tau: Vec<f64> = f.steps.iter().filter_map(|s| s.time_constant_s).collect();
-        format!(
-            "{}: dead {}, τ {}",
-            f.steps.len(),
-            median(dead),
-            median(tau)
-        )
+        format!("{}: dead {dead}, τ {}", f.steps.len(), median(tau))
     };
     (map, steps)
 }
@@ -101,6 +105,10 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 (None, false, Some(_)) if s.dead_time_s.is_some() => "< dt".to_string(),
                 (t, ..) => num(t, 4),
             };
+            let dead = match s.dead_time_below_sample {
+                true => "< dt".to_string(),
+                false => num(s.dead_time_s, 4),
+            };
             let _ = writeln!(
                 o,
                 "  {:>9.3}  {:>6.3} -> {:>5.3}  {:>4}  {:>9}  {:>9}  {:>9}  {:>9}  {:>8}%{}",
@@ -108,7 +116,7 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 s.from,
                 s.to,
                 dir,
-                num(s.dead_time_s, 4),
+                dead,
                 tau,
                 num(s.rise_10_90_s, 4),
                 num(s.settling_90_s, 4),
