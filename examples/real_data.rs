@@ -15,14 +15,13 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
-use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs};
+use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs, Quality};
 use propid::ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
 use propid::ingest::steps::find_steps;
 use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
-use propid_numerics::quality::{judge_gain, judge_sample_period};
 use propid_numerics::segment::{Command, SegmentRules};
 use propid_numerics::stand::steady_levels;
 use propid_numerics::static_map::level_slope;
@@ -415,7 +414,9 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
         }
     };
     if let Some(j) = &file.source.jitter {
-        if j.resampled {
+        if j.steady_rows {
+            notes.push("a table of steady states (held row to row)".into());
+        } else if j.resampled {
             notes.push(format!(
                 "resampled (rms jitter {:.1} ms)",
                 1e3 * j.rms_jitter_s
@@ -454,22 +455,13 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
     if let Some(k) = model.okid.as_ref().and_then(|k| k.realised_dc_gain) {
         notes.push(format!("DC gain Σ Y_k (ERA's realisation {k:.4})"));
     }
-    // The same check as `propid identify`'s quality gate: the gain against the slope of the
-    // estimation part's own steady levels.
+    // `propid identify`'s quality gate itself, on the model of the estimation part and the slope
+    // of that part's own steady levels.
     let cmd = Command::with_missing(&u[..n_est], &rec.missing[..n_est]);
-    let levels = steady_levels(cmd, &rules, &ys[0][..n_est]);
-    let refused = level_slope(&levels).and_then(|s| judge_gain(r, &s));
-    let too_slow = judge_sample_period(rec.dt_s).filter(|_| command);
-    if too_slow.is_some() {
-        notes.push(format!(
-            "refused (sample_period_too_long): a sample every {:.2} s, every sample a steady state",
-            rec.dt_s
-        ));
-    } else if let Some(c) = refused {
-        notes.push(format!(
-            "refused (dc_gain_contradicts_levels): model {:.4}, levels' slope {:.4}",
-            c.dc_gain, c.slope.slope
-        ));
+    let slope = level_slope(&steady_levels(cmd, &rules, &ys[0][..n_est]));
+    let quality = Quality::of(r, slope.as_ref(), command);
+    if !quality.accepted {
+        notes.push(format!("refused ({})", quality.names()));
     } else if let propid_numerics::report::Gain::Scalar(g) = r.dc_gain {
         if g <= 0.0 {
             notes.push("warning: DC gain ≤ 0 (the output falls as the input rises)".into());
@@ -492,7 +484,7 @@ fn run_case(case: &Case, path: &Path, map: &str, steps: &str) -> Result<String, 
         num(r.fn_hz, 3),
         num(r.zeta, 3),
         list(&r.time_constants_s),
-        if refused.is_some() || too_slow.is_some() {
+        if !quality.accepted {
             "refused".to_string()
         } else {
             gain(&r.dc_gain)

@@ -37,6 +37,7 @@ mod stand;
 mod summary;
 
 pub use stand::brief as stand_brief;
+pub use summary::Quality;
 
 use std::path::PathBuf;
 

@@ -33,14 +33,15 @@ pub struct Output<'a> {
     /// The quality checks of the model ([`propid_numerics::quality`], the daemon's rule).
     pub quality: Quality,
     /// Implausible results that do not reject the model (`nonpositive_gain`: the output falls
-    /// as the command rises, [`propid_numerics::quality::nonpositive_gain`]); empty when none.
+    /// as the command rises, [`propid_numerics::quality::nonpositive_gain`];
+    /// `expo_outside_blend`: the thrust map's expo outside `0..1`); empty when none.
     pub warnings: Vec<IdentifyWarning>,
 }
 
 /// One entry of `"warnings"`: the shape of `diagnose`'s (`kind`, `message`, `value`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IdentifyWarning {
-    /// What is implausible (`nonpositive_gain`).
+    /// What is implausible (`nonpositive_gain`, `expo_outside_blend`).
     pub kind: &'static str,
     /// In words.
     pub message: String,
@@ -48,11 +49,17 @@ pub struct IdentifyWarning {
     pub value: f64,
 }
 
-/// The warnings on `model` identified from a command (`commanded`): a DC gain `≤ 0`.
-fn warnings_of(model: &propid_numerics::ModelReport, commanded: bool) -> Vec<IdentifyWarning> {
+/// The warnings on `model` identified from a command (`commanded`): a DC gain `≤ 0`; and on
+/// the thrust's static map (`thrust`): an expo outside the blend ([`expo_outside_blend`]).
+fn warnings_of(
+    model: &propid_numerics::ModelReport,
+    commanded: bool,
+    thrust: Option<&propid_numerics::stand::StaticMap>,
+) -> Vec<IdentifyWarning> {
     let gain = commanded
         .then(|| propid_numerics::quality::nonpositive_gain(model))
         .flatten();
+    let expo = thrust.and_then(expo_outside_blend);
     gain.map(|g| IdentifyWarning {
         kind: "nonpositive_gain",
         message: format!(
@@ -63,7 +70,43 @@ fn warnings_of(model: &propid_numerics::ModelReport, commanded: bool) -> Vec<Ide
         value: g,
     })
     .into_iter()
+    .chain(expo)
     .collect()
+}
+
+/// The thrust map's expo `a` when it lies outside `0..1` by more than two standard errors: the
+/// curve is then no blend of a line and a parabola through throttle 0 (`a > 1` bends up more
+/// than a parabola and dips below 0 at low throttle; `a < 0` bends down), which is what a
+/// flight controller's `MOT_THST_EXPO` / `THR_MDL_FAC` describes. Seen on vanderploeg's step
+/// tables (`a` 1.11–1.17: thrust ∝ (u − u0)^2.5..3 over the ESC's µs); the power law, printed
+/// beside it, is then the map to use.
+fn expo_outside_blend(map: &propid_numerics::stand::StaticMap) -> Option<IdentifyWarning> {
+    let e = map.expo.as_ref()?;
+    let sd = e.uncertainty.map_or(0.0, |u| u.a);
+    if (0.0..=1.0).contains(&e.a) || (e.a - 1.0).abs().min(e.a.abs()) <= 2.0 * sd {
+        return None;
+    }
+    let bends = match e.a > 1.0 {
+        true => "bends up more than a parabola through throttle 0",
+        false => "bends down (less than linear)",
+    };
+    let law = map.power.as_ref().map_or_else(String::new, |p| {
+        format!(
+            " (the power law: exponent {:.2} from throttle {:.3})",
+            p.exponent, p.u0
+        )
+    });
+    Some(IdentifyWarning {
+        kind: "expo_outside_blend",
+        message: format!(
+            "the thrust expo a = {:.2} ± {sd:.2} lies outside 0..1 (0 linear, 1 quadratic): the \
+             thrust {bends}{law}, which a flight controller's MOT_THST_EXPO / THR_MDL_FAC \
+             cannot describe as it is; use the power law, or fit the expo over the throttle \
+             range the controller uses",
+            e.a
+        ),
+        value: e.a,
+    })
 }
 
 /// `"quality"` in the JSON output: whether the model passed the checks a plant's model always
@@ -153,7 +196,11 @@ impl<'a> Output<'a> {
             static_map: &stand.static_map,
             stabilization: model.stabilization.as_ref(),
             quality: Quality::of(&model.report, levels, loaded.input_is_a_command),
-            warnings: warnings_of(&model.report, loaded.commanded),
+            warnings: warnings_of(
+                &model.report,
+                loaded.commanded,
+                stand.static_map.get("thrust"),
+            ),
         }
     }
 
@@ -258,7 +305,11 @@ impl<'a> Output<'a> {
                 j.p5_dt_s,
                 j.p95_dt_s,
                 j.rms_jitter_s,
-                if j.resampled { ", resampled" } else { "" }
+                match (j.steady_rows, j.resampled) {
+                    (true, _) => ", a table of steady states (every channel held from row to row)",
+                    (false, true) => ", resampled",
+                    (false, false) => "",
+                }
             );
             if j.non_increasing > 0 {
                 let _ = writeln!(
@@ -381,6 +432,8 @@ pub struct Partial<'a> {
     pub steps: &'a [propid_numerics::step_response::StepFigures],
     /// Steady levels and fitted curves per output.
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
+    /// Implausible figures (`expo_outside_blend`); empty when none.
+    pub warnings: Vec<IdentifyWarning>,
     /// All the figures (for the human tables).
     #[serde(skip)]
     stand: &'a StandFigures,
@@ -395,6 +448,12 @@ impl<'a> Partial<'a> {
             source: loaded.source.clone(),
             steps: &stand.steps,
             static_map: &stand.static_map,
+            warnings: stand
+                .static_map
+                .get("thrust")
+                .and_then(expo_outside_blend)
+                .into_iter()
+                .collect(),
             stand,
         }
     }
@@ -411,6 +470,9 @@ impl<'a> Partial<'a> {
         let _ = writeln!(o, "file      {} ({})", s.file, s.format);
         let _ = writeln!(o, "input     {}", s.input);
         let _ = writeln!(o, "identification failed: {}", self.error);
+        for w in &self.warnings {
+            let _ = writeln!(o, "warning   {}: {}", w.kind, w.message);
+        }
         let _ = writeln!(o, "(the step figures and the static map need no model:)");
         super::stand::write_tables(&mut o, self.stand);
         o
@@ -443,5 +505,50 @@ fn gain(g: &Gain) -> String {
             .collect::<Vec<_>>()
             .join(", "),
         Gain::Matrix(m) => format!("{m:?}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use propid_numerics::stand::StaticMap;
+    use propid_numerics::static_map::{fit_expo, fit_power_law, Level};
+
+    /// The static map of levels `t(u)` at throttle 0.15, 0.20, …, 0.80.
+    fn map(t: impl Fn(f64) -> f64) -> StaticMap {
+        let levels: Vec<Level> = (3..=16)
+            .map(|i| {
+                let u = 0.05 * f64::from(i);
+                Level {
+                    throttle: u,
+                    mean: t(u),
+                    std: 0.0,
+                    samples: 1,
+                }
+            })
+            .collect();
+        StaticMap {
+            unit: "N",
+            power: fit_power_law(&levels),
+            expo: fit_expo(&levels),
+            k_t: None,
+            levels,
+        }
+    }
+
+    #[test]
+    fn an_expo_outside_the_blend_is_a_warning_and_a_blend_is_not() {
+        // Thrust ∝ u³ (as vanderploeg's µs tables): a > 1, warned, with the power law's exponent.
+        let w = expo_outside_blend(&map(|u| 20.0 * u * u * u)).unwrap();
+        assert_eq!(w.kind, "expo_outside_blend");
+        assert!(w.value > 1.1, "{w:?}");
+        assert!(w.message.contains("exponent 3.00"), "{}", w.message);
+        // A square root: a < 0.
+        assert!(expo_outside_blend(&map(|u| 10.0 * u.sqrt())).unwrap().value < 0.0);
+        // The blends flight controllers take: none.
+        for a in [0.0, 0.35, 0.65, 1.0] {
+            let m = map(|u| 12.0 * ((1.0 - a) * u + a * u * u));
+            assert!(expo_outside_blend(&m).is_none(), "{a}: {:?}", m.expo);
+        }
     }
 }
