@@ -167,6 +167,17 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         b.model.report.dc_gain.get(0),
         b.fit_percent
     );
+    if let Some(l) = &d.input_lead {
+        let _ = writeln!(
+            t,
+            "input lead {:.2} sample ({:.1} ms): the output answers a command within the \
+             command's own sample (a logger that reads the sensor after sending the command \
+             and writes both on one row, or an input sampled rather than held), so every model \
+             takes each input sample as acting that much before its row",
+            l.samples,
+            1e3 * l.seconds
+        );
+    }
     if let Some(c) = &b.core_model {
         let _ = writeln!(
             t,

@@ -10,7 +10,9 @@ use super::fit::Fit;
 use super::folds::{fit_percent, Folds};
 use super::model::{simulate, Model};
 use super::noise;
-use super::result::{Diagnosis, Extended, FoldFit, Gain, Split, Stage, Traces, Validation};
+use super::result::{
+    Diagnosis, Extended, FoldFit, Gain, InputLead, Split, Stage, Traces, Validation,
+};
 use super::search::Searched;
 use super::summary::ModelSummary;
 use super::verdict::{self, Residual};
@@ -102,8 +104,13 @@ pub fn assemble(
             warnings.extend(verdict::supply_sag_warning(&d, model));
         }
     }
+    let lead = base.model.core.lead;
     Diagnosis {
         source: Default::default(),
+        input_lead: (lead > 0.0).then_some(InputLead {
+            samples: lead,
+            seconds: lead * dt,
+        }),
         baseline,
         findings,
         extended,

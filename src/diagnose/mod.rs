@@ -30,6 +30,7 @@ pub mod era_start;
 pub mod error;
 pub mod fit;
 pub mod folds;
+pub mod lead;
 pub mod model;
 pub mod noise;
 pub mod pair;
@@ -53,7 +54,8 @@ use propid_numerics::segment::SegmentRules;
 use propid_numerics::startup::start_transient;
 use propid_wire::record::{names, Record};
 pub use result::{
-    Diagnosis, Extended, Finding, FoldFit, Gain, Source, Split, Stage, Traces, Validation,
+    Diagnosis, Extended, Finding, FoldFit, Gain, InputLead, Source, Split, Stage, Traces,
+    Validation,
 };
 pub use summary::ModelSummary;
 

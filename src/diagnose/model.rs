@@ -36,6 +36,11 @@ pub struct Core {
     pub gain: f64,
     /// Output offset `c`, output units.
     pub offset: f64,
+    /// The input's lead `α` (0..1), a share of a sample: each input sample takes effect `α·dt`
+    /// before its own row's time (0: at its row, the zero-order hold of a command sent at the
+    /// sample instant). Not fitted with the rest: chosen once for the record
+    /// ([`super::lead`]) and kept by every model.
+    pub lead: f64,
 }
 
 impl Default for Core {
@@ -45,6 +50,7 @@ impl Default for Core {
             zeta: 0.7,
             gain: 1.0,
             offset: 0.0,
+            lead: 0.0,
         }
     }
 }
@@ -221,20 +227,39 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
     for t in m.at(Place::Core) {
         t.core_law(&mut law);
     }
-    if law.is_linear() {
+    // With a lead α, the sample interval [t_k, t_k+1) holds v_k for (1 − α)·dt, then v_k+1.
+    let lead = m.core.lead.clamp(0.0, 1.0);
+    let next = |k: usize| v[(k + 1).min(n - 1)];
+    let (fn_hz, zeta) = (
+        m.core.fn_hz.clamp(1e-6, fmax),
+        m.core.zeta.clamp(1e-4, 50.0),
+    );
+    if law.is_linear() && lead == 0.0 {
         let mut x = Vector2::new(v[0], 0.0);
         for (o, &vk) in out.iter_mut().zip(&v) {
             *o = x[0];
             x = a * x + b * vk;
         }
-    } else {
-        let fn_hz = m.core.fn_hz.clamp(1e-6, fmax);
-        let zeta = m.core.zeta.clamp(1e-4, 50.0);
-        let core = NonlinearCore::new(fn_hz, zeta, 1.0, sig.dt_s, law, CORE_SUBSTEPS);
-        let mut x = core.settle(v[0]);
-        for (o, &vk) in out.iter_mut().zip(&v) {
+    } else if law.is_linear() {
+        let (a1, b1) = discretise_second_order(fn_hz, zeta, 1.0, (1.0 - lead) * sig.dt_s);
+        let (a2, b2) = discretise_second_order(fn_hz, zeta, 1.0, lead * sig.dt_s);
+        let mut x = Vector2::new(v[0], 0.0);
+        for (k, o) in out.iter_mut().enumerate() {
             *o = x[0];
-            x = core.step(x, vk);
+            x = a2 * (a1 * x + b1 * v[k]) + b2 * next(k);
+        }
+    } else {
+        let core = |dt: f64| NonlinearCore::new(fn_hz, zeta, 1.0, dt, law, CORE_SUBSTEPS);
+        let (first, second) = (core((1.0 - lead) * sig.dt_s), core(lead * sig.dt_s));
+        let mut x = first.settle(v[0]);
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = x[0];
+            if lead < 1.0 {
+                x = first.step(x, v[k]);
+            }
+            if lead > 0.0 {
+                x = second.step(x, next(k));
+            }
         }
     }
     for t in m.at(Place::Series) {
@@ -269,6 +294,47 @@ mod tests {
             voltage: None,
             u_ref: 0.5,
             v_ref: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_lead_of_a_whole_sample_is_the_input_one_sample_early_and_keeps_the_gain() {
+        let u: Vec<f64> = (0..200)
+            .map(|k| if (k / 40) % 2 == 1 { 0.6 } else { 0.2 })
+            .collect();
+        let y = vec![0.0; u.len()];
+        let sig = Signals {
+            dt_s: 0.02,
+            ..signals(&u, &y)
+        };
+        let core = |lead| Core {
+            fn_hz: 3.0,
+            zeta: 0.8,
+            gain: 2.0,
+            lead,
+            ..Core::default()
+        };
+        let run = |lead, u: &[f64]| {
+            let mut out = vec![0.0; u.len()];
+            simulate(&Model::new(core(lead)), &Signals { u, ..sig }, &mut out);
+            out
+        };
+        let plain = run(0.0, &u);
+        // Lead 1: the plain hold of the input advanced by one sample.
+        let early: Vec<f64> = (0..u.len()).map(|k| u[(k + 1).min(u.len() - 1)]).collect();
+        let whole = run(1.0, &u);
+        let advanced = run(0.0, &early);
+        for k in 0..u.len() - 1 {
+            assert!((whole[k] - advanced[k]).abs() < 1e-12, "{k}");
+        }
+        // A half sample lies between, and every lead settles at the same gain.
+        let half = run(0.5, &u);
+        for k in 41..60 {
+            let (lo, hi) = (plain[k].min(whole[k]), plain[k].max(whole[k]));
+            assert!(half[k] >= lo - 1e-12 && half[k] <= hi + 1e-12, "{k}");
+        }
+        for out in [&plain, &half, &whole] {
+            assert!((out[79] - 1.2).abs() < 1e-3, "{}", out[79]);
         }
     }
 
@@ -333,6 +399,7 @@ mod tests {
             zeta: 1.0,
             gain: 1.0,
             offset: 0.0,
+            lead: 0.0,
         };
         let sag = SupplySagParams { gain_per_volt: 0.1 };
         let first_low = |sensor: usize| {
@@ -401,6 +468,7 @@ mod tests {
             zeta: cfg.zeta,
             gain: cfg.gain_n_per_throttle,
             offset: 0.0,
+            lead: 0.0,
         })
         .with(AsymmetricDynamicsParams {
             log_ratio: 2f64.ln(),
@@ -454,6 +522,7 @@ mod tests {
             zeta: cfg.zeta,
             gain: cfg.gain_n_per_throttle,
             offset: 0.0,
+            lead: 0.0,
         });
         let sig = Signals {
             dt_s: 2e-3,

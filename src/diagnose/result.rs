@@ -155,6 +155,10 @@ pub struct Source {
 pub struct Diagnosis {
     /// What the record held, its outliers counted.
     pub source: Source,
+    /// When the output answers a command within the command's own sample, the lead every
+    /// model gives the input ([`super::lead`]); absent for the plain hold.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_lead: Option<InputLead>,
     /// The 2nd-order model and its validation fit.
     pub baseline: Stage,
     /// The effects found (empty when none).
@@ -181,6 +185,15 @@ pub struct Diagnosis {
     /// Fitted models and predictions, for reports (not serialised).
     #[serde(skip)]
     pub traces: Traces,
+}
+
+/// The input's lead ([`super::lead`]): each input sample acts this long before its row.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct InputLead {
+    /// Share of a sample (0..1).
+    pub samples: f64,
+    /// Seconds.
+    pub seconds: f64,
 }
 
 /// Measured and simulated outputs over the whole record, for plots.

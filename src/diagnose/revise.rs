@@ -366,6 +366,7 @@ mod tests {
             zeta: 0.3,
             gain: 2.0,
             offset: 0.1,
+            lead: 0.0,
         })
         .with(DeadTimeParams::throttle(3));
         let mut y = vec![0.0; u.len()];

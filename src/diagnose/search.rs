@@ -43,6 +43,7 @@ use super::effect::Effect;
 use super::effects::REGISTRY;
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Scores};
+use super::lead;
 use super::model::{Core, Model};
 use super::pair::{joint_evidence, select_pair};
 use super::rejected::{Ledger, Rejected};
@@ -96,12 +97,21 @@ pub fn baseline(ctx: &Ctx, template: &Model, extra_starts: &[Core]) -> Fit {
             starts.push(template.with_core(Core {
                 fn_hz,
                 zeta,
+                lead: template.core.lead,
                 ..Core::default()
             }));
         }
     }
     let grid = ctx.best_of(starts, 2);
-    let extra = ctx.best_of(extra_starts.iter().map(|c| template.with_core(*c)), 1);
+    let extra = ctx.best_of(
+        extra_starts.iter().map(|c| {
+            template.with_core(Core {
+                lead: template.core.lead,
+                ..*c
+            })
+        }),
+        1,
+    );
     if extra.sse < grid.sse {
         extra
     } else {
@@ -118,13 +128,40 @@ pub fn search(
     era_starts: &[Core],
     max_effects: usize,
 ) -> Option<Searched> {
+    let base = lead::baseline_with_lead(ctx, era_starts);
+    let first = search_from(ctx, folds, base, era_starts, max_effects)?;
+    // A lead the baseline could not show (a static map hid it): the search again with it.
+    let Some(lead) = lead::better_lead(ctx, &first.extended) else {
+        return Some(first);
+    };
+    let template = Model::new(Core {
+        lead,
+        ..Core::default()
+    });
+    let base = baseline(ctx, &template, era_starts);
+    match search_from(ctx, folds, base, era_starts, max_effects) {
+        Some(second) if second.extended_cv.mean > first.extended_cv.mean => Some(second),
+        _ => Some(first),
+    }
+}
+
+/// The search from the baseline `base` (its core's lead kept by every model).
+fn search_from(
+    ctx: &Ctx,
+    folds: &Folds,
+    base: Fit,
+    era_starts: &[Core],
+    max_effects: usize,
+) -> Option<Searched> {
     let cv = |f: &Fit| cross_validate(ctx, folds, f);
-    let base = baseline(ctx, &Model::default(), era_starts);
     if !base.sse.is_finite() || base.n == 0 {
         return None;
     }
     let base_cv = cv(&base);
-    let mut template = Model::default();
+    let mut template = Model::new(Core {
+        lead: base.model.core.lead,
+        ..Core::default()
+    });
     let mut findings = Vec::new();
     let (mut cur, mut cur_cv) = (base.clone(), base_cv.clone());
     for e in REGISTRY {

@@ -429,6 +429,7 @@ mod tests {
             zeta: 0.7,
             gain: 2.0,
             offset: 0.0,
+            lead: 0.0,
         })
         .with(SupplySagParams { gain_per_volt: 0.1 });
         let mut y = vec![0.0; u.len()];

@@ -1,0 +1,141 @@
+//! The input's lead: when, within a sample, a logged command takes effect.
+//!
+//! The core is sampled as a zero-order hold: input sample `u_k` acts from its row's time `t_k`
+//! to the next, so the output at `t_k` has not yet answered it. A stand's logger need not work
+//! that way: one that sends the command, then reads the load cell and writes both on one row
+//! logs a thrust that has already answered the command beside it for part of a sample; a
+//! smooth input sampled at the row instants (the Silverbox benchmark) is, on average, half a
+//! sample ahead of its hold. A model that holds the input from its row then has to imitate a
+//! response that starts before it can (a time constant far below a sample, `ζ` ≫ 1) and
+//! leaves a residual at every step that no effect accounts for. A delay cannot be negative,
+//! so [`super::effects::dead_time`] cannot mend it.
+//!
+//! **Model.** With a lead `α` (a share of a sample), `u_k` acts over
+//! `[t_k − α·dt, t_{k+1} − α·dt)`: the interval `[t_k, t_{k+1})` holds `u_k` for
+//! `(1 − α)·dt`, then `u_{k+1}`, each integrated exactly (`x_{k+1} = A_α (A_{1−α} x_k +
+//! B_{1−α} u_k) + B_α u_{k+1}`, the discretisations of the same core over the two parts: the
+//! modified z-transform of a fractional advance). `α = 0` is the plain hold.
+//!
+//! **Choice.** `α` is not a free parameter of every fit: it is a property of the record's
+//! logging, chosen once on the baseline and kept by every model (so the effects' scores
+//! compare models with the same timing). The baseline is fitted at each of [`LEADS`]; a lead
+//! is taken only when its baseline beats the plain hold by the effects' own evidence
+//! (`n ln(SSE_0 / SSE_α) ≥` [`super::search::SCORE_THRESHOLD`] and an RMS at least
+//! [`super::search::MIN_RMS_DROP`] lower), the best of those; a record
+//! with a delay, or none of either, keeps the plain hold. A strong effect can hide the lead
+//! from the baseline (a fast pole of an overdamped core imitates the early answer as well as
+//! the lead does while a static map dominates the residual), so the final model is checked
+//! too ([`better_lead`]: every parameter refitted at each lead); when one beats it by the same
+//! evidence the search runs again from the baseline at that lead, and its result is taken when
+//! its held-out figure is higher. A same-row logger (first-order
+//! thrust, τ = 2.4 samples, its row's thrust one sample into the response) takes `α = 1`,
+//! and a staircase that left the residual at 4 × the noise with a 2 ms time constant is
+//! explained to the noise.
+
+use super::ctx::Ctx;
+use super::fit::Fit;
+use super::model::{Core, Model};
+use super::search::{baseline, MIN_RMS_DROP, SCORE_THRESHOLD};
+
+/// The leads tried, shares of a sample.
+pub const LEADS: [f64; 4] = [0.0, 0.25, 0.5, 0.75];
+
+/// The baseline at the lead the record shows (module doc): the plain hold's unless a lead
+/// beats it by [`SCORE_THRESHOLD`].
+pub fn baseline_with_lead(ctx: &Ctx, era_starts: &[Core]) -> Fit {
+    let at = |lead: f64| {
+        let template = Model::new(Core {
+            lead,
+            ..Core::default()
+        });
+        baseline(ctx, &template, era_starts)
+    };
+    let hold = at(0.0);
+    let mut best = hold.clone();
+    for &lead in &LEADS[1..] {
+        let f = at(lead);
+        if f.sse < best.sse {
+            best = f;
+        }
+    }
+    if clearly_better(hold.n, hold.sse, best.sse) {
+        best
+    } else {
+        hold
+    }
+}
+
+/// A lead other than the current one that fits the (extended) model `cur` better by the
+/// effects' evidence ([`clearly_better`]; every parameter refitted at each of [`LEADS`], and at
+/// the current lead for the comparison): the best such, or `None`.
+pub fn better_lead(ctx: &Ctx, cur: &Fit) -> Option<f64> {
+    let now = cur.model.core.lead;
+    // The current lead refitted as long as the others, so that a fit that was still
+    // converging is not taken for a better lead.
+    let again = ctx.lm(&cur.model, 30);
+    let cur = if again.sse < cur.sse { &again } else { cur };
+    let best = LEADS
+        .iter()
+        .filter(|&&l| l != now)
+        .map(|&lead| {
+            let core = Core {
+                lead,
+                ..cur.model.core
+            };
+            (lead, ctx.lm(&cur.model.with_core(core), 30))
+        })
+        .min_by(|a, b| a.1.sse.total_cmp(&b.1.sse))?;
+    clearly_better(cur.n, cur.sse, best.1.sse).then_some(best.0)
+}
+
+/// The effects' own evidence for a change of a fit over `n` samples from SSE `before` to
+/// `after`: a score `n ln(before / after)` of at least [`SCORE_THRESHOLD`] and an RMS at least
+/// [`MIN_RMS_DROP`] lower.
+fn clearly_better(n: usize, before: f64, after: f64) -> bool {
+    let score = n as f64 * (before / after).ln();
+    after.is_finite() && score >= SCORE_THRESHOLD && (after / before).sqrt() <= 1.0 - MIN_RMS_DROP
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::diagnose::{diagnose, Options};
+    use propid_sim::synth;
+
+    #[test]
+    fn a_same_row_logger_gets_a_lead_and_a_held_input_none() {
+        // The detection table's clean plants (a zero-order hold: the plain hold, no lead), and
+        // the same plants logged one sample later beside their command (y'_k = y_{k+1}: the
+        // thrust read after the command was sent, both on one row): a lead, and a fit it
+        // raises.
+        for i in 0..3 {
+            let (_, m) = synth::case("clean", i).unwrap();
+            let held = diagnose(synth::DT_S, &m.u, &m.y, &[], None, &Options::default());
+            let held = held.unwrap();
+            assert!(held.input_lead.is_none(), "{i}: {:?}", held.input_lead);
+            let n = m.y.len() - 1;
+            let early = diagnose(
+                synth::DT_S,
+                &m.u[..n],
+                &m.y[1..],
+                &[],
+                None,
+                &Options::default(),
+            );
+            let early = early.unwrap();
+            let lead = early.input_lead.expect("a lead");
+            assert!(lead.samples >= 0.75, "{i}: {lead:?}");
+            assert!((lead.seconds - lead.samples * synth::DT_S).abs() < 1e-12);
+            // Without a lead a core cannot answer within the sample: the fit suffers.
+            assert!(
+                early.baseline.fit_percent > held.baseline.fit_percent - 1.0,
+                "{i}: {} vs {}",
+                early.baseline.fit_percent,
+                held.baseline.fit_percent
+            );
+            assert!(
+                early.findings.iter().all(|f| f.effect != "dead_time"),
+                "{i}"
+            );
+        }
+    }
+}
