@@ -172,8 +172,8 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
             t,
             "input lead {:.2} sample ({:.1} ms): the output answers a command within the \
              command's own sample (a logger that reads the sensor after sending the command \
-             and writes both on one row, or an input sampled rather than held), so every model \
-             takes each input sample as acting that much before its row",
+             and writes both on one row, or an input sampled rather than held), so the models \
+             take each input sample as acting that much before its row",
             l.samples,
             1e3 * l.seconds
         );

@@ -104,7 +104,9 @@ pub fn assemble(
             warnings.extend(verdict::supply_sag_warning(&d, model));
         }
     }
-    let lead = base.model.core.lead;
+    // The published (extended) model's lead: a canonical form may have moved it into the
+    // dead time (`super::lead::canonical`).
+    let lead = cur.model.core.lead;
     Diagnosis {
         source: Default::default(),
         input_lead: (lead > 0.0).then_some(InputLead {

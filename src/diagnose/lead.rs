@@ -22,7 +22,10 @@
 //! is taken only when its baseline beats the plain hold by the effects' own evidence
 //! (`n ln(SSE_0 / SSE_α) ≥` [`super::search::SCORE_THRESHOLD`] and an RMS at least
 //! [`super::search::MIN_RMS_DROP`] lower), the best of those; a record
-//! with a delay, or none of either, keeps the plain hold. A strong effect can hide the lead
+//! with a delay, or none of either, keeps the plain hold. A whole sample of lead is a dead
+//! time of −1 sample: beside a dead time of `d ≥ 2` samples the model is published in its
+//! canonical form, `d − 1` samples and no lead ([`canonical`]; the same simulation), so that a
+//! dead time is always the delay the output shows. A strong effect can hide the lead
 //! from the baseline (a fast pole of an overdamped core imitates the early answer as well as
 //! the lead does while a static map dominates the residual), so the final model is checked
 //! too ([`better_lead`]: every parameter refitted at each lead); when one beats it by the same
@@ -33,12 +36,13 @@
 //! explained to the noise.
 
 use super::ctx::Ctx;
+use super::effects::dead_time::{self, DeadTimeParams};
 use super::fit::Fit;
 use super::model::{Core, Model};
 use super::search::{baseline, MIN_RMS_DROP, SCORE_THRESHOLD};
 
 /// The leads tried, shares of a sample.
-pub const LEADS: [f64; 4] = [0.0, 0.25, 0.5, 0.75];
+pub const LEADS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
 
 /// The baseline at the lead the record shows (module doc): the plain hold's unless a lead
 /// beats it by [`SCORE_THRESHOLD`].
@@ -96,10 +100,78 @@ fn clearly_better(n: usize, before: f64, after: f64) -> bool {
     after.is_finite() && score >= SCORE_THRESHOLD && (after / before).sqrt() <= 1.0 - MIN_RMS_DROP
 }
 
+/// `fit` in canonical form when it has a whole sample of lead beside a dead time of `d ≥ 2`
+/// samples: `d − 1` samples and no lead, the same simulation (module doc); `None` otherwise.
+/// A share of the delay on the output's side (the voltage as late as the thrust) moves with
+/// it; a model whose voltage is read at the throttle's time beside a lead keeps its form.
+pub fn canonical(fit: &Fit) -> Option<Fit> {
+    let core = fit.model.core;
+    let delay = fit.model.term(dead_time::NAME)?;
+    let (d, s) = (delay.input_delay(), delay.voltage_delay());
+    let reads_voltage = fit.model.terms().any(|t| t.reads_voltage());
+    if core.lead != 1.0 || d < 2 || (reads_voltage && s == 0) {
+        return None;
+    }
+    let model = fit
+        .model
+        .with(DeadTimeParams {
+            delay_samples: d - 1,
+            sensor_samples: s.saturating_sub(1),
+        })
+        .with_core(Core { lead: 0.0, ..core });
+    Some(Fit {
+        model,
+        ..fit.clone()
+    })
+}
+
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use crate::diagnose::model::{simulate, Signals};
     use crate::diagnose::{diagnose, Options};
     use propid_sim::synth;
+
+    #[test]
+    fn a_whole_sample_of_lead_beside_a_dead_time_is_published_as_one_sample_less() {
+        let u: Vec<f64> = (0..300).map(|k| [0.2, 0.6, 0.4][(k / 60) % 3]).collect();
+        let y = vec![0.0; u.len()];
+        let sig = Signals {
+            dt_s: 0.01,
+            u: &u,
+            y: &y,
+            voltage: None,
+            u_ref: 0.4,
+            v_ref: 0.0,
+        };
+        let core = Core {
+            fn_hz: 4.0,
+            zeta: 0.9,
+            gain: 3.0,
+            lead: 1.0,
+            ..Core::default()
+        };
+        let fit = |d| Fit {
+            model: Model::new(core).with(DeadTimeParams::throttle(d)),
+            sse: 1.0,
+            n: 300,
+        };
+        let c = canonical(&fit(4)).expect("a canonical form");
+        assert_eq!(c.model.core.lead, 0.0);
+        assert_eq!(c.model.term(dead_time::NAME).unwrap().input_delay(), 3);
+        let (mut a, mut b) = (vec![0.0; u.len()], vec![0.0; u.len()]);
+        simulate(&fit(4).model, &sig, &mut a);
+        simulate(&c.model, &sig, &mut b);
+        for k in 0..u.len() - 1 {
+            assert!((a[k] - b[k]).abs() < 1e-12, "{k}: {} vs {}", a[k], b[k]);
+        }
+        // One sample of dead time stays beside the lead (it would leave no dead time), and a
+        // lead short of a sample is no whole sample.
+        assert!(canonical(&fit(1)).is_none());
+        let mut partial = fit(4);
+        partial.model.core.lead = 0.75;
+        assert!(canonical(&partial).is_none());
+    }
 
     #[test]
     fn a_same_row_logger_gets_a_lead_and_a_held_input_none() {

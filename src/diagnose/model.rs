@@ -249,16 +249,23 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
             x = a2 * (a1 * x + b1 * v[k]) + b2 * next(k);
         }
     } else {
-        let core = |dt: f64| NonlinearCore::new(fn_hz, zeta, 1.0, dt, law, CORE_SUBSTEPS);
-        let (first, second) = (core((1.0 - lead) * sig.dt_s), core(lead * sig.dt_s));
-        let mut x = first.settle(v[0]);
+        // A part of no length has no core (a zero step would not discretise).
+        let core = |share: f64| {
+            (share > 0.0)
+                .then(|| NonlinearCore::new(fn_hz, zeta, 1.0, share * sig.dt_s, law, CORE_SUBSTEPS))
+        };
+        let (first, second) = (core(1.0 - lead), core(lead));
+        let mut x = Vector2::new(0.0, 0.0);
+        if let Some(c) = first.as_ref().or(second.as_ref()) {
+            x = c.settle(v[0]);
+        }
         for (k, o) in out.iter_mut().enumerate() {
             *o = x[0];
-            if lead < 1.0 {
-                x = first.step(x, v[k]);
+            if let Some(c) = &first {
+                x = c.step(x, v[k]);
             }
-            if lead > 0.0 {
-                x = second.step(x, next(k));
+            if let Some(c) = &second {
+                x = c.step(x, next(k));
             }
         }
     }

@@ -221,6 +221,9 @@ fn search_from(
         revisions += 1;
         apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv, &mut ledger);
     }
+    if let Some(c) = lead::canonical(&cur) {
+        cur = c;
+    }
     final_values(&mut findings[detected..], &cur, ctx);
     let taken: Vec<String> = findings.iter().map(|f| f.effect.clone()).collect();
     Some(Searched {

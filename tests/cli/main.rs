@@ -3,6 +3,7 @@
 mod demo_cli;
 mod diagnose_cli;
 mod diagnose_injected;
+mod diagnose_input_lead;
 mod diagnose_model_keys;
 mod diagnose_outliers;
 mod diagnose_rejected;

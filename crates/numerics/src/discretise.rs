@@ -22,7 +22,10 @@
 use nalgebra::{Matrix2, Matrix3, Vector2};
 
 /// Exact zero-order-hold discretisation of `T'' + 2ζωn T' + ωn² T = ωn² k u` with state
-/// `[T, T']`, sampled every `dt_s` seconds; returns `(A, B)` (see the module doc).
+/// `[T, T']`, sampled every `dt_s` seconds; returns `(A, B)` (see the module doc). A
+/// non-finite parameter (an infinite `ωn`: a fit that drove a time scale to 0) gives NaN
+/// matrices at once: nalgebra's exponential scales by the norm and never ends on an
+/// infinite one.
 pub fn discretise_second_order(
     fn_hz: f64,
     zeta: f64,
@@ -41,6 +44,9 @@ pub fn discretise_second_order(
         0.0,
         0.0,
     ) * dt_s;
+    if !m.iter().all(|v| v.is_finite()) {
+        return (Matrix2::repeat(f64::NAN), Vector2::repeat(f64::NAN));
+    }
     let e = m.exp();
     let a = Matrix2::new(e[(0, 0)], e[(0, 1)], e[(1, 0)], e[(1, 1)]);
     let b = Vector2::new(e[(0, 2)], e[(1, 2)]);
@@ -50,6 +56,22 @@ pub fn discretise_second_order(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_non_finite_parameter_gives_nan_at_once() {
+        for (f, z, k, dt) in [
+            (f64::INFINITY, 0.7, 1.0, 1e-3),
+            (5.0, f64::NAN, 1.0, 1e-3),
+            (5.0, 0.7, f64::INFINITY, 1e-3),
+        ] {
+            let (a, b) = discretise_second_order(f, z, k, dt);
+            assert!(a.iter().chain(b.iter()).all(|v| v.is_nan()), "{a} {b}");
+        }
+        // A zero step is the identity (a lead of a whole sample leaves no first part).
+        let (a, b) = discretise_second_order(5.0, 0.7, 1.0, 0.0);
+        assert_eq!(a, Matrix2::identity());
+        assert_eq!(b, Vector2::zeros());
+    }
 
     #[test]
     fn step_response_settles_at_the_static_gain() {

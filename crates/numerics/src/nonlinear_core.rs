@@ -104,9 +104,14 @@ impl NonlinearCore {
     ) -> NonlinearCore {
         let m = substeps.max(1);
         let h = dt_s / m as f64;
+        // A time scale shrunk below the sample (a fit driving `up_scale` towards 0) is no mode
+        // the samples can show: its frequency is held at the sample's Nyquist frequency
+        // (beyond it nalgebra's exponential of the huge-norm matrix may never return).
+        let nyquist = 0.5 / dt_s;
+        let scaled = |s: f64| (fn_hz / s).min(nyquist);
         NonlinearCore {
-            up: Steps::new(fn_hz / law.up_scale, zeta, h),
-            down: Steps::new(fn_hz / law.down_scale, zeta, h),
+            up: Steps::new(scaled(law.up_scale), zeta, h),
+            down: Steps::new(scaled(law.down_scale), zeta, h),
             k,
             cubic: law.cubic,
             substeps: m,

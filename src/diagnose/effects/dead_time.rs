@@ -205,8 +205,11 @@ impl Effect for DeadTime {
                 throttle
             }
         };
+        // Beside a whole sample of input lead one sample of delay would only undo the lead
+        // (`crate::diagnose::lead`): the shortest delay tried is then 2.
+        let first = if cur.model.core.lead >= 1.0 { 2 } else { 1 };
         let step = coarse_step(cur.model.core.fn_hz, ctx.sig.dt_s).max(dmax / 32);
-        let mut coarse: Vec<(usize, f64)> = (1..=dmax)
+        let mut coarse: Vec<(usize, f64)> = (first..=dmax.max(first))
             .step_by(step)
             .map(|d| (d, fit_d(d, 8).sse))
             .collect();
@@ -214,7 +217,7 @@ impl Effect for DeadTime {
         let mut fine: Vec<usize> = coarse
             .iter()
             .take(FINE_STARTS)
-            .flat_map(|&(d0, _)| d0.saturating_sub(step).max(1)..=(d0 + step).min(dmax))
+            .flat_map(|&(d0, _)| d0.saturating_sub(step).max(first)..=(d0 + step).min(dmax))
             .collect();
         fine.sort_unstable();
         fine.dedup();
