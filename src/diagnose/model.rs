@@ -13,6 +13,10 @@
 //!   ŷ_k = c + s_k, then the output terms               e.g. drift r t_k, a sinusoid, a clip
 //! ```
 //!
+//! With an input lead `α` ([`Core::lead`], [`super::lead`]) the core's step is
+//! `x_{k+1} = A_α (A_{1−α} x_k + B_{1−α} K v_k) + B_α K v_{k+1}`: `v_k` acts from `α·dt`
+//! before its row.
+//!
 //! Each effect's term and its formula are in its file under [`super::effects`]; where it acts
 //! is its [`Place`]. The states start in steady state for the first input sample. The core is
 //! discretised by [`propid_numerics::discretise::discretise_second_order`], the function the

@@ -37,6 +37,10 @@
 //! to add is kept; the held-out figure must not fall), or to add an effect the taken one had
 //! absorbed; a kept change is applied and the forward search resumes (its module doc gives the
 //! rule and its reasoning).
+//!
+//! **Input lead.** Every model of a search shares one input lead ([`super::lead`]), chosen on
+//! the baseline; when the final model shows a different one, the search runs again from the
+//! baseline at that lead and the run with the higher held-out figure is kept.
 
 use super::ctx::Ctx;
 use super::effect::Effect;
@@ -120,8 +124,9 @@ pub fn baseline(ctx: &Ctx, template: &Model, extra_starts: &[Core]) -> Fit {
 }
 
 /// Runs the search (module doc) with the core's model as an extra start of the baseline and
-/// `folds` for the held-out figure; `None` when the baseline cannot be fitted (non-finite SSE
-/// or no sample counted).
+/// `folds` for the held-out figure, at the input lead the record shows (once more at the lead
+/// the final model shows, when that differs); `None` when the baseline cannot be fitted
+/// (non-finite SSE or no sample counted).
 pub fn search(
     ctx: &Ctx,
     folds: &Folds,
