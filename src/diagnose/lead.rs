@@ -177,8 +177,7 @@ mod tests {
     fn a_same_row_logger_gets_a_lead_and_a_held_input_none() {
         // The detection table's clean plants (a zero-order hold: the plain hold, no lead), and
         // the same plants logged one sample later beside their command (y'_k = y_{k+1}: the
-        // thrust read after the command was sent, both on one row): a lead, and a fit it
-        // raises.
+        // thrust read after the command was sent, both on one row): a lead, and no dead time.
         for i in 0..3 {
             let (_, m) = synth::case("clean", i).unwrap();
             let held = diagnose(synth::DT_S, &m.u, &m.y, &[], None, &Options::default());
@@ -197,7 +196,8 @@ mod tests {
             let lead = early.input_lead.expect("a lead");
             assert!(lead.samples >= 0.75, "{i}: {lead:?}");
             assert!((lead.seconds - lead.samples * synth::DT_S).abs() < 1e-12);
-            // Without a lead a core cannot answer within the sample: the fit suffers.
+            // The lead costs the baseline nothing on the early log (within a point of the
+            // plain log's fit).
             assert!(
                 early.baseline.fit_percent > held.baseline.fit_percent - 1.0,
                 "{i}: {} vs {}",

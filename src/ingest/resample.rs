@@ -203,7 +203,8 @@ pub fn to_uniform(
         non_increasing: t.len() - keep.len(),
         resampled: false,
         gap_samples: 0,
-        steady_rows: held.contains(&true) && SegmentRules::DEFAULT.at_rate(dt).samples_are_steady(),
+        // A held channel is a command: the segmentation's one choice of rules for it.
+        steady_rows: SegmentRules::for_record(dt, held.contains(&true)).samples_are_steady(),
     };
     let kept: Vec<Vec<f64>> = channels
         .iter()
