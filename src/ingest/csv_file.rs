@@ -27,7 +27,10 @@
 //! ([`super::resample`]: interpolation between its own samples, gaps wider than one and a half
 //! of its own periods left NaN); the record's `missing` marks the samples where the input or an
 //! output has no value, the channels read beside them ([`CsvFileOptions::optional`]) keep their
-//! own NaNs.
+//! own NaNs. A column asked for beside them whose every cell is 0 or empty holds no reading (an
+//! export keeps the columns of sensors the stand lacks: RCbenchmark's electrical or optical
+//! speed): another column of its name that reads is taken instead, else it is left out and
+//! said in [`CsvSource::unread`] ([`NO_READING`]).
 //!
 //! **Header.** Where the header is (after preamble lines, with a units row under it) is the
 //! rule of `csv_file/layout.rs`. A file without a header is refused unless the caller names its
@@ -388,7 +391,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
     if data.is_empty() {
         return Err(CsvFileError::Empty);
     }
-    let picks = Picks::choose(&columns, opts)?;
+    let picks = Picks::choose(&columns, opts, |i| column_reads(data, &layout, i))?;
     let used = picks.all();
     let required = used.len() - picks.optional.len();
     let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(data.len()); used.len()];
@@ -482,8 +485,12 @@ fn build(
     let Converted {
         units,
         input_range,
-        unread,
+        mut unread,
     } = convert(columns, &mut picks, &mut values, opts)?;
+    unread.extend(picks.silent.iter().map(|&i| Unread {
+        column: columns[i].name.clone(),
+        reason: NO_READING.to_string(),
+    }));
     let time_vals = picks.time.map(|_| values.remove(0));
     // A measured channel written on every row as its last reading: its repeats are cells not
     // updated; a command written only where it changes holds until the next (`super::held`).
@@ -628,6 +635,21 @@ fn build(
         outputs,
         optional,
         source,
+    })
+}
+
+/// Why a column asked for beside the outputs whose every cell is 0 or empty is left out.
+pub const NO_READING: &str =
+    "no reading: every cell is 0 or empty (no sensor on this column), left out";
+
+/// Whether column `i` holds a reading, a number other than 0, in some data line (a stand's
+/// export keeps the columns of sensors it does not have, written 0 or left empty).
+fn column_reads(data: &[&str], layout: &Layout, i: usize) -> bool {
+    data.iter().any(|line| {
+        fields(line, layout.sep)
+            .nth(i)
+            .and_then(|f| parse_field(&f, layout.mark))
+            .is_some_and(|v| v.is_finite() && v != 0.0)
     })
 }
 

@@ -217,6 +217,13 @@ fn a_speed_in_erpm_needs_the_pole_count_and_says_so() {
         "{unread}"
     );
     assert!(v["static_map"].get("rpm").is_none());
+    // The summary says it too.
+    let (code, out, err) = propid(&["identify", file.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("left out  Motor Electrical Speed (eRPM):") && out.contains("--poles N"),
+        "{out}"
+    );
     let v = identify(&file, &["--poles", "14"]);
     let rpm = &v["source"]["units"]["rpm"];
     assert_eq!(rpm["unit"], "eRPM");

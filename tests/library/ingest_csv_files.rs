@@ -529,3 +529,40 @@ fn unix_time_stamps_are_read_by_their_size_and_a_counter_is_not_guessed() {
     let e = read_csv(&file(&|k| (1_000_000_000 + 5000 * k).to_string()), &opts()).unwrap_err();
     assert!(matches!(e, CsvFileError::UnitlessTime { .. }), "{e}");
 }
+
+#[test]
+fn a_speed_column_without_a_sensor_gives_way_to_the_one_that_reads() {
+    // An RCbenchmark export writes an electrical and an optical speed; a stand with only the
+    // optical probe writes 0 in the electrical one on every row.
+    let header = "Time (s),ESC signal (µs),Thrust (N),Motor Electrical Speed (RPM),\
+                  Motor Optical Speed (RPM),Voltage (V)\n";
+    let table = |electrical: bool, optical: bool, volts: &str| {
+        let mut text = String::from(header);
+        for k in 0..100 {
+            let rpm = 5000 + 10 * k;
+            let e = if electrical { rpm } else { 0 };
+            let o = if optical { rpm } else { 0 };
+            text.push_str(&format!("{},1400,1.5,{e},{o},{volts}\n", 0.01 * k as f64));
+        }
+        text
+    };
+    let o = CsvFileOptions {
+        optional: vec!["rpm".into(), "voltage_V".into()],
+        ..opts()
+    };
+    let f = read_csv(&table(false, true, "16.1"), &o).unwrap();
+    assert_eq!(f.source.units["rpm"].column, "Motor Optical Speed (RPM)");
+    assert_eq!(f.record.channel("rpm").unwrap().data[10], 5100.0);
+    assert!(f.source.unread.is_empty(), "{:?}", f.source.unread);
+    // Both read: the first, as before.
+    let f = read_csv(&table(true, true, "16.1"), &o).unwrap();
+    assert_eq!(f.source.units["rpm"].column, "Motor Electrical Speed (RPM)");
+    // Neither reads, nor the voltage (an empty column): left out, and said.
+    let f = read_csv(&table(false, false, ""), &o).unwrap();
+    assert!(f.record.channel("rpm").is_none());
+    assert!(f.record.channel("voltage_V").is_none());
+    assert!(f.optional.is_empty(), "{:?}", f.optional);
+    let left: Vec<&str> = f.source.unread.iter().map(|u| u.column.as_str()).collect();
+    assert_eq!(left, ["Motor Electrical Speed (RPM)", "Voltage (V)"]);
+    assert!(f.source.unread[0].reason.contains("no reading"));
+}

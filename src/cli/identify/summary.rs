@@ -234,6 +234,9 @@ impl<'a> Output<'a> {
                 let _ = writeln!(o, "units     {}", text.join("; "));
             }
         }
+        for u in s.csv.iter().flat_map(|c| &c.unread) {
+            let _ = writeln!(o, "left out  {}: {}", u.column, u.reason);
+        }
         let _ = writeln!(o, "outputs   {}", s.outputs.join(", "));
         let _ = writeln!(
             o,

@@ -22,10 +22,19 @@ pub(super) struct Picks {
     pub(super) outputs: Vec<usize>,
     /// Optional columns the file has (not the input, an output or the time).
     pub(super) optional: Vec<usize>,
+    /// Optional columns the file has that read nothing: every cell 0 or empty (an RPM column
+    /// of an export whose stand has no such probe), with no other column of their name that
+    /// reads: left out, said ([`super::Unread`]).
+    pub(super) silent: Vec<usize>,
 }
 
 impl Picks {
-    pub(super) fn choose(columns: &[Column], opts: &CsvFileOptions) -> Result<Self, CsvFileError> {
+    /// `reads(i)`: whether column `i` holds a reading, a number other than 0, in some row.
+    pub(super) fn choose(
+        columns: &[Column],
+        opts: &CsvFileOptions,
+        reads: impl Fn(usize) -> bool,
+    ) -> Result<Self, CsvFileError> {
         let available = || {
             columns
                 .iter()
@@ -89,6 +98,7 @@ impl Picks {
             Some(time.ok_or(CsvFileError::NeedRate)?)
         };
         let mut optional: Vec<usize> = Vec::new();
+        let mut silent: Vec<usize> = Vec::new();
         // A quantity already read is not read twice (a `Force (N)` beside the output `Thrust
         // (N)` would be a second thrust channel).
         let quantity = |i: usize| columns[i].spec.map(|s| s.quantity);
@@ -99,8 +109,16 @@ impl Picks {
                     || used().any(|j| j == i)
                     || (quantity(*i).is_some() && used().any(|&j| quantity(j) == quantity(*i)))
             };
-            if let Some(i) = find(columns, name).filter(|i| !taken(i)) {
-                optional.push(i);
+            // Of the columns of this name (RCbenchmark writes an electrical and an optical
+            // speed, one of them 0 on every row when its sensor is absent), the first that reads.
+            let found: Vec<usize> = find_all(columns, name)
+                .into_iter()
+                .filter(|i| !taken(i))
+                .collect();
+            match (found.iter().find(|&&i| reads(i)), found.first()) {
+                (Some(&i), _) => optional.push(i),
+                (None, Some(&i)) => silent.push(i),
+                (None, None) => {}
             }
         }
         Ok(Self {
@@ -108,6 +126,7 @@ impl Picks {
             input,
             outputs,
             optional,
+            silent,
         })
     }
 
@@ -166,17 +185,27 @@ fn one_sensor(
 
 /// A column by its name as written, its normalised name, or its canonical channel name.
 fn find(columns: &[Column], name: &str) -> Option<usize> {
+    find_all(columns, name).first().copied()
+}
+
+/// The columns of a name as written or normalised, else of that canonical channel name, in
+/// file order.
+fn find_all(columns: &[Column], name: &str) -> Vec<usize> {
     let want = csv_columns::normalise(name);
-    columns
-        .iter()
-        .position(|c| c.name == name || csv_columns::normalise(&c.name) == want)
-        .or_else(|| {
-            columns.iter().position(|c| {
-                c.spec
-                    .and_then(|s| s.quantity.channel_name())
-                    .is_some_and(|n| n.eq_ignore_ascii_case(name))
-            })
+    let by_name: Vec<usize> = (0..columns.len())
+        .filter(|&i| columns[i].name == name || csv_columns::normalise(&columns[i].name) == want)
+        .collect();
+    if !by_name.is_empty() {
+        return by_name;
+    }
+    (0..columns.len())
+        .filter(|&i| {
+            columns[i]
+                .spec
+                .and_then(|s| s.quantity.channel_name())
+                .is_some_and(|n| n.eq_ignore_ascii_case(name))
         })
+        .collect()
 }
 
 /// The record channel of a column: its canonical name and unit when it has one, else its own
