@@ -1,7 +1,8 @@
 //! `identify`'s DC gain is the one the record's steady levels show (issue 11): on a staircase
 //! through a hardening static map, OKID's realisation alone gave the wrong sign; the published
 //! gain is the Markov sequence's own, and a gain the levels contradict is refused (exit 4,
-//! `dc_gain_contradicts_levels`, the hint naming both numbers).
+//! `dc_gain_contradicts_levels`, the hint naming both numbers). A thrust that falls as the
+//! command rises (a load cell mounted reversed) is warned and its curves fit its magnitude.
 
 use std::path::{Path, PathBuf};
 
@@ -166,4 +167,40 @@ fn unlogged_holds_give_the_levels_gain_or_a_refusal_never_the_jumps_sign() {
         v["model"]
     );
     assert!(err.contains("dc_gain_contradicts_levels"), "{err}");
+}
+
+#[test]
+fn a_reversed_load_cell_is_warned_and_its_curves_fit_the_magnitude() {
+    let dir = tempfile::tempdir().unwrap();
+    let (u, y) = staircase(&[0.2, 0.35, 0.5, 0.65, 0.8]);
+    let neg: Vec<f64> = y.iter().map(|v| -v).collect();
+    let (code, up, err) = identify(&write_csv(dir.path(), &u, &y));
+    assert_eq!(code, 0, "{err}");
+    let (code, down, err) = identify(&write_csv(dir.path(), &u, &neg));
+    assert_eq!(code, 0, "{err}");
+    let kinds: Vec<&str> = down["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w["kind"].as_str())
+        .collect();
+    assert!(kinds.contains(&"nonpositive_gain"), "{}", down["warnings"]);
+    let (m, n) = (&up["static_map"]["thrust"], &down["static_map"]["thrust"]);
+    assert!(m.get("falls_with_command").is_none(), "{m}");
+    assert_eq!(n["falls_with_command"], true, "{n}");
+    let f = |v: &Value| v.as_f64().unwrap();
+    // The map of 10·u³: the magnitude's exponent near 3, its k and t_max negated.
+    assert!((f(&m["power"]["exponent"]) - 3.0).abs() < 0.5, "{m}");
+    assert_eq!(f(&n["power"]["exponent"]), f(&m["power"]["exponent"]));
+    assert_eq!(f(&n["power"]["k"]), -f(&m["power"]["k"]));
+    assert_eq!(f(&n["expo"]["t_max"]), -f(&m["expo"]["t_max"]));
+    assert!(f(&n["expo"]["t_max"]) < -5.0, "{n}");
+    let (_, text, _) = propid(&[
+        "identify",
+        write_csv(dir.path(), &u, &neg).to_str().unwrap(),
+    ]);
+    assert!(
+        text.contains("falls     the thrust falls as the command rises"),
+        "{text}"
+    );
 }

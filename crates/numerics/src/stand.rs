@@ -18,8 +18,8 @@ use serde::Serialize;
 
 use crate::segment::{self, Command, SegmentRules};
 use crate::static_map::{
-    fit_expo, fit_power_law, fit_thrust_coefficient, levels, window_levels, Expo, Level, PowerLaw,
-    ThrustCoefficient,
+    falls_with_command, fit_expo, fit_power_law, fit_thrust_coefficient, levels, window_levels,
+    Expo, Level, PowerLaw, ThrustCoefficient,
 };
 use crate::step_response::{step_figures, StepFigures};
 
@@ -48,6 +48,11 @@ pub struct StaticMap {
     /// Thrust only, when the record has rotor speed too: `T = k_t·ω²`, ω in rad/s.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub k_t: Option<ThrustCoefficient>,
+    /// The output falls as the command rises ([`falls_with_command`]: a load cell mounted
+    /// reversed, a pusher): `power` and `expo` fit its magnitude, their `k` and `t_max`
+    /// negative. Omitted when it rises.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub falls_with_command: bool,
 }
 
 /// Step figures and static maps of a record.
@@ -139,6 +144,7 @@ pub fn stand_figures(
                 unit: o.unit,
                 power: fit_power_law(&lv),
                 expo: fit_expo(&lv),
+                falls_with_command: falls_with_command(&lv),
                 levels: lv,
                 k_t: None,
             };

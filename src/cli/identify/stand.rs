@@ -144,6 +144,14 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 l.throttle, l.mean, l.std, l.samples
             );
         }
+        if map.falls_with_command {
+            let _ = writeln!(
+                o,
+                "  falls     the {key} falls as the command rises (a load cell mounted reversed, \
+                 a pusher, a motor turning the other way): the curves fit its magnitude, k and \
+                 t_max negative"
+            );
+        }
         match &map.power {
             Some(p) => {
                 let sd = p.uncertainty;
@@ -156,7 +164,7 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 );
             }
             None => {
-                let _ = writeln!(o, "  power     - (fewer than 3 levels)");
+                let _ = writeln!(o, "  power     - (fewer than 3 levels, or none above zero)");
             }
         }
         match &map.expo {

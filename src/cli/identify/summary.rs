@@ -535,6 +535,7 @@ mod tests {
             power: fit_power_law(&levels),
             expo: fit_expo(&levels),
             k_t: None,
+            falls_with_command: false,
             levels,
         }
     }

@@ -249,9 +249,38 @@ fn log_fit(pts: &[(f64, f64)], u0: f64) -> Option<(f64, f64, f64)> {
     Some((k, e, sse))
 }
 
+/// Whether the output falls as the command rises: the least-squares slope of the levels
+/// ([`level_slope`]) is negative. A load cell mounted the other way round, a pusher propeller
+/// pulling on it, a torque sensor under a motor turning the other way: the magnitude still
+/// grows with the command, and [`fit_power_law`] and [`fit_expo`] fit the magnitude, `k` and
+/// `t_max` then negative.
+pub fn falls_with_command(levels: &[Level]) -> bool {
+    level_slope(levels).is_some_and(|s| s.slope < 0.0)
+}
+
+/// The levels with their means (the output) negated.
+fn mirrored(levels: &[Level]) -> Vec<Level> {
+    levels
+        .iter()
+        .map(|l| Level {
+            mean: -l.mean,
+            ..*l
+        })
+        .collect()
+}
+
 /// Fits the power law to the levels (see the module doc); `None` with fewer than three levels
-/// or no positive output.
+/// or no output above zero. An output that falls as the command rises
+/// ([`falls_with_command`]) is fitted by its magnitude: `k` negative.
 pub fn fit_power_law(levels: &[Level]) -> Option<PowerLaw> {
+    if falls_with_command(levels) {
+        return fit_rising_power_law(&mirrored(levels)).map(|p| PowerLaw { k: -p.k, ..p });
+    }
+    fit_rising_power_law(levels)
+}
+
+/// [`fit_power_law`] of an output that rises with the command.
+fn fit_rising_power_law(levels: &[Level]) -> Option<PowerLaw> {
     let pts: Vec<(f64, f64)> = finite(levels).map(|l| (l.throttle, l.mean)).collect();
     let first_on = pts
         .iter()
@@ -361,8 +390,20 @@ pub fn fit_power_law(levels: &[Level]) -> Option<PowerLaw> {
 }
 
 /// Fits the expo curve to the levels (see the module doc); `None` with fewer than two levels or
-/// a degenerate fit (`t_max` not positive).
+/// a degenerate fit (`t_max` not positive). An output that falls as the command rises
+/// ([`falls_with_command`]) is fitted by its magnitude: `t_max` negative, `a` the magnitude's.
 pub fn fit_expo(levels: &[Level]) -> Option<Expo> {
+    if falls_with_command(levels) {
+        return fit_rising_expo(&mirrored(levels)).map(|e| Expo {
+            t_max: -e.t_max,
+            ..e
+        });
+    }
+    fit_rising_expo(levels)
+}
+
+/// [`fit_expo`] of an output that rises with the command.
+fn fit_rising_expo(levels: &[Level]) -> Option<Expo> {
     let pts: Vec<(f64, f64)> = finite(levels).map(|l| (l.throttle, l.mean)).collect();
     if pts.len() < 2 {
         return None;

@@ -76,9 +76,30 @@ fn a_noisy_power_law_has_an_uncertainty_that_covers_the_error() {
 #[test]
 fn too_few_levels_give_no_power_law() {
     assert!(fit_power_law(&[lv(0.3, 1.0), lv(0.5, 2.0)]).is_none());
-    assert!(fit_power_law(&[lv(0.3, -1.0), lv(0.5, -2.0), lv(0.6, -3.0)]).is_none());
+    // No level above zero, rising or falling: nothing to fit.
+    assert!(fit_power_law(&[lv(0.3, 0.0), lv(0.5, 0.0), lv(0.6, 0.0)]).is_none());
     let three = fit_power_law(&[lv(0.3, 1.0), lv(0.5, 2.5), lv(0.7, 5.0)]).unwrap();
     assert!(three.uncertainty.is_none());
+}
+
+#[test]
+fn an_output_that_falls_with_the_command_is_fitted_by_its_magnitude() {
+    // A load cell mounted reversed: the same map, negated (and a tare a little below zero).
+    let truth = |u: f64| 12.0 * (u - 0.08f64).max(0.0).powf(1.9);
+    let up: Vec<Level> = [0.0, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
+        .iter()
+        .map(|&u| lv(u, truth(u)))
+        .collect();
+    let down: Vec<Level> = up.iter().map(|l| lv(l.throttle, -l.mean)).collect();
+    assert!(!falls_with_command(&up));
+    assert!(falls_with_command(&down));
+    let (p, q) = (fit_power_law(&up).unwrap(), fit_power_law(&down).unwrap());
+    assert!((q.k + 12.0).abs() < 1e-4, "{q:?}");
+    assert_eq!((q.u0, q.exponent), (p.u0, p.exponent));
+    assert!((q.predict(0.5) - down[4].mean).abs() < 1e-6);
+    let (e, f) = (fit_expo(&up).unwrap(), fit_expo(&down).unwrap());
+    assert_eq!((f.a, f.t_max), (e.a, -e.t_max));
+    assert!(f.t_max < 0.0 && (f.predict(0.9) - down[8].mean).abs() < 0.5);
 }
 
 #[test]
