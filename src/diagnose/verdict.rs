@@ -20,7 +20,8 @@
 //! **Warnings** (each published model, baseline and extended):
 //! - `nonpositive_gain`: DC gain (thrust per unit command) `≤ 0`: more command, less thrust.
 //! - `time_constant_below_sample`: a stable pole with `τ = −1 / Re s` shorter than one sample
-//!   period: a dynamic the data cannot resolve.
+//!   period: a dynamic the data cannot resolve. Beside a slower pole of `τ ≥ dt` it is an
+//!   overdamped core fitting a first-order response, and the message says that instead.
 //! - `mode_outside_band`: the dominant mode (the core's `fn` when underdamped, its slow real
 //!   pole's `|s| / 2π` when overdamped) outside the excited band `[1/T, f_hi]`: `T` the record
 //!   length, `f_hi` the frequency below which [`BAND_POWER`] `= 99 %` of the power of the
@@ -281,19 +282,34 @@ pub fn warnings(m: &ModelSummary, name: &'static str, band: [f64; 2]) -> Vec<War
             band_hz: None,
         });
     }
-    let tau = r
-        .poles_s
-        .iter()
-        .filter(|s| s[0] < 0.0 && s[0].is_finite())
-        .map(|s| -1.0 / s[0])
-        .fold(f64::INFINITY, f64::min);
+    let taus = || {
+        r.poles_s
+            .iter()
+            .filter(|s| s[0] < 0.0 && s[0].is_finite())
+            .map(|s| -1.0 / s[0])
+    };
+    let (tau, slowest) = (
+        taus().fold(f64::INFINITY, f64::min),
+        taus().fold(0.0, f64::max),
+    );
     if tau < r.dt_s {
-        out.push(Warning {
-            kind: WarningKind::TimeConstantBelowSample,
-            message: format!(
+        // Beside a resolved slow pole, a pole faster than a sample is an overdamped core
+        // fitting a first-order response: said so, not as an unresolved dynamic.
+        let message = if slowest >= r.dt_s {
+            format!(
+                "{name} second time constant {tau:.3e} s is shorter than one sample ({:.3e} s): \
+                 at this rate the response is first-order, time constant {slowest:.4} s",
+                r.dt_s
+            )
+        } else {
+            format!(
                 "{name} time constant {tau:.3e} s is shorter than one sample ({:.3e} s)",
                 r.dt_s
-            ),
+            )
+        };
+        out.push(Warning {
+            kind: WarningKind::TimeConstantBelowSample,
+            message,
             model: name,
             value: tau,
             band_hz: None,
@@ -367,6 +383,48 @@ mod tests {
             .collect();
         let b = excited_band(&sine, dt);
         assert!(b[1] < 2.0, "{b:?}");
+    }
+
+    #[test]
+    fn a_pole_faster_than_a_sample_is_warned_and_named_second_beside_a_resolved_one() {
+        use crate::diagnose::fit::Fit;
+        use crate::diagnose::model::{Core, Model};
+        let dt = 1e-3;
+        let summary = |fn_hz, zeta| {
+            let fit = Fit {
+                model: Model::default().with_core(Core {
+                    fn_hz,
+                    zeta,
+                    gain: 1.0,
+                    ..Core::default()
+                }),
+                sse: 1.0,
+                n: 100,
+            };
+            ModelSummary::from_fit(&fit, dt, None)
+        };
+        let band = [0.01, 500.0];
+        let below = |m: &ModelSummary| {
+            warnings(m, "extended", band)
+                .into_iter()
+                .find(|w| w.kind == WarningKind::TimeConstantBelowSample)
+        };
+        // Poles at τ 40 ms and 4 µs: a first-order response, the fast pole named second.
+        let (t1, t2): (f64, f64) = (0.04, 4e-6);
+        let wn = 1.0 / (t1 * t2).sqrt();
+        let zeta = (t1 + t2) * wn / 2.0;
+        let w = below(&summary(wn / std::f64::consts::TAU, zeta)).unwrap();
+        assert!((w.value - t2).abs() < 1e-8, "{}", w.value);
+        assert!(
+            w.message.contains("second time constant") && w.message.contains("first-order"),
+            "{}",
+            w.message
+        );
+        // Every pole faster than a sample: unresolved.
+        let w = below(&summary(2000.0, 1.5)).unwrap();
+        assert!(!w.message.contains("second"), "{}", w.message);
+        // Both resolved: no warning.
+        assert!(below(&summary(5.0, 0.7)).is_none());
     }
 
     #[test]
