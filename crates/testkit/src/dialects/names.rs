@@ -1,10 +1,11 @@
 //! Dialects of names and cells (see [`super`]): a qualifier before a quantity's word (`Motor
 //! RPM`, `Battery Voltage`, `Rotor speed`), the small stands' words for a load cell (`Pull`,
 //! `Lift`) and for a command (`Signal`, `cmd [-]`, `Duty cycle`), a stopwatch's `M:SS.fff`
-//! time, percent signs in the cells, a drag `Force` left of the `Thrust`, and fractions under
-//! a `%` header (refused: which the exporter meant is not in the file).
+//! time, percent signs in the cells, a drag `Force` left of the `Thrust`, fractions under a
+//! `%` header (refused: which the exporter meant is not in the file), a German bench's words,
+//! a snake_case script log (`motor_cmd`, `load_cell_N`) and `quantity / unit` headers.
 
-use super::common::{pct, t_s, us, Collector, PCT_RANGE, US_RANGE};
+use super::common::{gf, pct, t_s, us, Collector, PCT_RANGE, US_RANGE};
 use super::{col, expect, num, Dialect, Expect, Sample, G0, PLAIN};
 
 /// The dialects of this file, seeded from `first` on.
@@ -121,6 +122,64 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
             ],
             PCT_RANGE.0,
             PCT_RANGE.1,
+        ),
+    );
+    // A German lab bench: its words, units in brackets, speed in 1/min.
+    c.add(
+        "german_bench_words",
+        PLAIN,
+        &[
+            col("Zeit [s]", t_s),
+            col("Gas [%]", pct),
+            col("Schub [g]", gf),
+            col("Drehzahl [1/min]", |_, s| num(s.rpm, 0)),
+            col("Spannung [V]", |_, s| num(s.voltage_v, 3)),
+            col("Strom [A]", |_, s| num(s.current_a, 3)),
+        ],
+        expect(
+            &[
+                ("time", "Zeit [s]", "s", 1.0),
+                ("throttle", "Gas [%]", "%", 0.01),
+                ("thrust", "Schub [g]", "gf", G0 / 1e3),
+                ("rpm", "Drehzahl [1/min]", "RPM", 1.0),
+                ("current", "Strom [A]", "A", 1.0),
+            ],
+            PCT_RANGE.0,
+            PCT_RANGE.1,
+        ),
+    );
+    // A script's snake_case log: a qualified command with no unit (its values decide), a
+    // `load_cell` in newtons, an elapsed time; and a table's `quantity / unit` force `F / N`
+    // beside an ESC's `esc_pwm_us`.
+    c.add(
+        "snake_case_motor_cmd_load_cell",
+        PLAIN,
+        &[
+            col("elapsed_s", t_s),
+            col("motor_cmd", |_, s| num(s.u, 3)),
+            col("load_cell_N", n),
+        ],
+        expect(
+            &[
+                ("time", "elapsed_s", "s", 1.0),
+                ("throttle", "motor_cmd", "0..1", 1.0),
+                ("thrust", "load_cell_N", "N", 1.0),
+            ],
+            [0.0, 1.0],
+            "values: 0..1",
+        ),
+    );
+    c.add(
+        "quantity_over_unit_force_esc_pwm",
+        PLAIN,
+        &[col("t / s", t_s), col("esc_pwm_us", us), col("F / N", n)],
+        expect(
+            &[
+                ("throttle", "esc_pwm_us", "µs", 1e-3),
+                ("thrust", "F / N", "N", 1.0),
+            ],
+            US_RANGE.0,
+            US_RANGE.1,
         ),
     );
     c.out

@@ -10,7 +10,11 @@
 //! quantity word and a unit suffix, `word(unit)`, `word_unit` or `word / unit`, and looks both
 //! up ([`WORDS`], [`UNITS`]): `Thrust (gf)`, `thrust_lbf`, `Torque (N·mm)`, `Motor Speed
 //! (rad/s)`, `Thrust / N`. A qualifier may precede the word (`Battery Voltage (V)`, `Motor
-//! RPM`), unless it makes the column no reading (`Target RPM`, `Max Current (A)`).
+//! RPM`), unless it makes the column no reading (`Target RPM`, `Max Current (A)`). Words joined
+//! by `_` where a header has a space read as one (`load_cell_N`); a command with a qualifier
+//! and no unit (`Motor Command`, `motor_cmd`) is a command whose scale its values decide;
+//! German benches' words are known (`Zeit`, `Gas`, `Schub`, `Drehzahl`, ...). Of single
+//! letters only `t` (time) and `F` (force, the load cell's) are read, with a unit.
 //!
 //! The conversion to canonical units (throttle fraction, s, N, N·m, rev/min, V, A) is affine,
 //! `canonical = (raw - zero) * mul / div`; some units need options ([`ConvOptions`]). A
@@ -382,6 +386,12 @@ pub const NAMES: &[(&str, Quantity, Unit)] = &[
     // An Arduino's clock functions, the usual names of a hobby logger's time column.
     ("millis", Q::Time, U::Millisecond),
     ("micros", Q::Time, U::Microsecond),
+    // A time column named by its unit alone.
+    ("sec", Q::Time, U::Second),
+    ("secs", Q::Time, U::Second),
+    ("seconds", Q::Time, U::Second),
+    ("ms", Q::Time, U::Millisecond),
+    ("msec", Q::Time, U::Millisecond),
     ("throttle", Q::Throttle, U::ThrottleLevel),
     ("escsignal", Q::Throttle, U::Command),
     ("esc", Q::Throttle, U::Command),
@@ -424,6 +434,8 @@ pub const WORDS: &[(&str, Quantity)] = &[
     // The load cell's force (`Force (N)`): a thrust stand measures one (a multi-axis
     // `Force X (N)` is not this word).
     ("force", Q::Thrust),
+    // Its symbol, with a force unit (`F / N`, `F (gf)`; an axis's `Fz (N)` is not this word).
+    ("f", Q::Thrust),
     // A load cell's reading named as such (`Load (g)`, `Load cell (kg)`, `loadcell_N`): only
     // with a force unit (a `Load (%)` is not a thrust).
     ("load", Q::Thrust),
@@ -448,6 +460,15 @@ pub const WORDS: &[(&str, Quantity)] = &[
     ("vbatlatest", Q::Voltage),
     ("current", Q::Current),
     ("amperagelatest", Q::Current),
+    // German benches' names (`Zeit [s]`, `Gas [%]`, `Schub [g]`, `Drehzahl [1/min]`).
+    ("zeit", Q::Time),
+    ("gas", Q::Throttle),
+    ("schub", Q::Thrust),
+    ("kraft", Q::Thrust),
+    ("drehmoment", Q::Torque),
+    ("drehzahl", Q::Rpm),
+    ("spannung", Q::Voltage),
+    ("strom", Q::Current),
 ];
 
 /// The unit table: a unit suffix (normalised) of a quantity → its unit.
@@ -560,7 +581,19 @@ pub fn lookup(name: &str) -> Option<ColumnSpec> {
             .find(|(s, q, _)| *s == suffix && *q == quantity)
             .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
     });
-    with_unit.or_else(|| qualified_name(&n).and_then(whole))
+    with_unit
+        .or_else(|| qualified_name(&n).and_then(whole))
+        .or_else(|| qualified_command(&n))
+}
+
+/// A command named with a qualifier and no unit (`Motor Command`, `motor_cmd`, `esc_pwm`): a
+/// command's scale is decided from its values ([`Unit::Command`]), so no unit is guessed.
+/// Other quantities without a unit are [`unitless`], never read.
+fn qualified_command(n: &str) -> Option<ColumnSpec> {
+    (quantity_of_word(n)? == Quantity::Throttle).then_some(ColumnSpec {
+        quantity: Quantity::Throttle,
+        unit: Unit::Command,
+    })
 }
 
 /// The whole name ([`NAMES`]) a qualified name stands for: a unit-named speed after a
@@ -593,7 +626,7 @@ fn qualified_name(n: &str) -> Option<&'static str> {
 /// only a bare `Force` is the stand's load cell; a `Drag Force`, a `Side Force` or a
 /// benchmark's `vir_force` (a motor's force command) is not its thrust.
 const QUALIFIABLE: &[&str] = &[
-    "time", "throttle", "command", "cmd", "signal", "thrust", "torque", "speed", "voltage",
+    "time", "throttle", "command", "cmd", "signal", "pwm", "thrust", "torque", "speed", "voltage",
     "current",
 ];
 
@@ -661,6 +694,8 @@ fn quantity_of_word(word: &str) -> Option<Quantity> {
         .or_else(|| qualified(word))
         .or_else(|| qualified(strip_index(word)?))
         .or_else(|| set_point(word))
+        // Words joined by `_` where a header would have a space (`load_cell_N`, `motor_speed`).
+        .or_else(|| of(&word.replace('_', "")))
 }
 
 /// Words that name a set-point after a command's word (`Throttle setpoint (%)`).

@@ -448,6 +448,26 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
             Unit::PulseMicrosecond,
         ),
         ("Throttle command (%)", Quantity::Throttle, Unit::Percent),
+        // A qualified command without a unit: its scale from its values.
+        ("motor_cmd", Quantity::Throttle, Unit::Command),
+        ("Motor Command", Quantity::Throttle, Unit::Command),
+        ("esc_pwm", Quantity::Throttle, Unit::Command),
+        ("esc_pwm_us", Quantity::Throttle, Unit::PulseMicrosecond),
+        // Words joined by `_`, a time named by its unit, a German bench's names.
+        ("load_cell_N", Quantity::Thrust, Unit::Newton),
+        ("motor_speed_rpm", Quantity::Rpm, Unit::Rpm),
+        ("sec", Quantity::Time, Unit::Second),
+        ("ms", Quantity::Time, Unit::Millisecond),
+        ("Zeit [s]", Quantity::Time, Unit::Second),
+        ("Gas [%]", Quantity::Throttle, Unit::Percent),
+        ("Schub [g]", Quantity::Thrust, Unit::GramForce),
+        ("Kraft (N)", Quantity::Thrust, Unit::Newton),
+        ("Drehmoment [Nm]", Quantity::Torque, Unit::NewtonMetre),
+        ("Drehzahl [1/min]", Quantity::Rpm, Unit::Rpm),
+        ("Spannung [V]", Quantity::Voltage, Unit::Volt),
+        ("Strom [A]", Quantity::Current, Unit::Ampere),
+        ("F / N", Quantity::Thrust, Unit::Newton),
+        ("F (gf)", Quantity::Thrust, Unit::GramForce),
     ];
     for (name, q, u) in cases {
         assert_eq!(lookup(name), spec(q, u), "{name}");
@@ -477,9 +497,15 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         "Settling Time (s)",
         "speed_target_rpm",
         "Thrust/Power (g/W)",
+        // No command's word at the end; a letter other than `t` and `F`, `F` with no force unit.
+        "motor_temp",
+        "u / %",
+        "f (Hz)",
     ] {
         assert_eq!(lookup(other), None, "{other}");
     }
     assert_eq!(unitless("Motor Thrust"), Some(Quantity::Thrust));
     assert_eq!(unitless("Pull"), Some(Quantity::Thrust));
+    assert_eq!(unitless("Schub"), Some(Quantity::Thrust));
+    assert_eq!(unitless("load_cell"), Some(Quantity::Thrust));
 }
