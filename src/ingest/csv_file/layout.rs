@@ -9,8 +9,10 @@
 //!    ([`parse_clock`]) or missing markers (`-`, `N/A`, `NULL`: [`is_missing_marker`]), at
 //!    least one a number; its separator ([`separator`]) is the file's.
 //! 2. A file whose first line is a data row has no header.
-//! 3. Otherwise the **header** is, among the lines before the first data row, the first one with
-//!    at least as many fields as that row and a name the alias table knows; else the first line
+//! 3. Otherwise the **header** is, among the lines before the first data row that have at
+//!    least as many fields as that row, a name the alias table knows and are no units row, the
+//!    one with the most names the table maps whole, with their unit (the first of equals: of a
+//!    title row `Zeit;Schub` above `Time (s);Thrust (g)`, the second); else the first line
 //!    if it has a known name (a header narrower than its rows); else the first line with as many
 //!    fields; else the first line. The lines before it are the preamble (counted, not read).
 //! 4. A line under the header, before the first data row, whose cells are all units of the unit
@@ -82,10 +84,20 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
     let known = |l: &&str| {
         fields(l, sep).any(|f| columns::lookup(&f).is_some() || columns::unitless(&f).is_some())
     };
+    // Of two stacked name rows (a title row of quantity words above the names with their
+    // units, two languages), the one whose names map with a unit; a units row is no header.
+    let mapped = |l: &&str| {
+        fields(l, sep)
+            .filter(|f| columns::lookup(f).is_some())
+            .count()
+    };
     let candidates = &lines[..before];
     let header = candidates
         .iter()
-        .position(|l| wide(l) && known(l))
+        .enumerate()
+        .filter(|(_, l)| wide(l) && known(l) && !is_units_row(l, sep))
+        .max_by_key(|&(i, l)| (mapped(l), std::cmp::Reverse(i)))
+        .map(|(i, _)| i)
         .or_else(|| known(&candidates[0]).then_some(0))
         .or_else(|| candidates.iter().position(wide))
         .unwrap_or(0);
