@@ -36,6 +36,16 @@ pub enum LoadError {
         /// The file as given.
         file: String,
     },
+    /// A spreadsheet workbook or a compressed archive, not a text or a recording.
+    #[error("{file}: {kind}, not a CSV text or a TSP/1 recording: {fix}")]
+    NotText {
+        /// The file as given.
+        file: String,
+        /// What its first bytes say it is.
+        kind: &'static str,
+        /// What to do with it.
+        fix: &'static str,
+    },
     /// The file is larger than what propid reads of one input.
     #[error("{file}: larger than {limit} bytes (1 GiB), the most propid reads of one input")]
     TooLarge {
@@ -175,6 +185,14 @@ pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFil
     if bytes.is_empty() {
         return Err(LoadError::Empty { file: name }.into());
     }
+    if let Some((kind, fix)) = container(bytes) {
+        return Err(LoadError::NotText {
+            file: name,
+            kind,
+            fix,
+        }
+        .into());
+    }
     // A UTF-16 text (its NUL bytes would look binary) is read as the UTF-8 it decodes to;
     // anything else is decoded once, by the reader that takes it as text.
     let utf8;
@@ -191,6 +209,28 @@ pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFil
         // file is an exported log, read by its own time column.
         _ if req.columns.is_none() && is_csv_stream(bytes) => load_tsp(req, name, bytes),
         _ => load_csv(req, name, bytes, utf16),
+    }
+}
+
+/// What a file's first bytes say it is when it is a container a stand's software writes
+/// beside its CSV (an Excel or LibreOffice workbook, a compressed log), with what to do: its
+/// bytes would otherwise read as a stream with no frame.
+fn container(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
+    const XLS: &[u8] = &[0xD0, 0xCF, 0x11, 0xE0, 0xA1, 0xB1, 0x1A, 0xE1];
+    if bytes.starts_with(b"PK\x03\x04") {
+        Some((
+            "a zip archive (an .xlsx or .ods workbook?)",
+            "export the sheet as CSV, or unpack the archive",
+        ))
+    } else if bytes.starts_with(XLS) {
+        Some((
+            "an Excel 97–2003 workbook (.xls)",
+            "export the sheet as CSV",
+        ))
+    } else if bytes.starts_with(&[0x1F, 0x8B]) {
+        Some(("a gzip-compressed file", "decompress it first (gunzip)"))
+    } else {
+        None
     }
 }
 
@@ -377,6 +417,19 @@ mod tests {
         );
         assert!(e.to_string().ends_with("e.csv: the file is empty"), "{e}");
         assert_eq!(e.exit_code(), 3);
+        // A workbook saved where its CSV export was expected, a compressed log.
+        for (bytes, says) in [
+            (&b"PK\x03\x04\x14\x00rest"[..], "export the sheet as CSV"),
+            (
+                &[0xD0, 0xCF, 0x11, 0xE0, 0xA1, 0xB1, 0x1A, 0xE1, 0][..],
+                ".xls",
+            ),
+            (&[0x1F, 0x8B, 8, 0][..], "gunzip"),
+        ] {
+            let e = load_bytes("log".into(), bytes, &Request::default()).unwrap_err();
+            assert!(e.to_string().contains(says), "{e}");
+            assert_eq!(e.exit_code(), 3);
+        }
         let good = write(dir.path(), "g.csv", &csv(false));
         let bad_esc = [1000.0];
         let req = Request {
