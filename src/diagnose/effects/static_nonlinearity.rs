@@ -69,9 +69,17 @@ impl Term for StaticNonlinearityParams {
         (0.1..=10.0).contains(&self.exponent)
     }
 
+    /// `u_ref · (max(v, 0) / u_ref)^e` per sample. A stand's command holds each level for many
+    /// samples: the power of a value equal to the previous one is reused (the same result;
+    /// `powf` was a third of a staircase's diagnosis time).
     fn shape_input(&self, v: &mut [f64], sig: &Signals) {
+        let (mut last_in, mut last_out) = (f64::NAN, f64::NAN);
         for x in v.iter_mut() {
-            *x = sig.u_ref * (x.max(0.0) / sig.u_ref).powf(self.exponent);
+            if *x != last_in {
+                last_in = *x;
+                last_out = sig.u_ref * (x.max(0.0) / sig.u_ref).powf(self.exponent);
+            }
+            *x = last_out;
         }
     }
 
