@@ -18,6 +18,7 @@ mod identify_held;
 mod identify_interpolated;
 mod identify_quality;
 mod identify_real_data;
+mod identify_repeats;
 mod identify_sim_recording;
 mod identify_slow_logs;
 mod identify_square_hankel;

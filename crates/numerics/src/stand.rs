@@ -18,8 +18,8 @@ use serde::Serialize;
 
 use crate::segment::{self, Command, SegmentRules};
 use crate::static_map::{
-    falls_with_command, fit_expo, fit_power_law, fit_thrust_coefficient, levels, window_levels,
-    Expo, Level, PowerLaw, ThrustCoefficient,
+    falls_with_command, fit_expo, fit_power_law, fit_thrust_coefficient, levels, repeats,
+    window_levels, Expo, Level, PowerLaw, Repeat, ThrustCoefficient,
 };
 use crate::step_response::{step_figures, StepFigures};
 
@@ -53,6 +53,10 @@ pub struct StaticMap {
     /// negative. Omitted when it rises.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub falls_with_command: bool,
+    /// The commands held more than once, the mean of each visit and the last minus the first
+    /// ([`repeats`]); omitted when none is.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub repeats: Vec<Repeat>,
 }
 
 /// Step figures and static maps of a record.
@@ -145,6 +149,7 @@ pub fn stand_figures(
                 power: fit_power_law(&lv),
                 expo: fit_expo(&lv),
                 falls_with_command: falls_with_command(&lv),
+                repeats: repeats(&lv),
                 levels: lv,
                 k_t: None,
             };

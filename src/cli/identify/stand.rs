@@ -4,6 +4,7 @@
 use std::fmt::Write;
 
 use propid_numerics::stand::StandFigures;
+use propid_numerics::static_map::not_repeatable;
 use propid_numerics::step_response::Direction;
 
 /// A number, or `-` where the data supports none.
@@ -142,6 +143,24 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 o,
                 "  {:>9.4}  {:>12.5}  {:>10.5}  {:>8}",
                 l.throttle, l.mean, l.std, l.samples
+            );
+        }
+        if let (Some(lo), Some(hi)) = (
+            map.repeats.iter().map(|r| r.shift).reduce(f64::min),
+            map.repeats.iter().map(|r| r.shift).reduce(f64::max),
+        ) {
+            let within = match not_repeatable(&map.levels, &map.repeats) {
+                Some(_) => "beyond the noise and 2 % of full scale",
+                None => "within the visits' spread or 2 % of full scale",
+            };
+            let _ = writeln!(
+                o,
+                "  repeats   {} command(s) held again: the last visit minus the first {} .. {} \
+                 {} ({within})",
+                map.repeats.len(),
+                num(Some(lo), 5),
+                num(Some(hi), 5),
+                map.unit
             );
         }
         if map.falls_with_command {

@@ -34,14 +34,15 @@ pub struct Output<'a> {
     pub quality: Quality,
     /// Implausible results that do not reject the model (`nonpositive_gain`: the output falls
     /// as the command rises, [`propid_numerics::quality::nonpositive_gain`];
-    /// `expo_outside_blend`: the thrust map's expo outside `0..1`); empty when none.
+    /// `expo_outside_blend`: the thrust map's expo outside `0..1`; `levels_not_repeatable`: a
+    /// command held twice gave two thrusts apart beyond the noise); empty when none.
     pub warnings: Vec<IdentifyWarning>,
 }
 
 /// One entry of `"warnings"`: the shape of `diagnose`'s (`kind`, `message`, `value`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IdentifyWarning {
-    /// What is implausible (`nonpositive_gain`, `expo_outside_blend`).
+    /// What is implausible (`nonpositive_gain`, `expo_outside_blend`, `levels_not_repeatable`).
     pub kind: &'static str,
     /// In words.
     pub message: String,
@@ -60,6 +61,7 @@ fn warnings_of(
         .then(|| propid_numerics::quality::nonpositive_gain(model))
         .flatten();
     let expo = thrust.and_then(expo_outside_blend);
+    let repeat = thrust.and_then(levels_not_repeatable);
     gain.map(|g| IdentifyWarning {
         kind: "nonpositive_gain",
         message: format!(
@@ -71,7 +73,29 @@ fn warnings_of(
     })
     .into_iter()
     .chain(expo)
+    .chain(repeat)
     .collect()
+}
+
+/// The thrust map's largest shift between visits of one command when it is beyond the noise
+/// and 2 % of full thrust ([`propid_numerics::static_map::not_repeatable`]): the map holds
+/// only to that, whatever its curves' uncertainties say.
+fn levels_not_repeatable(map: &propid_numerics::stand::StaticMap) -> Option<IdentifyWarning> {
+    let (r, share) = propid_numerics::static_map::not_repeatable(&map.levels, &map.repeats)?;
+    Some(IdentifyWarning {
+        kind: "levels_not_repeatable",
+        message: format!(
+            "the thrust at throttle {:.3} moved by {:+.4} {} between its first and last visit \
+             ({:.1} % of full thrust, beyond its noise): the stand does not repeat itself (a \
+             load cell's zero creeping or warming, a motor or battery heating); the static map \
+             holds to about that, whatever its fit's uncertainty",
+            r.throttle,
+            r.shift,
+            map.unit,
+            100.0 * share
+        ),
+        value: r.shift,
+    })
 }
 
 /// The thrust map's expo `a` when it lies outside `0..1` by more than two standard errors: the
@@ -435,7 +459,7 @@ pub struct Partial<'a> {
     pub steps: &'a [propid_numerics::step_response::StepFigures],
     /// Steady levels and fitted curves per output.
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
-    /// Implausible figures (`expo_outside_blend`); empty when none.
+    /// Implausible figures (`expo_outside_blend`, `levels_not_repeatable`); empty when none.
     pub warnings: Vec<IdentifyWarning>,
     /// All the figures (for the human tables).
     #[serde(skip)]
@@ -454,8 +478,12 @@ impl<'a> Partial<'a> {
             warnings: stand
                 .static_map
                 .get("thrust")
-                .and_then(expo_outside_blend)
                 .into_iter()
+                .flat_map(|m| {
+                    expo_outside_blend(m)
+                        .into_iter()
+                        .chain(levels_not_repeatable(m))
+                })
                 .collect(),
             stand,
         }
@@ -536,6 +564,7 @@ mod tests {
             expo: fit_expo(&levels),
             k_t: None,
             falls_with_command: false,
+            repeats: Vec::new(),
             levels,
         }
     }

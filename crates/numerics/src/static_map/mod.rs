@@ -18,16 +18,20 @@
 //!
 //! - **Slope** of the least-squares line through the levels ([`slope`]): the gain the steady
 //!   states show, against which [`crate::quality`] judges a linear model's DC gain.
+//! - **Repeats**: the commands held more than once and how far their later visits moved
+//!   ([`repeats`]): whether the stand repeats itself.
 //!
 //! Fewer levels than parameters give no fit (`None`); exactly as many give the curve with no
 //! uncertainty (`None` standard errors): the data cannot support a spread then.
 
+pub mod repeats;
 pub mod slope;
 
 use serde::Serialize;
 
 use crate::segment::Run;
 
+pub use repeats::{not_repeatable, repeats, Repeat};
 pub use slope::{level_slope, LevelSlope};
 
 /// Share of a hold, from its end, taken as steady.
