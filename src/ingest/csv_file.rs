@@ -487,9 +487,9 @@ fn build(
         input_range,
         mut unread,
     } = convert(columns, &mut picks, &mut values, opts)?;
-    unread.extend(picks.silent.iter().map(|&i| Unread {
+    unread.extend(picks.silent.iter().map(|&(i, why)| Unread {
         column: columns[i].name.clone(),
-        reason: NO_READING.to_string(),
+        reason: why.to_string(),
     }));
     let time_vals = picks.time.map(|_| values.remove(0));
     // A measured channel written on every row as its last reading: its repeats are cells not
@@ -641,6 +641,10 @@ fn build(
 /// Why a column asked for beside the outputs whose every cell is 0 or empty is left out.
 pub const NO_READING: &str =
     "no reading: every cell is 0 or empty (no sensor on this column), left out";
+
+/// Why a column asked for beside the outputs that the file has once per motor is left out.
+pub const ONE_PER_MOTOR: &str =
+    "one column per motor: which one belongs beside the output is not guessed, left out";
 
 /// Whether column `i` holds a reading, a number other than 0, in some data line (a stand's
 /// export keeps the columns of sensors it does not have, written 0 or left empty).

@@ -566,3 +566,26 @@ fn a_speed_column_without_a_sensor_gives_way_to_the_one_that_reads() {
     assert_eq!(left, ["Motor Electrical Speed (RPM)", "Voltage (V)"]);
     assert!(f.source.unread[0].reason.contains("no reading"));
 }
+
+#[test]
+fn a_speed_per_motor_beside_one_thrust_is_left_out_and_said() {
+    // A quad's rig: one load cell under the frame, a speed per motor. Motor 1's speed beside
+    // the total thrust would give a thrust coefficient four times too large.
+    let mut text = String::from("Time (s),Throttle (%),Thrust (N),Motor 1 RPM,Motor 2 RPM\n");
+    for k in 0..100 {
+        text.push_str(&format!("{},40,6.0,9000,9100\n", 0.01 * k as f64));
+    }
+    let o = CsvFileOptions {
+        optional: vec!["rpm".into()],
+        ..opts()
+    };
+    let f = read_csv(&text, &o).unwrap();
+    assert!(f.record.channel("rpm").is_none());
+    assert_eq!(f.source.unread.len(), 1, "{:?}", f.source.unread);
+    assert_eq!(f.source.unread[0].column, "Motor 1 RPM");
+    assert!(f.source.unread[0].reason.contains("one column per motor"));
+    // One motor's speed alone is read.
+    let one = text.replace(",Motor 2 RPM", ",Note");
+    let f = read_csv(&one, &o).unwrap();
+    assert_eq!(f.source.units["rpm"].column, "Motor 1 RPM");
+}

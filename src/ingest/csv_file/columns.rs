@@ -22,10 +22,11 @@ pub(super) struct Picks {
     pub(super) outputs: Vec<usize>,
     /// Optional columns the file has (not the input, an output or the time).
     pub(super) optional: Vec<usize>,
-    /// Optional columns the file has that read nothing: every cell 0 or empty (an RPM column
-    /// of an export whose stand has no such probe), with no other column of their name that
-    /// reads: left out, said ([`super::Unread`]).
-    pub(super) silent: Vec<usize>,
+    /// Optional columns the file has that are left out, with why ([`super::Unread`]): every
+    /// cell 0 or empty (an RPM column of an export whose stand has no such probe) with no
+    /// other column of their name that reads ([`super::NO_READING`]), or one column per motor
+    /// ([`super::ONE_PER_MOTOR`]).
+    pub(super) silent: Vec<(usize, &'static str)>,
 }
 
 impl Picks {
@@ -98,7 +99,7 @@ impl Picks {
             Some(time.ok_or(CsvFileError::NeedRate)?)
         };
         let mut optional: Vec<usize> = Vec::new();
-        let mut silent: Vec<usize> = Vec::new();
+        let mut silent: Vec<(usize, &'static str)> = Vec::new();
         // A quantity already read is not read twice (a `Force (N)` beside the output `Thrust
         // (N)` would be a second thrust channel).
         let quantity = |i: usize| columns[i].spec.map(|s| s.quantity);
@@ -115,9 +116,17 @@ impl Picks {
                 .into_iter()
                 .filter(|i| !taken(i))
                 .collect();
+            // One per motor (`Motor 1 RPM`, `Motor 2 RPM`): which belongs beside the output is
+            // not guessed.
+            let per_motor = found.iter().any(|&a| {
+                found
+                    .iter()
+                    .any(|&b| csv_columns::indexed_alike(&columns[a].name, &columns[b].name))
+            });
             match (found.iter().find(|&&i| reads(i)), found.first()) {
+                (_, Some(&i)) if per_motor => silent.push((i, super::ONE_PER_MOTOR)),
                 (Some(&i), _) => optional.push(i),
-                (None, Some(&i)) => silent.push(i),
+                (None, Some(&i)) => silent.push((i, super::NO_READING)),
                 (None, None) => {}
             }
         }

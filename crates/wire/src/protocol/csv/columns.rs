@@ -614,6 +614,13 @@ fn qualified_name(n: &str) -> Option<&'static str> {
             return false;
         };
         let q = p.trim_end_matches('_');
+        // A motor's index after the owner (`Motor 1 RPM`, `esc2_erpm`).
+        let owner = q
+            .trim_end_matches(|c: char| c.is_ascii_digit())
+            .trim_end_matches('_');
+        if owner.len() < q.len() && SPEED_OWNERS.contains(&owner) {
+            return true;
+        }
         let told_apart = p.ends_with('_')
             || SPEED_OWNERS.contains(&q)
             || (w == "rpm" && !q.ends_with(['e', 'k']));

@@ -467,6 +467,8 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         ("Spannung [V]", Quantity::Voltage, Unit::Volt),
         ("Strom [A]", Quantity::Current, Unit::Ampere),
         ("F / N", Quantity::Thrust, Unit::Newton),
+        ("Motor 1 RPM", Quantity::Rpm, Unit::Rpm),
+        ("esc2_erpm", Quantity::Rpm, Unit::ElectricalRpm),
         ("F (gf)", Quantity::Thrust, Unit::GramForce),
     ];
     for (name, q, u) in cases {
