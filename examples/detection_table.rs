@@ -49,8 +49,17 @@ const fn case(
 }
 
 const KRULL: &[&str] = &["t_s", "load_kg"];
+/// The BL-Ctrl logs' columns (PROVENANCE.md): current in 0.1 A and rpm as a raw byte are named
+/// so that they are not read as amperes and rev/min.
 const BLCTRL: &[&str] = &[
-    "cmd", "current", "maxpwm", "temp", "rpm", "res", "volt", "force",
+    "cmd",
+    "current_raw",
+    "maxpwm",
+    "temp",
+    "rpm_raw",
+    "res",
+    "volt",
+    "force",
 ];
 
 const REAL: &[RealCase] = &[

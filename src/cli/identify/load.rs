@@ -116,6 +116,10 @@ pub struct StepOut {
     pub to: f64,
 }
 
+/// The static map's key of an identified output that is none of [`STAND_CHANNELS`] (its unit
+/// the column's own, `?`).
+pub const OUTPUT_KEY: &str = "output";
+
 /// The channels of a stand's static map: its key, the record's channel and its unit.
 pub const STAND_CHANNELS: [(&str, &str, &str); 4] = [
     ("thrust", names::THRUST, "N"),
@@ -185,11 +189,18 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
     };
     let commanded = file.input.is_some();
     let input_is_a_command = file.input_is_a_command();
-    let stand = STAND_CHANNELS
+    let mut stand: Vec<(&'static str, &'static str, Vec<f64>)> = STAND_CHANNELS
         .iter()
         .filter(|c| rec.channel(c.1).is_some())
         .map(|&(key, channel, unit)| (key, unit, file.data(channel)))
         .collect();
+    // An identified output that is none of them (a force in ADC counts, a benchmark's level)
+    // has its map too, under `output`, in the column's own unit.
+    if let Some(first) = file.outputs.first() {
+        if !STAND_CHANNELS.iter().any(|c| c.1 == first) {
+            stand.push((OUTPUT_KEY, "?", file.data(first)));
+        }
+    }
     let (format, output_names, rate_hz, tsp1, csv) = match file.origin {
         Origin::Tsp1(stats) => (
             "tsp1",

@@ -30,15 +30,17 @@ fn pm(v: f64, sd: Option<f64>) -> String {
     }
 }
 
-/// Two table cells (the real-data tables): the static map of thrust (else of the first output)
+/// Two table cells (the real-data tables): the static map of thrust (else of the identified
+/// output, [`super::load::OUTPUT_KEY`])
 /// — number of levels, power law `k`, `u0`, exponent `e`, `expo a`, unit — and the steps —
 /// how many, the median dead time (`< dt` when below a sample) and time constant (s) of those
 /// that resolve them; `–` for none.
 pub fn brief(f: &StandFigures) -> (String, String) {
+    // The thrust's map, else the identified output's (never another channel's).
     let map = f
         .static_map
         .get("thrust")
-        .or_else(|| f.static_map.values().next())
+        .or_else(|| f.static_map.get(super::load::OUTPUT_KEY))
         .map_or_else(
             || "–".to_string(),
             |m| {
