@@ -204,3 +204,31 @@ fn a_reversed_load_cell_is_warned_and_its_curves_fit_the_magnitude() {
         "{text}"
     );
 }
+
+#[test]
+fn an_output_of_no_known_quantity_has_its_map_under_output() {
+    // A force sensor read in ADC counts: a column the unit table does not know.
+    let dir = tempfile::tempdir().unwrap();
+    let (u, y) = staircase(&[0.2, 0.35, 0.5, 0.65, 0.8]);
+    let path = write_csv(dir.path(), &u, &y);
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replacen("thrust_N", "force_counts", 1);
+    std::fs::write(&path, text).unwrap();
+    let (code, out, err) = propid(&[
+        "identify",
+        "--json",
+        path.to_str().unwrap(),
+        "--output",
+        "force_counts",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let m = &v["static_map"]["output"];
+    assert_eq!(m["unit"], "?", "{m}");
+    assert_eq!(m["levels"].as_array().unwrap().len(), 5, "{m}");
+    // The map of 10·u³.
+    let e = m["power"]["exponent"].as_f64().unwrap();
+    assert!((e - 3.0).abs() < 0.5, "{m}");
+    assert!(v["static_map"].get("thrust").is_none());
+}
