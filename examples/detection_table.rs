@@ -49,18 +49,7 @@ const fn case(
 }
 
 const KRULL: &[&str] = &["t_s", "load_kg"];
-/// The BL-Ctrl logs' columns (PROVENANCE.md): current in 0.1 A and rpm as a raw byte are named
-/// so that they are not read as amperes and rev/min.
-const BLCTRL: &[&str] = &[
-    "cmd",
-    "current_raw",
-    "maxpwm",
-    "temp",
-    "rpm_raw",
-    "res",
-    "volt",
-    "force",
-];
+const BLCTRL: &[&str] = propid_testkit::inject::BLCTRL_COLUMNS;
 
 const REAL: &[RealCase] = &[
     case(

@@ -29,6 +29,7 @@ use propid_numerics::static_map::level_slope;
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
 use propid_numerics::ModelReport;
+use propid_testkit::inject::BLCTRL_COLUMNS;
 
 /// One file and how to read it.
 struct Case {
@@ -135,17 +136,7 @@ const CASES: &[Case] = &[
         input_range: Some((0.0, 255.0)),
         outputs: &["force"],
         fs: Some(50.0),
-        // Current in 0.1 A, rpm a raw byte: named so that they are not read as A and rev/min.
-        columns: Some(&[
-            "cmd",
-            "current_raw",
-            "maxpwm",
-            "temp",
-            "rpm_raw",
-            "res",
-            "volt",
-            "force",
-        ]),
+        columns: Some(BLCTRL_COLUMNS),
         excitation: "25-level staircase, ~50 Hz assumed",
     },
     Case {
@@ -156,16 +147,7 @@ const CASES: &[Case] = &[
         input_range: Some((0.0, 255.0)),
         outputs: &["force"],
         fs: Some(50.0),
-        columns: Some(&[
-            "cmd",
-            "current_raw",
-            "maxpwm",
-            "temp",
-            "rpm_raw",
-            "res",
-            "volt",
-            "force",
-        ]),
+        columns: Some(BLCTRL_COLUMNS),
         excitation: "25-level staircase, ~50 Hz assumed",
     },
     Case {

@@ -81,6 +81,20 @@ pub const REPO_LOGS: [Log; 3] = [
     },
 ];
 
+/// The column names of the noahcurtiss BL-Ctrl logs (`robbe12.0.txt`, `tiger12.0.txt`: no
+/// header, `--columns`; PROVENANCE.md): the current in 0.1 A and the rpm as a raw byte are
+/// named so that they are not read as amperes and rev/min; the force is in ADC counts.
+pub const BLCTRL_COLUMNS: &[&str] = &[
+    "cmd",
+    "current_raw",
+    "maxpwm",
+    "temp",
+    "rpm_raw",
+    "res",
+    "volt",
+    "force",
+];
+
 /// Motor-stand logs that may only be read from `../shared/data` (no licence to copy them).
 pub const SHARED_LOGS: [Log; 3] = [
     Log {
