@@ -227,7 +227,10 @@ fn container(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
             "an Excel 97–2003 workbook (.xls)",
             "export the sheet as CSV",
         ))
-    } else if bytes.starts_with(&[0x1F, 0x8B]) {
+    } else if bytes.starts_with(&[0x1F, 0x8B, 0x08]) && bytes.get(3).is_some_and(|f| f & 0xE0 == 0)
+    {
+        // Deflate and no reserved flag (RFC 1952): a recording's stray bytes are not taken
+        // for one.
         Some(("a gzip-compressed file", "decompress it first (gunzip)"))
     } else {
         None
