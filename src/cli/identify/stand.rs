@@ -4,7 +4,7 @@
 use std::fmt::Write;
 
 use propid_numerics::stand::StandFigures;
-use propid_numerics::static_map::not_repeatable;
+use propid_numerics::static_map::{not_repeatable, MIN_SHARE, NOISE_FACTOR};
 use propid_numerics::step_response::Direction;
 
 /// A number, or `-` where the data supports none.
@@ -152,9 +152,13 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
             map.repeats.iter().map(|r| r.shift).reduce(f64::max),
         ) {
             let within = match not_repeatable(&map.levels, &map.repeats) {
-                Some(_) => "beyond the noise and 2 % of full scale",
-                None => "within the visits' spread or 2 % of full scale",
+                Some(_) => "beyond",
+                None => "within",
             };
+            let within = format!(
+                "{within} {NOISE_FACTOR} × the visits' spread or {} % of full scale",
+                100.0 * MIN_SHARE
+            );
             let _ = writeln!(
                 o,
                 "  repeats   {} command(s) held again: the last visit minus the first {} .. {} \

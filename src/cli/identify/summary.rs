@@ -78,7 +78,7 @@ fn warnings_of(
 }
 
 /// The thrust map's largest shift between visits of one command when it is beyond the noise
-/// and 2 % of full thrust ([`propid_numerics::static_map::not_repeatable`]): the map holds
+/// and a share of full thrust ([`propid_numerics::static_map::not_repeatable`]): the map holds
 /// only to that, whatever its curves' uncertainties say.
 fn levels_not_repeatable(map: &propid_numerics::stand::StaticMap) -> Option<IdentifyWarning> {
     let (r, share) = propid_numerics::static_map::not_repeatable(&map.levels, &map.repeats)?;

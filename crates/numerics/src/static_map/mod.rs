@@ -31,7 +31,7 @@ use serde::Serialize;
 
 use crate::segment::Run;
 
-pub use repeats::{not_repeatable, repeats, Repeat};
+pub use repeats::{not_repeatable, repeats, Repeat, MIN_SHARE, NOISE_FACTOR};
 pub use slope::{level_slope, LevelSlope};
 
 /// Share of a hold, from its end, taken as steady.

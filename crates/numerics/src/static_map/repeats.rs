@@ -8,8 +8,8 @@
 //!
 //! For every command value (throttle equal to `1e-9`) held more than once, in the order of the
 //! levels (the record's): the means of its visits and `shift = last − first`.
-//! [`not_repeatable`] names the largest shift when it is beyond both the noise (three times the
-//! larger standard deviation of the two visits' samples) and [`MIN_SHARE`] of the map's full
+//! [`not_repeatable`] names the largest shift when it is beyond both the noise ([`NOISE_FACTOR`]
+//! times the larger standard deviation of the two visits' samples) and [`MIN_SHARE`] of the map's full
 //! scale (the largest `|mean|`).
 
 use serde::Serialize;
@@ -18,6 +18,9 @@ use super::{finite, Level};
 
 /// Smallest shift, as a share of the map's full scale, called not repeatable.
 pub const MIN_SHARE: f64 = 0.02;
+
+/// Smallest shift, in standard deviations of a visit's samples, called not repeatable.
+pub const NOISE_FACTOR: f64 = 3.0;
 
 /// One command held more than once.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -66,7 +69,8 @@ pub fn not_repeatable<'a>(levels: &[Level], repeats: &'a [Repeat]) -> Option<(&'
         .iter()
         .max_by(|a, b| a.shift.abs().total_cmp(&b.shift.abs()))?;
     let share = r.shift.abs() / full;
-    (full > 0.0 && share > MIN_SHARE && r.shift.abs() > 3.0 * r.noise).then_some((r, share))
+    (full > 0.0 && share > MIN_SHARE && r.shift.abs() > NOISE_FACTOR * r.noise)
+        .then_some((r, share))
 }
 
 #[cfg(test)]
