@@ -94,6 +94,7 @@ pub fn select_pair<S>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::diagnose::search::{select, Selection};
 
     #[test]
     fn two_effects_that_fail_held_out_alone_are_taken_together() {
@@ -101,7 +102,10 @@ mod tests {
         // "map" (score 200) gives 45: the single step takes neither (search::select).
         let alone = [("sag", 300.0, 30.0), ("map", 200.0, 45.0)];
         let singles: Vec<(f64, (&str, f64))> = alone.iter().map(|&(n, s, f)| (s, (n, f))).collect();
-        assert!(super::super::search::select(singles, 50.0, |&(_, f)| (f, ())).is_none());
+        for rule in [Selection::BestFigure, Selection::FirstByScore] {
+            let none = select(rule, singles.clone(), 50.0, |&(_, f)| (f, ()));
+            assert!(none.is_none());
+        }
         // Together they give 62: the pair is taken, the stronger first.
         let scores: Vec<f64> = alone.iter().map(|a| a.1).collect();
         let got = select_pair(&scores, 50.0, |a, b| Some((62.0, (alone[a].0, alone[b].0))));
