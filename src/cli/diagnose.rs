@@ -6,11 +6,14 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use super::load::{self as shared, steps_from_response, LoadedFile, Request, NO_INPUT};
-use super::{CliError, UsageError};
+use std::collections::BTreeMap;
+
+use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
+use super::{source_text, CliError, UsageError};
 use crate::diagnose::noise::FloorSource;
 use crate::diagnose::verdict::VerdictKind;
 use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
+use crate::ingest::csv_file::ColumnUnit;
 use propid_wire::record::names;
 
 /// Arguments of `propid diagnose`.
@@ -73,6 +76,74 @@ pub struct Signals {
     pub output_name: String,
     /// Whether the input is a stand's command ([`LoadedFile::input_is_a_command`]).
     pub input_is_a_command: bool,
+    /// What the file's columns were read as ([`FileSource`]).
+    pub file: FileSource,
+}
+
+/// What `diagnose --json` adds to its `source` about the file, with the names `identify`
+/// publishes: the findings' parameters are in the canonical units these say (a thrust column in
+/// gram-force gives a sinusoid's amplitude and a drift's rate in newtons).
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct FileSource {
+    /// `"csv"` or `"tsp1"`.
+    pub format: &'static str,
+    /// The input column as named in the file, or `"steps found from the response"`.
+    pub input: String,
+    /// The output column as named in the file.
+    pub output: String,
+    /// CSV files: per channel, the column, its unit and the factor to canonical units.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub units: Option<BTreeMap<String, ColumnUnit>>,
+    /// CSV files: the raw command values taken as throttle 0 and 1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_range: Option<[f64; 2]>,
+    /// Where `input_range` came from (as `identify`'s).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub input_range_from: Option<String>,
+    /// Sample rate used, Hz.
+    pub rate_hz: f64,
+}
+
+impl FileSource {
+    /// Of a loaded file.
+    fn of(file: &LoadedFile, input: &str, output: &str) -> FileSource {
+        let rate_hz = 1.0 / file.record.dt_s;
+        match &file.origin {
+            Origin::Tsp1(_) => FileSource {
+                format: "tsp1",
+                input: input.to_string(),
+                output: output.to_string(),
+                rate_hz,
+                ..FileSource::default()
+            },
+            Origin::Csv(src) => FileSource {
+                format: "csv",
+                input: src.input.clone().unwrap_or_else(|| input.to_string()),
+                output: src
+                    .outputs
+                    .first()
+                    .cloned()
+                    .unwrap_or_else(|| output.into()),
+                units: Some(src.units.clone()),
+                input_range: src.input_range.as_ref().map(|r| [r.raw_min, r.raw_max]),
+                input_range_from: src.input_range.as_ref().map(|r| r.from.clone()),
+                rate_hz: src.rate_hz,
+            },
+        }
+    }
+}
+
+/// The diagnosis as `--json` prints it: [`Diagnosis`] with the file's [`FileSource`] fields
+/// added to its `source`.
+pub fn json(d: &Diagnosis, file: &FileSource) -> Result<serde_json::Value, serde_json::Error> {
+    let mut v = serde_json::to_value(d)?;
+    if let (Some(source), serde_json::Value::Object(extra)) = (
+        v.get_mut("source").and_then(|s| s.as_object_mut()),
+        serde_json::to_value(file)?,
+    ) {
+        source.extend(extra);
+    }
+    Ok(v)
 }
 
 impl Signals {
@@ -111,7 +182,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
     }
     if args.json {
-        let text = serde_json::to_string(&d).map_err(CliError::DiagnosisJson)?;
+        let text = json(&d, &s.file)
+            .map(|v| v.to_string())
+            .map_err(CliError::DiagnosisJson)?;
         super::stdout::line(&text)
     } else {
         super::stdout::write(&summary(&args, &s, &d))
@@ -142,6 +215,14 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         s.u.len(),
         s.dt_s
     );
+    if let Some(line) =
+        source_text::input_range(s.file.input_range, s.file.input_range_from.as_deref())
+    {
+        let _ = writeln!(t, "input {}: {line}", s.file.input);
+    }
+    if let Some(line) = s.file.units.as_ref().and_then(source_text::units) {
+        let _ = writeln!(t, "units {line}");
+    }
     if d.source.outliers > 0 {
         let _ = writeln!(
             t,
@@ -309,6 +390,7 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
         y,
         interpolated,
         voltage,
+        file: FileSource::of(file, &input_name, &output_name),
         input_name,
         output_name,
         input_is_a_command: file.input_is_a_command(),

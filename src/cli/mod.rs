@@ -9,6 +9,7 @@ pub mod load;
 pub mod replay;
 pub mod run;
 pub mod sim;
+pub mod source_text;
 pub mod stdout;
 pub mod walkthrough;
 

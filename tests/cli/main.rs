@@ -9,6 +9,7 @@ mod diagnose_outliers;
 mod diagnose_rejected;
 mod diagnose_sim;
 mod diagnose_staircase;
+mod diagnose_units;
 mod host_faults_cli;
 mod identify_cli;
 mod identify_dialects;

@@ -5,7 +5,7 @@ use std::fmt::Write;
 use serde::Serialize;
 
 use super::load::{Loaded, Source};
-use crate::ingest::csv_file::command_range::RAW_SIGNAL;
+use crate::cli::source_text;
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::quality::{judge, judge_gain, judge_sample_period, Flaw};
@@ -239,24 +239,11 @@ impl<'a> Output<'a> {
         let mut o = String::new();
         let _ = writeln!(o, "file      {} ({})", s.file, s.format);
         let _ = writeln!(o, "input     {}", s.input);
-        match (s.input_range, &s.input_range_from) {
-            (Some(_), Some(from)) if from == RAW_SIGNAL => {
-                let _ = writeln!(o, "          taken as it is, factor 1 ({from})");
-            }
-            (Some([lo, hi]), Some(from)) => {
-                let _ = writeln!(o, "          {lo}..{hi} taken as throttle 0..1 ({from})");
-            }
-            _ => {}
+        if let Some(line) = source_text::input_range(s.input_range, s.input_range_from.as_deref()) {
+            let _ = writeln!(o, "          {line}");
         }
-        if let Some(units) = &s.units {
-            let text: Vec<String> = units
-                .iter()
-                .filter(|(key, _)| *key != "time" && *key != "throttle")
-                .map(|(key, u)| format!("{key} from {} in {} (x{})", u.column, u.unit, u.factor))
-                .collect();
-            if !text.is_empty() {
-                let _ = writeln!(o, "units     {}", text.join("; "));
-            }
+        if let Some(line) = s.units.as_ref().and_then(source_text::units) {
+            let _ = writeln!(o, "units     {line}");
         }
         for u in s.csv.iter().flat_map(|c| &c.unread) {
             let _ = writeln!(o, "left out  {}: {}", u.column, u.reason);

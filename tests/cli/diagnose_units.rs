@@ -1,0 +1,68 @@
+//! `diagnose --json` on a stand export in its own units: the findings are in canonical units
+//! (newtons for a thrust logged in gram-force), and `source` says which column was read in
+//! which unit with what factor, and the command's scale, with `identify`'s names (`units`,
+//! `input_range`, `input_range_from`), so that a reader can convert a finding back to the
+//! file's units.
+
+use propid_sim::plant::{Plant, PlantConfig};
+
+use super::support::propid;
+
+const DT_S: f64 = 0.005;
+const LEVELS: [f64; 5] = [0.3, 0.45, 0.6, 0.75, 0.5];
+/// gram-force in newtons.
+const GF: f64 = 0.00980665;
+
+#[test]
+fn a_sinusoid_in_a_gram_force_export_is_published_in_newtons_with_the_columns_units() {
+    let cfg = PlantConfig {
+        noise_rms_n: 0.01,
+        ..PlantConfig::default()
+    };
+    let mut plant = Plant::new(&cfg, DT_S, 11).unwrap();
+    plant.settle(LEVELS[0]);
+    let per = (1.5 / DT_S) as usize;
+    let (freq_hz, amplitude_gf) = (7.3, 6.0);
+    let mut s = String::from("Time (s),ESC signal (µs),Thrust (gf)\n");
+    for (i, &u) in LEVELS.iter().enumerate() {
+        for k in 0..per {
+            let t = (i * per + k) as f64 * DT_S;
+            let thrust_gf = plant.step(u).thrust_n / GF
+                + amplitude_gf * (std::f64::consts::TAU * freq_hz * t).sin();
+            s.push_str(&format!(
+                "{t:.3},{:.0},{thrust_gf:.2}\n",
+                1000.0 + 1000.0 * u
+            ));
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("export.csv");
+    std::fs::write(&path, s).unwrap();
+    let (code, out, err) = propid(&["diagnose", "--json", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let src = &v["source"];
+    assert_eq!(src["format"], "csv");
+    assert_eq!(src["input"], "ESC signal (µs)");
+    assert_eq!(src["output"], "Thrust (gf)");
+    assert_eq!(src["units"]["thrust"]["unit"], "gf");
+    assert_eq!(src["units"]["thrust"]["factor"].as_f64(), Some(GF));
+    assert_eq!(src["input_range"], serde_json::json!([1000.0, 2000.0]));
+    assert_eq!(src["input_range_from"], "header: µs");
+    assert!((src["rate_hz"].as_f64().unwrap() - 1.0 / DT_S).abs() < 1e-6);
+    assert_eq!(src["samples"].as_u64(), Some((LEVELS.len() * per) as u64));
+    let periodic = v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["effect"] == "periodic_disturbance")
+        .unwrap_or_else(|| panic!("no sinusoid named: {}", v["findings"]));
+    let f = periodic["freq_hz"].as_f64().unwrap();
+    let a = periodic["amplitude"].as_f64().unwrap();
+    assert!((f / freq_hz - 1.0).abs() < 0.01, "{f} Hz");
+    assert!(
+        (a / (amplitude_gf * GF) - 1.0).abs() < 0.15,
+        "{a} N, {} N hidden ({amplitude_gf} gf)",
+        amplitude_gf * GF
+    );
+}
