@@ -6,14 +6,12 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use std::collections::BTreeMap;
-
+use super::columns_read::ColumnsRead;
 use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
-use super::{source_text, CliError, UsageError};
+use super::{CliError, UsageError};
 use crate::diagnose::noise::FloorSource;
 use crate::diagnose::verdict::VerdictKind;
 use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
-use crate::ingest::csv_file::ColumnUnit;
 use propid_wire::record::names;
 
 /// Arguments of `propid diagnose`.
@@ -91,15 +89,9 @@ pub struct FileSource {
     pub input: String,
     /// The output column as named in the file.
     pub output: String,
-    /// CSV files: per channel, the column, its unit and the factor to canonical units.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub units: Option<BTreeMap<String, ColumnUnit>>,
-    /// CSV files: the raw command values taken as throttle 0 and 1.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub input_range: Option<[f64; 2]>,
-    /// Where `input_range` came from (as `identify`'s).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub input_range_from: Option<String>,
+    /// CSV files: the columns' units and factors and the command's scale.
+    #[serde(flatten)]
+    pub read: ColumnsRead,
     /// Sample rate used, Hz.
     pub rate_hz: f64,
 }
@@ -124,9 +116,7 @@ impl FileSource {
                     .first()
                     .cloned()
                     .unwrap_or_else(|| output.into()),
-                units: Some(src.units.clone()),
-                input_range: src.input_range.as_ref().map(|r| [r.raw_min, r.raw_max]),
-                input_range_from: src.input_range.as_ref().map(|r| r.from.clone()),
+                read: ColumnsRead::of(Some(src)),
                 rate_hz: src.rate_hz,
             },
         }
@@ -215,12 +205,10 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         s.u.len(),
         s.dt_s
     );
-    if let Some(line) =
-        source_text::input_range(s.file.input_range, s.file.input_range_from.as_deref())
-    {
+    if let Some(line) = s.file.read.input_range_line() {
         let _ = writeln!(t, "input {}: {line}", s.file.input);
     }
-    if let Some(line) = s.file.units.as_ref().and_then(source_text::units) {
+    if let Some(line) = s.file.read.units_line() {
         let _ = writeln!(t, "units {line}");
     }
     if d.source.outliers > 0 {

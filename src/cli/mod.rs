@@ -2,6 +2,7 @@
 //! function; errors from every layer arrive as a [`CliError`] holding the layer's typed error,
 //! which `main` turns into a message on stderr and an exit code ([`CliError::exit_code`]).
 
+pub mod columns_read;
 pub mod demo;
 pub mod diagnose;
 pub mod identify;
@@ -9,7 +10,6 @@ pub mod load;
 pub mod replay;
 pub mod run;
 pub mod sim;
-pub mod source_text;
 pub mod stdout;
 pub mod walkthrough;
 

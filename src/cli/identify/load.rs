@@ -1,13 +1,12 @@
 //! FILE → input, outputs and a description of where they came from.
 
-use std::collections::BTreeMap;
-
 use serde::Serialize;
 
 use super::Args;
+use crate::cli::columns_read::ColumnsRead;
 use crate::cli::load::{self as shared, steps_from_response, NoSteps, Origin, Request};
 use crate::cli::CliError;
-use crate::ingest::csv_file::{ColumnUnit, CsvSource};
+use crate::ingest::csv_file::CsvSource;
 use crate::ingest::steps::FoundStep;
 use crate::ingest::IngestStats;
 use propid_numerics::outliers::{find_outliers, isolated_outliers_of_readings, OutlierScratch};
@@ -63,17 +62,10 @@ pub struct Source {
     pub input: String,
     /// The output columns.
     pub outputs: Vec<String>,
-    /// CSV files: per channel, the column, its unit and the factor to canonical units (the
-    /// command's: to throttle 0..1), by key (`throttle`, `thrust`, `torque`, `rpm`, ...).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub units: Option<BTreeMap<String, ColumnUnit>>,
-    /// CSV files: the raw command values taken as throttle 0 and 1.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub input_range: Option<[f64; 2]>,
-    /// Where `input_range` came from: `"header: µs"`, `"values: 0..1"`,
-    /// `"values: 0..2047 (DShot/raw ESC)"`, `"--esc-us"`, `"--input-range"`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub input_range_from: Option<String>,
+    /// CSV files: the columns' units and factors and the command's scale (`units`,
+    /// `input_range`, `input_range_from`).
+    #[serde(flatten)]
+    pub read: ColumnsRead,
     /// Sample rate used, Hz.
     pub rate_hz: f64,
     /// Samples in the record.
@@ -211,8 +203,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         ),
         Origin::Csv(src) => ("csv", src.outputs.clone(), src.rate_hz, None, Some(*src)),
     };
-    let units = csv.as_ref().map(|c| c.units.clone());
-    let range = csv.as_ref().and_then(|c| c.input_range.clone());
+    let read = ColumnsRead::of(csv.as_ref());
     Ok(Loaded {
         dt_s: rec.dt_s,
         input,
@@ -228,9 +219,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
             format,
             input: input_name,
             outputs: output_names,
-            units,
-            input_range: range.as_ref().map(|r| [r.raw_min, r.raw_max]),
-            input_range_from: range.map(|r| r.from),
+            read,
             rate_hz,
             samples: rec.len(),
             missing: rec.missing_count(),

@@ -5,7 +5,6 @@ use std::fmt::Write;
 use serde::Serialize;
 
 use super::load::{Loaded, Source};
-use crate::cli::source_text;
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::quality::{judge, judge_gain, judge_sample_period, Flaw};
@@ -239,10 +238,10 @@ impl<'a> Output<'a> {
         let mut o = String::new();
         let _ = writeln!(o, "file      {} ({})", s.file, s.format);
         let _ = writeln!(o, "input     {}", s.input);
-        if let Some(line) = source_text::input_range(s.input_range, s.input_range_from.as_deref()) {
+        if let Some(line) = s.read.input_range_line() {
             let _ = writeln!(o, "          {line}");
         }
-        if let Some(line) = s.units.as_ref().and_then(source_text::units) {
+        if let Some(line) = s.read.units_line() {
             let _ = writeln!(o, "units     {line}");
         }
         for u in s.csv.iter().flat_map(|c| &c.unread) {
