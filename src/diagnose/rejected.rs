@@ -53,6 +53,27 @@ impl Rejected {
             reason: format!("fits in-sample but {change}: not taken"),
         }
     }
+
+    /// A candidate that raised the held-out figure by `cv_gain_pp`, less than `by` did
+    /// (`by_gain_pp`), which was taken in its place (`search::Selection::BestFigure`); a later
+    /// step, on the model with `by`, gives the latest word on it.
+    pub fn outranked(
+        effect: &str,
+        score: f64,
+        cv_gain_pp: f64,
+        by: &str,
+        by_gain_pp: f64,
+    ) -> Rejected {
+        Rejected {
+            effect: effect.to_string(),
+            score,
+            cv_gain_pp: Some(cv_gain_pp),
+            reason: format!(
+                "fits in-sample and raises the held-out fit by {cv_gain_pp:.2} pp, but {by} \
+                 raised it more ({by_gain_pp:.2} pp) and was taken in its place: not taken"
+            ),
+        }
+    }
 }
 
 /// The latest word on each candidate (module doc).
@@ -107,6 +128,13 @@ mod tests {
         assert_eq!(r[0].effect, "supply_sag");
         let diverged = Rejected::held_out("saturation", 63.0, f64::NEG_INFINITY);
         assert_eq!(diverged.cv_gain_pp, None);
+        let second = Rejected::outranked("asymmetric_dynamics", 364.0, 0.32, "dead_time", 0.8);
+        assert_eq!(second.cv_gain_pp, Some(0.32));
+        assert_eq!(
+            second.reason,
+            "fits in-sample and raises the held-out fit by 0.32 pp, but dead_time raised it \
+             more (0.80 pp) and was taken in its place: not taken"
+        );
         assert!(diverged.reason.contains("diverges"), "{}", diverged.reason);
         l.forget("supply_sag");
         assert_eq!(l.rejected(&[]).len(), 1);

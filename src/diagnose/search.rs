@@ -312,13 +312,25 @@ fn forward(
         tried.push((e.name(), s.mean));
         (s.mean, s)
     });
-    let taken_name = taken.as_ref().map(|(_, (e, _), _)| e.name());
-    for &(name, figure) in tried.iter().filter(|t| Some(t.0) != taken_name) {
+    let taken_gain = taken
+        .as_ref()
+        .map(|(_, (e, _), s)| (e.name(), s.mean - cur_figure));
+    for &(name, figure) in tried
+        .iter()
+        .filter(|t| Some(t.0) != taken_gain.map(|t| t.0))
+    {
         let score = scores
             .iter()
             .find(|s| s.0 == name)
             .map_or(f64::NAN, |s| s.1);
-        ledger.note(Rejected::held_out(name, score, figure - cur_figure));
+        let gain = figure - cur_figure;
+        ledger.note(match taken_gain {
+            // Raised the figure, less than the one taken (`Selection::BestFigure`).
+            Some((by, by_gain)) if gain > MIN_CV_GAIN_PP => {
+                Rejected::outranked(name, score, gain, by, by_gain)
+            }
+            _ => Rejected::held_out(name, score, gain),
+        });
     }
     if let Some((score, (e, f), f_cv)) = taken {
         return Some(Step {
