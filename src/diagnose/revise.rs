@@ -1,9 +1,11 @@
 //! Undoing a greedy choice of the forward search ([`super::search`]): the revision step run
 //! each time the forward additions stop.
 //!
-//! Forward selection takes the strongest candidate first, and a flexible effect can mimic a
-//! simpler one: a dead time of 2 samples in a lightly damped log is fitted first, and better,
-//! by an `extra_mode` (3 parameters: a series mode whose phase lag imitates the delay); once
+//! Forward selection takes one candidate at a time (the strongest by score with one hold-out
+//! tail, the best held-out under blocked cross-validation: [`super::search::Selection`]), and
+//! a flexible effect can mimic a simpler one: a dead time of 2 samples in a lightly damped log
+//! is fitted first, and better, by an `extra_mode` (3 parameters: a series mode whose phase lag
+//! imitates the delay); once
 //! the mode is in, the delay adds nothing (its score is ≈ 0) and is never named. The greedy path
 //! cannot leave that corner. The revision tries, for every effect `X` the search took (effects
 //! read off the data stay), the model `R` without it (every other parameter refitted jointly)
