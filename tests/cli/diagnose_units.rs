@@ -2,7 +2,9 @@
 //! (newtons for a thrust logged in gram-force), and `source` says which column was read in
 //! which unit with what factor, and the command's scale, with `identify`'s names (`units`,
 //! `input_range`, `input_range_from`), so that a reader can convert a finding back to the
-//! file's units.
+//! file's units. And an effect hidden in the export itself, as a user would hide it (the
+//! thrust column shifted by whole rows, its empty cells with it), is found on top of what the
+//! clean export shows.
 
 use propid_sim::plant::{Plant, PlantConfig};
 
@@ -12,6 +14,66 @@ const DT_S: f64 = 0.005;
 const LEVELS: [f64; 5] = [0.3, 0.45, 0.6, 0.75, 0.5];
 /// gram-force in newtons.
 const GF: f64 = 0.00980665;
+
+/// A Tyto-style export of a simulated staircase: `Time (s)`, `ESC signal (µs)`, `Thrust (gf)`
+/// with the thrust on every third row only (empty cells between the load cell's readings),
+/// its readings moved `late` rows later.
+fn sparse_export(late: usize) -> String {
+    let cfg = PlantConfig {
+        noise_rms_n: 0.01,
+        ..PlantConfig::default()
+    };
+    let mut plant = Plant::new(&cfg, DT_S, 5).unwrap();
+    plant.settle(LEVELS[0]);
+    let per = (1.5 / DT_S) as usize;
+    let mut rows = Vec::new();
+    for (i, &u) in LEVELS.iter().enumerate() {
+        for k in 0..per {
+            let thrust_gf = plant.step(u).thrust_n / GF;
+            let n = i * per + k;
+            let cell = if n % 3 == 0 {
+                format!("{thrust_gf:.2}")
+            } else {
+                String::new()
+            };
+            rows.push((n as f64 * DT_S, 1000.0 + 1000.0 * u, cell));
+        }
+    }
+    let mut s = String::from("Time (s),ESC signal (µs),Thrust (gf)\n");
+    for k in 0..rows.len() {
+        let cell = &rows[k.saturating_sub(late)].2;
+        s.push_str(&format!("{:.3},{:.0},{cell}\n", rows[k].0, rows[k].1));
+    }
+    s
+}
+
+/// `dead_time`'s `delay_samples` in `diagnose --json` of `text`, if named.
+fn delay_of(text: &str) -> Option<f64> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("export.csv");
+    std::fs::write(&path, text).unwrap();
+    let (code, out, err) = propid(&["diagnose", "--json", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    v["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["effect"] == "dead_time")
+        .and_then(|f| f["delay_samples"].as_f64())
+}
+
+#[test]
+fn a_delay_hidden_in_a_sparse_export_is_found_on_top_of_its_own() {
+    let own = delay_of(&sparse_export(0)).unwrap_or(0.0);
+    for late in [3, 6] {
+        let got = delay_of(&sparse_export(late));
+        assert!(
+            got.is_some_and(|d| (d - own - late as f64).abs() <= 1.0),
+            "{late} rows hidden on top of {own}: {got:?}"
+        );
+    }
+}
 
 #[test]
 fn a_sinusoid_in_a_gram_force_export_is_published_in_newtons_with_the_columns_units() {
