@@ -15,10 +15,21 @@ const LEVELS: [f64; 5] = [0.3, 0.45, 0.6, 0.75, 0.5];
 /// gram-force in newtons.
 const GF: f64 = 0.00980665;
 
-/// A Tyto-style export of a simulated staircase: `Time (s)`, `ESC signal (µs)`, `Thrust (gf)`
-/// with the thrust on every third row only (empty cells between the load cell's readings),
-/// its readings moved `late` rows later.
-fn sparse_export(late: usize) -> String {
+/// What [`export`] writes beside the simulated staircase.
+#[derive(Clone, Copy, Default)]
+struct Hidden {
+    /// The thrust on every `every`-th row only (empty cells between the load cell's
+    /// readings); 0 or 1: every row.
+    every: usize,
+    /// Its cells moved this many rows later.
+    late: usize,
+    /// A sinusoid added to the thrust: frequency, Hz, and amplitude, gf.
+    sine: Option<(f64, f64)>,
+}
+
+/// A Tyto-style export of a simulated staircase (`Time (s)`, `ESC signal (µs)`, `Thrust (gf)`)
+/// with `hidden` in it.
+fn export(hidden: Hidden) -> String {
     let cfg = PlantConfig {
         noise_rms_n: 0.01,
         ..PlantConfig::default()
@@ -29,33 +40,41 @@ fn sparse_export(late: usize) -> String {
     let mut rows = Vec::new();
     for (i, &u) in LEVELS.iter().enumerate() {
         for k in 0..per {
-            let thrust_gf = plant.step(u).thrust_n / GF;
             let n = i * per + k;
-            let cell = if n % 3 == 0 {
+            let t = n as f64 * DT_S;
+            let sine = hidden
+                .sine
+                .map_or(0.0, |(f, a)| a * (std::f64::consts::TAU * f * t).sin());
+            let thrust_gf = plant.step(u).thrust_n / GF + sine;
+            let cell = if n % hidden.every.max(1) == 0 {
                 format!("{thrust_gf:.2}")
             } else {
                 String::new()
             };
-            rows.push((n as f64 * DT_S, 1000.0 + 1000.0 * u, cell));
+            rows.push((t, 1000.0 + 1000.0 * u, cell));
         }
     }
     let mut s = String::from("Time (s),ESC signal (µs),Thrust (gf)\n");
     for k in 0..rows.len() {
-        let cell = &rows[k.saturating_sub(late)].2;
+        let cell = &rows[k.saturating_sub(hidden.late)].2;
         s.push_str(&format!("{:.3},{:.0},{cell}\n", rows[k].0, rows[k].1));
     }
     s
 }
 
-/// `dead_time`'s `delay_samples` in `diagnose --json` of `text`, if named.
-fn delay_of(text: &str) -> Option<f64> {
+/// `diagnose --json` of the export `text`.
+fn diagnose_json(text: &str) -> serde_json::Value {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("export.csv");
     std::fs::write(&path, text).unwrap();
     let (code, out, err) = propid(&["diagnose", "--json", path.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    v["findings"]
+    serde_json::from_str(&out).unwrap()
+}
+
+/// `dead_time`'s `delay_samples` in `diagnose --json` of `text`, if named.
+fn delay_of(text: &str) -> Option<f64> {
+    diagnose_json(text)["findings"]
         .as_array()
         .unwrap()
         .iter()
@@ -65,9 +84,13 @@ fn delay_of(text: &str) -> Option<f64> {
 
 #[test]
 fn a_delay_hidden_in_a_sparse_export_is_found_on_top_of_its_own() {
-    let own = delay_of(&sparse_export(0)).unwrap_or(0.0);
+    let sparse = Hidden {
+        every: 3,
+        ..Hidden::default()
+    };
+    let own = delay_of(&export(sparse)).unwrap_or(0.0);
     for late in [3, 6] {
-        let got = delay_of(&sparse_export(late));
+        let got = delay_of(&export(Hidden { late, ..sparse }));
         assert!(
             got.is_some_and(|d| (d - own - late as f64).abs() <= 1.0),
             "{late} rows hidden on top of {own}: {got:?}"
@@ -77,32 +100,12 @@ fn a_delay_hidden_in_a_sparse_export_is_found_on_top_of_its_own() {
 
 #[test]
 fn a_sinusoid_in_a_gram_force_export_is_published_in_newtons_with_the_columns_units() {
-    let cfg = PlantConfig {
-        noise_rms_n: 0.01,
-        ..PlantConfig::default()
-    };
-    let mut plant = Plant::new(&cfg, DT_S, 11).unwrap();
-    plant.settle(LEVELS[0]);
-    let per = (1.5 / DT_S) as usize;
     let (freq_hz, amplitude_gf) = (7.3, 6.0);
-    let mut s = String::from("Time (s),ESC signal (µs),Thrust (gf)\n");
-    for (i, &u) in LEVELS.iter().enumerate() {
-        for k in 0..per {
-            let t = (i * per + k) as f64 * DT_S;
-            let thrust_gf = plant.step(u).thrust_n / GF
-                + amplitude_gf * (std::f64::consts::TAU * freq_hz * t).sin();
-            s.push_str(&format!(
-                "{t:.3},{:.0},{thrust_gf:.2}\n",
-                1000.0 + 1000.0 * u
-            ));
-        }
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("export.csv");
-    std::fs::write(&path, s).unwrap();
-    let (code, out, err) = propid(&["diagnose", "--json", path.to_str().unwrap()]);
-    assert_eq!(code, 0, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let s = export(Hidden {
+        sine: Some((freq_hz, amplitude_gf)),
+        ..Hidden::default()
+    });
+    let v = diagnose_json(&s);
     let src = &v["source"];
     assert_eq!(src["format"], "csv");
     assert_eq!(src["input"], "ESC signal (µs)");
@@ -112,7 +115,8 @@ fn a_sinusoid_in_a_gram_force_export_is_published_in_newtons_with_the_columns_un
     assert_eq!(src["input_range"], serde_json::json!([1000.0, 2000.0]));
     assert_eq!(src["input_range_from"], "header: µs");
     assert!((src["rate_hz"].as_f64().unwrap() - 1.0 / DT_S).abs() < 1e-6);
-    assert_eq!(src["samples"].as_u64(), Some((LEVELS.len() * per) as u64));
+    let rows = s.lines().count() - 1;
+    assert_eq!(src["samples"].as_u64(), Some(rows as u64));
     let periodic = v["findings"]
         .as_array()
         .unwrap()
