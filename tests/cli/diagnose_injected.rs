@@ -5,8 +5,8 @@
 //! runs many (README's table), including the dead time and the supply sag, which these two
 //! logs do not yet give back (see docs/injection.md). The shared motor-stand logs
 //! (`../shared/data`, not copied into the repository) are used when present: a delay hidden in
-//! the vanderploeg staircase and a supply sag hidden in the vanderploeg and dantonio logs are
-//! tested here.
+//! the vanderploeg and bitcraze cf21 staircases (each on top of the log's own) and a supply sag
+//! hidden in the vanderploeg and dantonio logs are tested here.
 
 use std::path::{Path, PathBuf};
 
