@@ -149,7 +149,11 @@ pub fn stand_figures(
                 power: fit_power_law(&lv),
                 expo: fit_expo(&lv),
                 falls_with_command: falls_with_command(&lv),
-                repeats: repeats(&lv),
+                // Held commands only (a ramp's windows: `repeats`' module doc).
+                repeats: match over {
+                    Over::Holds(_) => repeats(&lv, rules),
+                    Over::Windows(_) => Vec::new(),
+                },
                 levels: lv,
                 k_t: None,
             };

@@ -6,8 +6,10 @@
 //! motor or a battery that heats, a propeller that loosened — the static map holds only to
 //! that difference, whatever its fitted uncertainty says.
 //!
-//! For every command value (throttle equal to `1e-9`) held more than once, in the order of the
-//! levels (the record's): the means of its visits and `shift = last − first`.
+//! For every command held more than once (two levels are the same command by the
+//! segmentation's own rule, [`SegmentRules::same`]), in the order of the levels (the record's):
+//! the means of its visits and `shift = last − first`. Only held levels count: a ramp's windows
+//! met again on the way down differ by the response's lag, not by the stand.
 //! [`not_repeatable`] names the largest shift when it is beyond both the noise ([`NOISE_FACTOR`]
 //! times the larger standard deviation of the two visits' samples) and [`MIN_SHARE`] of the map's full
 //! scale (the largest `|mean|`).
@@ -15,6 +17,7 @@
 use serde::Serialize;
 
 use super::{finite, Level};
+use crate::segment::SegmentRules;
 
 /// Smallest shift, as a share of the map's full scale, called not repeatable.
 pub const MIN_SHARE: f64 = 0.02;
@@ -36,9 +39,10 @@ pub struct Repeat {
     pub noise: f64,
 }
 
-/// The commands of `levels` held more than once (see the module doc), in order of first visit.
-pub fn repeats(levels: &[Level]) -> Vec<Repeat> {
-    let same = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a.abs().max(1.0);
+/// The commands of `levels` (the steady levels of holds) held more than once, the same
+/// command by `rules` (see the module doc), in order of first visit.
+pub fn repeats(levels: &[Level], rules: &SegmentRules) -> Vec<Repeat> {
+    let same = |a: f64, b: f64| rules.same(a, b);
     let lv: Vec<&Level> = finite(levels).collect();
     let mut out: Vec<Repeat> = Vec::new();
     for (i, l) in lv.iter().enumerate() {
@@ -93,7 +97,7 @@ mod tests {
         let map = |u: f64| 10.0 * u * u;
         let mut levels: Vec<Level> = up.iter().map(|&u| lv(u, map(u), 0.02)).collect();
         levels.extend(up.iter().rev().skip(1).map(|&u| lv(u, map(u) - 0.3, 0.02)));
-        let r = repeats(&levels);
+        let r = repeats(&levels, &SegmentRules::DEFAULT);
         let at: Vec<f64> = r.iter().map(|r| r.throttle).collect();
         assert_eq!(at, [0.0, 0.2, 0.4]);
         assert!(r
@@ -104,20 +108,20 @@ mod tests {
         assert!((share - 0.3 / 3.6).abs() < 1e-12, "{share}");
         // Within the noise, or under 2 % of full scale: repeatable.
         let noisy: Vec<Level> = levels.iter().map(|l| lv(l.throttle, l.mean, 0.2)).collect();
-        assert!(not_repeatable(&noisy, &repeats(&noisy)).is_none());
+        assert!(not_repeatable(&noisy, &repeats(&noisy, &SegmentRules::DEFAULT)).is_none());
         let tiny: Vec<Level> = up
             .iter()
             .chain(up.iter().rev())
             .enumerate()
             .map(|(i, &u)| lv(u, 100.0 * map(u) + 0.01 * i as f64, 0.0))
             .collect();
-        assert!(not_repeatable(&tiny, &repeats(&tiny)).is_none());
+        assert!(not_repeatable(&tiny, &repeats(&tiny, &SegmentRules::DEFAULT)).is_none());
     }
 
     #[test]
     fn a_record_that_never_returns_has_no_repeats() {
         let levels = [lv(0.2, 1.0, 0.0), lv(0.4, 2.0, 0.0), lv(0.6, 3.0, 0.0)];
-        assert!(repeats(&levels).is_empty());
+        assert!(repeats(&levels, &SegmentRules::DEFAULT).is_empty());
         assert!(not_repeatable(&levels, &[]).is_none());
     }
 }
