@@ -78,7 +78,7 @@ fn a_zero_that_moved_between_visits_is_warned_and_a_stand_that_repeats_is_not() 
     let (_, text, _) = propid(&["identify", up_and_down(dir.path(), 0.3).to_str().unwrap()]);
     assert!(
         text.contains("repeats   4 command(s) held again")
-            && text.contains("beyond 3 × the visits' spread or 2 % of full scale")
+            && text.contains("beyond 3 × the visits' spread and 2 % of full scale")
             && text.contains("levels_not_repeatable"),
         "{text}"
     );

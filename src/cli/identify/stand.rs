@@ -151,12 +151,14 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
             map.repeats.iter().map(|r| r.shift).reduce(f64::min),
             map.repeats.iter().map(|r| r.shift).reduce(f64::max),
         ) {
+            // Not repeatable only beyond both bounds; within either, repeatable.
             let within = match not_repeatable(&map.levels, &map.repeats) {
                 Some(_) => "beyond",
                 None => "within",
             };
+            let joined = if within == "beyond" { "and" } else { "or" };
             let within = format!(
-                "{within} {NOISE_FACTOR} × the visits' spread or {} % of full scale",
+                "{within} {NOISE_FACTOR} × the visits' spread {joined} {} % of full scale",
                 100.0 * MIN_SHARE
             );
             let _ = writeln!(
