@@ -25,6 +25,7 @@ mod identify_slow_logs;
 mod identify_square_hankel;
 mod identify_stabilization;
 mod identify_units;
+mod identify_zero_offset;
 mod sim_cli;
 mod support;
 mod walkthrough_cli;

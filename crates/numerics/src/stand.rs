@@ -18,8 +18,8 @@ use serde::Serialize;
 
 use crate::segment::{self, Command, SegmentRules};
 use crate::static_map::{
-    falls_with_command, fit_expo, fit_power_law, fit_thrust_coefficient, levels, repeats,
-    window_levels, Expo, Level, PowerLaw, Repeat, ThrustCoefficient,
+    falls_with_command, fit_expo, fit_power_law, fit_thrust_coefficient, levels, repeats, shifted,
+    window_levels, zero_offset, Expo, Level, PowerLaw, Repeat, ThrustCoefficient, ZeroOffset,
 };
 use crate::step_response::{step_figures, StepFigures};
 
@@ -41,11 +41,18 @@ pub struct StaticMap {
     pub unit: &'static str,
     /// Steady level per held command.
     pub levels: Vec<Level>,
-    /// `T = k·max(u − u0, 0)^exponent` (`null` with fewer than 3 levels).
+    /// `T = k·max(u − u0, 0)^exponent` (`null` with fewer than 3 levels), `T` the output
+    /// above `zero_offset` when there is one.
     pub power: Option<PowerLaw>,
-    /// `T/t_max = (1 − a)·x + a·x²` (`null` with fewer than 2 levels).
+    /// `T/t_max = (1 − a)·x + a·x²` (`null` with fewer than 2 levels), `T` as for `power`.
     pub expo: Option<Expo>,
-    /// Thrust only, when the record has rotor speed too: `T = k_t·ω²`, ω in rad/s.
+    /// The output's reading at zero command when the levels show one
+    /// ([`crate::static_map::offset`]: a load cell not tared, an ESC's idle current): `power`,
+    /// `expo` and `k_t` describe the output above it. Omitted when none is taken.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub zero_offset: Option<ZeroOffset>,
+    /// Thrust only, when the record has rotor speed too: `T = k_t·ω²`, ω in rad/s (`T`
+    /// above the thrust's `zero_offset`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub k_t: Option<ThrustCoefficient>,
     /// The output falls as the command rises ([`falls_with_command`]: a load cell mounted
@@ -144,10 +151,13 @@ pub fn stand_figures(
         .iter()
         .map(|o| {
             let lv = over.levels(o.y);
+            let zero = zero_offset(&lv);
+            let above = shifted(&lv, zero.map_or(0.0, |z| z.value));
             let map = StaticMap {
                 unit: o.unit,
-                power: fit_power_law(&lv),
-                expo: fit_expo(&lv),
+                power: fit_power_law(&above),
+                expo: fit_expo(&above),
+                zero_offset: zero,
                 falls_with_command: falls_with_command(&lv),
                 // Held commands only (a ramp's windows: `repeats`' module doc).
                 repeats: match over {
@@ -171,7 +181,8 @@ pub fn stand_figures(
             })
             .collect();
         if rpm.levels.len() == thrust.levels.len() {
-            thrust.k_t = fit_thrust_coefficient(&thrust.levels, &omega);
+            let above = shifted(&thrust.levels, thrust.zero_offset.map_or(0.0, |z| z.value));
+            thrust.k_t = fit_thrust_coefficient(&above, &omega);
         }
     }
     StandFigures {

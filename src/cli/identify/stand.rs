@@ -32,7 +32,8 @@ fn pm(v: f64, sd: Option<f64>) -> String {
 
 /// Two table cells (the real-data tables): the static map of thrust (else of the identified
 /// output, [`super::load::OUTPUT_KEY`])
-/// — number of levels, power law `k`, `u0`, exponent `e`, `expo a`, unit — and the steps —
+/// — number of levels, the zero-command reading taken out (`zero`), power law `k`, `u0`,
+/// exponent `e`, `expo a`, unit — and the steps —
 /// how many, the median dead time (`< dt` when below a sample) and time constant (s) of those
 /// that resolve them; `–` for none.
 pub fn brief(f: &StandFigures) -> (String, String) {
@@ -45,6 +46,9 @@ pub fn brief(f: &StandFigures) -> (String, String) {
             || "–".to_string(),
             |m| {
                 let mut t = format!("{} levels", m.levels.len());
+                if let Some(z) = &m.zero_offset {
+                    let _ = write!(t, "; zero {}", pm(z.value, None));
+                }
                 if let Some(p) = &m.power {
                     let _ = write!(
                         t,
@@ -177,6 +181,16 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 "  falls     the {key} falls as the command rises (a load cell mounted reversed, \
                  a pusher, a motor turning the other way): the curves fit its magnitude, k and \
                  t_max negative"
+            );
+        }
+        if let Some(z) = &map.zero_offset {
+            let _ = writeln!(
+                o,
+                "  zero      {} {} at zero command ({} level(s)): taken out, the curves below \
+                 fit the {key} above it",
+                pm(z.value, Some(z.sd)),
+                map.unit,
+                z.levels
             );
         }
         match &map.power {

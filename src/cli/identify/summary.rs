@@ -34,14 +34,16 @@ pub struct Output<'a> {
     /// Implausible results that do not reject the model (`nonpositive_gain`: the output falls
     /// as the command rises, [`propid_numerics::quality::nonpositive_gain`];
     /// `expo_outside_blend`: the thrust map's expo outside `0..1`; `levels_not_repeatable`: a
-    /// command held twice gave two thrusts apart beyond the noise); empty when none.
+    /// command held twice gave two thrusts apart beyond the noise; `thrust_zero_offset`: the
+    /// thrust reads beyond zero at zero command, taken out of its curves); empty when none.
     pub warnings: Vec<IdentifyWarning>,
 }
 
 /// One entry of `"warnings"`: the shape of `diagnose`'s (`kind`, `message`, `value`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct IdentifyWarning {
-    /// What is implausible (`nonpositive_gain`, `expo_outside_blend`, `levels_not_repeatable`).
+    /// What is implausible (`nonpositive_gain`, `expo_outside_blend`, `levels_not_repeatable`,
+    /// `thrust_zero_offset`).
     pub kind: &'static str,
     /// In words.
     pub message: String,
@@ -59,8 +61,6 @@ fn warnings_of(
     let gain = commanded
         .then(|| propid_numerics::quality::nonpositive_gain(model))
         .flatten();
-    let expo = thrust.and_then(expo_outside_blend);
-    let repeat = thrust.and_then(levels_not_repeatable);
     gain.map(|g| IdentifyWarning {
         kind: "nonpositive_gain",
         message: format!(
@@ -71,9 +71,42 @@ fn warnings_of(
         value: g,
     })
     .into_iter()
-    .chain(expo)
-    .chain(repeat)
+    .chain(thrust.into_iter().flat_map(thrust_map_warnings))
     .collect()
+}
+
+/// What the thrust's static map warns of: an expo outside the blend, levels that do not
+/// repeat, a reading at zero command taken out of the curves.
+fn thrust_map_warnings(map: &propid_numerics::stand::StaticMap) -> Vec<IdentifyWarning> {
+    expo_outside_blend(map)
+        .into_iter()
+        .chain(levels_not_repeatable(map))
+        .chain(zero_offset(map))
+        .collect()
+}
+
+/// The thrust's reading at zero command when the map took one out
+/// ([`propid_numerics::static_map::offset`]): the levels as printed carry it, the curves do not.
+fn zero_offset(map: &propid_numerics::stand::StaticMap) -> Option<IdentifyWarning> {
+    let z = map.zero_offset?;
+    let full = map
+        .levels
+        .iter()
+        .map(|l| (l.mean - z.value).abs())
+        .fold(0.0, f64::max);
+    Some(IdentifyWarning {
+        kind: "thrust_zero_offset",
+        message: format!(
+            "the thrust reads {:+.4} ± {:.4} {} at zero command ({:.1} % of full thrust): the \
+             load cell was not tared, or its zero moved; the power law and the expo describe \
+             the thrust above that reading (the levels are printed as read)",
+            z.value,
+            z.sd,
+            map.unit,
+            100.0 * z.value.abs() / full.max(f64::MIN_POSITIVE)
+        ),
+        value: z.value,
+    })
 }
 
 /// The thrust map's largest shift between visits of one command when it is beyond the noise
@@ -445,7 +478,8 @@ pub struct Partial<'a> {
     pub steps: &'a [propid_numerics::step_response::StepFigures],
     /// Steady levels and fitted curves per output.
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
-    /// Implausible figures (`expo_outside_blend`, `levels_not_repeatable`); empty when none.
+    /// Implausible figures (`expo_outside_blend`, `levels_not_repeatable`,
+    /// `thrust_zero_offset`); empty when none.
     pub warnings: Vec<IdentifyWarning>,
     /// All the figures (for the human tables).
     #[serde(skip)]
@@ -465,11 +499,7 @@ impl<'a> Partial<'a> {
                 .static_map
                 .get("thrust")
                 .into_iter()
-                .flat_map(|m| {
-                    expo_outside_blend(m)
-                        .into_iter()
-                        .chain(levels_not_repeatable(m))
-                })
+                .flat_map(thrust_map_warnings)
                 .collect(),
             stand,
         }
@@ -548,6 +578,7 @@ mod tests {
             unit: "N",
             power: fit_power_law(&levels),
             expo: fit_expo(&levels),
+            zero_offset: None,
             k_t: None,
             falls_with_command: false,
             repeats: Vec::new(),

@@ -20,10 +20,14 @@
 //!   states show, against which [`crate::quality`] judges a linear model's DC gain.
 //! - **Repeats**: the commands held more than once and how far their later visits moved
 //!   ([`repeats`]): whether the stand repeats itself.
+//! - **Zero offset**: the output's reading at zero command when the levels show one (a load
+//!   cell not tared, an ESC's idle current: [`zero_offset`]); the curves then describe the
+//!   output above it.
 //!
 //! Fewer levels than parameters give no fit (`None`); exactly as many give the curve with no
 //! uncertainty (`None` standard errors): the data cannot support a spread then.
 
+pub mod offset;
 pub mod repeats;
 pub mod slope;
 
@@ -31,6 +35,7 @@ use serde::Serialize;
 
 use crate::segment::Run;
 
+pub use offset::{shifted, zero_offset, ZeroOffset};
 pub use repeats::{not_repeatable, repeats, Repeat, MIN_SHARE, NOISE_FACTOR};
 pub use slope::{level_slope, LevelSlope};
 
