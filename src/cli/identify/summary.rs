@@ -86,7 +86,10 @@ fn thrust_map_warnings(map: &propid_numerics::stand::StaticMap) -> Vec<IdentifyW
 }
 
 /// The thrust's reading at zero command when the map took one out
-/// ([`propid_numerics::static_map::offset`]): the levels as printed carry it, the curves do not.
+/// ([`propid_numerics::static_map::offset`]) and it is at least
+/// [`propid_numerics::static_map::MIN_SHARE`] of full thrust (the share `levels_not_repeatable`
+/// calls a stand's own shift; a smaller one is in `zero_offset` and the summary, unwarned): the
+/// levels as printed carry it, the curves do not.
 fn zero_offset(map: &propid_numerics::stand::StaticMap) -> Option<IdentifyWarning> {
     let z = map.zero_offset?;
     let full = map
@@ -94,6 +97,9 @@ fn zero_offset(map: &propid_numerics::stand::StaticMap) -> Option<IdentifyWarnin
         .iter()
         .map(|l| (l.mean - z.value).abs())
         .fold(0.0, f64::max);
+    if z.value.abs() < propid_numerics::static_map::MIN_SHARE * full {
+        return None;
+    }
     Some(IdentifyWarning {
         kind: "thrust_zero_offset",
         message: format!(

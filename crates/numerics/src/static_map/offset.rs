@@ -11,7 +11,7 @@
 //! sample-weighted mean of those levels. It is taken when the map with it fits the levels
 //! significantly better than the map through zero: with `S₃` the squared error of the power
 //! law on the levels as read (3 parameters) and `S₄` that of `c` plus the power law on the
-//! levels less `c` (4), `F = (S₃ − S₄) / (S₄ / (n − 4))` above the 1 % point of Fisher's
+//! levels less `c` (4), both weighted as the power law is fitted ([`super::power_weights`]), `F = (S₃ − S₄) / (S₄ / (n − 4))` above the 1 % point of Fisher's
 //! `F(1, n − 4)` (an extra-sum-of-squares test; Bates & Watts 1988, §3.5), with at least
 //! [`MIN_LEVELS`] levels. A small reading the levels cannot tell from the map's misfit is not
 //! taken: the curves then stay fitted to the levels as read.
@@ -21,7 +21,7 @@
 
 use serde::Serialize;
 
-use super::{fit_power_law, Level, PowerLaw};
+use super::{fit_power_law, power_weights, Level, PowerLaw};
 
 /// Throttle at or below which a level is held at zero command.
 pub const AT_ZERO: f64 = 0.01;
@@ -65,11 +65,13 @@ fn f_critical_1pct(d: usize) -> Option<f64> {
     TABLE.iter().rev().find(|(n, _)| *n <= d).map(|(_, f)| *f)
 }
 
-/// Squared error of `law` (plus `offset`) on the levels.
-fn sse(levels: &[Level], law: &PowerLaw, offset: f64) -> f64 {
+/// Squared error of `law` (plus `offset`) on the levels, weighted as the power law is fitted
+/// (`w`: [`super::power_weights`] of the levels as read, the same for both maps).
+fn sse(levels: &[Level], w: &[f64], law: &PowerLaw, offset: f64) -> f64 {
     levels
         .iter()
-        .map(|l| (l.mean - offset - law.predict(l.throttle)).powi(2))
+        .zip(w)
+        .map(|(l, w)| w * (l.mean - offset - law.predict(l.throttle)).powi(2))
         .sum()
 }
 
@@ -103,11 +105,16 @@ pub fn zero_offset(levels: &[Level]) -> Option<ZeroOffset> {
         .map(|l| l.mean * l.samples.max(1) as f64)
         .sum::<f64>()
         / weight as f64;
+    let w = power_weights(&levels.iter().map(|l| l.mean).collect::<Vec<_>>());
     let through_zero = fit_power_law(&levels)?;
-    let s3 = sse(&levels, &through_zero, 0.0);
+    let s3 = sse(&levels, &w, &through_zero, 0.0);
     let above = fit_power_law(&shifted(&levels, c))?;
-    let s4 = sse(&levels, &above, c);
-    let scale: f64 = levels.iter().map(|l| l.mean * l.mean).sum();
+    let s4 = sse(&levels, &w, &above, c);
+    let scale: f64 = levels
+        .iter()
+        .zip(&w)
+        .map(|(l, w)| w * l.mean * l.mean)
+        .sum();
     let d = n - 4;
     let f = (s3 - s4) / (s4 / d as f64).max(1e-24 * scale);
     // NaN (no misfit either way) is no evidence.
@@ -179,8 +186,11 @@ mod tests {
     #[test]
     fn a_tared_cell_or_one_without_a_zero_level_keeps_the_map_through_zero() {
         assert_eq!(zero_offset(&staircase(0.0)), None);
-        // A reading of 0.1 % of full thrust is inside the levels' own misfit.
-        assert_eq!(zero_offset(&staircase(0.009)), None);
+        // 0.1 % of full thrust is 2.5 % of the lowest level, beyond the levels' own ±0.3 %
+        // misfit: taken (the warning weighs its share of full thrust, not this test).
+        assert!(zero_offset(&staircase(0.009)).is_some());
+        // Within that misfit it is not: 0.01 % of full thrust, 0.2 % of the lowest level.
+        assert_eq!(zero_offset(&staircase(0.0007)), None);
         // No level at zero command: the lowest level (0.2) is not a zero.
         let no_zero: Vec<Level> = staircase(0.294)
             .into_iter()
