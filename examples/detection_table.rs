@@ -10,6 +10,7 @@
 //! DATA_DIR defaults to `$PROPID_SHARED_DATA`, else `../shared/data`). Prints Markdown;
 //! `scripts/detection_table.sh` puts it into `docs/diagnose.md`.
 
+use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use propid::cli::diagnose::{load, Args};
@@ -236,12 +237,12 @@ fn real_data(dir: &Path) {
         eprintln!("real data skipped: {} absent", dir.display());
         return;
     }
-    println!("| dataset | file | input → output | samples, rate | validation | baseline fit | effects found | extended fit | gain | static map | steps |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| dataset | file | input → output | samples, rate | validation | baseline fit | effects found | extended fit | gain | verdict | static map | steps |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for c in REAL {
         let path: PathBuf = dir.join(c.folder).join(c.file);
         if !path.exists() {
-            println!("| {} | {} | | | | missing | | | | | |", c.folder, c.file);
+            println!("| {} | {} | | | | missing | | | | | | |", c.folder, c.file);
             continue;
         }
         let (map, steps) = stand_of(&IdentifyArgs {
@@ -294,8 +295,9 @@ fn real_data(dir: &Path) {
                     }
                     diagnose::folds::Method::Holdout => "hold-out tail".to_string(),
                 };
+                let verdict = verdict_text(&d);
                 println!(
-                    "| {} | {} | {} → {}{} | {}, {:.4} Hz | {validation} | {:.1} % | {} | {} | {} | {map} | {steps} |",
+                    "| {} | {} | {} → {}{} | {}, {:.4} Hz | {validation} | {:.1} % | {} | {} | {} | {verdict} | {map} | {steps} |",
                     c.folder,
                     c.file,
                     s.input_name,
@@ -318,13 +320,40 @@ fn real_data(dir: &Path) {
                 );
             }
             Err(e) => println!(
-                "| {} | {} | | | | not diagnosed: {} | | | | {map} | {steps} |",
+                "| {} | {} | | | | not diagnosed: {} | | | | | {map} | {steps} |",
                 c.folder,
                 c.file,
                 e.replace('|', "/")
             ),
         }
     }
+}
+
+/// The verdict cell: the kind, the final residual in noise floors, and the warnings' kinds
+/// (`diagnose`'s JSON names).
+fn verdict_text(d: &Diagnosis) -> String {
+    let mut t = serde_json::to_value(d.verdict.kind)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default();
+    if let Some(f) = d.noise_floor.as_ref().filter(|f| f.rms > 0.0) {
+        let _ = write!(t, " ({:.1} × noise)", d.residual.final_rms() / f.rms);
+    }
+    let mut kinds: Vec<String> = d
+        .warnings
+        .iter()
+        .filter_map(|w| {
+            serde_json::to_value(w.kind)
+                .ok()?
+                .as_str()
+                .map(str::to_string)
+        })
+        .collect();
+    kinds.dedup();
+    if !kinds.is_empty() {
+        let _ = write!(t, "; warns {}", kinds.join(", "));
+    }
+    t
 }
 
 /// Relative (or absolute, for delays and levels) error of the main parameter of a finding.

@@ -48,7 +48,9 @@ use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
 use propid_numerics::segment::Command;
 use propid_numerics::stabilization::StabOptions;
-use propid_numerics::stand::{stand_figures, steady_levels, OutputChannel, StandFigures};
+use propid_numerics::stand::{
+    response_step_figures, stand_figures, steady_levels, OutputChannel, StandFigures,
+};
 use propid_numerics::static_map::{level_slope, LevelSlope};
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
@@ -209,10 +211,24 @@ pub fn stand_of(args: &Args) -> Result<StandFigures, CliError> {
     Ok(stand_for(&load::load(args)?))
 }
 
-/// The step figures and static maps of a loaded file (none when its input is not a command).
+/// The step figures and static maps of a loaded file: none when its input is a column that
+/// is no command; only the steps' figures, timed from the response, when the steps were found
+/// from the response ([`response_step_figures`]).
 fn stand_for(loaded: &load::Loaded) -> StandFigures {
     if !loaded.commanded {
-        return StandFigures::default();
+        if loaded.source.steps.is_none() {
+            return StandFigures::default();
+        }
+        return StandFigures {
+            command: "response",
+            steps: response_step_figures(
+                &loaded.input,
+                loaded.dt_s,
+                &loaded.segment_rules(),
+                loaded.outputs.first().map_or(&[][..], Vec::as_slice),
+            ),
+            ..StandFigures::default()
+        };
     }
     stand_figures(
         Command::with_missing(&loaded.input, &loaded.missing),

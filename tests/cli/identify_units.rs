@@ -203,6 +203,27 @@ fn tyto_export_is_read_from_its_command_in_its_units() {
     assert!(v["source"]["steps"]
         .as_array()
         .is_some_and(|s| !s.is_empty()));
+    // Their figures, timed from the response: the time constant, no dead time (the command's
+    // time is not in the record), no command levels, no static map.
+    let steps = v["steps"].as_array().unwrap();
+    let timed: Vec<&Value> = steps
+        .iter()
+        .filter(|st| st["time_constant_s"].is_number())
+        .collect();
+    assert!(timed.len() >= LEVELS.len() - 2, "{steps:?}");
+    for st in steps {
+        assert!(
+            st["dead_time_s"].is_null() && st["from"].is_null() && st["to"].is_null(),
+            "{st}"
+        );
+    }
+    for st in timed {
+        assert!(
+            (f(&st["time_constant_s"]) / TAU_S - 1.0).abs() < 0.2,
+            "{st}"
+        );
+    }
+    assert_eq!(v["static_map"], serde_json::json!({}));
 }
 
 #[test]

@@ -8,6 +8,10 @@
 //!   windows, each at its mean command and mean output (quasi-static: a ramp slow against the
 //!   plant's time constants, which the record cannot check by itself).
 //! - Anything else (pulses on one level, random or multisine input) gives neither.
+//! - A record without its command, whose steps were found from the response (a load cell
+//!   logged alone while a servo tester stepped the ESC): [`response_step_figures`] gives each
+//!   step's time constant, rise, settling and overshoot, timed from when the response starts to
+//!   move; no dead time (the command's time is not in the record), no command levels, no map.
 //! - A record whose every sample outlasts the response (rules at a rate slower than a third of
 //!   a second: [`SegmentRules::samples_are_steady`], a stand's table of steady averages) gives
 //!   its static map and its steps without figures ([`SAMPLES_ARE_STEADY`]).
@@ -69,7 +73,8 @@ pub struct StaticMap {
 /// Step figures and static maps of a record.
 #[derive(Debug, Clone, PartialEq, Default, Serialize)]
 pub struct StandFigures {
-    /// `"steps"`, `"ramp"` or `"none"`: what the command was read as.
+    /// `"steps"`, `"ramp"` or `"none"`: what the command was read as; `"response"` for steps
+    /// found from the response ([`response_step_figures`]).
     pub command: &'static str,
     /// One per clean step, for the first output.
     pub steps: Vec<StepFigures>,
@@ -192,6 +197,57 @@ pub fn stand_figures(
     }
 }
 
+/// Why a step found from the response has no dead time and no command levels.
+pub const NO_COMMAND: &str = "no command in the record: the step was found from the \
+    response; timed from when it starts to move (no dead time), `from`/`to` unknown";
+
+/// The figures of the steps of `y` found from the response alone, `levels` the input built
+/// from them (the level sequence, output units: [`crate::segment::steps`] reads its steps as a
+/// command's): each step's figures with `from`, `to` null (NaN), the direction the response's,
+/// and no dead time ([`NO_COMMAND`]: the step is placed one sample before the response moves,
+/// so any delay from the command is not in the record). The time constant (`1.5 (t₆₃ − t₂₈)`)
+/// and the rise are differences of crossing times and need no command time; settling is
+/// counted from the found step.
+///
+/// The finder places a step within a sample or two of the response's start, later on a sparse
+/// or noisy response ([`crate::segment::ResponseStepRules`]); a response already past 28 % at
+/// the step would lose its `t₂₈` (a time constant 26 % short on a load cell read every third
+/// row). The figures are therefore taken from `smooth_samples` samples earlier (at most half
+/// the level before, where the response still sits on it), and the settling time given back
+/// that lead.
+pub fn response_step_figures(
+    levels: &[f64],
+    dt_s: f64,
+    rules: &SegmentRules,
+    y: &[f64],
+) -> Vec<StepFigures> {
+    segment::steps(Command::new(levels), rules)
+        .iter()
+        .map(|s| {
+            let lead = rules
+                .response
+                .smooth_samples
+                .min((s.at - s.before_start) / 2);
+            let early = segment::Step {
+                at: s.at - lead,
+                ..*s
+            };
+            let f = step_figures(y, dt_s, &early);
+            let lead_s = lead as f64 * dt_s;
+            StepFigures {
+                t_s: s.at as f64 * dt_s,
+                from: f64::NAN,
+                to: f64::NAN,
+                dead_time_s: None,
+                dead_time_below_sample: false,
+                settling_90_s: f.settling_90_s.map(|t| (t - lead_s).max(0.0)),
+                note: f.note.or(Some(NO_COMMAND)),
+                ..f
+            }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,6 +322,32 @@ mod tests {
         );
         assert!((thrust.k_t.unwrap().k_t - 2e-5).abs() < 1e-9);
         assert!(f.static_map["rpm"].k_t.is_none());
+    }
+
+    #[test]
+    fn steps_found_from_the_response_give_their_time_constants_and_no_dead_time() {
+        let (_, t, _) = staircase();
+        // The level sequence a finder builds: each hold's final thrust, switching one sample
+        // before the response moves (the 2-sample delay after each command step at 200·i).
+        let levels: Vec<f64> = (0..t.len())
+            .map(|k| {
+                let hold = ((k + 1).saturating_sub(2) / 200).min(4);
+                t[200 * hold + 199]
+            })
+            .collect();
+        let f = response_step_figures(&levels, 0.01, &SegmentRules::DEFAULT, &t);
+        assert_eq!(f.len(), 4);
+        for s in &f {
+            assert!((s.time_constant_s.unwrap() - 0.05).abs() < 0.01, "{s:?}");
+            assert!(
+                s.rise_10_90_s.is_some() && s.overshoot_pct.is_some(),
+                "{s:?}"
+            );
+            assert_eq!(s.dead_time_s, None);
+            assert!(s.from.is_nan() && s.to.is_nan());
+            assert_eq!(s.note, Some(NO_COMMAND));
+        }
+        assert_eq!(f[3].direction, crate::step_response::Direction::Down);
     }
 
     #[test]

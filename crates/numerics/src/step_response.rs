@@ -151,6 +151,12 @@ impl StepFigures {
         }
     }
 
+    /// Whether the step was found from the response, with no command levels (`from` and `to`
+    /// NaN: [`crate::stand::response_step_figures`]).
+    pub fn from_response(&self) -> bool {
+        self.from.is_nan() && self.to.is_nan()
+    }
+
     /// The step with no figure, only its time, levels and values, and `why` as its note.
     pub fn unsupported(self, why: &'static str) -> StepFigures {
         StepFigures {

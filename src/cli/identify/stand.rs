@@ -90,7 +90,15 @@ pub fn brief(f: &StandFigures) -> (String, String) {
 /// Appends the step table and the static maps to `o` (nothing when the record has neither).
 pub fn write_tables(o: &mut String, f: &StandFigures) {
     if !f.steps.is_empty() {
-        let _ = writeln!(o, "steps ({}):", f.steps.len());
+        let _ = match f.steps.iter().all(|s| s.from_response()) {
+            true => writeln!(
+                o,
+                "steps ({}), found from the response: no command in the record, each timed from \
+                 when the response starts to move (no dead time, no command levels):",
+                f.steps.len()
+            ),
+            false => writeln!(o, "steps ({}):", f.steps.len()),
+        };
         let _ = writeln!(
             o,
             "  {:>9}  {:>15}  {:>4}  {:>9}  {:>9}  {:>9}  {:>9}  {:>9}",
@@ -116,19 +124,25 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 true => "< dt".to_string(),
                 false => num(s.dead_time_s, 4),
             };
+            // A step found from the response has no command levels.
+            let command = match s.from_response() {
+                true => format!("{:>15}", "(response)"),
+                false => format!("{:>6.3} -> {:>5.3}", s.from, s.to),
+            };
             let _ = writeln!(
                 o,
-                "  {:>9.3}  {:>6.3} -> {:>5.3}  {:>4}  {:>9}  {:>9}  {:>9}  {:>9}  {:>8}%{}",
+                "  {:>9.3}  {command}  {:>4}  {:>9}  {:>9}  {:>9}  {:>9}  {:>8}%{}",
                 s.t_s,
-                s.from,
-                s.to,
                 dir,
                 dead,
                 tau,
                 num(s.rise_10_90_s, 4),
                 num(s.settling_90_s, 4),
                 num(s.overshoot_pct, 1),
-                s.note.map(|n| format!("  ({n})")).unwrap_or_default()
+                s.note
+                    .filter(|&n| n != propid_numerics::stand::NO_COMMAND)
+                    .map(|n| format!("  ({n})"))
+                    .unwrap_or_default()
             );
         }
     }

@@ -184,6 +184,21 @@ mod tests {
     }
 
     #[test]
+    fn a_reversed_cell_not_tared_is_read_the_same_way_round() {
+        let l: Vec<Level> = staircase(0.294)
+            .iter()
+            .map(|l| Level {
+                mean: -l.mean,
+                ..*l
+            })
+            .collect();
+        let z = zero_offset(&l).unwrap();
+        assert!((z.value + 0.294).abs() < 1e-9, "{z:?}");
+        let p = fit_power_law(&shifted(&l, z.value)).unwrap();
+        assert!(p.k < 0.0 && (p.exponent - 2.0).abs() < 0.03, "{p:?}");
+    }
+
+    #[test]
     fn a_tared_cell_or_one_without_a_zero_level_keeps_the_map_through_zero() {
         assert_eq!(zero_offset(&staircase(0.0)), None);
         // 0.1 % of full thrust is 2.5 % of the lowest level, beyond the levels' own ±0.3 %
