@@ -227,7 +227,7 @@ pub fn response_step_figures(
             let lead = rules
                 .response
                 .smooth_samples
-                .min((s.at - s.before_start) / 2);
+                .min(s.at.saturating_sub(s.before_start) / 2);
             let early = segment::Step {
                 at: s.at - lead,
                 ..*s

@@ -26,8 +26,10 @@ use super::{fit_power_law, power_weights, Level, PowerLaw};
 /// Throttle at or below which a level is held at zero command.
 pub const AT_ZERO: f64 = 0.01;
 
-/// Fewest levels for the test: four parameters and two degrees of freedom left.
-pub const MIN_LEVELS: usize = 6;
+/// Fewest levels for the test: four parameters and one degree of freedom left (a five-level
+/// staircase from zero command; its 1 % point, 4052, takes only an offset the power law then
+/// fits almost exactly).
+pub const MIN_LEVELS: usize = 5;
 
 /// The output's reading at zero command, taken out of the map's curves.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -43,9 +45,10 @@ pub struct ZeroOffset {
 }
 
 /// The 1 % point of `F(1, d)` (Fisher's tables), the next smaller tabulated `d` for others
-/// (a stricter point), `None` below `d = 2`.
+/// (a stricter point), `None` below `d = 1`.
 fn f_critical_1pct(d: usize) -> Option<f64> {
-    const TABLE: [(usize, f64); 15] = [
+    const TABLE: [(usize, f64); 16] = [
+        (1, 4052.2),
         (2, 98.50),
         (3, 34.12),
         (4, 21.20),
@@ -213,7 +216,22 @@ mod tests {
             .collect();
         assert_eq!(zero_offset(&no_zero), None);
         // Too few levels to test.
-        assert_eq!(zero_offset(&staircase(0.294)[..5]), None);
+        assert_eq!(zero_offset(&staircase(0.294)[..4]), None);
+    }
+
+    #[test]
+    fn a_five_level_staircase_shows_a_large_offset_and_not_a_real_curves_misfit() {
+        // 0, 0.2, 0.4, 0.6, 0.8: one degree of freedom left, Fisher's 1 % point 4052.
+        let five = |offset: f64, bend: f64| -> Vec<Level> {
+            [0.0, 0.2, 0.4, 0.6, 0.8]
+                .iter()
+                .map(|&u| lv(u, 8.826 * u * u * (1.0 - bend * u * u) + offset))
+                .collect()
+        };
+        let z = zero_offset(&five(0.294, 0.0)).unwrap();
+        assert!((z.value - 0.294).abs() < 1e-9, "{z:?}");
+        // A curve that rolls off at the top (no power law) and a small reading: not taken.
+        assert_eq!(zero_offset(&five(0.02, 0.3)), None);
     }
 
     #[test]
@@ -233,7 +251,8 @@ mod tests {
 
     #[test]
     fn the_critical_points_are_fishers() {
-        assert_eq!(f_critical_1pct(1), None);
+        assert_eq!(f_critical_1pct(0), None);
+        assert_eq!(f_critical_1pct(1), Some(4052.2));
         assert_eq!(f_critical_1pct(2), Some(98.50));
         assert_eq!(f_critical_1pct(11), Some(10.04));
         assert_eq!(f_critical_1pct(1000), Some(6.85));
