@@ -13,6 +13,7 @@ mod diagnose_units;
 mod host_faults_cli;
 mod identify_cli;
 mod identify_dialects;
+mod identify_directions;
 mod identify_encodings;
 mod identify_gain;
 mod identify_held;

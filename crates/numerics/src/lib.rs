@@ -59,6 +59,7 @@ pub mod stand;
 pub mod startup;
 pub mod statespace;
 pub mod static_map;
+pub mod step_directions;
 pub mod step_response;
 pub mod svd;
 pub mod uncertainty;

@@ -5,6 +5,7 @@ use std::fmt::Write;
 
 use propid_numerics::stand::StandFigures;
 use propid_numerics::static_map::{not_repeatable, MIN_SHARE, NOISE_FACTOR};
+use propid_numerics::step_directions::by_direction;
 use propid_numerics::step_response::Direction;
 
 /// A number, or `-` where the data supports none.
@@ -143,6 +144,31 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                     .filter(|&n| n != propid_numerics::stand::NO_COMMAND)
                     .map(|n| format!("  ({n})"))
                     .unwrap_or_default()
+            );
+        }
+        // Medians per direction, in the same columns, up first.
+        let dirs = by_direction(&f.steps);
+        for (name, d) in ["up", "down"]
+            .into_iter()
+            .filter_map(|n| dirs.get(n).map(|d| (n, d)))
+        {
+            let dead = match d.dead_time_below_sample {
+                true => "< dt".to_string(),
+                false => num(d.dead_time_s, 4),
+            };
+            let _ = writeln!(
+                o,
+                "  {:>9}  {:>15}  {:>4}  {:>9}  {:>9}  {:>9}  {:>9}  {:>8}%  ({} of {} steps timed)",
+                "median",
+                "",
+                name,
+                dead,
+                num(d.time_constant_s, 4),
+                num(d.rise_10_90_s, 4),
+                num(d.settling_90_s, 4),
+                num(d.overshoot_pct, 1),
+                d.timed,
+                d.steps
             );
         }
     }

@@ -12,7 +12,11 @@ use propid_numerics::report::Gain;
 use propid_numerics::stabilization::Stabilization;
 use propid_numerics::stand::StandFigures;
 use propid_numerics::static_map::LevelSlope;
+use propid_numerics::step_directions::{by_direction, DirectionFigures};
 use propid_numerics::ModelReport;
+
+/// Step figures' medians per direction (`"up"`, `"down"`).
+type ByDirection = std::collections::BTreeMap<&'static str, DirectionFigures>;
 
 /// Everything `identify` prints.
 #[derive(Debug, Clone, Serialize)]
@@ -25,6 +29,10 @@ pub struct Output<'a> {
     pub operating_points: &'a OpTable,
     /// Step figures, one per clean command step (empty without steps).
     pub steps: &'a [propid_numerics::step_response::StepFigures],
+    /// Their medians per direction, `up` and `down` ([`propid_numerics::step_directions`]);
+    /// omitted without steps.
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub steps_by_direction: ByDirection,
     /// Steady levels and fitted curves per output (empty without steps or a ramp).
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
     /// The stabilization diagram of the model's Hankel SVD (null when it cannot be realised).
@@ -255,6 +263,7 @@ impl<'a> Output<'a> {
             source,
             operating_points: ops,
             steps: &stand.steps,
+            steps_by_direction: by_direction(&stand.steps),
             static_map: &stand.static_map,
             stabilization: model.stabilization.as_ref(),
             quality: Quality::of(&model.report, levels, loaded.input_is_a_command),
@@ -482,6 +491,9 @@ pub struct Partial<'a> {
     pub source: Source,
     /// Step figures, one per clean command step.
     pub steps: &'a [propid_numerics::step_response::StepFigures],
+    /// Their medians per direction (as [`Output::steps_by_direction`]).
+    #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub steps_by_direction: ByDirection,
     /// Steady levels and fitted curves per output.
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
     /// Implausible figures (`expo_outside_blend`, `levels_not_repeatable`,
@@ -500,6 +512,7 @@ impl<'a> Partial<'a> {
             error: error.to_string(),
             source: loaded.source.clone(),
             steps: &stand.steps,
+            steps_by_direction: by_direction(&stand.steps),
             static_map: &stand.static_map,
             warnings: stand
                 .static_map
