@@ -35,8 +35,8 @@ fn pm(v: f64, sd: Option<f64>) -> String {
 /// output, [`super::load::OUTPUT_KEY`])
 /// — number of levels, the zero-command reading taken out (`zero`), power law `k`, `u0`,
 /// exponent `e`, `expo a`, unit — and the steps —
-/// how many, the median dead time (`< dt` when below a sample) and time constant (s) of those
-/// that resolve them; `–` for none.
+/// how many, and per direction ([`by_direction`]: up, then down) the median dead time (`< dt`
+/// when below a sample) and time constant (s) of those that resolve them; `–` for none.
 pub fn brief(f: &StandFigures) -> (String, String) {
     // The thrust's map, else the identified output's (never another channel's).
     let map = f
@@ -65,25 +65,22 @@ pub fn brief(f: &StandFigures) -> (String, String) {
                 format!("{t} ({})", m.unit)
             },
         );
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        num(v.get(v.len() / 2).copied(), 3)
-    };
     let steps = if f.steps.is_empty() {
         "–".to_string()
     } else {
-        let mut dead: Vec<(f64, bool)> = f
-            .steps
-            .iter()
-            .filter_map(|s| s.dead_time_s.map(|d| (d, s.dead_time_below_sample)))
+        let dirs = by_direction(&f.steps);
+        let sides: Vec<String> = ["up", "down"]
+            .into_iter()
+            .filter_map(|n| dirs.get(n).map(|d| (n, d)))
+            .map(|(n, d)| {
+                let dead = match d.dead_time_below_sample {
+                    true => "< dt".to_string(),
+                    false => num(d.dead_time_s, 3),
+                };
+                format!("{n} dead {dead}, τ {}", num(d.time_constant_s, 3))
+            })
             .collect();
-        dead.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let dead = match dead.get(dead.len() / 2) {
-            Some((_, true)) => "< dt".to_string(),
-            m => num(m.map(|d| d.0), 3),
-        };
-        let tau: Vec<f64> = f.steps.iter().filter_map(|s| s.time_constant_s).collect();
-        format!("{}: dead {dead}, τ {}", f.steps.len(), median(tau))
+        format!("{}: {}", f.steps.len(), sides.join("; "))
     };
     (map, steps)
 }
