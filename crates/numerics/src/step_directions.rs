@@ -85,16 +85,6 @@ mod tests {
 
     fn step(from: f64, to: f64, dead: Option<f64>, tau: Option<f64>) -> StepFigures {
         StepFigures {
-            t_s: 0.0,
-            from,
-            to,
-            direction: if to >= from {
-                Direction::Up
-            } else {
-                Direction::Down
-            },
-            initial: 0.0,
-            r#final: 1.0,
             dead_time_s: dead,
             dead_time_below_sample: dead.is_some_and(|d| d < 0.01),
             time_constant_s: tau,
@@ -102,7 +92,7 @@ mod tests {
             rise_10_90_s: tau.map(|t| 2.2 * t),
             settling_90_s: tau.map(|t| 2.3 * t),
             overshoot_pct: tau.map(|_| 0.0),
-            note: None,
+            ..StepFigures::blank(0.0, from, to)
         }
     }
 

@@ -128,7 +128,7 @@ fn crossing(r: &[f64], level: f64, dt_s: f64) -> Option<f64> {
 
 impl StepFigures {
     /// A step at `t_s` from command `from` to `to`, with no value and no figure yet.
-    fn blank(t_s: f64, from: f64, to: f64) -> StepFigures {
+    pub(crate) fn blank(t_s: f64, from: f64, to: f64) -> StepFigures {
         StepFigures {
             t_s,
             from,
