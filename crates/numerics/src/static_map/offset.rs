@@ -1,9 +1,10 @@
 //! The output's reading at zero command: a load cell not tared, a torque cell's zero, an
 //! electronic speed controller's own current. A power law `k·max(u − u₀, 0)^e` and the expo
 //! blend both pass through zero below the dead band, so a reading of `c ≠ 0` there bends both
-//! to fit it: 30 gf on a 900 gf propeller turns `e = 2.00` from throttle 0 into `e = 2.82` from
-//! throttle −0.34 and the expo `a` from 1.00 to 0.88; an ESC's 0.3 A at rest turns
-//! `I = 0.3 + 20·u³` into `e = 10 ± 13`.
+//! to fit it: 30 gf on a 900 gf·u² propeller (levels 0, 0.2 … 0.9) turns `e = 2.00` from
+//! throttle 0 into `e = 4.76` from throttle −0.88 and the expo `a` from 1.00 to 0.88 (−30 gf:
+//! `e = 1.58` from 0.16, `a = 1.13`); an ESC's 0.3 A at rest turns `I = 0.3 + 20·u³` into
+//! `e = 9.7 ± 9.3`.
 //!
 //! **When a reading is taken.** Only a level held at zero command (throttle ≤ [`AT_ZERO`]: the
 //! scale's zero, 1000 µs, 0 %, DShot 48, never the lowest level a record happens to hold)
@@ -11,9 +12,9 @@
 //! sample-weighted mean of those levels. It is taken when the map with it fits the levels
 //! significantly better than the map through zero: with `S₃` the squared error of the power
 //! law on the levels as read (3 parameters) and `S₄` that of `c` plus the power law on the
-//! levels less `c` (4), both weighted as the power law is fitted ([`super::power_weights`]), `F = (S₃ − S₄) / (S₄ / (n − 4))` above the 1 % point of Fisher's
-//! `F(1, n − 4)` (an extra-sum-of-squares test; Bates & Watts 1988, §3.5), with at least
-//! [`MIN_LEVELS`] levels. A small reading the levels cannot tell from the map's misfit is not
+//! levels less `c` (4), both weighted as the power law is fitted ([`super::power_weights`]),
+//! `F = (S₃ − S₄) / (S₄ / (n − 4))` above the 1 % point of Fisher's `F(1, n − 4)` (an
+//! extra-sum-of-squares test; Bates & Watts 1988, §3.5), with at least [`MIN_LEVELS`] levels. A small reading the levels cannot tell from the map's misfit is not
 //! taken: the curves then stay fitted to the levels as read.
 //!
 //! Its standard error is that of the mean of the zero-command levels' means (their spread
