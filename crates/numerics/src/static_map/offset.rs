@@ -1,10 +1,10 @@
 //! The output's reading at zero command: a load cell not tared, a torque cell's zero, an
 //! electronic speed controller's own current. A power law `k·max(u − u₀, 0)^e` and the expo
 //! blend both pass through zero below the dead band, so a reading of `c ≠ 0` there bends both
-//! to fit it: 30 gf on a 900 gf·u² propeller (levels 0, 0.2 … 0.9) turns `e = 2.00` from
-//! throttle 0 into `e = 4.76` from throttle −0.88 and the expo `a` from 1.00 to 0.88 (−30 gf:
-//! `e = 1.58` from 0.16, `a = 1.13`); an ESC's 0.3 A at rest turns `I = 0.3 + 20·u³` into
-//! `e = 9.7 ± 9.3`.
+//! to fit it: 30 gf on a 900 gf·u² propeller (levels 0, 0.2 … 0.9, 0.5, 0) turns `e = 2.00`
+//! from throttle 0 into `e = 4.76` from throttle −0.88 and the expo `a` from 1.00 to 0.88
+//! (−30 gf: `e = 1.58` from 0.16, `a = 1.13`); an ESC's 0.3 A at rest turns `I = 0.3 + 20·u³`
+//! into `e = 9.7 ± 9.3` (the tests check these figures).
 //!
 //! **When a reading is taken.** Only a level held at zero command (throttle ≤ [`AT_ZERO`]: the
 //! scale's zero, 1000 µs, 0 %, DShot 48, never the lowest level a record happens to hold)
@@ -185,6 +185,36 @@ mod tests {
                 "offset {offset}: {bent:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_bends_the_module_doc_quotes_are_the_fits_through_zero() {
+        // Exact levels 0, 0.2 … 0.9, 0.5, 0 of 900 gf·u² ± 30 gf, fitted through zero.
+        let exact = |offset: f64| -> Vec<Level> {
+            [0.0, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.5, 0.0]
+                .iter()
+                .map(|&u| lv(u, 8.826 * u * u + offset))
+                .collect()
+        };
+        for (offset, e, u0, a) in [(0.294, 4.76, -0.88, 0.88), (-0.294, 1.58, 0.16, 1.13)] {
+            let (p, x) = (
+                fit_power_law(&exact(offset)).unwrap(),
+                super::super::fit_expo(&exact(offset)).unwrap(),
+            );
+            assert!((p.exponent - e).abs() < 0.01, "{offset}: {p:?}");
+            assert!((p.u0 - u0).abs() < 0.01, "{offset}: {p:?}");
+            assert!((x.a - a).abs() < 0.01, "{offset}: {x:?}");
+        }
+        let idle: Vec<Level> = [0.0, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9]
+            .iter()
+            .map(|&u| lv(u, 0.3 + 20.0 * u * u * u))
+            .collect();
+        let p = fit_power_law(&idle).unwrap();
+        assert!((p.exponent - 9.7).abs() < 0.05, "{p:?}");
+        assert!(
+            (p.uncertainty.unwrap().exponent - 9.3).abs() < 0.05,
+            "{p:?}"
+        );
     }
 
     #[test]
