@@ -27,8 +27,11 @@ use super::summary::LinearPart;
 ///
 /// ```text
 ///   u → InputShift → InputLimit → InputMap → InputScale → × K → core (with the Core
-///     terms' law) → Series → + offset → OutputAdd → OutputLimit → ŷ
+///     terms' law) → Series → × output scales → + offset → OutputAdd → OutputLimit → ŷ
 /// ```
+///
+/// The output scales are every term's [`Term::scale_output`] (a term that scales the core's
+/// output by a measured signal, whatever its place: the supply sag's share on the output).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Place {
     /// Shifts the input in time (first: every other input term sees the shifted input).
@@ -168,6 +171,11 @@ pub trait Term: std::fmt::Debug + Send + Sync {
 
     /// Output places: transforms the output `y` (one value per sample) in place.
     fn shape_output(&self, _y: &mut [f64], _sig: &Signals) {}
+
+    /// Any place: scales the core's output `y` (after the series terms, before the offset, so
+    /// that the output stays affine in the core's gain and offset) in place; `sig` carries the
+    /// voltage as late as the input terms see it ([`Term::voltage_delay`]). Default: nothing.
+    fn scale_output(&self, _y: &mut [f64], _sig: &Signals) {}
 
     /// The frequency band `[lo, hi]`, Hz, an additive narrowband output term lives in (a drift
     /// near 0 Hz, a sinusoid about its frequency) over `n` estimation samples, for the search's

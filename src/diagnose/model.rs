@@ -276,6 +276,9 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
     for t in m.at(Place::Series) {
         t.filter(out, sig.dt_s);
     }
+    for t in m.terms() {
+        t.scale_output(out, &input_sig);
+    }
     for o in out.iter_mut() {
         *o += m.core.offset;
     }
@@ -378,9 +381,9 @@ mod tests {
     #[test]
     fn free_parameters_follow_the_registry_and_a_term_is_replaced_not_doubled() {
         let m = Model::default()
-            .with(SupplySagParams { gain_per_volt: 0.1 })
+            .with(SupplySagParams::drive(0.1))
             .with(StaticNonlinearityParams { exponent: 2.0 })
-            .with(SupplySagParams { gain_per_volt: 0.2 });
+            .with(SupplySagParams::drive(0.2));
         let names: Vec<&str> = m.terms().map(|t| t.name()).collect();
         assert_eq!(names, ["static_nonlinearity", "supply_sag"]);
         let values: Vec<f64> = m.free().iter().map(|f| f.0).collect();
@@ -412,7 +415,7 @@ mod tests {
             offset: 0.0,
             lead: 0.0,
         };
-        let sag = SupplySagParams { gain_per_volt: 0.1 };
+        let sag = SupplySagParams::drive(0.1);
         let first_low = |sensor: usize| {
             let m = Model::new(core).with(sag).with(DeadTimeParams {
                 delay_samples: 4,

@@ -55,7 +55,7 @@
 
 use super::ctx::Ctx;
 use super::effect::Effect;
-use super::effects::REGISTRY;
+use super::effects::{supply_sag, REGISTRY};
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Method, Scores};
 use super::lead;
@@ -244,6 +244,14 @@ fn search_from(
         };
         revisions += 1;
         apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv, &mut ledger);
+    }
+    // What the supply scales, settled on the final model; kept only when the held-out figure
+    // does not fall.
+    if let Some(f) = supply_sag::side(ctx, &cur) {
+        let f_cv = cv(&f);
+        if f_cv.mean >= cur_cv.mean {
+            (cur, cur_cv) = (f, f_cv);
+        }
     }
     if let Some(c) = lead::canonical(&cur) {
         cur = c;
