@@ -214,7 +214,7 @@ impl Experiment {
 
     /// The caller runs a stall watchdog on the link (the daemon's `stall_timeout_ms`): a
     /// command still unanswered after its re-sends while *nothing at all* has been heard since
-    /// it was first sent (after the device had spoken) is then not a link failure but a stall,
+    /// its last re-send (after the device had spoken) is then not a link failure but a stall,
     /// left to the watchdog ([`Self::link_stalled`]): no more re-sends, the command stays in
     /// flight in case the device wakes. A device that goes on sending but does not acknowledge
     /// is a link failure ([`Notice::LinkFailed`]) either way. Off by default.
@@ -524,7 +524,10 @@ impl Experiment {
             return;
         }
         if f.resends >= self.cfg.max_retries {
-            let silent = self.last_frame_us.is_some_and(|t| t < f.first_sent_us);
+            // Silent since the last re-send: a frame already on its way when the command was
+            // first sent (the device froze just then; a loaded host reads it late) does not
+            // make a frozen device a deaf one.
+            let silent = self.last_frame_us.is_some_and(|t| t < f.sent_us);
             if self.stall_watchdog && silent {
                 return; // a stall: the caller's watchdog acts
             }

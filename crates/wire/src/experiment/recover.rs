@@ -401,6 +401,31 @@ mod tests {
     }
 
     #[test]
+    fn a_frame_already_on_its_way_when_the_command_went_out_does_not_make_a_stall_a_failure() {
+        // The device freezes just as the IMPULSE goes out; one frame it sent before that is
+        // read 5 ms after the send (a loaded host), then nothing: still a stall. Frames that
+        // go on arriving through the re-sends are a deaf device: a link failure.
+        for (frames_until_us, failed) in [(5_000u64, false), (200_000, true)] {
+            let (mut p, imp, t) = pulsing(false, 11);
+            p.set_stall_watchdog(true);
+            let mut heard = 0;
+            for k in 1..=400u64 {
+                let now = t + k * 1_000;
+                if k * 1_000 <= frames_until_us && k % 5 == 0 {
+                    p.on_frame(&hello(11), now);
+                    heard += 1;
+                }
+                p.poll(now + 1);
+            }
+            assert!(heard > 0);
+            let (s, n) = drain(&mut p);
+            assert_eq!(s.iter().filter(|(q, _)| *q == imp).count(), 3);
+            let link_failed = n.iter().any(|x| matches!(x, Notice::LinkFailed { .. }));
+            assert_eq!(link_failed, failed, "frames until {frames_until_us} µs");
+        }
+    }
+
+    #[test]
     fn a_stall_sends_one_untracked_stop_and_rearms_at_the_next_reconnect_only_if_allowed() {
         for rearm in [false, true] {
             let (mut p, _, t) = pulsing(rearm, 11);
