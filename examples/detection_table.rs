@@ -357,7 +357,10 @@ fn verdict_text(d: &Diagnosis) -> String {
 }
 
 /// Relative (or absolute, for delays and levels) error of the main parameter of a finding.
-fn param_error(name: &str, cfg: &PlantConfig, d: &Diagnosis) -> Option<f64> {
+/// `v_mean` is the record's mean supply voltage: the simulated stand scales the throttle by
+/// `1 + g (V − battery_v)`, diagnose reports the gain per volt at the mean voltage `V̄`, and
+/// the two are the same law when `g_V = g / (1 + g (V̄ − battery_v))`.
+fn param_error(name: &str, cfg: &PlantConfig, d: &Diagnosis, v_mean: f64) -> Option<f64> {
     let f = d.findings.iter().find(|f| f.effect == name)?;
     let get = |k: &str| f.params.get(k).and_then(|v| v.as_f64());
     let e = &cfg.effects;
@@ -374,7 +377,13 @@ fn param_error(name: &str, cfg: &PlantConfig, d: &Diagnosis) -> Option<f64> {
             get("amplitude")?,
             e.periodic_disturbance.as_ref()?.amplitude,
         ),
-        "supply_sag" => rel(get("gain_per_volt")?, e.supply_sag.as_ref()?.gain_per_volt),
+        "supply_sag" => {
+            let g = e.supply_sag.as_ref()?.gain_per_volt;
+            rel(
+                get("gain_per_volt")?,
+                g / (1.0 + g * (v_mean - cfg.battery_v)),
+            )
+        }
         "saturation" => (get("level")? - e.saturation.as_ref()?.level).abs(),
         "asymmetric_dynamics" => {
             let a = e.asymmetric_dynamics.as_ref()?;
@@ -441,7 +450,8 @@ fn main() {
                         .collect::<Vec<_>>()
                 );
             }
-            if let Some(e) = param_error(name, &cfg, &d) {
+            let v_mean = m.voltage.iter().sum::<f64>() / m.voltage.len().max(1) as f64;
+            if let Some(e) = param_error(name, &cfg, &d, v_mean) {
                 errs.push(e);
             } else {
                 eprintln!(

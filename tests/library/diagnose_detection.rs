@@ -9,11 +9,11 @@
 
 use propid::diagnose::{self, Diagnosis, Finding};
 use propid_sim::plant::PlantConfig;
-use propid_sim::synth;
+use propid_sim::synth::{self, Measured};
 
 const CASES: u64 = 20;
 
-fn run(name: &str, i: u64) -> (PlantConfig, Diagnosis) {
+fn run(name: &str, i: u64) -> (PlantConfig, Diagnosis, Measured) {
     let (cfg, m) = synth::case(name, i).expect("valid plant");
     let d = diagnose::diagnose(
         synth::DT_S,
@@ -24,7 +24,7 @@ fn run(name: &str, i: u64) -> (PlantConfig, Diagnosis) {
         &Default::default(),
     )
     .expect("diagnosis");
-    (cfg, d)
+    (cfg, d, m)
 }
 
 fn num(f: &Finding, key: &str) -> f64 {
@@ -35,7 +35,10 @@ fn num(f: &Finding, key: &str) -> f64 {
 }
 
 /// Runs every case of `name` and checks naming, uniqueness, gain and `check_params`.
-fn check_effect(name: &str, check_params: impl Fn(&PlantConfig, &Finding) -> Result<(), String>) {
+fn check_effect(
+    name: &str,
+    check_params: impl Fn(&PlantConfig, &Finding, &Measured) -> Result<(), String>,
+) {
     check_cases(name, 0..CASES, check_params)
 }
 
@@ -43,11 +46,11 @@ fn check_effect(name: &str, check_params: impl Fn(&PlantConfig, &Finding) -> Res
 fn check_cases(
     name: &str,
     cases: std::ops::Range<u64>,
-    check_params: impl Fn(&PlantConfig, &Finding) -> Result<(), String>,
+    check_params: impl Fn(&PlantConfig, &Finding, &Measured) -> Result<(), String>,
 ) {
     let mut failures = Vec::new();
     for i in cases {
-        let (cfg, d) = run(name, i);
+        let (cfg, d, m) = run(name, i);
         let names: Vec<&str> = d.findings.iter().map(|f| f.effect.as_str()).collect();
         let Some(f) = d.findings.iter().find(|f| f.effect == name) else {
             failures.push(format!("case {i}: not named (found {names:?})"));
@@ -56,7 +59,7 @@ fn check_cases(
         if names.len() != 1 {
             failures.push(format!("case {i}: other effects named too: {names:?}"));
         }
-        if let Err(e) = check_params(&cfg, f) {
+        if let Err(e) = check_params(&cfg, f, &m) {
             failures.push(format!("case {i}: {e}"));
         }
         let ext = d
@@ -87,7 +90,7 @@ fn rel(est: f64, truth: f64, tol: f64, what: &str) -> Result<(), String> {
 
 #[test]
 fn dead_time_is_found_to_one_sample() {
-    check_effect("dead_time", |cfg, f| {
+    check_effect("dead_time", |cfg, f, _| {
         let truth = (cfg.effects.dead_time.as_ref().unwrap().delay_s / synth::DT_S).round();
         let est = num(f, "delay_samples");
         let ok =
@@ -99,7 +102,7 @@ fn dead_time_is_found_to_one_sample() {
 
 #[test]
 fn static_nonlinearity_exponent_within_10_percent() {
-    check_effect("static_nonlinearity", |cfg, f| {
+    check_effect("static_nonlinearity", |cfg, f, _| {
         let p = cfg.effects.static_nonlinearity.as_ref().unwrap().exponent;
         let curv = f
             .params
@@ -116,7 +119,7 @@ fn static_nonlinearity_exponent_within_10_percent() {
 
 #[test]
 fn extra_mode_frequency_within_5_percent_and_damping_within_003() {
-    check_effect("extra_mode", |cfg, f| {
+    check_effect("extra_mode", |cfg, f, _| {
         let m = cfg.effects.extra_mode.as_ref().unwrap();
         rel(num(f, "fn_hz"), m.fn_hz, 0.05, "fn_hz")?;
         let z = num(f, "zeta");
@@ -128,7 +131,7 @@ fn extra_mode_frequency_within_5_percent_and_damping_within_003() {
 
 #[test]
 fn baseline_drift_rate_within_15_percent() {
-    check_effect("baseline_drift", |cfg, f| {
+    check_effect("baseline_drift", |cfg, f, _| {
         let r = cfg.effects.baseline_drift.as_ref().unwrap().rate_per_s;
         rel(num(f, "rate_per_s"), r, 0.15, "rate_per_s")
     });
@@ -136,24 +139,30 @@ fn baseline_drift_rate_within_15_percent() {
 
 #[test]
 fn periodic_disturbance_frequency_within_1_percent_amplitude_within_15_percent() {
-    check_effect("periodic_disturbance", |cfg, f| {
+    check_effect("periodic_disturbance", |cfg, f, _| {
         let p = cfg.effects.periodic_disturbance.as_ref().unwrap();
         rel(num(f, "freq_hz"), p.freq_hz, 0.01, "freq_hz")?;
         rel(num(f, "amplitude"), p.amplitude, 0.15, "amplitude")
     });
 }
 
+/// The simulated stand scales the throttle by `1 + g (V − battery_v)`; diagnose reports the
+/// gain per volt at the record's mean voltage `V̄`, the same law when `g_V = g / (1 + g (V̄ −
+/// battery_v))`. Measured: median 0.5 %, at most 1.0 % (the detection table); compared with
+/// `g` itself the error was 9 % at the median, 13 % at most.
 #[test]
-fn supply_sag_gain_per_volt_within_25_percent() {
-    check_effect("supply_sag", |cfg, f| {
+fn supply_sag_gain_per_volt_within_3_percent() {
+    check_effect("supply_sag", |cfg, f, m| {
         let g = cfg.effects.supply_sag.as_ref().unwrap().gain_per_volt;
-        rel(num(f, "gain_per_volt"), g, 0.25, "gain_per_volt")
+        let v_mean = m.voltage.iter().sum::<f64>() / m.voltage.len() as f64;
+        let at_mean = g / (1.0 + g * (v_mean - cfg.battery_v));
+        rel(num(f, "gain_per_volt"), at_mean, 0.03, "gain_per_volt")
     });
 }
 
 #[test]
 fn throttle_saturation_level_within_001() {
-    check_effect("saturation", |cfg, f| {
+    check_effect("saturation", |cfg, f, _| {
         let l = cfg.effects.saturation.as_ref().unwrap().level;
         let est = num(f, "level");
         let sig = f.params.get("signal").and_then(|v| v.as_str());
@@ -169,7 +178,7 @@ fn throttle_saturation_level_within_001() {
 
 #[test]
 fn asymmetric_dynamics_ratio_within_10_percent() {
-    check_cases("asymmetric_dynamics", 0..4, |cfg, f| {
+    check_cases("asymmetric_dynamics", 0..4, |cfg, f, _| {
         let a = cfg.effects.asymmetric_dynamics.as_ref().unwrap();
         let (up, down) = (num(f, "up"), num(f, "down"));
         if ((up * down).sqrt() - 1.0).abs() > 1e-9 {
@@ -188,7 +197,7 @@ fn asymmetric_dynamics_ratio_within_10_percent() {
 
 #[test]
 fn stiffness_nonlinearity_cubic_coefficient_within_15_percent() {
-    check_cases("stiffness_nonlinearity", 0..4, |cfg, f| {
+    check_cases("stiffness_nonlinearity", 0..4, |cfg, f, _| {
         let e = cfg
             .effects
             .stiffness_nonlinearity
@@ -207,7 +216,7 @@ fn stiffness_nonlinearity_cubic_coefficient_within_15_percent() {
 #[test]
 fn the_new_effects_are_not_named_on_clean_cases() {
     for i in 0..3 {
-        let (_, d) = run("clean", i);
+        let (_, d, _) = run("clean", i);
         let names: Vec<&str> = d.findings.iter().map(|f| f.effect.as_str()).collect();
         assert!(
             !names.contains(&"asymmetric_dynamics") && !names.contains(&"stiffness_nonlinearity"),
@@ -223,7 +232,7 @@ fn false_alarm_rate_on_50_clean_cases_is_at_most_5_percent() {
     let half = |range: std::ops::Range<u64>| {
         let mut found = Vec::new();
         for i in range {
-            let (_, d) = run("clean", i);
+            let (_, d, _) = run("clean", i);
             if !d.findings.is_empty() {
                 found.push((
                     i,
