@@ -529,19 +529,19 @@ impl Term for SupplySagParams {
                     (a.min(v), b.max(v))
                 })
         });
+        // The drop was measured when the term was taken, on the drive; the side is the final
+        // model's (`side`).
         let side = match self.scales {
             Scaled::Drive => "on the drive".to_string(),
-            Scaled::Output => "on the output at once".to_string(),
-            Scaled::Both => format!("{:.0} % of it on the output", 100.0 * self.output_share),
-        };
-        let scaled = match self.scales {
-            Scaled::Drive => "input",
-            Scaled::Output => "output",
-            Scaled::Both => "input and output",
+            Scaled::Output => "settled on the output at once".to_string(),
+            Scaled::Both => format!(
+                "settled with {:.0} % of it on the output",
+                100.0 * self.output_share
+            ),
         };
         format!(
             "the gain follows the supply voltage ({:+.1} % per volt while the supply ranged \
-             {lo:.2}..{hi:.2} V, {side}); with a voltage-scaled {scaled} {drop}",
+             {lo:.2}..{hi:.2} V, {side}); with a voltage-scaled input {drop}",
             100.0 * self.gain_per_volt
         )
     }
