@@ -16,6 +16,7 @@ mod identify_dialects;
 mod identify_directions;
 mod identify_encodings;
 mod identify_gain;
+mod identify_glitched_cells;
 mod identify_held;
 mod identify_interpolated;
 mod identify_quality;

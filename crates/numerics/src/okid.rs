@@ -33,7 +33,10 @@
 //! # Choosing `ℓ`
 //!
 //! `ℓ_max = clamp(⌊N / (10 (p+q))⌋, 1, 40)` follows from the data length (at least ten rows per
-//! parameter). Because the columns are ordered by lag, the regression with `ℓ ≤ ℓ_max` lags uses a
+//! parameter). A row needs its whole window of `ℓ` lags: where lost samples leave too few whole
+//! windows at that order (fewer than two rows a parameter), the automatic `ℓ_max` falls to the
+//! largest order the same rule allows on the rows usable at it ([`gap_observer_order`]); an
+//! order the caller gives is kept (and refused when too few rows remain). Because the columns are ordered by lag, the regression with `ℓ ≤ ℓ_max` lags uses a
 //! *prefix* of the columns, so one QR serves every `ℓ`: `R_φ` is the leading `m(ℓ) × m(ℓ)` block
 //! with `m(ℓ) = 1 + p + (p+q)ℓ`, and `RSS(ℓ) = ‖z_{m(ℓ):}‖² + ‖R_res‖²`. The number used is
 //! chosen by output (simulation) error over a set of candidates ([`observer`]). Too many lags are
@@ -180,6 +183,37 @@ pub fn auto_observer_order(n: usize, p: usize, q: usize) -> usize {
     (n / (10 * (p + q).max(1))).clamp(1, MAX_AUTO_OBSERVER_ORDER)
 }
 
+/// Rows of the regression with `ell` lags over `n` samples: the samples `k ≥ ℓ` whose window
+/// `k − ℓ ..= k` misses nothing.
+pub fn usable_rows(n: usize, ell: usize, is_missing: &impl Fn(usize) -> bool) -> usize {
+    let mut run = 0usize;
+    (0..n)
+        .filter(|&k| {
+            run = if is_missing(k) { 0 } else { run + 1 };
+            k >= ell && run > ell
+        })
+        .count()
+}
+
+/// The automatic order when gaps leave too few whole windows at `ell_max`: the largest
+/// `ℓ < ell_max` that [`auto_observer_order`]'s rule allows on the rows usable at it (ten rows a
+/// parameter: `usable(ℓ) + ℓ ≥ 10 (p + q) ℓ`, where without a gap `usable(ℓ) + ℓ = n`); `None`
+/// when not even `ℓ = 1` is. Randomly lost samples (a share `s`) keep a window of `ℓ + 1` whole
+/// with probability `(1 − s)^(ℓ+1)`: a 50 Hz staircase export whose load cell lost 46 of its
+/// 800 readings had 46 whole windows at `ℓ = 40`, where 82 parameters need 164 rows; the order
+/// falls to 14.
+pub fn gap_observer_order(
+    n: usize,
+    p: usize,
+    q: usize,
+    ell_max: usize,
+    is_missing: &impl Fn(usize) -> bool,
+) -> Option<usize> {
+    (1..ell_max)
+        .rev()
+        .find(|&ell| usable_rows(n, ell, is_missing) + ell >= 10 * (p + q) * ell)
+}
+
 /// The automatic number of system Markov parameters to return: `clamp(N/2, 2ℓ + 2, 1024)`
 /// (ERA sizes its Hankel from these and cuts where they sink into the noise floor).
 pub fn auto_markov_len(n: usize, observer_order: usize) -> usize {
@@ -203,7 +237,7 @@ pub fn okid(
     let is_missing = |k: usize| missing.is_some_and(|m| m[k]);
     check_finite(u, "input", &is_missing)?;
     check_finite(y, "output", &is_missing)?;
-    let ell_max = opts.observer_order.unwrap_or(auto_observer_order(n, p, q));
+    let mut ell_max = opts.observer_order.unwrap_or(auto_observer_order(n, p, q));
     if ell_max == 0 {
         return Err(OkidError::ZeroObserverOrder);
     }
@@ -222,9 +256,24 @@ pub fn okid(
         y_stats: &y_stats,
         ell: ell_max,
     };
-    let params_max = params_for(p, q, ell_max);
-    let (r_aug, rows, rows_skipped) = streaming_qr(&scaled, n, params_max, &is_missing);
-    let need = 2 * params_max;
+    let mut params_max = params_for(p, q, ell_max);
+    let (mut r_aug, mut rows, mut rows_skipped) = streaming_qr(&scaled, n, params_max, &is_missing);
+    let mut need = 2 * params_max;
+    if rows < need && opts.observer_order.is_none() {
+        // Gaps leave too few rows whose window is whole: the automatic order by the rule of
+        // [`auto_observer_order`] on the rows usable at it ([`gap_observer_order`]).
+        if let Some(ell) = gap_observer_order(n, p, q, ell_max, &is_missing) {
+            ell_max = ell;
+            params_max = params_for(p, q, ell);
+            need = 2 * params_max;
+            let scaled = Scaled { ell, ..scaled };
+            (r_aug, rows, rows_skipped) = streaming_qr(&scaled, n, params_max, &is_missing);
+        }
+    }
+    let scaled = Scaled {
+        ell: ell_max,
+        ..scaled
+    };
     if rows < need {
         return Err(OkidError::TooShort {
             rows,

@@ -3,7 +3,7 @@
 //! size is pinned here (see also `okid_noise` for the Monte Carlo after ERA).
 
 use nalgebra::{DMatrix, DVector};
-use propid_numerics::okid::{okid, OkidError, OkidOptions};
+use propid_numerics::okid::{gap_observer_order, okid, usable_rows, OkidError, OkidOptions};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
 
@@ -300,6 +300,61 @@ fn missing_samples_skip_their_rows_and_stay_exact() {
     let r = okid(&[&u[0]], &[&y[0]], Some(&missing), &opts).unwrap();
     assert_eq!(r.rows_skipped, 10 + r.observer_order_max);
     assert!(rel_err(&sys, &r) < 1e-8);
+}
+
+#[test]
+fn rows_with_a_whole_window_are_counted() {
+    // Samples 3 and 9 of 12 lost: with 2 lags a row k ≥ 2 needs k−2..=k present.
+    let lost = |k: usize| k == 3 || k == 9;
+    let rows: Vec<usize> = (0..12usize)
+        .filter(|&k| k >= 2 && !(k - 2..=k).any(lost))
+        .collect();
+    assert_eq!(rows, [2, 6, 7, 8]);
+    assert_eq!(usable_rows(12, 2, &lost), 4);
+    assert_eq!(usable_rows(12, 0, &lost), 10);
+    assert_eq!(usable_rows(12, 2, &|_| false), 10);
+    // Without a gap the rule is the automatic order's own: nothing below 40 is needed for
+    // 800 samples (800 ≥ 20·40), and the largest order below it is taken.
+    assert_eq!(gap_observer_order(800, 1, 1, 40, &|_| false), Some(39));
+    assert_eq!(gap_observer_order(6, 1, 1, 1, &|_| false), None);
+}
+
+#[test]
+fn randomly_lost_samples_lower_the_automatic_observer_order_instead_of_failing() {
+    // 5 % of 800 samples lost at random: at the automatic order (40 lags) a row keeps its
+    // whole window with probability 0.95^41 ≈ 12 %, fewer than the 164 rows 82 parameters
+    // need. The order falls to what the rows allow, and the recovery stays exact; an order
+    // given by the caller is not lowered.
+    let sys = underdamped();
+    let u = vec![random_input(800, 21)];
+    let mut y = sys.simulate(&u);
+    let mut u = u;
+    let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+    let mut missing = vec![false; 800];
+    for k in 0..800 {
+        if rng.gen_range(0.0..1.0) < 0.05 {
+            missing[k] = true;
+            y[0][k] = f64::NAN;
+            u[0][k] = f64::NAN;
+        }
+    }
+    let given = OkidOptions {
+        observer_order: Some(40),
+        ..OkidOptions::default()
+    };
+    assert!(matches!(
+        okid(&[&u[0]], &[&y[0]], Some(&missing), &given),
+        Err(OkidError::TooShort { .. })
+    ));
+    let r = okid(&[&u[0]], &[&y[0]], Some(&missing), &OkidOptions::default()).unwrap();
+    assert!(r.observer_order_max < 40, "{}", r.observer_order_max);
+    assert!(
+        r.rows + r.observer_order_max >= 20 * r.observer_order_max,
+        "{} rows at {}",
+        r.rows,
+        r.observer_order_max
+    );
+    assert!(rel_err(&sys, &r) < 1e-8, "{}", rel_err(&sys, &r));
 }
 
 #[test]
