@@ -124,6 +124,24 @@ impl Model {
         self.terms.iter_mut()
     }
 
+    /// Samples by which the model's terms delay the throttle (its dead time; 0 without one).
+    pub fn input_delay(&self) -> usize {
+        self.terms().map(|t| t.input_delay()).max().unwrap_or(0)
+    }
+
+    /// This model with each share of its dead time on the output's side
+    /// ([`Term::with_voltage_delay`], the shares of [`effects::dead_time::shares`]: from none to all of
+    /// it, ascending), paired with the share; empty without a dead time.
+    pub fn with_each_voltage_delay(&self) -> Vec<(usize, Model)> {
+        effects::dead_time::shares(self.input_delay())
+            .into_iter()
+            .filter_map(|s| {
+                let t = self.terms().find_map(|t| t.with_voltage_delay(s))?;
+                Some((s, self.with_boxed(t)))
+            })
+            .collect()
+    }
+
     /// The term of effect `name`, if the model has it.
     pub fn term(&self, name: &str) -> Option<&dyn Term> {
         self.terms().find(|t| t.name() == name)

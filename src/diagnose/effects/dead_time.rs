@@ -165,12 +165,7 @@ impl Effect for DeadTime {
         // delay is tried all on the throttle's side and all on the output's, and the best
         // delay's share is refined.
         let split = ctx.sig.voltage.is_some() && cur.model.terms().any(|t| t.reads_voltage());
-        let d_cur = cur
-            .model
-            .terms()
-            .map(|t| t.input_delay())
-            .max()
-            .unwrap_or(0);
+        let d_cur = cur.model.input_delay();
         let lm_at = |p: DeadTimeParams, iters: usize| {
             let delayed = cur.model.with(p);
             let from_cur = ctx.lm(&delayed, iters);

@@ -43,7 +43,6 @@ use serde_json::{json, Map, Value};
 use crate::diagnose::ctx::Ctx;
 use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
 use crate::diagnose::effects::baseline_drift::measured_estimation_samples;
-use crate::diagnose::effects::dead_time::shares;
 use crate::diagnose::fit::Fit;
 use crate::diagnose::model::{simulate, Core, Model, Signals};
 use crate::diagnose::search::SCORE_THRESHOLD;
@@ -279,24 +278,15 @@ pub fn side(ctx: &Ctx, cur: &Fit) -> Option<Fit> {
     };
     // Every share of a dead time on the output's side (the voltage as late as the output it
     // scales, or as early as the drive).
-    let all = cur
+    let mut delays: Vec<Model> = cur
         .model
-        .terms()
-        .map(|t| t.input_delay())
-        .max()
-        .unwrap_or(0);
-    let delays: Vec<Model> = shares(all)
+        .with_each_voltage_delay()
         .into_iter()
-        .filter_map(|s| {
-            let t = cur.model.terms().find_map(|t| t.with_voltage_delay(s))?;
-            Some(cur.model.with_boxed(t))
-        })
+        .map(|(_, m)| m)
         .collect();
-    let delays = if delays.is_empty() {
-        vec![cur.model.clone()]
-    } else {
-        delays
-    };
+    if delays.is_empty() {
+        delays.push(cur.model.clone());
+    }
     let output = ctx.best_of(delays.iter().map(|m| moved(m, Scaled::Output, 1.0)), 3);
     let better = if output.sse < cur.sse { &output } else { cur };
     let both = ctx.best_of(
@@ -325,19 +315,15 @@ pub fn side(ctx: &Ctx, cur: &Fit) -> Option<Fit> {
 /// ([`Term::voltage_delay`]); every share from none to all of it is tried.
 fn fit_scaling(ctx: &Ctx, cur: &Fit) -> Fit {
     let v_ref = ctx.sig.v_ref.abs().max(1e-6);
-    let starts = START_EXPONENTS.map(|n| cur.model.with(SupplySagParams::drive(n / v_ref)));
-    let mut best = ctx.best_of(starts.clone(), START_EXPONENTS.len());
-    let all = cur
+    let starts = |m: &Model| START_EXPONENTS.map(|n| m.with(SupplySagParams::drive(n / v_ref)));
+    let mut best = ctx.best_of(starts(&cur.model), START_EXPONENTS.len());
+    for (_, m) in cur
         .model
-        .terms()
-        .map(|t| t.input_delay())
-        .max()
-        .unwrap_or(0);
-    for share in shares(all).into_iter().filter(|&s| s > 0) {
-        let Some(t) = cur.model.terms().find_map(|t| t.with_voltage_delay(share)) else {
-            continue;
-        };
-        let f = ctx.best_of(starts.iter().map(|m| m.with_boxed(t.clone_box())), 1);
+        .with_each_voltage_delay()
+        .into_iter()
+        .filter(|(s, _)| *s > 0)
+    {
+        let f = ctx.best_of(starts(&m), 1);
         if f.sse < best.sse {
             best = f;
         }
