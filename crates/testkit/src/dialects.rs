@@ -467,6 +467,9 @@ mod tests {
             .unwrap()
             .starts_with("\"0,000\",\"30,0\","));
         assert!(text("time_of_day_midnight").contains("\n00:00:00.000,"));
+        let us = text("us_date_twelve_hour_clock");
+        assert!(us.contains("\n11/24/2024 11:59:57.000 PM,"), "{us:.200}");
+        assert!(us.contains("\n11/25/2024 12:00:00.000 AM,"));
         let rfc = text("rfc4180_escaped_quotes");
         assert!(rfc.starts_with("\"Time (s)\",\"Throttle (%)\",\"Thrust \"\"gf\"\"\","));
         assert!(rfc

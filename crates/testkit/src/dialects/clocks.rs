@@ -1,6 +1,7 @@
 //! Dialects of clocks and sensors (see [`super`]): Unix time stamps in ms and µs, an
 //! Arduino's `millis` column, time in minutes, a load cell reading `Force`, a motor's index in
-//! its columns' names, and a stand with a load cell per motor.
+//! its columns' names, a stand with a load cell per motor, and US software's dates and 12-hour
+//! clock.
 
 use super::common::{every_row, gf, pct, t_s, us, Collector, PCT_RANGE, US_RANGE};
 use super::{col, expect, num, Dialect, Expect, Style, G0, PLAIN};
@@ -99,6 +100,38 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                 &[("thrust", "m1_thrust_g", "gf", G0 / 1e3)],
                 PCT_RANGE.0,
                 PCT_RANGE.1,
+            )
+        },
+    );
+    // US software's wall clock: `M/D/YYYY h:mm:ss.fff AM|PM`, across midnight (11:59:57 PM on
+    // November 24 to 12:00:07 AM on November 25: the date carries the day).
+    c.add(
+        "us_date_twelve_hour_clock",
+        PLAIN,
+        &[
+            col("Date/Time", |_, s| {
+                let ms = 86_397_000 + (1e3 * s.t_s).round() as u64;
+                let (day, ms) = (24 + ms / 86_400_000, ms % 86_400_000);
+                let (h, m, sec, milli) =
+                    (ms / 3_600_000, ms / 60_000 % 60, ms / 1000 % 60, ms % 1000);
+                let (h12, half) = (
+                    if h % 12 == 0 { 12 } else { h % 12 },
+                    if h < 12 { "AM" } else { "PM" },
+                );
+                format!("11/{day}/2024 {h12}:{m:02}:{sec:02}.{milli:03} {half}")
+            }),
+            col("ESC signal (µs)", us),
+            col("Thrust (gf)", gf),
+        ],
+        Expect {
+            source: every_row(&[]),
+            ..expect(
+                &[
+                    ("time", "Date/Time", "date-time", 1.0),
+                    ("thrust", "Thrust (gf)", "gf", G0 / 1e3),
+                ],
+                US_RANGE.0,
+                US_RANGE.1,
             )
         },
     );

@@ -5,8 +5,12 @@
 /// `YYYY-MM-DD[T| ]HH:MM:SS[.fff][Z]` (seconds since 1970-01-01, UTC as written: no time zone
 /// is applied) or `M:SS.fff` (a stopwatch's minutes and seconds since the start, minutes past
 /// 59 too: `75:02.5`; the fraction is what tells it from a time of day without seconds,
-/// `18:55`, which is refused). A decimal comma is accepted in the seconds. `None` for anything
-/// else.
+/// `18:55`, which is refused). A decimal comma is accepted in the seconds. A time of day may
+/// end in `AM` or `PM` (a 12-hour clock, hours 1–12). The date may also be written with
+/// slashes, `M/D/YYYY` as US software writes it (`D/M/YYYY` when the first number cannot be a
+/// month, `YYYY/M/D` with the year first), or with dots, `D.M.YYYY` (`YYYY.M.D`): a record's
+/// stamps differ in their time of day, so the order of month and day matters only across a
+/// midnight. `None` for anything else.
 pub fn parse_clock(field: &str) -> Option<f64> {
     clock(field).map(|c| c.seconds)
 }
@@ -18,6 +22,7 @@ struct Clock {
 }
 
 fn clock(field: &str) -> Option<Clock> {
+    let (field, pm) = twelve_hour(field.trim());
     let field = field.strip_suffix('Z').unwrap_or(field);
     let (date, time) = match field.split_once(['T', ' ']) {
         Some((d, t)) => (Some(d), t.trim()),
@@ -37,13 +42,18 @@ fn clock(field: &str) -> Option<Clock> {
     let day_s = match parts[..] {
         [h, m, s] => {
             let (h, m, s) = (whole(h)?, whole(m)?, seconds(s)?);
+            let h = match pm {
+                None => h,
+                Some(_) if !(1..=12).contains(&h) => return None,
+                Some(pm) => h % 12 + if pm { 12 } else { 0 },
+            };
             if h > 23 || m > 59 {
                 return None;
             }
             f64::from(h * 3600 + m * 60) + s
         }
         // Minutes and seconds since a start: a fraction, no date.
-        [m, s] if date.is_none() && s.contains(['.', ',']) => {
+        [m, s] if date.is_none() && pm.is_none() && s.contains(['.', ',']) => {
             f64::from(whole(m)?.checked_mul(60)?) + seconds(s)?
         }
         _ => return None,
@@ -54,17 +64,55 @@ fn clock(field: &str) -> Option<Clock> {
             dated: false,
         });
     };
-    let mut ymd = date.split('-');
-    let y: i64 = ymd.next()?.parse().ok()?;
-    let mo: u32 = ymd.next()?.parse().ok()?;
-    let d: u32 = ymd.next()?.parse().ok()?;
-    if ymd.next().is_some() || !(1..=12).contains(&mo) || !(1..=31).contains(&d) {
-        return None;
-    }
+    let (y, mo, d) = civil_date(date)?;
     Some(Clock {
         seconds: days_from_civil(y, mo, d) as f64 * DAY_S + day_s,
         dated: true,
     })
+}
+
+/// The field without a trailing `AM` or `PM` (any case, a space before it or not), and whether
+/// it was `PM` (`None` without either).
+fn twelve_hour(field: &str) -> (&str, Option<bool>) {
+    let n = field.len();
+    if n < 2 || !field.is_char_boundary(n - 2) {
+        return (field, None);
+    }
+    let (rest, tail) = field.split_at(n - 2);
+    let pm = match tail.to_ascii_uppercase().as_str() {
+        "AM" => false,
+        "PM" => true,
+        _ => return (field, None),
+    };
+    (rest.trim_end(), Some(pm))
+}
+
+/// Year, month and day of a date written `YYYY-MM-DD`, with slashes or with dots
+/// ([`parse_clock`]'s doc).
+fn civil_date(date: &str) -> Option<(i64, u32, u32)> {
+    let sep = ['-', '/', '.'].into_iter().find(|&c| date.contains(c))?;
+    let parts: Vec<&str> = date.split(sep).collect();
+    let [a, b, c] = parts[..] else {
+        return None;
+    };
+    let num = |p: &str| -> Option<u32> {
+        (!p.is_empty() && p.bytes().all(|x| x.is_ascii_digit()))
+            .then(|| p.parse().ok())
+            .flatten()
+    };
+    let (a, b, c, year_first) = (num(a)?, num(b)?, num(c)?, a.len() == 4);
+    let (y, mo, d) = match sep {
+        _ if year_first => (a, b, c),
+        '-' => return None,
+        // Month first, as US software writes it, unless the first cannot be a month.
+        '/' if a > 12 => (c, b, a),
+        '/' => (c, a, b),
+        _ => (c, b, a),
+    };
+    if !(1..=12).contains(&mo) || !(1..=31).contains(&d) {
+        return None;
+    }
+    Some((i64::from(y), mo, d))
 }
 
 /// One day, s.
@@ -142,6 +190,37 @@ mod tests {
         let b = parse_clock("2024-08-13T18:55:24.130").unwrap();
         assert!((b - a - 1.01).abs() < 1e-6, "{}", b - a);
         for bad in ["18:55", "25:00:00", "2024-13-01 00:00:00", "12.5", "a:b:c"] {
+            assert_eq!(parse_clock(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn twelve_hour_clocks_and_dates_with_slashes_or_dots() {
+        let iso = parse_clock("2024-08-13 18:55:23.140").unwrap();
+        for same in [
+            "08/13/2024 06:55:23.140 PM",
+            "8/13/2024 6:55:23.140PM",
+            "13/08/2024 18:55:23.140",
+            "2024/08/13 18:55:23.140",
+            "13.08.2024 18:55:23,140",
+        ] {
+            let t = parse_clock(same).unwrap_or_else(|| panic!("{same}"));
+            assert!((t - iso).abs() < 1e-6, "{same}: {}", t - iso);
+        }
+        // Month first when both could be a month: 03/04 is March 4.
+        let march = parse_clock("2024-03-04 00:00:00").unwrap();
+        assert_eq!(parse_clock("03/04/2024 12:00:00 am"), Some(march));
+        assert_eq!(parse_clock("12:00:00 PM"), Some(43_200.0));
+        assert_eq!(parse_clock("12:30:00 AM"), Some(1_800.0));
+        for bad in [
+            "13:00:00 PM",
+            "00:10:00 AM",
+            "01:05.5 PM",
+            "13/13/2024 00:00:00",
+            "13-08-2024 00:00:00",
+            "1/2 00:00:00",
+            "PM",
+        ] {
             assert_eq!(parse_clock(bad), None, "{bad}");
         }
     }
