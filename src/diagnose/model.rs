@@ -130,8 +130,8 @@ impl Model {
     }
 
     /// This model with each share of its dead time on the output's side
-    /// ([`Term::with_voltage_delay`], the shares of [`effects::dead_time::shares`]: from none to all of
-    /// it, ascending), paired with the share; empty without a dead time.
+    /// ([`Term::with_voltage_delay`], the shares of [`effects::dead_time::shares`]: from none
+    /// to all of it, ascending), paired with the share; empty without a dead time.
     pub fn with_each_voltage_delay(&self) -> Vec<(usize, Model)> {
         effects::dead_time::shares(self.input_delay())
             .into_iter()

@@ -36,7 +36,8 @@
 //! parameter). A row needs its whole window of `ℓ` lags: where lost samples leave too few whole
 //! windows at that order (fewer than two rows a parameter), the automatic `ℓ_max` falls to the
 //! largest order the same rule allows on the rows usable at it ([`gap_observer_order`]); an
-//! order the caller gives is kept (and refused when too few rows remain). Because the columns are ordered by lag, the regression with `ℓ ≤ ℓ_max` lags uses a
+//! order the caller gives is kept (and refused when too few rows remain). Because the columns
+//! are ordered by lag, the regression with `ℓ ≤ ℓ_max` lags uses a
 //! *prefix* of the columns, so one QR serves every `ℓ`: `R_φ` is the leading `m(ℓ) × m(ℓ)` block
 //! with `m(ℓ) = 1 + p + (p+q)ℓ`, and `RSS(ℓ) = ‖z_{m(ℓ):}‖² + ‖R_res‖²`. The number used is
 //! chosen by output (simulation) error over a set of candidates ([`observer`]). Too many lags are
