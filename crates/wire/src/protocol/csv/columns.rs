@@ -392,6 +392,12 @@ pub const NAMES: &[(&str, Quantity, Unit)] = &[
     ("seconds", Q::Time, U::Second),
     ("ms", Q::Time, U::Millisecond),
     ("msec", Q::Time, U::Millisecond),
+    // Seconds since 1970 (a logger's `time.time()`, a spreadsheet's Unix stamp).
+    ("unix_time", Q::Time, U::Second),
+    ("unixtime", Q::Time, U::Second),
+    ("unix_timestamp", Q::Time, U::Second),
+    ("epoch", Q::Time, U::Second),
+    ("epoch_time", Q::Time, U::Second),
     ("throttle", Q::Throttle, U::ThrottleLevel),
     ("escsignal", Q::Throttle, U::Command),
     ("esc", Q::Throttle, U::Command),
@@ -408,6 +414,9 @@ pub const NAMES: &[(&str, Quantity, Unit)] = &[
     // Hobby loggers' supply columns, named by their unit.
     ("volts", Q::Voltage, U::Volt),
     ("amps", Q::Current, U::Ampere),
+    // A hobby load cell's column named by its unit (an HX711 sketch's `grams`).
+    ("grams", Q::Thrust, U::GramForce),
+    ("newtons", Q::Thrust, U::Newton),
 ];
 
 /// Quantity words of `word(unit)` / `word_unit` names (§6, RCbenchmark / Tyto Series
@@ -453,6 +462,7 @@ pub const WORDS: &[(&str, Quantity)] = &[
     ("angularvelocity", Q::Rpm),
     ("elapsed", Q::Time),
     ("timestamp", Q::Time),
+    ("epoch", Q::Time),
     ("voltage", Q::Voltage),
     ("vbat", Q::Voltage),
     ("battery", Q::Voltage),
@@ -576,10 +586,15 @@ pub fn lookup(name: &str) -> Option<ColumnSpec> {
         // `[-]`, an engineer's "dimensionless" (not in the unit table: a `-` cell of a units
         // row is an empty one).
         let suffix = if suffix == "-" { "1" } else { suffix };
-        UNITS
-            .iter()
-            .find(|(s, q, _)| *s == suffix && *q == quantity)
-            .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
+        let in_unit = |quantity| {
+            UNITS
+                .iter()
+                .find(|(s, q, _)| *s == suffix && *q == quantity)
+                .map(|&(_, _, unit)| ColumnSpec { quantity, unit })
+        };
+        // `T` is a thrust's symbol as well as a time's (`T (N)`, `T_g`): its unit tells them
+        // apart (normalised, both are `t`).
+        in_unit(quantity).or_else(|| (word == "t").then(|| in_unit(Quantity::Thrust)).flatten())
     });
     with_unit
         .or_else(|| qualified_name(&n).and_then(whole))
@@ -633,8 +648,8 @@ fn qualified_name(n: &str) -> Option<&'static str> {
 /// only a bare `Force` is the stand's load cell; a `Drag Force`, a `Side Force` or a
 /// benchmark's `vir_force` (a motor's force command) is not its thrust.
 const QUALIFIABLE: &[&str] = &[
-    "time", "throttle", "command", "cmd", "signal", "pwm", "thrust", "torque", "speed", "voltage",
-    "current",
+    "time", "throttle", "command", "cmd", "signal", "input", "pwm", "thrust", "torque", "speed",
+    "voltage", "current",
 ];
 
 /// Qualifiers that make a column no reading of its quantity: a set-point (`Target Speed`), a

@@ -470,6 +470,17 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         ("Motor 1 RPM", Quantity::Rpm, Unit::Rpm),
         ("esc2_erpm", Quantity::Rpm, Unit::ElectricalRpm),
         ("F (gf)", Quantity::Thrust, Unit::GramForce),
+        // A command qualified as a motor's input, thrust by its symbol `T` with a force unit,
+        // a Unix time stamp, a hobby load cell's column named by its unit.
+        ("Motor input (%)", Quantity::Throttle, Unit::Percent),
+        ("T (N)", Quantity::Thrust, Unit::Newton),
+        ("T_g", Quantity::Thrust, Unit::GramForce),
+        ("T [kgf]", Quantity::Thrust, Unit::KilogramForce),
+        ("t_ms", Quantity::Time, Unit::Millisecond),
+        ("unix_time", Quantity::Time, Unit::Second),
+        ("epoch_ms", Quantity::Time, Unit::Millisecond),
+        ("unix_time_ms", Quantity::Time, Unit::Millisecond),
+        ("grams", Quantity::Thrust, Unit::GramForce),
     ];
     for (name, q, u) in cases {
         assert_eq!(lookup(name), spec(q, u), "{name}");
@@ -503,6 +514,8 @@ fn qualified_and_small_stands_names_map_and_set_points_do_not() {
         "motor_temp",
         "u / %",
         "f (Hz)",
+        "T (V)",
+        "Analog input (V)",
     ] {
         assert_eq!(lookup(other), None, "{other}");
     }

@@ -29,11 +29,6 @@ fn clock(field: &str) -> Option<Clock> {
         None => (None, field),
     };
     let parts: Vec<&str> = time.split(':').collect();
-    let whole = |p: &str| -> Option<u32> {
-        (!p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()))
-            .then(|| p.parse().ok())
-            .flatten()
-    };
     let seconds = |p: &str| -> Option<f64> {
         let p = p.replacen(',', ".", 1);
         let s: f64 = p.parse().ok()?;
@@ -71,6 +66,13 @@ fn clock(field: &str) -> Option<Clock> {
     })
 }
 
+/// A field of digits only as a number (no sign, no space, not empty).
+fn whole(p: &str) -> Option<u32> {
+    (!p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()))
+        .then(|| p.parse().ok())
+        .flatten()
+}
+
 /// The field without a trailing `AM` or `PM` (any case, a space before it or not), and whether
 /// it was `PM` (`None` without either).
 fn twelve_hour(field: &str) -> (&str, Option<bool>) {
@@ -95,12 +97,7 @@ fn civil_date(date: &str) -> Option<(i64, u32, u32)> {
     let [a, b, c] = parts[..] else {
         return None;
     };
-    let num = |p: &str| -> Option<u32> {
-        (!p.is_empty() && p.bytes().all(|x| x.is_ascii_digit()))
-            .then(|| p.parse().ok())
-            .flatten()
-    };
-    let (a, b, c, year_first) = (num(a)?, num(b)?, num(c)?, a.len() == 4);
+    let (a, b, c, year_first) = (whole(a)?, whole(b)?, whole(c)?, a.len() == 4);
     let (y, mo, d) = match sep {
         _ if year_first => (a, b, c),
         '-' => return None,
