@@ -19,6 +19,7 @@ mod identify_gain;
 mod identify_glitched_cells;
 mod identify_held;
 mod identify_interpolated;
+mod identify_noisy_steps;
 mod identify_quality;
 mod identify_real_data;
 mod identify_repeats;

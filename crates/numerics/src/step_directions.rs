@@ -6,7 +6,8 @@
 //! figure over the steps that have it ([`crate::step_response::StepFigures`]: dead time, time
 //! constant, 10–90 % rise, settling, overshoot), the upper of the two middle values for an even
 //! count (a figure every step of the median carries, never an average of two). A dead time's
-//! median that is a bound (`< dt`) stays one (`dead_time_below_sample`). Steps the response's
+//! median that is a bound (`< dt`) stays one (`dead_time_below_sample`), and so does an
+//! overshoot's within the noise (`overshoot_below_pct`). Steps the response's
 //! change does not support count in `steps`, not in the medians.
 
 use std::collections::BTreeMap;
@@ -33,8 +34,13 @@ pub struct DirectionFigures {
     pub rise_10_90_s: Option<f64>,
     /// Median settling time, s.
     pub settling_90_s: Option<f64>,
-    /// Median overshoot, percent of the step.
+    /// Median overshoot, percent of the step (`None` when the median step's overshoot is
+    /// within its noise: `overshoot_below_pct`).
     pub overshoot_pct: Option<f64>,
+    /// The median step's overshoot is within its noise: below this, percent (omitted when
+    /// not).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub overshoot_below_pct: Option<f64>,
 }
 
 /// The median of `v` (the upper middle for an even count), `None` when empty.
@@ -62,6 +68,18 @@ pub fn by_direction(steps: &[StepFigures]) -> BTreeMap<&'static str, DirectionFi
             dead.sort_by(|a, b| a.0.total_cmp(&b.0));
             let mid = dead.get(dead.len() / 2).copied();
             let taus = all(|s| s.time_constant_s);
+            // An overshoot within the noise counts by its bound, and a median that falls on a
+            // bound stays one (as the dead time's).
+            let mut over: Vec<(f64, bool)> = of
+                .iter()
+                .filter_map(|s| match (s.overshoot_pct, s.overshoot_below_pct) {
+                    (Some(o), _) => Some((o, false)),
+                    (None, Some(b)) => Some((b, true)),
+                    (None, None) => None,
+                })
+                .collect();
+            over.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let over_mid = over.get(over.len() / 2).copied();
             Some((
                 name,
                 DirectionFigures {
@@ -72,7 +90,8 @@ pub fn by_direction(steps: &[StepFigures]) -> BTreeMap<&'static str, DirectionFi
                     time_constant_s: median(taus),
                     rise_10_90_s: median(all(|s| s.rise_10_90_s)),
                     settling_90_s: median(all(|s| s.settling_90_s)),
-                    overshoot_pct: median(all(|s| s.overshoot_pct)),
+                    overshoot_pct: over_mid.filter(|o| !o.1).map(|o| o.0),
+                    overshoot_below_pct: over_mid.filter(|o| o.1).map(|o| o.0),
                 },
             ))
         })
@@ -126,5 +145,30 @@ mod tests {
         let d = by_direction(&[step(0.2, 0.4, None, Some(0.04))]);
         assert!(d.contains_key("up") && !d.contains_key("down"));
         assert!(by_direction(&[]).is_empty());
+    }
+
+    /// Overshoots within the noise count by their bounds: a median on a bound stays a bound,
+    /// a median on a measured overshoot is a number.
+    #[test]
+    fn an_overshoot_median_on_a_bound_stays_a_bound() {
+        let with = |o: Option<f64>, below: Option<f64>| StepFigures {
+            overshoot_pct: o,
+            overshoot_below_pct: below,
+            ..step(0.2, 0.4, None, Some(0.04))
+        };
+        let d = by_direction(&[
+            with(None, Some(6.0)),
+            with(Some(2.0), None),
+            with(None, Some(7.0)),
+        ]);
+        assert_eq!(d["up"].overshoot_pct, None);
+        assert_eq!(d["up"].overshoot_below_pct, Some(6.0));
+        let d = by_direction(&[
+            with(Some(12.0), None),
+            with(None, Some(5.0)),
+            with(Some(15.0), None),
+        ]);
+        assert_eq!(d["up"].overshoot_pct, Some(12.0));
+        assert_eq!(d["up"].overshoot_below_pct, None);
     }
 }

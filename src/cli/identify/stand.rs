@@ -16,6 +16,14 @@ fn num(v: Option<f64>, prec: usize) -> String {
     }
 }
 
+/// An overshoot (the column's `%` follows), or `< bound` when it is within the noise.
+fn overshoot(value: Option<f64>, below: Option<f64>) -> String {
+    match (value, below) {
+        (None, Some(b)) => format!("< {b:.1}"),
+        (v, _) => num(v, 1),
+    }
+}
+
 /// `value ± sd`, or `value` alone without an uncertainty.
 fn pm(v: f64, sd: Option<f64>) -> String {
     let f = |x: f64| {
@@ -136,7 +144,7 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 tau,
                 num(s.rise_10_90_s, 4),
                 num(s.settling_90_s, 4),
-                num(s.overshoot_pct, 1),
+                overshoot(s.overshoot_pct, s.overshoot_below_pct),
                 s.note
                     .filter(|&n| n != propid_numerics::stand::NO_COMMAND)
                     .map(|n| format!("  ({n})"))
@@ -163,7 +171,7 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
                 num(d.time_constant_s, 4),
                 num(d.rise_10_90_s, 4),
                 num(d.settling_90_s, 4),
-                num(d.overshoot_pct, 1),
+                overshoot(d.overshoot_pct, d.overshoot_below_pct),
                 d.timed,
                 d.steps
             );
