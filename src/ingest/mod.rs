@@ -8,8 +8,9 @@
 //! - [`csv_file`]: CSV files (exported stand logs, benchmark archives) with column choice,
 //!   [`held`] for a slow sensor written on every row as its last reading, [`interpolated`] for
 //!   one the exporter interpolated onto every row, [`resample`] for
-//!   irregular timestamps, and [`steps`] found from a response-only record.
+//!   irregular timestamps ([`coarse_clock`] for stamps coarser than the rows), and [`steps`] found from a response-only record.
 
+pub mod coarse_clock;
 pub mod csv_file;
 pub mod held;
 pub mod interpolated;

@@ -9,6 +9,8 @@
 //! `t_k = t_0 + k·dt` for every channel.
 //!
 //! Method (documented because results depend on it):
+//! 0. Stamps coarser than the rows (a tick holding several rows, [`super::coarse_clock`]) are
+//!    spread evenly over their tick ([`Jitter::coarse_clock`]).
 //! 1. Rows whose time is not strictly after the previous kept row (duplicates, steps back) are
 //!    dropped and counted ([`Jitter::non_increasing`]).
 //! 2. The grid period is `1/fs` when the rate is given, otherwise the **median** spacing of the
@@ -62,6 +64,8 @@
 use propid_numerics::segment::SegmentRules;
 use serde::Serialize;
 
+use super::coarse_clock::{self, CoarseClock};
+
 /// How regular the timestamps were and what was done about it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Jitter {
@@ -87,6 +91,10 @@ pub struct Jitter {
     /// documentation, step 6; omitted when false).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub steady_rows: bool,
+    /// The stamps were coarser than the rows and each tick's rows were spread over it (module
+    /// documentation, step 0; omitted otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coarse_clock: Option<CoarseClock>,
 }
 
 /// Why the timestamps cannot be used.
@@ -183,6 +191,8 @@ pub fn to_uniform(
             return Err(ResampleError::BadRate(fs));
         }
     }
+    let spread = coarse_clock::spread(t);
+    let t: &[f64] = spread.as_ref().map_or(t, |s| &s.0);
     let keep = increasing_rows(t);
     if keep.len() < 2 {
         return Err(ResampleError::TooFewTimes);
@@ -205,6 +215,7 @@ pub fn to_uniform(
         gap_samples: 0,
         // A held channel is a command: the segmentation's one choice of rules for it.
         steady_rows: SegmentRules::for_record(dt, held.contains(&true)).samples_are_steady(),
+        coarse_clock: spread.as_ref().map(|s| s.1),
     };
     let kept: Vec<Vec<f64>> = channels
         .iter()

@@ -372,6 +372,14 @@ impl<'a> Output<'a> {
                     (false, false) => "",
                 }
             );
+            if let Some(c) = j.coarse_clock {
+                let _ = writeln!(
+                    o,
+                    "          stamps every {} s, {} rows each: the clock is coarser than the \
+                     rows; each stamp's rows spread evenly over its tick ({} rows)",
+                    c.tick_s, c.rows_per_tick, c.rows_spread
+                );
+            }
             if j.non_increasing > 0 {
                 let _ = writeln!(
                     o,

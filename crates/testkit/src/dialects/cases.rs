@@ -2,7 +2,7 @@
 
 use serde_json::json;
 
-use super::common::{gf, pct, t_s, us, Collector, PCT_RANGE};
+use super::common::{every_row, gf, pct, t_s, us, Collector, PCT_RANGE};
 use super::{
     col, expect, num, sparse, unit, Dialect, Expect, Sample, Style, G0, LBF_N, PLAIN, TRUTH,
 };
@@ -253,7 +253,8 @@ pub fn dialects() -> Vec<Dialect> {
             )
         },
     );
-    // 11. Time stamps rounded to 20 ms on rows every 10 ms (duplicated stamps).
+    // 11. Time stamps rounded to 20 ms on rows every 10 ms (duplicated stamps): a clock
+    //     coarser than the rows, its two rows per stamp spread over the tick (none dropped).
     c.add(
         "duplicated_stamps",
         PLAIN,
@@ -265,7 +266,11 @@ pub fn dialects() -> Vec<Dialect> {
             col("Thrust (N)", n),
         ],
         Expect {
-            source: vec![("/csv/jitter/non_increasing", json!(525))],
+            source: every_row(&[
+                ("/csv/jitter/non_increasing", json!(0)),
+                ("/csv/jitter/coarse_clock/tick_s", json!(0.02)),
+                ("/csv/jitter/coarse_clock/rows_per_tick", json!(2)),
+            ]),
             ..expect(&[("time", "Time (s)", "s", 1.0)], PCT_RANGE.0, PCT_RANGE.1)
         },
     );

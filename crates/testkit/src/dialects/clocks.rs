@@ -1,7 +1,9 @@
 //! Dialects of clocks and sensors (see [`super`]): Unix time stamps in ms and µs, an
 //! Arduino's `millis` column, time in minutes, a load cell reading `Force`, a motor's index in
 //! its columns' names, a stand with a load cell per motor, and US software's dates and 12-hour
-//! clock.
+//! clock; a spreadsheet's stamps in whole seconds (100 rows each).
+
+use serde_json::json;
 
 use super::common::{every_row, gf, pct, t_s, us, Collector, PCT_RANGE, US_RANGE};
 use super::{col, expect, num, Dialect, Expect, Style, G0, PLAIN};
@@ -132,6 +134,35 @@ pub(super) fn dialects(first: u64) -> Vec<Dialect> {
                 ],
                 US_RANGE.0,
                 US_RANGE.1,
+            )
+        },
+    );
+    // A spreadsheet that saved its time column in whole seconds (`14:03:27`): 100 rows share
+    // each stamp, the first second cut at the record's start (60 rows).
+    c.add(
+        "spreadsheet_whole_seconds",
+        PLAIN,
+        &[
+            col("Time", |_, s| {
+                let sec = (50_607.4 + s.t_s + 1e-9).floor() as u64;
+                format!("{}:{:02}:{:02}", sec / 3600, sec / 60 % 60, sec % 60)
+            }),
+            col("Throttle (%)", pct),
+            col("Thrust (gf)", gf),
+        ],
+        Expect {
+            source: every_row(&[
+                ("/csv/jitter/coarse_clock/tick_s", json!(1.0)),
+                ("/csv/jitter/coarse_clock/rows_per_tick", json!(100)),
+                ("/csv/jitter/non_increasing", json!(0)),
+            ]),
+            ..expect(
+                &[
+                    ("time", "Time", "date-time", 1.0),
+                    ("thrust", "Thrust (gf)", "gf", G0 / 1e3),
+                ],
+                PCT_RANGE.0,
+                PCT_RANGE.1,
             )
         },
     );
