@@ -69,7 +69,8 @@ pub fn spread(t: &[f64]) -> Option<(Vec<f64>, CoarseClock)> {
     };
     // Most ticks have rows: the median step is one tick.
     let median_is_one = (steps[steps.len() / 2] - tick).abs() <= 0.01 * tick;
-    if !(tick > 0.0) || !median_is_one || !steps.iter().all(|&d| whole(d)) {
+    let positive = tick.is_finite() && tick > 0.0;
+    if !positive || !median_is_one || !steps.iter().all(|&d| whole(d)) {
         return None;
     }
     let mut inner: Vec<usize> = runs[1..runs.len() - 1].iter().map(|r| r.1).collect();
