@@ -25,7 +25,10 @@
 //!   tests against the current model: `Y` is a real addition that the greedy path could not
 //!   reach because `X`'s parameters had absorbed it;
 //! - **remove** `X` when `X` fails the addition tests on `R` (the later effects took over what
-//!   it explained).
+//!   it explained); a term the current model holds at implausible values
+//!   ([`Term::plausible`](super::effect::Term::plausible) on the model as it stands: a later
+//!   joint refit moved it there) is removed whatever the held-out figure, as an implausible
+//!   addition is refused whatever it gains.
 //!
 //! A change is kept only when the held-out figure ([`super::folds`]) agrees: not lower for a
 //! swap or a removal (the simpler model must predict the held-out steps as well), higher for an
@@ -214,6 +217,18 @@ pub fn revise(
     let mut removals = Vec::new();
     let mut swaps: Vec<(usize, f64, Change)> = Vec::new();
     let mut adds: Vec<(f64, Change)> = Vec::new();
+    // Terms the current model holds at physically implausible values (a joint refit moved
+    // them there, the supply's side settled after them): removed whatever the held-out figure
+    // says, as an implausible addition is refused whatever it gains.
+    let implausible: Vec<&'static str> = searched
+        .iter()
+        .copied()
+        .filter(|&x| {
+            cur.model
+                .term(x)
+                .is_some_and(|t| !t.plausible(ctx, &cur.model))
+        })
+        .collect();
     for &x_name in searched {
         let Some(x) = REGISTRY.iter().find(|e| e.name() == x_name) else {
             continue;
@@ -288,6 +303,7 @@ pub fn revise(
         let f_cv = cv(fit);
         let kept = match change {
             Change::Add { .. } => f_cv.mean > cur_cv.mean + super::search::MIN_CV_GAIN_PP,
+            Change::Remove { out, .. } if implausible.contains(&out) => true,
             _ => f_cv.mean >= cur_cv.mean,
         };
         if kept {

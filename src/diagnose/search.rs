@@ -202,56 +202,67 @@ fn search_from(
     let mut revisions = 0;
     let mut ledger = Ledger::default();
     let rule = Selection::for_method(folds.method);
-    loop {
-        while findings.len() < max_effects {
-            let room = max_effects - findings.len();
-            let Some(step) = forward(
-                ctx,
-                &findings,
-                &cur,
-                (cur_cv.mean, rule),
-                &cv,
-                &mut ledger,
-                room,
-            ) else {
-                break;
-            };
-            for (score, e, gain, with) in step.taken {
-                let mut f = finding(e, score, gain, &cur, &step.fit, ctx);
-                if let Some(other) = with {
-                    let note = format!(
-                        "; taken together with {other}: neither raised the held-out fit \
+    // The supply's side is settled on the model the search ends with; when that changes the
+    // model, the search and its revisions run again on it (a term that stood in for the side's
+    // misfit can then be removed, and what it kept out taken).
+    let mut side_settled = false;
+    'settle: loop {
+        loop {
+            while findings.len() < max_effects {
+                let room = max_effects - findings.len();
+                let Some(step) = forward(
+                    ctx,
+                    &findings,
+                    &cur,
+                    (cur_cv.mean, rule),
+                    &cv,
+                    &mut ledger,
+                    room,
+                ) else {
+                    break;
+                };
+                for (score, e, gain, with) in step.taken {
+                    let mut f = finding(e, score, gain, &cur, &step.fit, ctx);
+                    if let Some(other) = with {
+                        let note = format!(
+                            "; taken together with {other}: neither raised the held-out fit \
                          alone, the pair did (the pair's held-out gain is reported on the \
                          stronger of the two, 0 on the other)"
-                    );
-                    f.drop.push_str(&note);
-                    f.evidence.push_str(&note);
+                        );
+                        f.drop.push_str(&note);
+                        f.evidence.push_str(&note);
+                    }
+                    findings.push(f);
                 }
-                findings.push(f);
+                (cur, cur_cv) = (step.fit, step.cv);
             }
-            (cur, cur_cv) = (step.fit, step.cv);
+            let searched: Vec<&'static str> = findings[detected..]
+                .iter()
+                .filter_map(|f| REGISTRY.iter().map(|e| e.name()).find(|n| *n == f.effect))
+                .collect();
+            if revisions >= MAX_REVISIONS || searched.is_empty() {
+                break;
+            }
+            let may_add = findings.len() < max_effects;
+            let Some(kept) = revise(ctx, folds, &cur, &cur_cv, &searched, may_add) else {
+                break;
+            };
+            revisions += 1;
+            apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv, &mut ledger);
         }
-        let searched: Vec<&'static str> = findings[detected..]
-            .iter()
-            .filter_map(|f| REGISTRY.iter().map(|e| e.name()).find(|n| *n == f.effect))
-            .collect();
-        if revisions >= MAX_REVISIONS || searched.is_empty() {
-            break;
+        // What the supply scales, settled on the final model; kept only when the held-out figure
+        // does not fall.
+        if !side_settled {
+            side_settled = true;
+            if let Some(f) = supply_sag::side(ctx, &cur) {
+                let f_cv = cv(&f);
+                if f_cv.mean >= cur_cv.mean {
+                    (cur, cur_cv) = (f, f_cv);
+                    continue 'settle;
+                }
+            }
         }
-        let may_add = findings.len() < max_effects;
-        let Some(kept) = revise(ctx, folds, &cur, &cur_cv, &searched, may_add) else {
-            break;
-        };
-        revisions += 1;
-        apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv, &mut ledger);
-    }
-    // What the supply scales, settled on the final model; kept only when the held-out figure
-    // does not fall.
-    if let Some(f) = supply_sag::side(ctx, &cur) {
-        let f_cv = cv(&f);
-        if f_cv.mean >= cur_cv.mean {
-            (cur, cur_cv) = (f, f_cv);
-        }
+        break;
     }
     if let Some(c) = lead::canonical(&cur) {
         cur = c;

@@ -2,6 +2,7 @@
 
 mod demo_cli;
 mod diagnose_cli;
+mod diagnose_hidden_sag;
 mod diagnose_injected;
 mod diagnose_input_lead;
 mod diagnose_model_keys;
