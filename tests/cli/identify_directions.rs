@@ -2,7 +2,7 @@
 //! 40 ms time constant and falls with 90 ms (a motor driven up, coasting down), written as a
 //! plain 200 Hz export, read through the binary; each direction's medians are its own.
 
-use crate::support::propid;
+use crate::support::{median_rows, propid};
 use serde_json::Value;
 
 fn f(v: &Value) -> f64 {
@@ -63,10 +63,7 @@ fn spin_up_and_spin_down_have_their_own_medians() {
     // The summary prints them under the step table, up first.
     let (code, human, err) = propid(&["identify", file]);
     assert_eq!(code, 0, "{err}");
-    let medians: Vec<&str> = human
-        .lines()
-        .filter(|l| l.trim_start().starts_with("median"))
-        .collect();
+    let medians = median_rows(&human);
     assert_eq!(medians.len(), 2, "{human}");
     assert!(
         medians[0].contains(" up ") && medians[1].contains(" down "),

@@ -5,7 +5,7 @@
 //! its noise requires (`smoothing_samples`), the overshoot is a bound (`overshoot_below_pct`)
 //! and the settling time is the motor's.
 
-use crate::support::propid;
+use crate::support::{median_rows, propid};
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use serde_json::Value;
@@ -65,10 +65,7 @@ fn a_noisy_load_cell_shows_no_overshoot_and_the_motors_settling_time() {
     // The summary prints the bound as one.
     let (code, human, err) = propid(&["identify", file]);
     assert_eq!(code, 0, "{err}");
-    let medians: Vec<&str> = human
-        .lines()
-        .filter(|l| l.trim_start().starts_with("median"))
-        .collect();
+    let medians = median_rows(&human);
     assert_eq!(medians.len(), 2, "{human}");
     assert!(medians.iter().all(|l| l.contains("< ")), "{human}");
 }

@@ -22,3 +22,11 @@ pub fn second_order_sim(dir: &std::path::Path) -> String {
     std::fs::write(&path, "[plant]\nkind = \"second_order\"\n").expect("write sim config");
     path.to_str().expect("utf-8 path").to_owned()
 }
+
+/// The `median` rows of `identify`'s summary (under its step table, up first).
+pub fn median_rows(human: &str) -> Vec<&str> {
+    human
+        .lines()
+        .filter(|l| l.trim_start().starts_with("median"))
+        .collect()
+}
