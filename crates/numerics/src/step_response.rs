@@ -401,6 +401,21 @@ mod tests {
             .collect()
     }
 
+    /// The unit step response of `ωn² / (s² + 2ζωn s + ωn²)` to a step at sample `at`.
+    fn underdamped(n: usize, at: usize, dt: f64, wn: f64, z: f64) -> Vec<f64> {
+        let wd = wn * (1.0 - z * z).sqrt();
+        (0..n)
+            .map(|k| {
+                let t = (k as f64 - at as f64) * dt;
+                if t <= 0.0 {
+                    0.0
+                } else {
+                    1.0 - (-z * wn * t).exp() * ((wd * t).cos() + z * wn / wd * (wd * t).sin())
+                }
+            })
+            .collect()
+    }
+
     fn step(at: usize, end: usize, from: f64, to: f64) -> Step {
         Step {
             before_start: 0,
@@ -472,17 +487,7 @@ mod tests {
     fn an_underdamped_response_shows_its_overshoot() {
         // 2nd order, ζ = 0.3: overshoot exp(−πζ/√(1−ζ²)) = 37.2 %.
         let (dt, wn, z) = (0.001, 2.0 * std::f64::consts::PI * 5.0, 0.3f64);
-        let wd = wn * (1.0 - z * z).sqrt();
-        let y: Vec<f64> = (0..3000)
-            .map(|k| {
-                let t = (k as f64 - 500.0) * dt;
-                if t <= 0.0 {
-                    0.0
-                } else {
-                    1.0 - (-z * wn * t).exp() * ((wd * t).cos() + z * wn / wd * (wd * t).sin())
-                }
-            })
-            .collect();
+        let y = underdamped(3000, 500, dt, wn, z);
         let f = step_figures(&y, dt, &step(500, 3000, 0.3, 0.5));
         let want = 100.0 * (-std::f64::consts::PI * z / (1.0 - z * z).sqrt()).exp();
         assert!((f.overshoot_pct.unwrap() - want).abs() < 0.5, "{f:?}");
@@ -543,17 +548,7 @@ mod tests {
     #[test]
     fn an_overshoot_beyond_the_noise_is_measured() {
         let (dt, wn, z) = (0.002, 2.0 * std::f64::consts::PI * 5.0, 0.3f64);
-        let wd = wn * (1.0 - z * z).sqrt();
-        let clean: Vec<f64> = (0..1500)
-            .map(|k| {
-                let t = (k as f64 - 500.0) * dt;
-                if t <= 0.0 {
-                    0.0
-                } else {
-                    1.0 - (-z * wn * t).exp() * ((wd * t).cos() + z * wn / wd * (wd * t).sin())
-                }
-            })
-            .collect();
+        let clean = underdamped(1500, 500, dt, wn, z);
         let want = 100.0 * (-std::f64::consts::PI * z / (1.0 - z * z).sqrt()).exp();
         for seed in 0..5 {
             let f = step_figures(
