@@ -199,71 +199,34 @@ fn search_from(
         }
     }
     let detected = findings.len();
-    let mut revisions = 0;
-    let mut ledger = Ledger::default();
     let rule = Selection::for_method(folds.method);
-    // The supply's side is settled on the model the search ends with; when that changes the
-    // model, the search and its revisions run again on it (a term that stood in for the side's
-    // misfit can then be removed, and what it kept out taken).
-    let mut side_settled = false;
-    'settle: loop {
-        loop {
-            while findings.len() < max_effects {
-                let room = max_effects - findings.len();
-                let Some(step) = forward(
-                    ctx,
-                    &findings,
-                    &cur,
-                    (cur_cv.mean, rule),
-                    &cv,
-                    &mut ledger,
-                    room,
-                ) else {
-                    break;
-                };
-                for (score, e, gain, with) in step.taken {
-                    let mut f = finding(e, score, gain, &cur, &step.fit, ctx);
-                    if let Some(other) = with {
-                        let note = format!(
-                            "; taken together with {other}: neither raised the held-out fit \
-                         alone, the pair did (the pair's held-out gain is reported on the \
-                         stronger of the two, 0 on the other)"
-                        );
-                        f.drop.push_str(&note);
-                        f.evidence.push_str(&note);
-                    }
-                    findings.push(f);
-                }
-                (cur, cur_cv) = (step.fit, step.cv);
-            }
-            let searched: Vec<&'static str> = findings[detected..]
-                .iter()
-                .filter_map(|f| REGISTRY.iter().map(|e| e.name()).find(|n| *n == f.effect))
-                .collect();
-            if revisions >= MAX_REVISIONS || searched.is_empty() {
-                break;
-            }
-            let may_add = findings.len() < max_effects;
-            let Some(kept) = revise(ctx, folds, &cur, &cur_cv, &searched, may_add) else {
-                break;
-            };
-            revisions += 1;
-            apply(ctx, kept, &mut findings, &mut cur, &mut cur_cv, &mut ledger);
+    let mut g = Growth {
+        findings,
+        cur,
+        cur_cv,
+        ledger: Ledger::default(),
+        revisions: 0,
+        detected,
+    };
+    g.grow(ctx, folds, rule, max_effects, &cv);
+    // What the supply scales, settled on the model the search ends with; kept only when the
+    // held-out figure does not fall. When it changes the model, the search and its revisions
+    // run again on it (a term that stood in for the side's misfit can then be removed, and
+    // what it kept out taken).
+    if let Some(f) = supply_sag::side(ctx, &g.cur) {
+        let f_cv = cv(&f);
+        if f_cv.mean >= g.cur_cv.mean {
+            (g.cur, g.cur_cv) = (f, f_cv);
+            g.grow(ctx, folds, rule, max_effects, &cv);
         }
-        // What the supply scales, settled on the final model; kept only when the held-out figure
-        // does not fall.
-        if !side_settled {
-            side_settled = true;
-            if let Some(f) = supply_sag::side(ctx, &cur) {
-                let f_cv = cv(&f);
-                if f_cv.mean >= cur_cv.mean {
-                    (cur, cur_cv) = (f, f_cv);
-                    continue 'settle;
-                }
-            }
-        }
-        break;
     }
+    let Growth {
+        mut findings,
+        mut cur,
+        cur_cv,
+        ledger,
+        ..
+    } = g;
     if let Some(c) = lead::canonical(&cur) {
         cur = c;
     }
@@ -277,6 +240,81 @@ fn search_from(
         findings,
         rejected: ledger.rejected(&taken),
     })
+}
+
+/// The search as it grows: the findings (those read off the data first, `detected` of them),
+/// the current model and its held-out scores, the candidates not taken, the revisions made.
+struct Growth {
+    findings: Vec<Finding>,
+    cur: Fit,
+    cur_cv: Scores,
+    ledger: Ledger,
+    revisions: usize,
+    detected: usize,
+}
+
+impl Growth {
+    /// Forward steps until none is taken or `max_effects` are in, then a revision
+    /// ([`revise`]); again after each kept revision, at most [`MAX_REVISIONS`] in all.
+    fn grow(
+        &mut self,
+        ctx: &Ctx,
+        folds: &Folds,
+        rule: Selection,
+        max_effects: usize,
+        cv: &impl Fn(&Fit) -> Scores,
+    ) {
+        loop {
+            while self.findings.len() < max_effects {
+                let room = max_effects - self.findings.len();
+                let Some(step) = forward(
+                    ctx,
+                    &self.findings,
+                    &self.cur,
+                    (self.cur_cv.mean, rule),
+                    cv,
+                    &mut self.ledger,
+                    room,
+                ) else {
+                    break;
+                };
+                for (score, e, gain, with) in step.taken {
+                    let mut f = finding(e, score, gain, &self.cur, &step.fit, ctx);
+                    if let Some(other) = with {
+                        let note = format!(
+                            "; taken together with {other}: neither raised the held-out fit \
+                             alone, the pair did (the pair's held-out gain is reported on the \
+                             stronger of the two, 0 on the other)"
+                        );
+                        f.drop.push_str(&note);
+                        f.evidence.push_str(&note);
+                    }
+                    self.findings.push(f);
+                }
+                (self.cur, self.cur_cv) = (step.fit, step.cv);
+            }
+            let searched: Vec<&'static str> = self.findings[self.detected..]
+                .iter()
+                .filter_map(|f| REGISTRY.iter().map(|e| e.name()).find(|n| *n == f.effect))
+                .collect();
+            if self.revisions >= MAX_REVISIONS || searched.is_empty() {
+                return;
+            }
+            let may_add = self.findings.len() < max_effects;
+            let Some(kept) = revise(ctx, folds, &self.cur, &self.cur_cv, &searched, may_add) else {
+                return;
+            };
+            self.revisions += 1;
+            apply(
+                ctx,
+                kept,
+                &mut self.findings,
+                &mut self.cur,
+                &mut self.cur_cv,
+                &mut self.ledger,
+            );
+        }
+    }
 }
 
 /// What one forward step takes: one effect, or a pair ([`super::pair`]), each as (score,
