@@ -1,6 +1,6 @@
 //! Step figures from a vibrating stand: a first-order motor (θ 20 ms, τ 40 ms, no overshoot)
 //! whose load cell reads with Gaussian noise 5 % of each step, exported in gram-force at
-//! 200 Hz and read through the binary. Read sample by sample the noise was a ~15 % "overshoot"
+//! 200 Hz and read through the binary. Read sample by sample such noise was a 13.5 % "overshoot"
 //! and a settling time as long as the hold; the figures now come from the response smoothed as
 //! its noise requires (`smoothing_samples`), the overshoot is a bound (`overshoot_below_pct`)
 //! and the settling time is the motor's.

@@ -504,7 +504,7 @@ mod tests {
     }
 
     /// A first-order step at 200 Hz (θ 20 ms, τ 40 ms) with noise 5 % of its size: read
-    /// sample by sample it showed ~15 % overshoot and a settling time near the hold's length
+    /// sample by sample the same noise showed 13.5 % overshoot and a settling time of the hold
     /// (module doc, "Noise"); smoothed, the settling time is within 25 % of θ + τ ln 10 and
     /// the overshoot is a bound, not a number, on every seed.
     #[test]
