@@ -30,20 +30,20 @@
 //! read off the response smoothed by a centred moving average of `w` samples
 //! ([`StepFigures::smoothing_samples`]), `w` the shortest of [`WIDTHS`] whose smoothed noise
 //! `σ_w` (measured on the hold's settled last third, so a coloured noise counts as it is, and
-//! never below the levels' noise over `√w`) is at
-//! most a [`BAND_NOISE_RATIO`]th of the band, and never longer than half the smoothed 10–90 %
-//! rise (a window that blurs the rise would move the figures it is to clean; a centred average
-//! of `w ≤ t_r/2` moves a first-order lag's settling by under 0.1 τ). Clean records keep
-//! `w = 1`, their figures unchanged. Where no such window exists the noise is wider than the
-//! band at this rate: the settling time is withheld ([`NOISE_WIDER_THAN_BAND`]). A stand's
-//! structure ringing on through the hold (krull's load cell, an 11 Hz mode of ζ 0.005 at
-//! 50 Hz) counts as such noise: its settling time is withheld too, though a ringing of a few
-//! per cent reaches the band less often than a Gaussian noise of its standard deviation (a
-//! rule on the settled third's largest excursion was tried: it let one step in sixteen of a
-//! noisy first-order staircase read a settling time five times too long; not kept). An overshoot is
-//! reported above [`OVERSHOOT_SIGMAS`]` σ_w` (or as 0 where the smoothed response never passes
-//! its final value); within it `overshoot_pct` is null and `overshoot_below_pct` gives that
-//! bound (the response overshoots by less, if at all).
+//! never below the levels' noise over `√w`) is at most a [`BAND_NOISE_RATIO`]th of the band,
+//! and never longer than half the smoothed 10–90 % rise (a window that blurs the rise would
+//! move the figures it is to clean; a centred average of `w ≤ t_r/2` moves a first-order lag's
+//! settling by under 0.1 τ). Clean records keep `w = 1`, their figures unchanged. Where no
+//! such window exists the noise is wider than the band at this rate: the settling time is
+//! withheld ([`NOISE_WIDER_THAN_BAND`]). A stand's structure ringing on through the hold
+//! (krull's load cell, an 11 Hz mode of ζ 0.005 at 50 Hz) counts as such noise: its settling
+//! time is withheld too, though a ringing of a few per cent reaches the band less often than
+//! a Gaussian noise of its standard deviation (a rule on the settled third's largest
+//! excursion was tried: on a noisy first-order staircase, one of the eight steps looked at
+//! read 0.58 s for 0.11 s; not kept). An overshoot is reported above
+//! [`OVERSHOOT_SIGMAS`]` σ_w` (or as 0 where the smoothed response never passes its final
+//! value); within it `overshoot_pct` is null and `overshoot_below_pct` gives that bound (the
+//! response overshoots by less, if at all).
 //!
 //! A step whose change `|y₁ − y₀|` is below [`MIN_SNR`] times the noise (the standard deviation
 //! of the level before and after) supports none of these figures: they are all `None` and the
@@ -65,8 +65,8 @@ pub const SETTLING_BAND: f64 = 0.1;
 pub const MIN_SNR: f64 = 5.0;
 /// The smoothed noise's standard deviation (a share of the step) is at most the settling
 /// band's half-width over this: one sample of settled noise past the band is then a 4σ event
-/// (at 3σ, measured, one step in eight of a first-order staircase with noise 5 % of its steps
-/// read a settling time three times too long).
+/// (at 3σ, measured on a first-order staircase with noise 10 % of its steps, settling times
+/// up to three times too long: 0.36 s for 0.11 s).
 pub const BAND_NOISE_RATIO: f64 = 4.0;
 /// An overshoot is reported when the smoothed response's peak stands this many smoothed noise
 /// standard deviations above the final value (the largest of a hold's few dozen independent
