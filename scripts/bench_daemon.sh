@@ -75,7 +75,7 @@ settle_ms = 300
 pulse_amplitudes = [0.1, 0.15]
 pulse_spacing_ms = 100
 pulses_per_level = 1000
-# 1 ms pulses: one-sample pulses at 10 kHz are below the noise (model_unreliable, see README)
+# 1 ms pulses: one-sample pulses at 10 kHz are below the noise (model_unreliable, see docs/daemon.md)
 pulse_width_samples = $(( rate >= 2000 ? rate / 1000 : 1 ))
 TOML
 "$bin" sim --config "$work/sim_fast.toml" --link "$work/stand" --seconds $((seconds + 5)) \

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Produces the detection table of `propid diagnose` (issue 5) and the real-data table, and puts
-# both into docs/diagnose.md between the markers
+# both into docs/detection.md between the markers
 #   <!-- detection-table:begin --> ... <!-- detection-table:end -->
 # Nothing in those tables is typed by hand.
 #
@@ -24,7 +24,7 @@ data="$(realpath -m "$data")" # the table names the folder without ../ detours
 if [ ! -d "$data" ]; then
     echo "warning: data dir $data absent; the real-data table will say so" >&2
 fi
-doc=docs/diagnose.md
+doc=docs/detection.md
 table="$(mktemp)"
 trap 'rm -f "$table"' EXIT
 cargo run --quiet --release --example detection_table -- "$cases" "$data" > "$table"

@@ -3,7 +3,7 @@
 # bitcraze cf21 log (when ../shared/data is present) and on generated 1 kHz staircases of
 # 20 000 and 60 000 samples: random levels 0.2..0.8 held 3 s, thrust 900 gf · u² through a 40 ms
 # lag and a 10 ms dead time, deterministic noise. With a second binary, both in turn and the
-# ratio of the medians. Numbers for README's "Speed and scale".
+# ratio of the medians. Numbers for docs/speed.md.
 #
 #   scripts/diagnose_time.sh BIN [OTHER_BIN] [RUNS]
 set -euo pipefail

@@ -40,8 +40,8 @@
 #      failed) + the pulses of every window closed before K pulses (`window_interrupted`, each
 #      named with what closed it: `closed_by` segment = a reset or hang-up, level_end = pulses
 #      left over when an operating point ended, end = the stream's end) = pulses; the windows the plan made = models + refused + failed + interrupted.
-# Writes docs/soak.md and README.md between <!-- BEGIN soak --> and <!-- END soak -->
-# (scripts/update_readme_tables.sh copies it again). Run by hand; it takes STAND_S + ~3 min:
+# Writes its table into docs/soak.md between <!-- BEGIN soak --> and <!-- END soak -->
+# (scripts/splice_docs.py; the prose around is kept). Run by hand; it takes STAND_S + ~3 min:
 #
 #   nice -n 10 scripts/soak.sh [BIN]        (default target/release/propid; STAND_S=1800)
 #   scripts/soak.sh --analyse DIR [BIN]     (the checks and figures again, from a kept run)
@@ -285,16 +285,5 @@ PY
 OK=$?
 set -e
 cat "$WORK/soak.md"
-mkdir -p docs
-{ echo "# Soak"; echo; cat "$WORK/soak.md"; } >docs/soak.md
-python3 - <<'PY'
-import re
-body = open("docs/soak.md", encoding="utf-8").read().split("\n", 2)[2].strip()
-readme = open("README.md", encoding="utf-8").read()
-pat = re.compile(r"(<!-- BEGIN soak -->\n)(?:.*?\n)?(<!-- END soak -->)", re.S)
-if not pat.search(readme):
-    raise SystemExit("README.md has no markers for soak")
-open("README.md", "w", encoding="utf-8").write(pat.sub(lambda m: m.group(1) + body + "\n" + m.group(2), readme))
-print("docs/soak.md and README.md (soak) updated")
-PY
+python3 scripts/splice_docs.py soak docs/soak.md "$WORK/soak.md"
 exit "$OK"
