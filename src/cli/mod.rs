@@ -106,7 +106,7 @@ pub enum CliError {
     },
 }
 
-/// The class of a cause: what the user has to act on, and the exit code (README).
+/// The class of a cause: what the user has to act on, and the exit code (docs/cli.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ExitClass {
     /// The command line is wrong (exit 2).

@@ -361,7 +361,7 @@ impl Outcome {
 /// - supply sag 30 %: the log's own supply dependence adds to the injected one where the clean
 ///   log does not name it (dantonio's ramp: median 26 %, at most 41 % high), and a log's own
 ///   dependence on the drive beside an injected one on the output is no single term
-///   (vanderploeg: 23 % low; README, "Which side the supply scales").
+///   (vanderploeg: 23 % low; docs/injection.md, "Which side the supply scales").
 pub fn tolerance(inj: &Injection) -> f64 {
     match inj {
         Injection::DeadTime { .. } => 1.0,
