@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Produces the detection table of `propid diagnose` (issue 5) and the real-data table, and puts
 # both into docs/detection.md between the markers
-#   <!-- detection-table:begin --> ... <!-- detection-table:end -->
+#   <!-- BEGIN detection --> ... <!-- END detection -->   (scripts/splice_docs.py)
 # Nothing in those tables is typed by hand.
 #
 # Usage: [PROPID_SHARED_DATA=DIR] scripts/detection_table.sh [CASES] [DATA_DIR]
@@ -28,18 +28,10 @@ doc=docs/detection.md
 table="$(mktemp)"
 trap 'rm -f "$table"' EXIT
 cargo run --quiet --release --example detection_table -- "$cases" "$data" > "$table"
-if ! grep -q '<!-- detection-table:begin -->' "$doc"; then
-    echo "$doc lacks the detection-table markers" >&2
-    exit 1
-fi
 {
-    sed '/<!-- detection-table:begin -->/q' "$doc"
     echo
     echo "_Produced by \`scripts/detection_table.sh $cases\` on $(date -u +%Y-%m-%d)._"
     echo
     cat "$table"
     echo
-    sed -n '/<!-- detection-table:end -->/,$p' "$doc"
-} > "$doc.new"
-mv "$doc.new" "$doc"
-echo "updated $doc" >&2
+} | python3 scripts/splice_docs.py detection "$doc"
