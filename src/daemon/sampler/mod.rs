@@ -1,7 +1,8 @@
 //! The sampler: reads the source, decodes TSP/1, places samples, drives the plan, never blocks.
 //!
 //! One loop, each turn bounded by the source's read timeout (≤ 50 ms):
-//! 1. read whatever bytes are there (`Ok(0)` = nothing yet); append them to the raw recording;
+//! 1. read whatever bytes are there (`Ok(0)` = nothing yet); copy them for the raw recording
+//!    (its own thread writes the file: [`super::recorder`]; the sampler does no file I/O);
 //! 2. push them through the link's [`Wire`] decoder — binary TSP/1 (fixed buffer, counts every
 //!    drop by kind) or the CSV fallback made to look like it ([`super::csv_link`]);
 //! 3. for each frame: HELLO → new segment if its `boot_id` changed; SAMPLE → unwrapped clock and
@@ -46,7 +47,7 @@ use std::time::{Duration, Instant};
 use super::config::WireProtocol;
 use super::csv_link::CsvLinkOptions;
 use super::item::{Item, Notice, PlanNote};
-use super::recorder::Recorder;
+use super::recorder::{Recorder, CLOSE_TIMEOUT};
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
@@ -247,9 +248,9 @@ impl Sampler {
             self.decided(f);
         }
         if let Some(r) = self.record.as_mut() {
-            r.flush();
+            let handler = &mut self.handler;
+            r.finish(CLOSE_TIMEOUT, &mut |n| handler.send(Item::Record(n)));
         }
-        self.forward_record_notes();
         self.finish_stats();
         SamplerOutcome {
             stats: self.handler.stats,
@@ -259,15 +260,14 @@ impl Sampler {
         }
     }
 
-    /// Flushes the recording when due and hands what it reports to the worker.
+    /// Hands the recording's waiting bytes to its thread when due and what it reports to the
+    /// worker.
     fn forward_record_notes(&mut self) {
         let Some(r) = self.record.as_mut() else {
             return;
         };
-        r.tick();
-        for n in r.take_notes() {
-            self.handler.send(Item::Record(n));
-        }
+        let handler = &mut self.handler;
+        r.tick(&mut |n| handler.send(Item::Record(n)));
     }
 
     fn run_loop(&mut self) -> Result<(), DaemonError> {
@@ -376,7 +376,7 @@ impl Sampler {
             return Ok(());
         }
         if let Some(r) = self.record.as_mut() {
-            r.write(&self.buf[..n]); // a failure is reported, never stops the stand
+            r.write(&self.buf[..n]); // copied for the recorder thread: never waits
         }
         self.handler.stats.bytes += n as u64;
         self.heard();
@@ -450,6 +450,7 @@ impl Sampler {
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
         s.record_bytes_written = self.record.as_ref().map(Recorder::bytes_written);
+        s.record_bytes_dropped = self.record.as_ref().map(Recorder::bytes_dropped);
     }
 }
 
