@@ -32,10 +32,10 @@
 //! `link_resumed` event when bytes return ([`link`]; a passive CSV bench too). After either
 //! the plan is told: it asks the device (HELLO_REQ) whether it is the same boot and goes on,
 //! or, reset, ends — or re-arms with `[experiment] rearm_on_reset`, at most `max_rearms`
-//! times. A plan over on a fault (device reset, stall,
-//! watchdog trip, refusal) ends the run 500 ms later (the link still read meanwhile), with
-//! [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms
-//! with the same seq) until the device acknowledges it or the stop timeout passes.
+//! times. A plan over on a fault (device reset, stall, watchdog trip, refusal) sends STOP at
+//! once (its heartbeats are over) and ends the run 500 ms later (the link still read
+//! meanwhile), with [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent
+//! every 50 ms with the same seq) until the device acknowledges it or the stop timeout passes.
 
 mod handler;
 mod link;
@@ -299,13 +299,16 @@ impl Sampler {
                 Some(PlanStatus::Done) => return Ok(()),
                 Some(PlanStatus::Halted) if !self.shutdown.requested() => {
                     // A device reset, a watchdog trip or a refusal ended the plan (its warning
-                    // is queued): the run is over, with a fault, so that a supervisor sees it;
-                    // after HALT_DRAIN, so that what the device says about it (its HELLO, its
-                    // events) is still read and published.
-                    let since = *self.halted_at.get_or_insert_with(Instant::now);
-                    if since.elapsed() >= HALT_DRAIN {
-                        self.plan_halted = true;
+                    // is queued): STOP at once (the plan's heartbeats are over), and the run is
+                    // over, with a fault, so that a supervisor sees it; after HALT_DRAIN, so
+                    // that what the device says about it (its HELLO, its events) is still read
+                    // and published.
+                    if self.halted_at.is_none() {
+                        self.halted_at = Some(Instant::now());
                         let _ = self.stop_device();
+                    }
+                    if self.halted_at.is_some_and(|t| t.elapsed() >= HALT_DRAIN) {
+                        self.plan_halted = true;
                         return Ok(());
                     }
                 }
