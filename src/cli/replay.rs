@@ -2,9 +2,11 @@
 //!
 //! The same sampler (without commands) and the same worker as `propid run`, so the replay of a
 //! run's recording publishes the same model lines. Progress goes to stderr when stderr is a
-//! terminal.
+//! terminal. A FIFO as FILE is read to its end first (said on stderr; the first signal ends
+//! the wait for its writer).
 
 use std::io::IsTerminal;
+use std::os::unix::fs::FileTypeExt;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -42,6 +44,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     cfg.publish.http_hold = cfg.publish.http.is_some();
     let shutdown = Shutdown::install()?;
     let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
+    // a FIFO is read to its end before the replay starts (no streamed replay yet): say so,
+    // as opening it waits for its writer (the first signal ends the wait: `Shutdown`)
+    if std::fs::metadata(&args.file).is_ok_and(|m| m.file_type().is_fifo()) {
+        eprintln!(
+            "propid replay: {} is a FIFO: reading it until its writer closes it (Ctrl-C to give up)",
+            args.file.display()
+        );
+    }
     // unreadable: exit 7; empty, too large or (below) nothing decoded: exit 3, as identify
     let bytes = super::load::read_input(&args.file)?;
     let file = args.file.display().to_string();

@@ -25,7 +25,8 @@ pub struct Args {
     #[arg(long)]
     pub port: Option<String>,
     /// Store the raw bytes received in FILE (overrides `daemon.record`); an existing FILE is
-    /// kept and the recording goes to FILE's first free numbered name (rec.1.tsp, ...).
+    /// kept and the recording goes to FILE's first free numbered name (rec.1.tsp, ...); a
+    /// device or a pipe with a reader (`>(gzip > r.gz)`) is written to as it is.
     #[arg(long)]
     pub record: Option<PathBuf>,
     /// Start a new numbered recording file when this many bytes are in the current one

@@ -86,18 +86,13 @@ pub struct Publisher {
 impl Publisher {
     /// Opens the configured sinks (creates the file, binds the socket).
     pub fn open(cfg: &PublishConfig) -> Result<Publisher, DaemonError> {
-        let file = match &cfg.file {
-            Some(p) => Some(
-                OpenOptions::new()
-                    .create(true)
-                    .append(true)
-                    .open(p)
-                    .map_err(|e| {
-                        DaemonError::io(format!("open publish file {}", p.display()), e)
-                    })?,
-            ),
-            None => None,
-        };
+        let file =
+            match &cfg.file {
+                Some(p) => Some(open_publish_file(p).map_err(|e| {
+                    DaemonError::io(format!("open publish file {}", p.display()), e)
+                })?),
+                None => None,
+            };
         let socket = match &cfg.socket {
             Some(p) => Some(SocketSink::bind(p, cfg)?),
             None => None,
@@ -379,7 +374,14 @@ fn replace_stale_socket(path: &Path) -> std::io::Result<()> {
         return Ok(());
     };
     if !meta.file_type().is_socket() {
-        return Ok(());
+        // never removed: it is not ours (bind would only say "Address already in use")
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            format!(
+                "it exists and is {}, not a socket: remove it or set another [publish] socket",
+                kind_of(&meta.file_type())
+            ),
+        ));
     }
     match UnixStream::connect(path) {
         Ok(_) => Err(std::io::Error::new(
@@ -391,6 +393,47 @@ fn replace_stale_socket(path: &Path) -> std::io::Result<()> {
         }
         Err(_) => Ok(()),
     }
+}
+
+/// What a file type is, for messages.
+fn kind_of(t: &std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if t.is_file() {
+        "a regular file"
+    } else if t.is_dir() {
+        "a directory"
+    } else if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else {
+        "a socket"
+    }
+}
+
+/// Opens the publish file for append: a regular file (created when missing) or a character
+/// device (`/dev/null`, a terminal). A FIFO or a socket is refused: opening a FIFO blocks
+/// until a reader appears, and a reader that stops reading would block every line (the
+/// socket is the sink for subscribers: it drops a slow one).
+fn open_publish_file(p: &Path) -> std::io::Result<File> {
+    use std::os::unix::fs::FileTypeExt;
+    if let Ok(meta) = std::fs::metadata(p) {
+        let t = meta.file_type();
+        if !(t.is_file() || t.is_char_device()) {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!(
+                    "it is {}: the publish file must be a regular file (subscribe through [publish] socket instead)",
+                    kind_of(&t)
+                ),
+            ));
+        }
+    }
+    OpenOptions::new().create(true).append(true).open(p)
 }
 
 /// Mode 0600, or 0660 with the group `gid`.

@@ -83,6 +83,7 @@ pub fn run<I: Identifier + 'static>(
     parts: RunParts<I>,
 ) -> Result<RunSummary, DaemonError> {
     let start = Instant::now();
+    parts.shutdown.begin_run();
     let channel = OutputChannel::from_name(&cfg.identify.output).unwrap_or(OutputChannel::Thrust);
     let window = Window::new(
         super::window::window_capacity(cfg),

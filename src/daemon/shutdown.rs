@@ -8,6 +8,12 @@
 //! stats line is written, but nothing already published is lost (stdout and the file are
 //! flushed per line; `tests/daemon/daemon_e2e.rs` checks it through the binary).
 //!
+//! **Before the run starts** (loading, opening the port, the outputs, reading a replay's
+//! input: anything that may block, as opening a FIFO does until its other end appears) nothing
+//! commands the motor yet, so the first signal ends the process at once, with a message and
+//! 128 + its number; [`Shutdown::begin_run`] (called by the runner as it starts the threads)
+//! switches to the graceful stop above.
+//!
 //! The handler is process-wide, installed once with `sigaction` (it only stores to atomics and
 //! calls `_exit`, both async-signal-safe); [`Shutdown::manual`] gives the same flag without a
 //! handler, for tests and in-process runs.
@@ -27,6 +33,8 @@ pub struct Shutdown {
 static GLOBAL: OnceLock<Shutdown> = OnceLock::new();
 /// Signals received so far.
 static SIGNALS: AtomicU32 = AtomicU32::new(0);
+/// The run has started: a first signal asks for a graceful stop (before, it exits).
+static RUNNING: AtomicBool = AtomicBool::new(false);
 
 impl Shutdown {
     /// A flag that only [`Shutdown::request`] sets.
@@ -57,6 +65,12 @@ impl Shutdown {
         Ok(s)
     }
 
+    /// The run starts (the threads that command the motor): from now on the first signal
+    /// asks for a graceful stop instead of ending the process.
+    pub fn begin_run(&self) {
+        RUNNING.store(true, Ordering::SeqCst);
+    }
+
     /// Asks everything polling this flag to stop.
     pub fn request(&self) {
         self.flag.store(true, Ordering::SeqCst);
@@ -68,9 +82,17 @@ impl Shutdown {
     }
 }
 
-/// The process-wide handler: the first signal asks for a stop, a second one exits at once
-/// with 128 + its number.
+/// The process-wide handler: before the run, the first signal exits at once; then the first
+/// signal asks for a stop, a second one exits at once with 128 + its number.
 extern "C" fn on_signal(sig: libc::c_int) {
+    if !RUNNING.load(Ordering::SeqCst) {
+        const MSG: &[u8] = b"propid: stopped by a signal before the run started\n";
+        // SAFETY: `write` and `_exit` are async-signal-safe; MSG is a valid buffer.
+        unsafe {
+            libc::write(2, MSG.as_ptr().cast(), MSG.len());
+            libc::_exit(128 + sig)
+        };
+    }
     if SIGNALS.fetch_add(1, Ordering::SeqCst) >= 1 {
         // SAFETY: `_exit` is async-signal-safe; the operator insists.
         unsafe { libc::_exit(128 + sig) };

@@ -47,6 +47,11 @@ pub struct LinkStats {
     /// below `bytes` after a write failure).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub record_bytes_written: Option<u64>,
+    /// Bytes received that the recording dropped because it fell behind (a pipe whose reader
+    /// stalled, a slow disk: [`super::recorder`]), or that it had not written when the run
+    /// ended (only with a recording).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub record_bytes_dropped: Option<u64>,
 }
 
 /// For `skip_serializing_if`: counters published only when they counted something.

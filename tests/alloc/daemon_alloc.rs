@@ -90,3 +90,41 @@ fn window_and_identification_allocate_nothing(svd: SvdChoice) {
     assert!(outliers > 0, "the spikes in windows are left out ({svd:?})");
     assert_eq!(allocs, 0, "allocations in the hot path ({svd:?})");
 }
+
+/// The sampler's side of the recording: each read is copied into a preallocated chunk and
+/// handed to the recorder thread; when the recorder falls behind (a pipe whose reader never
+/// reads) the bytes are dropped and counted. Neither allocates on the sampler's thread.
+#[test]
+fn the_recording_allocates_nothing_per_read_on_the_sampler() {
+    use propid::daemon::recorder::{Recorder, CHUNK, CHUNKS};
+    use std::os::unix::ffi::OsStrExt;
+    use std::os::unix::fs::OpenOptionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe");
+    let c = std::ffi::CString::new(fifo.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let _reader = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(&fifo)
+        .unwrap();
+    let read = [5u8; 4096];
+    for path in [dir.path().join("rec.tsp"), fifo] {
+        let mut r = Recorder::create(&path, Some(1 << 20)).unwrap();
+        let mut notes = 0;
+        r.tick(&mut |_| notes += 1); // the first file's note
+        let (allocs, ()) = allocations(|| {
+            for _ in 0..2 * CHUNKS * CHUNK / read.len() {
+                r.write(&read);
+                r.tick(&mut |_| notes += 1);
+            }
+        });
+        assert_eq!(allocs, 0, "{path:?}");
+        let mut last = Vec::new();
+        r.finish(std::time::Duration::from_millis(200), &mut |n| last.push(n));
+        assert!(notes >= 1);
+        if path.ends_with("pipe") {
+            assert!(r.bytes_dropped() > 0, "the pipe is never read");
+        }
+    }
+}

@@ -1,7 +1,8 @@
 //! Faults of the host around a live daemon (issue 12), through the real binary against the
-//! simulated stand: the recording (full disk, never overwritten, flushed, rotated), the plan
-//! ended on a fault (exit 8), the socket (client cap, a live socket kept, mode), a second
-//! SIGTERM (143).
+//! simulated stand: the recording (full disk, never overwritten, flushed, rotated, a pipe that
+//! is never read), the plan ended on a fault (exit 8), the socket (client cap, a live socket
+//! kept, mode), a second SIGTERM (143), FIFOs and files where outputs go, a signal before the
+//! run starts.
 
 use crate::daemon_proc;
 
@@ -41,6 +42,8 @@ fn a_recording_never_overwrites_is_flushed_and_rotates() {
     let rec = dir.path().join("rec.tsp");
     std::fs::write(&rec, b"an earlier run").unwrap();
     std::fs::write(dir.path().join("rec.2.tsp"), b"another").unwrap();
+    // a FIFO without a reader where the next file would go: skipped, never opened (it blocks)
+    mkfifo(&dir.path().join("rec.3.tsp"));
     let sim = sim_stand(1000, |_| {});
     let port = sim.path().display().to_string();
     let mut d = Daemon::start(&[
@@ -69,7 +72,7 @@ fn a_recording_never_overwrites_is_flushed_and_rotates() {
     }
     // run past two more files, then stop
     d.wait_for(20.0, |l| {
-        l["kind"] == "recording" && l["path"].as_str().is_some_and(|p| p.ends_with("rec.4.tsp"))
+        l["kind"] == "recording" && l["path"].as_str().is_some_and(|p| p.ends_with("rec.5.tsp"))
     });
     d.signal(libc::SIGINT);
     let (status, lines, err) = d.finish(10.0);
@@ -97,12 +100,13 @@ fn a_recording_never_overwrites_is_flushed_and_rotates() {
         .collect();
     assert_eq!(
         names[..3],
-        ["rec.1.tsp", "rec.3.tsp", "rec.4.tsp"],
+        ["rec.1.tsp", "rec.4.tsp", "rec.5.tsp"],
         "{names:?}"
     );
     let total: u64 = files.iter().map(|p| size(Path::new(p))).sum();
     let s = stats(&lines);
     assert_eq!(s["record_bytes_written"], total);
+    assert_eq!(s["record_bytes_dropped"], 0);
     assert_eq!(s["bytes"], total, "every byte received is recorded");
     for p in &files[..files.len() - 1] {
         assert!(size(Path::new(p)) <= 65_536, "{p}");
@@ -272,4 +276,136 @@ fn a_second_sigterm_exits_143() {
     daemon_proc::signal(stand.0.id(), libc::SIGCONT);
     drop(stand);
     assert_eq!(status.code(), Some(143), "{status:?}");
+}
+
+/// A FIFO at `path` (no reader, no writer yet).
+fn mkfifo(path: &Path) {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+}
+
+/// The read end of the FIFO at `path`, opened without waiting for a writer, never read.
+fn reader_that_never_reads(path: &Path) -> std::fs::File {
+    use std::os::unix::fs::OpenOptionsExt;
+    std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .unwrap()
+}
+
+/// `propid ARGS` to its exit (killed, and a panic, after `secs`): the status and stderr.
+fn exit_of(args: &[&str], secs: f64) -> (std::process::ExitStatus, String) {
+    let d = Daemon::start(args);
+    let (status, _, err) = d.finish(secs);
+    (status, err)
+}
+
+#[test]
+fn a_recording_to_a_pipe_whose_reader_never_reads_drops_counts_and_the_stand_keeps_running() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("rec.pipe");
+    mkfifo(&fifo);
+    let _reader = reader_that_never_reads(&fifo);
+    let cfg = daemon_config(dir.path(), "[0.4]", 1000, 4, "");
+    // 20 kHz: the pipe (64 KiB) and the recorder's chunks (2 MiB) fill within seconds
+    let sim = sim_stand(20_000, |_| {});
+    let port = sim.path().display().to_string();
+    let mut d = Daemon::run(&cfg, &port, Some(&fifo));
+    let warning = d.wait_for(30.0, |l| l["kind"] == "output_failed");
+    assert_eq!(warning["sink"], "record");
+    assert_eq!(warning["path"], fifo.to_str().unwrap());
+    // past the stand's watchdog many times over: heartbeats go on whatever the pipe does
+    std::thread::sleep(Duration::from_millis(1500));
+    let t = Instant::now();
+    d.signal(libc::SIGTERM);
+    let (status, lines, err) = d.finish(10.0);
+    let report = sim.stop().unwrap();
+    // STOP first, then at most CLOSE_TIMEOUT for the recorder
+    assert!(t.elapsed() < Duration::from_secs(4), "{:?}", t.elapsed());
+    assert_eq!(status.code(), Some(7), "{err}");
+    assert!(
+        err.contains("fell behind") && err.contains("bytes dropped"),
+        "{err}"
+    );
+    assert_eq!(
+        kind(&lines, "shutdown_stop_acknowledged").len(),
+        1,
+        "{lines:#?}"
+    );
+    assert_eq!(kind(&lines, "output_failed").len(), 1, "once: {lines:#?}");
+    assert_eq!(report.firmware.watchdog_trips, 0, "{report:?}");
+    let s = stats(&lines);
+    let (written, dropped) = (
+        s["record_bytes_written"].as_u64().unwrap(),
+        s["record_bytes_dropped"].as_u64().unwrap(),
+    );
+    assert!(dropped > 0 && written < 1 << 20, "{s}");
+    assert_eq!(written + dropped, s["bytes"].as_u64().unwrap(), "{s}");
+}
+
+#[test]
+fn fifos_and_files_where_outputs_go_are_clear_errors_at_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("out.fifo");
+    mkfifo(&fifo);
+    // the publish file a FIFO (opening it would wait for a reader)
+    let cfg = daemon_config(
+        dir.path(),
+        "[0.4]",
+        4,
+        4,
+        &format!("[publish]\nfile = {:?}\n", fifo.to_str().unwrap()),
+    );
+    let cfg = cfg.to_str().unwrap();
+    let (status, err) = exit_of(&["run", "--config", cfg, "--port", "/nonexistent"], 10.0);
+    assert_eq!(status.code(), Some(7), "{err}");
+    assert!(
+        err.contains("open publish file") && err.contains("a FIFO"),
+        "{err}"
+    );
+    // the socket's path a regular file: named, kept
+    let file = dir.path().join("p.sock");
+    std::fs::write(&file, b"not a socket").unwrap();
+    let cfg = daemon_config(
+        dir.path(),
+        "[0.4]",
+        4,
+        4,
+        &format!("[publish]\nsocket = {:?}\n", file.to_str().unwrap()),
+    );
+    let cfg = cfg.to_str().unwrap();
+    let (status, err) = exit_of(&["run", "--config", cfg, "--port", "/nonexistent"], 10.0);
+    assert_eq!(status.code(), Some(7), "{err}");
+    assert!(
+        err.contains(file.to_str().unwrap()) && err.contains("a regular file, not a socket"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&file).unwrap(), b"not a socket");
+    // the recording a FIFO nobody reads: refused before the stand is commanded
+    let cfg = daemon_config(dir.path(), "[0.4]", 4, 4, "");
+    let sim = sim_stand(200, |_| {});
+    let port = sim.path().display().to_string();
+    let d = Daemon::run(&cfg, &port, Some(&fifo));
+    let (status, _, err) = d.finish(10.0);
+    let report = sim.stop().unwrap();
+    assert_eq!(status.code(), Some(7), "{err}");
+    assert!(err.contains("FIFO with no reader"), "{err}");
+    assert_eq!(report.firmware.executed, 0, "{report:?}");
+}
+
+#[test]
+fn the_first_signal_ends_a_replay_waiting_for_a_fifo_writer() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("in.fifo");
+    mkfifo(&fifo);
+    let mut d = Daemon::start(&["replay", fifo.to_str().unwrap()]);
+    std::thread::sleep(Duration::from_millis(500));
+    assert!(d.child.try_wait().unwrap().is_none(), "waits for a writer");
+    d.signal(libc::SIGTERM);
+    let (status, _, err) = d.finish(5.0);
+    assert_eq!(status.code(), Some(143), "{err}");
+    assert!(err.contains("is a FIFO"), "{err}");
+    assert!(err.contains("before the run started"), "{err}");
 }

@@ -1,7 +1,8 @@
 //! The sampler: reads the source, decodes TSP/1, places samples, drives the plan, never blocks.
 //!
 //! One loop, each turn bounded by the source's read timeout (≤ 50 ms):
-//! 1. read whatever bytes are there (`Ok(0)` = nothing yet); append them to the raw recording;
+//! 1. read whatever bytes are there (`Ok(0)` = nothing yet); copy them for the raw recording
+//!    (its own thread writes the file: [`super::recorder`]; the sampler does no file I/O);
 //! 2. push them through the link's [`Wire`] decoder — binary TSP/1 (fixed buffer, counts every
 //!    drop by kind) or the CSV fallback made to look like it ([`super::csv_link`]);
 //! 3. for each frame: HELLO → new segment if its `boot_id` changed; SAMPLE → unwrapped clock and
@@ -31,10 +32,10 @@
 //! `link_resumed` event when bytes return ([`link`]; a passive CSV bench too). After either
 //! the plan is told: it asks the device (HELLO_REQ) whether it is the same boot and goes on,
 //! or, reset, ends — or re-arms with `[experiment] rearm_on_reset`, at most `max_rearms`
-//! times. A plan over on a fault (device reset, stall,
-//! watchdog trip, refusal) ends the run 500 ms later (the link still read meanwhile), with
-//! [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent every 50 ms
-//! with the same seq) until the device acknowledges it or the stop timeout passes.
+//! times. A plan over on a fault (device reset, stall, watchdog trip, refusal) sends STOP at
+//! once (its heartbeats are over) and ends the run 500 ms later (the link still read
+//! meanwhile), with [`SamplerOutcome::plan_halted`]: exit 8. On shutdown it sends STOP (re-sent
+//! every 50 ms with the same seq) until the device acknowledges it or the stop timeout passes.
 
 mod handler;
 mod link;
@@ -46,7 +47,7 @@ use std::time::{Duration, Instant};
 use super::config::WireProtocol;
 use super::csv_link::CsvLinkOptions;
 use super::item::{Item, Notice, PlanNote};
-use super::recorder::Recorder;
+use super::recorder::{Recorder, CLOSE_TIMEOUT};
 use super::shutdown::Shutdown;
 use super::source::{Backoff, Source, SourceError};
 use super::stats::LinkStats;
@@ -247,9 +248,9 @@ impl Sampler {
             self.decided(f);
         }
         if let Some(r) = self.record.as_mut() {
-            r.flush();
+            let handler = &mut self.handler;
+            r.finish(CLOSE_TIMEOUT, &mut |n| handler.send(Item::Record(n)));
         }
-        self.forward_record_notes();
         self.finish_stats();
         SamplerOutcome {
             stats: self.handler.stats,
@@ -259,15 +260,14 @@ impl Sampler {
         }
     }
 
-    /// Flushes the recording when due and hands what it reports to the worker.
+    /// Hands the recording's waiting bytes to its thread when due and what it reports to the
+    /// worker.
     fn forward_record_notes(&mut self) {
         let Some(r) = self.record.as_mut() else {
             return;
         };
-        r.tick();
-        for n in r.take_notes() {
-            self.handler.send(Item::Record(n));
-        }
+        let handler = &mut self.handler;
+        r.tick(&mut |n| handler.send(Item::Record(n)));
     }
 
     fn run_loop(&mut self) -> Result<(), DaemonError> {
@@ -299,13 +299,16 @@ impl Sampler {
                 Some(PlanStatus::Done) => return Ok(()),
                 Some(PlanStatus::Halted) if !self.shutdown.requested() => {
                     // A device reset, a watchdog trip or a refusal ended the plan (its warning
-                    // is queued): the run is over, with a fault, so that a supervisor sees it;
-                    // after HALT_DRAIN, so that what the device says about it (its HELLO, its
-                    // events) is still read and published.
-                    let since = *self.halted_at.get_or_insert_with(Instant::now);
-                    if since.elapsed() >= HALT_DRAIN {
-                        self.plan_halted = true;
+                    // is queued): STOP at once (the plan's heartbeats are over), and the run is
+                    // over, with a fault, so that a supervisor sees it; after HALT_DRAIN, so
+                    // that what the device says about it (its HELLO, its events) is still read
+                    // and published.
+                    if self.halted_at.is_none() {
+                        self.halted_at = Some(Instant::now());
                         let _ = self.stop_device();
+                    }
+                    if self.halted_at.is_some_and(|t| t.elapsed() >= HALT_DRAIN) {
+                        self.plan_halted = true;
                         return Ok(());
                     }
                 }
@@ -376,7 +379,7 @@ impl Sampler {
             return Ok(());
         }
         if let Some(r) = self.record.as_mut() {
-            r.write(&self.buf[..n]); // a failure is reported, never stops the stand
+            r.write(&self.buf[..n]); // copied for the recorder thread: never waits
         }
         self.handler.stats.bytes += n as u64;
         self.heard();
@@ -450,6 +453,7 @@ impl Sampler {
         s.clock_wraps = self.handler.tracker.clock_wraps();
         s.duplicates = self.handler.tracker.duplicates;
         s.record_bytes_written = self.record.as_ref().map(Recorder::bytes_written);
+        s.record_bytes_dropped = self.record.as_ref().map(Recorder::bytes_dropped);
     }
 }
 

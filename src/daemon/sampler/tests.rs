@@ -397,3 +397,104 @@ fn a_link_silent_past_the_stall_timeout_gets_stop_a_warning_and_a_reopen_each_ti
     let stops = written.windows(stop.len()).filter(|w| *w == stop).count() as u64;
     assert!(stops >= n, "{stops}");
 }
+
+/// What a [`Played`] link was sent: (reads done then, the bytes).
+type WriteLog = std::sync::Arc<std::sync::Mutex<Vec<(usize, Vec<u8>)>>>;
+
+/// A live link that plays one read per entry of `reads`, then nothing (a read that waits
+/// 2 ms); logs how many reads, empty ones too, were done when each write came.
+struct Played {
+    reads: std::collections::VecDeque<Vec<u8>>,
+    done: usize,
+    writes: WriteLog,
+}
+impl Source for Played {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
+        self.done += 1;
+        let Some(r) = self.reads.pop_front() else {
+            std::thread::sleep(Duration::from_millis(2));
+            return Ok(0);
+        };
+        buf[..r.len()].copy_from_slice(&r);
+        Ok(r.len())
+    }
+    fn write_all(&mut self, b: &[u8]) -> Result<(), SourceError> {
+        self.writes.lock().unwrap().push((self.done, b.to_vec()));
+        Ok(())
+    }
+    fn reconnect(&mut self) -> Result<(), SourceError> {
+        Ok(())
+    }
+    fn is_live(&self) -> bool {
+        true
+    }
+    fn describe(&self) -> String {
+        "played".into()
+    }
+}
+
+/// A plan that is over (a device reset) once it sees a HELLO of boot 2.
+struct EndsOnReset(bool);
+impl Plan for EndsOnReset {
+    fn on_connect(&mut self, _: u64) {}
+    fn on_frame(&mut self, _: u64, f: &Frame) {
+        if matches!(&f.msg, Message::Hello(h) if h.boot_id == 2) {
+            self.0 = true;
+        }
+    }
+    fn poll(&mut self, _: u64) {}
+    fn abort(&mut self, _: u64) {}
+    fn on_stall(&mut self, _: u64) {}
+    fn next(&mut self, _: &mut dyn FnMut(u16, &Message), _: &mut dyn FnMut(PlanNote)) {}
+    fn status(&self) -> PlanStatus {
+        if self.0 {
+            PlanStatus::Halted
+        } else {
+            PlanStatus::Running
+        }
+    }
+}
+
+fn hello(boot_id: u32) -> Message {
+    Message::Hello(Hello {
+        proto_minor: 0,
+        esc_protocol: EscProtocol::from_u8(5),
+        fw_version: 1,
+        boot_id,
+        t_us: 0,
+        sample_rate_hz: 1000,
+        channels: 1,
+        motor_poles: 14,
+        caps: 0,
+        name: Hello::name_field("t"),
+    })
+}
+
+#[test]
+fn a_device_reset_that_ends_the_plan_is_sent_stop_before_the_next_read() {
+    let mut first = frame(0, hello(1));
+    first.extend(frame(1, sample(0)));
+    let reads = vec![first, frame(2, sample(1)), frame(0, hello(2))];
+    let writes = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let src = Played {
+        reads: reads.into(),
+        done: 0,
+        writes: writes.clone(),
+    };
+    let (tx, rx) = crossbeam_channel::bounded(1024);
+    let c = SamplerConfig {
+        protocol: WireProtocol::Tsp,
+        max_run: Some(Duration::from_secs(5)),
+        ..cfg()
+    };
+    let plan: Box<dyn Plan> = Box::new(EndsOnReset(false));
+    let out = Sampler::new(Box::new(src), tx, Some(plan), None, Shutdown::manual(), c).run();
+    assert!(out.plan_halted, "the run ends on the fault");
+    let stop = frame(STOP_SEQ, Message::Stop);
+    let writes = writes.lock().unwrap();
+    let first_stop = writes.iter().find(|(_, b)| *b == stop).expect("STOP sent");
+    // at once: in the turn that read the reset's HELLO, not HALT_DRAIN later
+    assert_eq!(first_stop.0, 3, "{writes:?}");
+    let items: Vec<Item> = rx.try_iter().collect();
+    assert!(items.contains(&Item::Notice(Notice::StopUnacknowledged)));
+}

@@ -22,7 +22,7 @@ use super::line::{Event, Line, ScheduleRow, Warning, WindowFacts, WindowModel};
 use super::live::{ResponseLine, SampleDigest, StabilizationLine};
 use super::publish::Publisher;
 use super::quality;
-use super::recorder::RecordNote;
+use super::recorder::{RecordNote, DROPPED_MESSAGE};
 use super::stats::{LinkStats, StatsLine, WorkStats};
 use super::window::{Interrupted, Window, WindowView};
 use super::DaemonError;
@@ -168,6 +168,14 @@ impl<I: Identifier> Worker<I> {
             Item::Record(RecordNote::File { path }) => {
                 let path = path.display().to_string();
                 self.emit(&Line::Event(Event::Recording { path }));
+            }
+            Item::Record(RecordNote::Dropped { path }) => {
+                let path = path.display().to_string();
+                self.emit(&Line::Warning(Warning::OutputFailed {
+                    sink: "record",
+                    path: Some(&path),
+                    message: DROPPED_MESSAGE,
+                }));
             }
             Item::Record(RecordNote::Failed { path, error }) => {
                 let (path, message) = (path.display().to_string(), error.to_string());
