@@ -344,7 +344,7 @@ int main(int argc, char **argv)
            emu_s(), wall_s() - t0, max_lag, state, plant_steps, esc_pulses, esc_us, hx_thrust.reads,
            rpm_pulses);
     fflush(stdout);
-    uart_pty_stop(&pty);
+    /* no uart_pty_stop(): its thread does not end on the SIGINT it is sent; exit ends it */
     if (link)
         unlink(link);
     fclose(plant_in);
