@@ -182,16 +182,18 @@ static uint8_t hx_ready(uint8_t dout) { return !(PIND & _BV(dout)); }
 static int32_t hx_read(uint8_t dout, uint8_t sck)
 {
     uint32_t v = 0;
-    ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
-    { /* SCK high for more than 60 us powers the HX711 down: no interrupt in between */
-        for (uint8_t i = 0; i < 25; i++) {
+    for (uint8_t i = 0; i < 25; i++) {
+        /* SCK high for more than 60 us powers the HX711 down: no interrupt while it is high
+         * (interrupts run between bits, so the UART never waits 50 us) */
+        ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+        {
             PORTD |= _BV(sck);
             _delay_us(1);
             if (i < 24)
                 v = (v << 1) | (hx_ready(dout) ? 0 : 1);
             PORTD &= ~_BV(sck);
-            _delay_us(1);
         }
+        _delay_us(1);
     }
     if (v & 0x800000UL)
         v |= 0xFF000000UL;
@@ -528,12 +530,14 @@ static void boundary(uint32_t b)
 
     uint16_t flags = prev_f;
     float thrust = NAN, torque = NAN;
-    if (hx_ready(HX_THRUST_DOUT)) {
+    /* both cells' readiness first: a conversion is read whole or not at all */
+    uint8_t thrust_ready = hx_ready(HX_THRUST_DOUT), torque_ready = hx_ready(HX_TORQUE_DOUT);
+    if (thrust_ready) {
         raw_thrust = hx_read(HX_THRUST_DOUT, HX_THRUST_SCK);
         have_thrust = 1;
         flags |= F_THRUST_FRESH;
     }
-    if (hx_ready(HX_TORQUE_DOUT)) {
+    if (torque_ready) {
         raw_torque = hx_read(HX_TORQUE_DOUT, HX_TORQUE_SCK);
         have_torque = 1;
     }
