@@ -182,15 +182,16 @@ impl Stand {
     }
 }
 
-/// A daemon config: `levels`, `pulses` per level, 4 pulses per model, `extra` lines appended.
-fn config(dir: &Path, levels: &str, pulses: u32, extra: &str) -> PathBuf {
+/// A daemon config: `levels`, `pulses` per level, 4 pulses per model, `device` lines added to
+/// `[device]`.
+fn config(dir: &Path, levels: &str, pulses: u32, device: &str) -> PathBuf {
     let p = dir.join("propid.toml");
     let text = format!(
-        "[device]\nbaud = 250000\nreconnect_initial_ms = 50\nreconnect_max_ms = 500\n\
+        "[device]\nbaud = 250000\nreconnect_initial_ms = 50\nreconnect_max_ms = 500\n{device}\n\
          [identify]\npulses_per_model = 4\n\
          [experiment]\nlevels = {levels}\nramp_ms = 300\nsettle_ms = 500\n\
          pulse_amplitudes = [0.1, 0.15]\npulse_width_samples = 2\npulse_spacing_ms = 250\n\
-         pulses_per_level = {pulses}\n{extra}"
+         pulses_per_level = {pulses}\n"
     );
     std::fs::write(&p, text).unwrap();
     p
@@ -247,6 +248,25 @@ fn pulses_plan_on_the_emulated_firmware_publishes_models_and_disarms() {
     });
     assert!(disarm_acked, "no ACK of DISARM in the recording");
     // and the ESC is back at its minimum
+    stand.esc_until(5.0, |us| us < 1010.0);
+}
+
+#[test]
+fn csv_fallback_runs_the_plan_when_the_host_speaks_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(stand) = Stand::start(dir.path(), 60.0) else {
+        return;
+    };
+    // the daemon's CSV link sends text commands: the firmware answers in CSV from the first
+    let cfg = config(dir.path(), "[0.4]", 8, "protocol = \"csv\"");
+    let d = Daemon::run(&cfg, &stand.link.display().to_string(), None);
+    let (status, lines, err) = d.finish(60.0);
+    assert!(status.success(), "{status:?} {err}");
+    assert_eq!(kind(&lines, "plan_finished").len(), 1, "{lines:#?}");
+    assert!(!kind(&lines, "disarmed").is_empty(), "{lines:#?}");
+    assert!(!of_type(&lines, "model").is_empty(), "{lines:#?}");
+    let s = stats(&lines);
+    assert_eq!(s["wire"], "csv", "{s}");
     stand.esc_until(5.0, |us| us < 1010.0);
 }
 
