@@ -304,3 +304,70 @@ fn sigterm_stop_is_acknowledged_and_after_sigkill_the_firmware_watchdog_stops_th
     let (t_stop, _) = *back.last().unwrap();
     assert!(t_stop > t_spun, "{back:?}");
 }
+
+#[test]
+fn a_storm_of_bad_frames_while_armed_stops_the_motor() {
+    use propid_wire::protocol::{encode_frame, Arm, SetThrottle};
+    let dir = tempfile::tempdir().unwrap();
+    let Some(stand) = Stand::start(dir.path(), 60.0) else {
+        return;
+    };
+    let mut port = serialport::new(stand.link.to_string_lossy(), 250_000)
+        .timeout(Duration::from_millis(10))
+        .open()
+        .unwrap();
+    let mut seq = 0u16;
+    let mut send = |port: &mut Box<dyn serialport::SerialPort>, msg: Message| {
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        let n = encode_frame(seq, &msg, &mut buf);
+        seq += 1;
+        port.write_all(&buf[..n]).unwrap();
+    };
+    let drain = |port: &mut Box<dyn serialport::SerialPort>| {
+        let mut sink = [0u8; 4096];
+        let _ = port.read(&mut sink);
+    };
+    send(&mut port, Message::Arm(Arm::new(500)));
+    send(
+        &mut port,
+        Message::SetThrottle(SetThrottle {
+            level: 4000,
+            ramp_ms: 0,
+        }),
+    );
+    // heartbeats until the ESC runs at the level, then garbage: 20 frames with a bad CRC
+    let t = Instant::now();
+    let mut spun = Vec::new();
+    while spun.is_empty() {
+        assert!(t.elapsed() < Duration::from_secs(5), "the ESC never ran");
+        send(&mut port, Message::Heartbeat);
+        drain(&mut port);
+        std::thread::sleep(Duration::from_millis(50));
+        while let Ok(v) = stand.rx.try_recv() {
+            if v["esc_us"].as_f64().is_some_and(|us| us > 1300.0) {
+                spun.push(v);
+            }
+        }
+    }
+    for i in 0..20u8 {
+        port.write_all(&[0x05, 0x01, 0x07, i, 0x99, 0x00]).unwrap();
+    }
+    // heartbeats go on (the watchdog is fed): only the storm can stop the motor
+    let t = Instant::now();
+    loop {
+        assert!(
+            t.elapsed() < Duration::from_secs(3),
+            "the storm did not stop the motor"
+        );
+        send(&mut port, Message::Heartbeat);
+        drain(&mut port);
+        std::thread::sleep(Duration::from_millis(50));
+        if stand
+            .rx
+            .try_iter()
+            .any(|v| v["esc_us"].as_f64().is_some_and(|us| us < 1010.0))
+        {
+            break;
+        }
+    }
+}
