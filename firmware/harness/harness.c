@@ -49,7 +49,7 @@ static unsigned long plant_steps;
 
 /* HX711 model */
 struct hx711 {
-    int dout, sck;        /* port D bits */
+    int dout, sck;        /* HX_PORT_NAME bits */
     avr_irq_t *dout_irq;
     int32_t value;        /* the conversion being clocked out */
     int32_t pending;      /* the newest conversion */
@@ -309,8 +309,8 @@ int main(int argc, char **argv)
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('B'), 1), on_esc, 0);
     struct hx711 *hx[2] = {&hx_thrust, &hx_torque};
     for (int i = 0; i < 2; i++) {
-        hx[i]->dout_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), hx[i]->dout);
-        avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), hx[i]->sck),
+        hx[i]->dout_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(HX_PORT_NAME), hx[i]->dout);
+        avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(HX_PORT_NAME), hx[i]->sck),
                                 on_sck, hx[i]);
         hx_set_dout(hx[i], 1);
     }

@@ -22,11 +22,16 @@
 #define ESC_MAX_US 2000
 #endif
 
-/* HX711 load cells on port D: thrust DOUT PD4 (D4) SCK PD5 (D5); torque DOUT PD6 (D6) SCK PD7 (D7). */
-#define HX_THRUST_DOUT 4
-#define HX_THRUST_SCK 5
-#define HX_TORQUE_DOUT 6
-#define HX_TORQUE_SCK 7
+/* HX711 load cells on port C: thrust DOUT PC2 (A2) SCK PC3 (A3); torque DOUT PC4 (A4) SCK PC5
+ * (A5). Port D (UART, rpm) is then never written after setup. */
+#define HX_PORT PORTC
+#define HX_PIN PINC
+#define HX_DDR DDRC
+#define HX_PORT_NAME 'C'
+#define HX_THRUST_DOUT 2
+#define HX_THRUST_SCK 3
+#define HX_TORQUE_DOUT 4
+#define HX_TORQUE_SCK 5
 /* rpm sensor on INT0 = PD2 (D2), rising edges. */
 #define RPM_PIN 2
 /* ADC channels: battery voltage divider on A0, current sensor on A1. */

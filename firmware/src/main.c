@@ -177,7 +177,7 @@ ISR(INT0_vect)
 }
 
 /* ---- HX711: 24-bit two's complement, 25 clocks (channel A, gain 128 next) ---- */
-static uint8_t hx_ready(uint8_t dout) { return !(PIND & _BV(dout)); }
+static uint8_t hx_ready(uint8_t dout) { return !(HX_PIN & _BV(dout)); }
 
 static int32_t hx_read(uint8_t dout, uint8_t sck)
 {
@@ -187,11 +187,11 @@ static int32_t hx_read(uint8_t dout, uint8_t sck)
          * (interrupts run between bits, so the UART never waits 50 us) */
         ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
         {
-            PORTD |= _BV(sck);
+            HX_PORT |= _BV(sck);
             _delay_us(1);
             if (i < 24)
                 v = (v << 1) | (hx_ready(dout) ? 0 : 1);
-            PORTD &= ~_BV(sck);
+            HX_PORT &= ~_BV(sck);
         }
         _delay_us(1);
     }
@@ -895,9 +895,11 @@ static uint32_t mix(uint32_t x)
 int main(void)
 {
     esc_init();
-    DDRD |= _BV(HX_THRUST_SCK) | _BV(HX_TORQUE_SCK);
-    PORTD &= ~(_BV(HX_THRUST_SCK) | _BV(HX_TORQUE_SCK));
-    PORTD |= _BV(HX_THRUST_DOUT) | _BV(HX_TORQUE_DOUT) | _BV(RPM_PIN); /* pull-ups */
+    HX_DDR |= _BV(HX_THRUST_SCK) | _BV(HX_TORQUE_SCK);
+    HX_PORT &= ~(_BV(HX_THRUST_SCK) | _BV(HX_TORQUE_SCK));
+    HX_PORT |= _BV(HX_THRUST_DOUT) | _BV(HX_TORQUE_DOUT); /* pull-ups */
+    PORTD |= _BV(RPM_PIN);                                 /* pull-up */
+    DIDR0 = _BV(ADC_VOLTAGE) | _BV(ADC_CURRENT);           /* analog only */
     TCCR0A = _BV(WGM01);
     OCR0A = 249;
     TCCR0B = _BV(CS01) | _BV(CS00); /* 16 MHz / 64 / 250 = 1 kHz */
