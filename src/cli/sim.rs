@@ -14,7 +14,7 @@ use std::sync::Arc;
 use super::{CliError, UsageError};
 use propid_sim::config::WireProtocol;
 use propid_sim::pty::{self, RunOptions};
-use propid_sim::{record, SimConfig};
+use propid_sim::{plant_pipe, record, SimConfig};
 
 /// Arguments of `propid sim`.
 #[derive(Debug, clap::Args)]
@@ -37,6 +37,11 @@ pub struct Args {
     /// time, instead of opening a pty. Needs --seconds.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
+    /// Serve the configured plant on stdin/stdout for an emulated firmware (firmware/harness):
+    /// one throttle (0..1) per line in, one `thrust torque rpm voltage current` line out, a
+    /// 1 ms step each; no pty, no firmware.
+    #[arg(long, conflicts_with_all = ["record", "link"])]
+    pub plant_pipe: bool,
     /// Overrides of config keys (boxed: keeps the binary's command enum small).
     #[command(flatten)]
     pub set: Box<Overrides>,
@@ -112,6 +117,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if let Some(s) = args.faults_for.filter(|&s| !positive(s)) {
         return Err(UsageError::FaultsFor(s).into());
     }
+    if args.plant_pipe {
+        return run_plant_pipe(&cfg);
+    }
     match &args.record {
         Some(file) => run_record(&cfg, file, &args),
         None => run_pty(&cfg, &args),
@@ -175,6 +183,22 @@ fn run_record(cfg: &SimConfig, file: &Path, args: &Args) -> Result<(), CliError>
         obj.extend(s);
     }
     super::stdout::line(&line.to_string())
+}
+
+fn run_plant_pipe(cfg: &SimConfig) -> Result<(), CliError> {
+    let mut plant = propid_sim::plant::Plant::new(&cfg.plant, plant_pipe::STEP_S, cfg.stand.seed)
+        .map_err(propid_sim::SimError::from)?;
+    let stats = plant_pipe::serve(
+        &mut plant,
+        std::io::stdin().lock(),
+        std::io::stdout().lock(),
+    )
+    .map_err(|e| CliError::io("serving the plant on stdin/stdout".to_string(), e))?;
+    eprintln!(
+        "propid sim: plant pipe ended after {} steps ({} bad lines)",
+        stats.steps, stats.bad_lines
+    );
+    Ok(())
 }
 
 fn run_pty(cfg: &SimConfig, args: &Args) -> Result<(), CliError> {

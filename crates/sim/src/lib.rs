@@ -15,6 +15,8 @@
 //!   own process (`propid sim`) or on a thread ([`pty::SimHandle`]).
 //! - [`record`]: firmware + host experiment plan in a loop on a simulated clock, writing a
 //!   recording faster than real time (`propid sim --record`).
+//! - [`plant_pipe`]: the plant alone, one step per line, for the reference firmware running in
+//!   an emulator (`propid sim --plant-pipe`, `firmware/harness`).
 //! - [`config::SimConfig`]: `config/sim.toml`, validated with the key and value named on refusal.
 //!
 //! Smaller pieces: [`rx`] classifies host frames (so refused ones can still be ACKed with their
@@ -33,6 +35,7 @@ pub mod faults;
 pub mod firmware;
 pub mod pace;
 pub mod plant;
+pub mod plant_pipe;
 pub mod pty;
 pub mod record;
 pub mod rx;
