@@ -437,7 +437,8 @@ setInterval(() => {
   cPower.setData([s.t, s.volt, s.amp]);
 }, 100);
 
-const es = new EventSource("/events");
+// served by `propid fleet` at /stand/NAME/, the stand's stream is beside the page
+const es = new EventSource(location.pathname.startsWith("/stand/") ? location.pathname + "events" : "/events");
 es.onopen = () => { $("stream").textContent = "open"; };
 es.onerror = () => { $("stream").textContent = es.readyState === 2 ? "closed" : "reconnecting"; };
 es.onmessage = (ev) => {
