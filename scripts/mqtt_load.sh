@@ -58,6 +58,8 @@ def read_sub():
         now = time.monotonic()
         topic, _, payload = line.rstrip("\n").partition(" ")
         parts = topic.split("/")
+        if len(parts) < 3 or parts[0] != "propid":
+            continue  # the next lines of a samples batch (one message, several lines)
         if parts[2] == "model":
             m = json.loads(payload)
             with lock:
