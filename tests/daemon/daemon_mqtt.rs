@@ -10,6 +10,11 @@ use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// The device watchdog of these runs (the `[experiment]` key; 500 ms by default): several
+/// stands and daemons share the test machine's cores, and these tests are about the broker,
+/// not about a daemon starved of CPU for half a second.
+const WATCHDOG: &str = "watchdog_ms = 3000\n";
+
 /// A daemon config publishing to `broker` as `stand` (short plan: `levels`, 8 pulses each,
 /// a model every 4).
 fn mqtt_config(dir: &Path, broker: &Broker, stand: &str, levels: &str, extra: &str) -> String {
@@ -21,7 +26,7 @@ fn mqtt_config(dir: &Path, broker: &Broker, stand: &str, levels: &str, extra: &s
         8,
         4,
         &format!(
-            "[publish]\nmqtt = \"{}\"\nstand = \"{stand}\"\nmqtt_keep_alive_s = 5\n{extra}",
+            "{WATCHDOG}[publish]\nmqtt = \"{}\"\nstand = \"{stand}\"\nmqtt_keep_alive_s = 5\n{extra}",
             broker.url()
         ),
     );
@@ -389,7 +394,7 @@ fn mqtts_with_a_client_certificate_publishes_the_models() {
         8,
         4,
         &format!(
-            "[publish]\nmqtt = \"mqtts://127.0.0.1:{tls_port}\"\nstand = \"tls\"\n\
+            "{WATCHDOG}[publish]\nmqtt = \"mqtts://127.0.0.1:{tls_port}\"\nstand = \"tls\"\n\
              mqtt_ca = {:?}\nmqtt_cert = {:?}\nmqtt_key = {:?}\n",
             pki.ca, pki.client.0, pki.client.1
         ),

@@ -142,8 +142,7 @@ impl Subscriber {
         if let Some(id) = session {
             cmd.args(["-c", "-i", id]);
         }
-        let child = Subscriber::spawn(cmd);
-        child
+        Subscriber::spawn(cmd)
     }
 
     fn spawn(mut cmd: Command) -> Subscriber {

@@ -150,7 +150,7 @@ impl MqttSink {
     pub fn send(&mut self, line: &Line<'_>, text: &str) {
         match line {
             Line::Model(m) => {
-                self.offer(&self.topics.model.clone(), QoS::AtLeastOnce, false, text);
+                self.offer(&self.topics.model, QoS::AtLeastOnce, false, text);
                 let level = m.window.level;
                 let topic = self.topics.schedule(level);
                 self.offer(&topic, QoS::AtLeastOnce, true, text);
@@ -163,10 +163,10 @@ impl MqttSink {
                 }
             }
             Line::Event(_) | Line::Warning(_) => {
-                self.offer(&self.topics.event.clone(), QoS::AtLeastOnce, false, text)
+                self.offer(&self.topics.event, QoS::AtLeastOnce, false, text)
             }
             Line::Stats(_) => {
-                self.offer(&self.topics.stats.clone(), QoS::AtLeastOnce, true, text);
+                self.offer(&self.topics.stats, QoS::AtLeastOnce, true, text);
                 if let Ok(mut r) = self.retained.lock() {
                     r.stats = Some(Arc::from(text));
                 }
