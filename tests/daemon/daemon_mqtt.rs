@@ -415,3 +415,32 @@ fn mqtts_with_a_client_certificate_publishes_the_models() {
     let got = sub.drain(1.5).to_vec();
     assert_eq!(payloads(&got, "propid/tls/model"), models, "{err}");
 }
+
+/// The binary refuses an MQTT configuration it cannot use, before it touches a stand, with the
+/// key named and exit 5: `mqtts://` without a CA, a password file others may read.
+#[test]
+fn unusable_mqtt_settings_are_refused_with_exit_5() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let pw = dir.path().join("pw");
+    std::fs::write(&pw, "secret\n").unwrap();
+    std::fs::set_permissions(&pw, std::fs::Permissions::from_mode(0o644)).unwrap();
+    for (publish, key) in [
+        ("mqtt = \"mqtts://127.0.0.1:1\"\nstand = \"s\"\n", "publish.mqtt_ca"),
+        ("mqtt = \"mqtt://u:p@127.0.0.1\"\nstand = \"s\"\n", "publish.mqtt"),
+        (
+            &format!("mqtt = \"mqtt://127.0.0.1:1\"\nstand = \"s\"\nmqtt_username = \"u\"\nmqtt_password_file = {pw:?}\n"),
+            "publish.mqtt_password_file",
+        ),
+    ] {
+        let cfg = dir.path().join("bad.toml");
+        std::fs::write(&cfg, format!("[publish]\n{publish}")).unwrap();
+        let out = std::process::Command::new(crate::daemon_proc::BIN)
+            .args(["run", "--config", cfg.to_str().unwrap(), "--port", "/nonexistent/port"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(5), "{publish}: {err}");
+        assert!(err.contains(key), "{publish}: {err}");
+    }
+}
