@@ -27,6 +27,8 @@ enum Command {
     Replay(cli::replay::Args),
     /// Show what the 2nd-order model gets wrong, name the cause, extend the model.
     Diagnose(cli::diagnose::Args),
+    /// Serve one page of every stand publishing to an MQTT broker.
+    Fleet(cli::fleet::Args),
 }
 
 fn main() {
@@ -39,6 +41,7 @@ fn main() {
         Command::Run(a) => cli::run::run(a),
         Command::Replay(a) => cli::replay::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
+        Command::Fleet(a) => cli::fleet::run(a),
     };
     if let Err(e) = result {
         if e.is_closed_pipe() {

@@ -437,7 +437,15 @@ setInterval(() => {
   cPower.setData([s.t, s.volt, s.amp]);
 }, 100);
 
-const es = new EventSource("/events");
+// served by `propid fleet` at /stand/NAME/: the stand's name in the title, its stream beside
+// the page
+const fleetStand = location.pathname.startsWith("/stand/");
+if (fleetStand) {
+  const name = decodeURIComponent(location.pathname.split("/")[2]);
+  document.querySelector("h1 .dim").textContent = "stand " + name;
+  document.title = "propid — " + name;
+}
+const es = new EventSource(fleetStand ? location.pathname + "events" : "/events");
 es.onopen = () => { $("stream").textContent = "open"; };
 es.onerror = () => { $("stream").textContent = es.readyState === 2 ? "closed" : "reconnecting"; };
 es.onmessage = (ev) => {

@@ -5,6 +5,7 @@
 pub mod columns_read;
 pub mod demo;
 pub mod diagnose;
+pub mod fleet;
 pub mod identify;
 pub mod load;
 pub mod replay;

@@ -8,7 +8,7 @@
 //!     │ bounded queue (never blocks: a full queue is counted as an overflow)
 //!  worker thread ─── fixed-size window per operating point, identifies after every K pulses
 //!     │              with the core's workspace (no allocation per identification)
-//!  Publisher ─────── JSON lines to stdout, a file, a UNIX socket
+//!  Publisher ─────── JSON lines to stdout, a file, a UNIX socket, the web page, MQTT
 //! ```
 //!
 //! Replay runs the same sampler (without commands) and the same worker on a recording, so a live
@@ -23,6 +23,7 @@ pub mod identify;
 pub mod item;
 pub mod line;
 pub mod live;
+pub mod mqtt;
 pub mod plan;
 pub mod publish;
 pub mod quality;

@@ -22,6 +22,9 @@
 //!   mode 0600 (owner only; umask 0177 while binding), or 0660 and the group `[publish]
 //!   socket_group`; it is removed at exit only while it is still the one this daemon bound.
 //!
+//! - **MQTT** (`[publish] mqtt`): [`super::mqtt::MqttSink`], its own thread and bounded
+//!   queue; never waits.
+//!
 //! Lines come in typed ([`Line`]) and are serialised here, once ([`Line::to_json`]). A *tap*
 //! ([`Publisher::with_tap`]) sees every typed line beside its bytes, in order, on the publishing
 //! thread: how `propid demo` prints models without re-parsing the JSON.
@@ -40,6 +43,8 @@ use super::config::PublishConfig;
 use super::http::{HttpSink, Kind};
 use super::line::Event;
 use super::line::{Line, Warning};
+use super::mqtt::MqttSink;
+use super::stats::MqttStats;
 use super::DaemonError;
 
 /// Sees every published line, typed and as published (without the newline).
@@ -81,6 +86,8 @@ pub struct Publisher {
     lines: u64,
     /// The live web page's server (`--http`), when configured.
     http: Option<HttpSink>,
+    /// The MQTT broker's client (`[publish] mqtt`), when configured.
+    mqtt: Option<MqttSink>,
 }
 
 impl Publisher {
@@ -101,6 +108,10 @@ impl Publisher {
             Some(a) => Some(HttpSink::bind(a, cfg.client_queue_lines, cfg.max_clients)?),
             None => None,
         };
+        let mqtt = match &cfg.mqtt {
+            Some(m) => Some(MqttSink::start(m)?),
+            None => None,
+        };
         Ok(Publisher {
             stdout: cfg.stdout,
             stdout_error: None,
@@ -110,6 +121,7 @@ impl Publisher {
             tap: None,
             lines: 0,
             http,
+            mqtt,
         })
     }
 
@@ -125,6 +137,7 @@ impl Publisher {
             tap: None,
             lines: 0,
             http: None,
+            mqtt: None,
         };
         (p, lines)
     }
@@ -146,6 +159,9 @@ impl Publisher {
         if let Some(h) = &self.http {
             h.send(http_kind(line), &text);
         }
+        if let Some(m) = &mut self.mqtt {
+            m.send(line, &text);
+        }
         if let (false, Some(e)) = (had_failed, &self.stdout_error) {
             let message = e.to_string();
             let warning = Line::Warning(Warning::OutputFailed {
@@ -158,23 +174,43 @@ impl Publisher {
             if let Some(h) = &self.http {
                 h.send(Kind::Log, &text);
             }
+            if let Some(m) = &mut self.mqtt {
+                m.send(&warning, &text);
+            }
         }
         Ok(())
     }
 
-    /// Publishes a line to the web page's clients only ([`super::live`]); nothing without an
-    /// HTTP sink (check [`Publisher::is_live`] before building one).
+    /// Publishes a line to the web page's clients only ([`super::live`]), and its `samples`
+    /// lines to MQTT with `mqtt_samples`; nothing without either (check
+    /// [`Publisher::is_live`] before building one).
     pub fn publish_live(&mut self, line: &Line<'_>) -> Result<(), DaemonError> {
+        let mqtt = match &mut self.mqtt {
+            Some(m) if m.wants_samples() && matches!(line, Line::Samples(_)) => Some(m),
+            _ => None,
+        };
+        if self.http.is_none() && mqtt.is_none() {
+            return Ok(());
+        }
+        let text = line.to_json().map_err(DaemonError::Serialize)?;
+        if let Some(m) = mqtt {
+            m.send(line, &text);
+        }
         if let Some(h) = &self.http {
-            let text = line.to_json().map_err(DaemonError::Serialize)?;
             h.send(http_kind(line), &text);
         }
         Ok(())
     }
 
-    /// Whether a web page is served (the worker then builds the [`super::live`] lines).
+    /// Whether a web page is served, or MQTT takes live samples (the worker then builds the
+    /// [`super::live`] lines).
     pub fn is_live(&self) -> bool {
-        self.http.is_some()
+        self.http.is_some() || self.mqtt.as_ref().is_some_and(MqttSink::wants_samples)
+    }
+
+    /// The MQTT sink's counters (with `[publish] mqtt`).
+    pub fn mqtt_stats(&self) -> Option<MqttStats> {
+        self.mqtt.as_ref().map(MqttSink::stats)
     }
 
     /// A handle that sends lines to the web page's clients only, from outside the publisher
@@ -266,6 +302,9 @@ impl Publisher {
         }
         if let Some(h) = self.http.take() {
             h.close();
+        }
+        if let Some(m) = self.mqtt.take() {
+            m.close();
         }
     }
 }
@@ -525,6 +564,7 @@ mod tests {
             socket_group: None,
             http: None,
             http_hold: false,
+            mqtt: None,
         }
     }
 

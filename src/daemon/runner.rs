@@ -94,14 +94,17 @@ pub fn run<I: Identifier + 'static>(
     let (tx, rx) = bounded(cfg.daemon.queue_capacity);
     let mut publisher = parts.publisher;
     let shutdown = parts.shutdown.clone();
-    let live_link = publisher.http_url().map(|url| {
+    if let Some(url) = publisher.http_url() {
         eprintln!("propid: the live page is at {url}");
         let line = Line::Event(super::line::Event::Http { url });
         if let Err(e) = publisher.publish_line(&line) {
             eprintln!("propid: {e}");
         }
-        std::sync::Arc::new(std::sync::Mutex::new(LinkStats::default()))
-    });
+    }
+    // the web page's lines (and MQTT's live samples) need the sampler's counters too
+    let live_link = publisher
+        .is_live()
+        .then(|| std::sync::Arc::new(std::sync::Mutex::new(LinkStats::default())));
     let mut worker = Worker::new(window, parts.identifier, publisher);
     if let Some(link) = &live_link {
         worker = worker.with_live(link.clone());
@@ -152,9 +155,10 @@ pub fn run<I: Identifier + 'static>(
         &worked.latencies_s,
     );
     stats.clients_refused = publisher.clients_refused();
+    stats.mqtt = publisher.mqtt_stats();
     publisher.publish_line(&Line::Stats(&stats))?;
     let output_error = publisher.take_error();
-    if publisher.is_live() && cfg.publish.http_hold {
+    if publisher.http_url().is_some() && cfg.publish.http_hold {
         eprintln!("propid: the run is over; the page stays up until Ctrl-C");
         while !shutdown.requested() {
             std::thread::sleep(std::time::Duration::from_millis(50));

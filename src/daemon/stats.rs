@@ -98,10 +98,28 @@ pub struct StatsLine<'a> {
     /// socket).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clients_refused: Option<u64>,
+    /// The MQTT sink's counters (only with `[publish] mqtt`).
+    #[serde(flatten)]
+    pub mqtt: Option<MqttStats>,
     /// Wall-clock duration of the run, seconds.
     pub elapsed_s: f64,
     /// Latency from a window's last sample to its published model line.
     pub latency_s: Latency,
+}
+
+/// The MQTT sink's counters ([`super::mqtt`]), in the stats line with `[publish] mqtt`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct MqttStats {
+    /// Messages handed to the MQTT client (its bounded queue).
+    pub mqtt_published: u64,
+    /// Of those, not yet delivered when the line was made (QoS 1 not yet acknowledged, QoS 0
+    /// not yet written): waiting for the broker.
+    pub mqtt_queued: u64,
+    /// Messages dropped: the queue was full (the broker away or slow for long), or live
+    /// samples while the broker was away.
+    pub mqtt_dropped: u64,
+    /// Connections to the broker after the first.
+    pub mqtt_reconnects: u64,
 }
 
 /// Quantiles of the latencies, s (`null` without models).
@@ -129,6 +147,7 @@ impl<'a> StatsLine<'a> {
             work,
             dropped_clients,
             clients_refused: None,
+            mqtt: None,
             elapsed_s,
             latency_s: Latency {
                 p50: quantile(sorted_latencies_s, 0.5),
@@ -204,6 +223,32 @@ mod tests {
         assert!(
             text.contains(r#""latency_s":{"p50":null,"p99":null}"#),
             "{text}"
+        );
+    }
+
+    /// With `[publish] mqtt`, the sink's counters join the line (absent without).
+    #[test]
+    fn mqtt_counters_are_flattened_in() {
+        let (link, work) = (LinkStats::default(), WorkStats::default());
+        let mut line = StatsLine::new(&link, &work, 0, 1.0, &[]);
+        let text = Line::Stats(&line).to_json().unwrap();
+        assert!(!text.contains("mqtt"), "{text}");
+        line.mqtt = Some(MqttStats {
+            mqtt_published: 5,
+            mqtt_queued: 1,
+            mqtt_dropped: 2,
+            mqtt_reconnects: 3,
+        });
+        let v: serde_json::Value =
+            serde_json::from_str(&Line::Stats(&line).to_json().unwrap()).unwrap();
+        assert_eq!(
+            (
+                &v["mqtt_published"],
+                &v["mqtt_queued"],
+                &v["mqtt_dropped"],
+                &v["mqtt_reconnects"]
+            ),
+            (&5.into(), &1.into(), &2.into(), &3.into())
         );
     }
 

@@ -10,6 +10,7 @@
 //! Every key, its unit and its range are documented in `config/propid.toml`; the defaults here
 //! are the values written there.
 
+pub mod mqtt;
 mod raw;
 
 pub use raw::{RawConfig, RawCsv, RawDaemon, RawDevice, RawIdentify, RawPublish};
@@ -49,6 +50,17 @@ pub enum ConfigError {
         value: String,
         /// What is accepted.
         expected: &'static str,
+    },
+    /// A file a key names cannot be used (read when the daemon starts: MQTT's TLS files and
+    /// password).
+    #[error("config key `{key}` = {path:?}: {reason}")]
+    File {
+        /// Dotted key, for instance `publish.mqtt_ca`.
+        key: &'static str,
+        /// The file.
+        path: PathBuf,
+        /// Why it cannot be used.
+        reason: String,
     },
 }
 
@@ -135,6 +147,8 @@ pub struct PublishConfig {
     /// After the run, keep serving the page (its final state) until a stop is requested
     /// (`replay` and `demo` with `--http`; not from the file).
     pub http_hold: bool,
+    /// Publish to an MQTT broker (None: off; [`mqtt`]).
+    pub mqtt: Option<mqtt::MqttConfig>,
 }
 
 /// Validated CSV-bench settings.

@@ -84,6 +84,26 @@ pub struct RawPublish {
     pub socket_group: Option<String>,
     /// Serve the live web page on this address (`8080`, `:8080`, `127.0.0.1:8080`).
     pub http: Option<String>,
+    /// Publish to this MQTT broker (`mqtt://HOST:PORT`, `mqtts://HOST:PORT`; docs/mqtt.md).
+    pub mqtt: Option<String>,
+    /// The stand's name in the MQTT topics (`propid/<stand>/...`).
+    pub stand: Option<String>,
+    /// CA certificate (PEM) of an `mqtts://` broker.
+    pub mqtt_ca: Option<String>,
+    /// Client certificate (PEM) for an `mqtts://` broker.
+    pub mqtt_cert: Option<String>,
+    /// Its private key (PEM).
+    pub mqtt_key: Option<String>,
+    /// User name given to the broker.
+    pub mqtt_username: Option<String>,
+    /// File whose first line is the password.
+    pub mqtt_password_file: Option<String>,
+    /// Also publish the live samples, batched (QoS 0).
+    pub mqtt_samples: Option<bool>,
+    /// MQTT keep-alive, s.
+    pub mqtt_keep_alive_s: Option<u64>,
+    /// Messages queued while the broker is away.
+    pub mqtt_queue_messages: Option<usize>,
 }
 
 /// `[csv]` as written: how a CSV bench (PROTOCOL.md §6) is read.
@@ -328,7 +348,21 @@ impl RawIdentify {
 
 impl RawPublish {
     fn validate(self) -> Result<PublishConfig, ConfigError> {
+        let mqtt = super::mqtt::RawMqtt {
+            url: non_empty(self.mqtt),
+            stand: self.stand,
+            ca: non_empty(self.mqtt_ca),
+            cert: non_empty(self.mqtt_cert),
+            key: non_empty(self.mqtt_key),
+            username: non_empty(self.mqtt_username),
+            password_file: non_empty(self.mqtt_password_file),
+            samples: self.mqtt_samples,
+            keep_alive_s: self.mqtt_keep_alive_s,
+            queue_messages: self.mqtt_queue_messages,
+        }
+        .validate()?;
         Ok(PublishConfig {
+            mqtt,
             stdout: self.stdout.unwrap_or(true),
             file: non_empty(self.file).map(PathBuf::from),
             socket: non_empty(self.socket).map(PathBuf::from),

@@ -17,8 +17,11 @@
 //! - **History.** A browser that connects late first gets the last [`RECENT_LINES`] events
 //!   and warnings, the last [`RECENT_SAMPLES`] samples lines and the latest line of each state
 //!   kind (model, response, stabilization, schedule, live stats, stats), then the live lines.
+//! - **Other sites** ([`site`]): `propid fleet` serves its own file table and named event
+//!   streams (one per stand) through the same server ([`HttpSink::bind_site`]).
 
 pub mod assets;
+pub mod site;
 
 use crossbeam_channel::{bounded, Receiver, RecvTimeoutError, Sender, TrySendError};
 use std::collections::VecDeque;
@@ -77,14 +80,41 @@ pub struct HttpSink {
     shared: Arc<Shared>,
     server: Arc<tiny_http::Server>,
     serve: Option<JoinHandle<()>>,
+    /// The site's file table and named streams ([`site`]).
+    streams: Arc<site::Streams>,
+}
+
+impl Shared {
+    fn new(queue_lines: usize, max_clients: usize) -> Shared {
+        Shared {
+            clients: Mutex::new(Vec::new()),
+            history: Mutex::new(History::default()),
+            queue_lines,
+            max_clients,
+            closing: AtomicBool::new(false),
+            dropped_clients: AtomicU64::new(0),
+            clients_refused: AtomicU64::new(0),
+        }
+    }
 }
 
 impl HttpSink {
-    /// Binds `addr` (port 0: a free port, see [`HttpSink::addr`]) and starts serving.
+    /// Binds `addr` (port 0: a free port, see [`HttpSink::addr`]) and starts serving the live
+    /// page.
     pub fn bind(
         addr: SocketAddr,
         queue_lines: usize,
         max_clients: usize,
+    ) -> Result<HttpSink, DaemonError> {
+        HttpSink::bind_site(addr, queue_lines, max_clients, site::Site::LIVE)
+    }
+
+    /// Binds `addr` and serves `site`'s files and streams ([`site`]).
+    pub fn bind_site(
+        addr: SocketAddr,
+        queue_lines: usize,
+        max_clients: usize,
+        site: site::Site,
     ) -> Result<HttpSink, DaemonError> {
         let bind_err = |e: String| {
             DaemonError::io(
@@ -98,25 +128,19 @@ impl HttpSink {
             .to_ip()
             .ok_or_else(|| bind_err("not an IP address".into()))?;
         let server = Arc::new(server);
-        let shared = Arc::new(Shared {
-            clients: Mutex::new(Vec::new()),
-            history: Mutex::new(History::default()),
-            queue_lines,
-            max_clients,
-            closing: AtomicBool::new(false),
-            dropped_clients: AtomicU64::new(0),
-            clients_refused: AtomicU64::new(0),
-        });
-        let (sv, sh) = (server.clone(), shared.clone());
+        let shared = Arc::new(Shared::new(queue_lines, max_clients));
+        let streams = Arc::new(site::Streams::new(site, queue_lines, max_clients));
+        let (sv, sh, st) = (server.clone(), shared.clone(), streams.clone());
         let serve = std::thread::Builder::new()
             .name("propid-http".into())
-            .spawn(move || serve_loop(&sv, &sh))
+            .spawn(move || serve_loop(&sv, &sh, &st))
             .map_err(|e| DaemonError::io("spawn the http thread", e))?;
         Ok(HttpSink {
             addr: bound,
             shared,
             server,
             serve: Some(serve),
+            streams,
         })
     }
 
@@ -145,11 +169,17 @@ impl HttpSink {
     /// Event-stream clients dropped for falling behind.
     pub fn dropped_clients(&self) -> u64 {
         self.shared.dropped_clients.load(Ordering::Relaxed)
+            + self
+                .streams
+                .sum(|s| s.dropped_clients.load(Ordering::Relaxed))
     }
 
     /// Event-stream clients refused because `max_clients` were connected.
     pub fn clients_refused(&self) -> u64 {
         self.shared.clients_refused.load(Ordering::Relaxed)
+            + self
+                .streams
+                .sum(|s| s.clients_refused.load(Ordering::Relaxed))
     }
 
     /// Stops serving: the event streams end after their queued lines, the server closes.
@@ -162,6 +192,7 @@ impl HttpSink {
         if let Ok(mut c) = self.shared.clients.lock() {
             c.clear();
         }
+        self.streams.close();
         self.server.unblock();
         if let Some(t) = self.serve.take() {
             let _ = t.join();
@@ -240,19 +271,19 @@ fn ring(r: &mut VecDeque<Arc<str>>, cap: usize, text: &Arc<str>) {
 }
 
 /// Answers requests until the sink closes.
-fn serve_loop(server: &tiny_http::Server, shared: &Arc<Shared>) {
+fn serve_loop(server: &tiny_http::Server, shared: &Arc<Shared>, streams: &site::Streams) {
     while !shared.closing.load(Ordering::Relaxed) {
         let request = match server.recv_timeout(Duration::from_millis(200)) {
             Ok(Some(r)) => r,
             Ok(None) => continue,
             Err(_) => break,
         };
-        answer(request, shared);
+        answer(request, shared, streams);
     }
 }
 
 /// One request: an asset, the event stream, or a refusal.
-fn answer(request: tiny_http::Request, shared: &Arc<Shared>) {
+fn answer(request: tiny_http::Request, shared: &Arc<Shared>, streams: &site::Streams) {
     use tiny_http::{Method, Response};
     if *request.method() != Method::Get {
         let r = Response::from_string("405 method not allowed: this page is read-only\n")
@@ -265,7 +296,10 @@ fn answer(request: tiny_http::Request, shared: &Arc<Shared>) {
     if path == "/events" {
         return subscribe(request, shared);
     }
-    let response = match assets::get(&path) {
+    if let Some(named) = streams.find(&path) {
+        return subscribe(request, &named);
+    }
+    let response = match (streams.site.asset)(&path) {
         Some(a) => Response::from_data(a.body)
             .with_header(header("Content-Type", a.content_type))
             .with_header(header("Cache-Control", "no-store"))

@@ -290,6 +290,7 @@ impl<I: Identifier> Worker<I> {
             &sorted,
         );
         stats.clients_refused = self.publisher.clients_refused();
+        stats.mqtt = self.publisher.mqtt_stats();
         let line = Line::LiveStats(&stats);
         if let Err(e) = self.publisher.publish_live(&line) {
             self.error.get_or_insert(e);
