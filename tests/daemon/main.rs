@@ -12,3 +12,4 @@ mod daemon_replay;
 mod demo_http;
 mod host_faults;
 mod link_faults;
+mod lying_stand;
