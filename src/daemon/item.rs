@@ -159,6 +159,27 @@ pub enum PlanNote {
         /// Re-arms done.
         rearms: u32,
     },
+    /// The applied throttle stayed outside what the plan commanded; the plan is over.
+    ThrottleMismatch {
+        /// Lowest commanded throttle, fraction.
+        commanded_min: f64,
+        /// Highest commanded throttle, fraction.
+        commanded_max: f64,
+        /// The throttle the device reported, fraction.
+        applied: f64,
+        /// How long, ms.
+        for_ms: u64,
+    },
+    /// Commands acknowledged and never seen in the samples; the plan is over.
+    CommandsNotExecuted {
+        /// Protocol name of the command.
+        command: &'static str,
+        /// The level it commanded, fraction.
+        level: f64,
+    },
+    /// The plan stopped on a sample rate other than the HELLO's (published from
+    /// [`Item::RateMismatch`]).
+    RateMismatch,
 }
 
 /// One item on the sampler → worker queue.
@@ -177,6 +198,23 @@ pub enum Item {
     Segment {
         /// The device's boot id (0 if the segment was inferred from the index going back).
         boot_id: u32,
+    },
+    /// The device clock jumped before the sample with this index (the window closes: no fit
+    /// spans it).
+    ClockJump {
+        /// Device index of the sample after the jump.
+        index: u64,
+        /// The clock's step, µs (negative: backwards).
+        step_us: i64,
+        /// The step the index step said, µs.
+        expected_us: f64,
+    },
+    /// The device's measured sample rate disagrees with its HELLO's.
+    RateMismatch {
+        /// The HELLO's rate, Hz.
+        hello_hz: u16,
+        /// The measured one, Hz.
+        measured_hz: f64,
     },
     /// A device event.
     Event(EventItem),

@@ -278,6 +278,46 @@ pub enum Warning<'a> {
         /// Protocol name of the command.
         command: &'static str,
     },
+    /// The throttle the device reports applying stayed outside what the plan commanded for
+    /// longer than `propid_wire::experiment::THROTTLE_MISMATCH_MS`: STOP sent, the plan is
+    /// over (exit 8).
+    ThrottleMismatch {
+        /// Lowest commanded throttle then, fraction.
+        commanded_min: f64,
+        /// Highest commanded throttle then, fraction.
+        commanded_max: f64,
+        /// The throttle the device reported, fraction.
+        applied: f64,
+        /// How long it stayed outside, ms.
+        for_ms: u64,
+    },
+    /// The device acknowledged commands its samples never show (a level never applied, or
+    /// pulses in a row without a trace): STOP sent, the plan is over (exit 8).
+    CommandsNotExecuted {
+        /// Protocol name of the command (`SET_THROTTLE`, `IMPULSE`).
+        command: &'static str,
+        /// The throttle it commanded, fraction.
+        level: f64,
+    },
+    /// The device's sample rate measured from its clock disagrees with its HELLO's; a plan
+    /// (which sizes pulses from the HELLO's rate) is stopped (exit 8).
+    HelloRateMismatch {
+        /// The HELLO's rate, Hz.
+        hello_hz: u16,
+        /// The rate the samples' clock measures, Hz.
+        measured_hz: f64,
+    },
+    /// The device clock stepped by `step_us` where the sample index said `expected_us`: the
+    /// window there is closed (no fit spans it), the samples go on.
+    ClockJump {
+        /// Device index of the sample after the jump.
+        sample_index: u64,
+        /// The clock's step, µs (negative: backwards).
+        step_us: i64,
+        /// What the index step and the period expected, µs.
+        #[serde(serialize_with = "nullable::num::serialize")]
+        expected_us: f64,
+    },
     /// Device event WATCHDOG_TRIP.
     WatchdogTrip(DeviceEvent),
     /// Device event LIMIT_CUTOFF.
@@ -369,6 +409,26 @@ impl Warning<'_> {
             }
             Warning::CommandRefused { .. } => "the device refused a command; the plan is over",
             Warning::LinkFailed { .. } => "a command went unanswered after its re-sends",
+            Warning::ThrottleMismatch { .. } => {
+                "the throttle the device reports is not the one commanded: STOP sent, the plan \
+                 is over"
+            }
+            Warning::CommandsNotExecuted { .. } => {
+                "the device acknowledged commands its samples never show: STOP sent, the plan \
+                 is over"
+            }
+            Warning::HelloRateMismatch { .. } => {
+                "the sample rate measured from the device clock is not the HELLO's (pulse \
+                 widths are sized from it): a plan is stopped"
+            }
+            Warning::ClockJump { .. } => {
+                "the device clock jumped while the sample index ran on: the window there is \
+                 closed, no model spans the jump"
+            }
+            Warning::WindowInterrupted {
+                closed_by: Reason::ClockJump,
+                ..
+            } => "a device clock jump closed the window before its K pulses: not identified",
             Warning::OverflowGap { .. } => {
                 "samples dropped by a full sampler queue; masked as missing"
             }
@@ -476,6 +536,22 @@ impl Line<'_> {
             PlanNote::Refused { command } => Line::Warning(Warning::CommandRefused { command }),
             PlanNote::LinkFailed { command } => Line::Warning(Warning::LinkFailed { command }),
             PlanNote::RearmLimit { rearms } => Line::Warning(Warning::RearmLimitReached { rearms }),
+            PlanNote::ThrottleMismatch {
+                commanded_min,
+                commanded_max,
+                applied,
+                for_ms,
+            } => Line::Warning(Warning::ThrottleMismatch {
+                commanded_min,
+                commanded_max,
+                applied,
+                for_ms,
+            }),
+            PlanNote::CommandsNotExecuted { command, level } => {
+                Line::Warning(Warning::CommandsNotExecuted { command, level })
+            }
+            // published from the tracker's item (replays too): `hello_rate_mismatch`
+            PlanNote::RateMismatch => return None,
         })
     }
 

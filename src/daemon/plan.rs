@@ -5,7 +5,10 @@
 //! turns its notices into published lines. After a reconnect the plan asks the device whether
 //! it is the same boot before it goes on. After a device reset or a link stall the plan is over
 //! unless `[experiment] rearm_on_reset` lets it hand-shake, ARM and resume at the interrupted
-//! operating point; after a watchdog trip or a refused command it is over. A plan over on a
+//! operating point; after a watchdog trip or a refused command it is over, and so it is when the
+//! stand's samples contradict its ACKs (a throttle other than the commanded one, commands never
+//! executed, a sample rate other than the HELLO's: `propid_wire::experiment`'s `verify.rs`,
+//! a STOP sent; the rate measured by the tracker's assembler). A plan over on a
 //! fault ends the run with exit 8 (the sampler reads the link 500 ms more first). A failed link
 //! (a command unanswered after its re-sends) ends the run (exit 6).
 
@@ -76,6 +79,21 @@ fn note(n: &Notice) -> PlanNote {
         Notice::Refused { command, .. } => PlanNote::Refused { command },
         Notice::LinkFailed { command, .. } => PlanNote::LinkFailed { command },
         Notice::RearmLimit { rearms } => PlanNote::RearmLimit { rearms },
+        Notice::ThrottleMismatch {
+            commanded_min,
+            commanded_max,
+            applied,
+            for_ms,
+        } => PlanNote::ThrottleMismatch {
+            commanded_min,
+            commanded_max,
+            applied,
+            for_ms,
+        },
+        Notice::CommandsNotExecuted { command, level } => {
+            PlanNote::CommandsNotExecuted { command, level }
+        }
+        Notice::RateMismatch { .. } => PlanNote::RateMismatch,
     }
 }
 
@@ -102,6 +120,11 @@ impl Plan for ExperimentPlan {
 
     fn poll(&mut self, now_us: u64) {
         self.exp.poll(now_us);
+    }
+
+    fn on_rate_mismatch(&mut self, now_us: u64, hello_hz: u16, measured_hz: f64) {
+        self.exp
+            .sample_rate_disagrees(hello_hz, measured_hz, now_us);
     }
 
     fn abort(&mut self, now_us: u64) {

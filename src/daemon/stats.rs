@@ -81,6 +81,9 @@ pub struct WorkStats {
     /// `window_interrupted` warning (published when there was one).
     #[serde(skip_serializing_if = "is_zero")]
     pub windows_interrupted: u64,
+    /// `clock_jump` warnings (present when there was one).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub clock_jumps: u64,
 }
 
 /// The final `"stats"` line (its `"type"` is written by [`super::line::Line::Stats`]).

@@ -18,6 +18,10 @@
 //!   the far side ([`Placed::new_segment`] *and* [`Placed::lost_before`]). A corrupted frame
 //!   whose absurd index passed the CRC, or a device that silently restarted its counter far
 //!   away, therefore never turns into millions of "lost" samples bridged inside one window.
+//! - **Clock jumps and the rate.** A clock step the index step and the HELLO's rate do not
+//!   explain is a jump ([`Placed::clock_jump`]: the window closes, a `clock_jump` warning; the
+//!   samples keep their indices); a measured rate other than the HELLO's is said once per
+//!   segment ([`Placed::rate_mismatch`]). The assembler's rules, `identify`'s too.
 //! - **Duplicates.** The same index again is dropped and counted (`duplicates`).
 //! - **Resets.** A backward index with no new HELLO is a device reset whose HELLO was lost: a
 //!   new segment; the next HELLO (of that new boot) is adopted without splitting it again.
@@ -46,7 +50,7 @@ use crate::ingest::clock::Unwrap32;
 use propid_wire::stream::SegmentCause;
 
 /// What the tracker says about one SAMPLE.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Placed {
     /// Unwrapped device sample index within the segment.
     pub index: u64,
@@ -63,6 +67,12 @@ pub struct Placed {
     pub announce: bool,
     /// The same index as the previous sample: a duplicate, to be dropped.
     pub duplicate: bool,
+    /// The device clock jumped just before this sample (`step_us` as stepped, `expected_us`
+    /// as the index step says): the window must not span it.
+    pub clock_jump: Option<(i64, f64)>,
+    /// The segment's measured rate disagrees with the HELLO's (`hello_hz`, `measured_hz`;
+    /// once per segment).
+    pub rate_mismatch: Option<(u16, f64)>,
 }
 
 /// Clock, gap and segment tracking for one link; see the module documentation.
@@ -116,9 +126,10 @@ impl Tracker {
     /// before any sample, or a new boot): the segment is announced here, whether or not a
     /// sample ever follows. The first HELLO of a stream joined mid-segment, and the HELLO of a
     /// reset already inferred from the index, are adopted without a split.
-    pub fn hello(&mut self, boot_id: u32) -> bool {
-        // The nominal rate only serves the assembler's `dt_s`, which the daemon does not use.
-        let starts = self.asm.hello(boot_id, 0).starts_segment();
+    /// The HELLO's rate is the one the assembler holds clock steps and the measured rate
+    /// against (its clock-jump and rate rules).
+    pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) -> bool {
+        let starts = self.asm.hello(boot_id, sample_rate_hz).starts_segment();
         self.announced |= starts;
         starts
     }
@@ -132,6 +143,8 @@ impl Tracker {
             new_segment: false,
             announce: false,
             duplicate: false,
+            clock_jump: None,
+            rate_mismatch: None,
         };
         let mut t_us = None;
         let mut wraps = 0;
@@ -142,6 +155,15 @@ impl Tracker {
             Assembled::SegmentStart { cause: c, .. } => cause = Some(c),
             Assembled::Duplicate => p.duplicate = true,
             Assembled::ClockWrap => wraps += 1,
+            Assembled::ClockJump {
+                step_us,
+                expected_us,
+                ..
+            } => p.clock_jump = Some((step_us, expected_us)),
+            Assembled::RateMismatch {
+                hello_hz,
+                measured_hz,
+            } => p.rate_mismatch = Some((hello_hz, measured_hz)),
             Assembled::ClockBackwards
             | Assembled::Event { .. }
             | Assembled::EventDropped { .. } => {}
@@ -174,7 +196,12 @@ impl Tracker {
             }
             None => {
                 self.index.step(raw_index);
-                self.clock.step(raw_t_us);
+                if p.clock_jump.is_some() {
+                    // re-based as the assembler's: events are placed on the new clock
+                    self.clock = Unwrap32::start(raw_t_us);
+                } else {
+                    self.clock.step(raw_t_us);
+                }
             }
         }
         self.samples_lost += p.lost_before;
@@ -220,7 +247,7 @@ mod tests {
     #[test]
     fn contiguous_samples_have_no_gap() {
         let mut t = Tracker::default();
-        assert!(t.hello(7));
+        assert!(t.hello(7, 0));
         let p = t.sample(0, 100);
         assert!(p.new_segment);
         for i in 1..10u32 {
@@ -236,7 +263,7 @@ mod tests {
     #[test]
     fn index_jump_is_a_counted_gap() {
         let mut t = Tracker::default();
-        t.hello(1);
+        t.hello(1, 0);
         t.sample(10, 0);
         let p = t.sample(11, 1000);
         assert_eq!(p.lost_before, 0);
@@ -252,7 +279,7 @@ mod tests {
     fn gap_of_exactly_the_largest_size_is_masked_one_more_starts_a_segment() {
         let max = AssembleOptions::default().max_gap_samples;
         let mut t = Tracker::default();
-        t.hello(1);
+        t.hello(1, 0);
         t.sample(0, 0);
         let edge = (max + 1) as u32;
         let p = t.sample(edge, edge * 1000);
@@ -270,7 +297,7 @@ mod tests {
     fn jump_beyond_the_largest_gap_is_counted_but_never_bridged() {
         // a frame whose absurd index passed the CRC, then the stream goes on as before
         let mut t = Tracker::default();
-        t.hello(1);
+        t.hello(1, 0);
         for i in 0..5u32 {
             t.sample(i, i * 1000);
         }
@@ -298,7 +325,7 @@ mod tests {
         let mut t = Tracker::new(AssembleOptions {
             max_gap_samples: 1000,
         });
-        t.hello(1);
+        t.hello(1, 0);
         for i in 0..10u32 {
             t.sample(i, i);
         }
@@ -312,7 +339,7 @@ mod tests {
     #[test]
     fn clock_wrap_is_unwrapped_without_a_gap() {
         let mut t = Tracker::default();
-        t.hello(1);
+        t.hello(1, 0);
         let start = u32::MAX - 2500;
         let mut last = 0u64;
         for i in 0..10u32 {
@@ -331,7 +358,7 @@ mod tests {
     #[test]
     fn sample_index_wrap_is_no_gap() {
         let mut t = Tracker::default();
-        t.hello(1);
+        t.hello(1, 0);
         t.sample(u32::MAX - 1, 0);
         t.sample(u32::MAX, 1);
         let p = t.sample(0, 2);
@@ -344,11 +371,11 @@ mod tests {
     #[test]
     fn new_boot_id_starts_a_segment_same_id_does_not() {
         let mut t = Tracker::default();
-        assert!(t.hello(1));
+        assert!(t.hello(1, 0));
         t.sample(100, 0);
-        assert!(!t.hello(1));
+        assert!(!t.hello(1, 0));
         t.sample(101, 1000);
-        assert!(t.hello(2));
+        assert!(t.hello(2, 0));
         let p = t.sample(0, 50);
         assert!(p.new_segment);
         assert_eq!(p.lost_before, 0, "a reboot is not a gap");
@@ -359,16 +386,16 @@ mod tests {
     fn first_hello_after_joining_mid_stream_is_no_new_segment() {
         let mut t = Tracker::default();
         t.sample(500, 0);
-        assert!(!t.hello(9));
+        assert!(!t.hello(9, 0));
         let p = t.sample(501, 1);
         assert!(!p.new_segment);
-        assert!(t.hello(10));
+        assert!(t.hello(10, 0));
     }
 
     #[test]
     fn repeated_index_is_a_dropped_duplicate_not_a_restart() {
         let mut t = Tracker::default();
-        t.hello(1);
+        t.hello(1, 0);
         t.sample(10, 0);
         let p = t.sample(10, 0);
         assert!(p.duplicate && !p.new_segment);
@@ -384,7 +411,7 @@ mod tests {
     #[test]
     fn index_going_back_without_hello_is_a_new_segment() {
         let mut t = Tracker::default();
-        t.hello(1);
+        t.hello(1, 0);
         t.sample(500, 0);
         let p = t.sample(3, 10);
         assert!(p.new_segment);
@@ -393,7 +420,7 @@ mod tests {
         let p = t.sample(4, 20);
         assert!(!p.new_segment);
         assert_eq!(p.lost_before, 0);
-        assert!(!t.hello(2), "the restarted device's HELLO is adopted");
+        assert!(!t.hello(2, 0), "the restarted device's HELLO is adopted");
         assert!(!t.sample(5, 30).new_segment);
         assert_eq!(t.assemble_stats().segments, 2);
     }
@@ -413,18 +440,18 @@ mod tests {
         };
         sample(&mut t, 0, &mut announced); // no HELLO: the first sample announces
         sample(&mut t, 1, &mut announced);
-        assert!(!t.hello(4), "joined mid-stream: adopted");
+        assert!(!t.hello(4, 0), "joined mid-stream: adopted");
         sample(&mut t, 2, &mut announced);
         sample(&mut t, 0, &mut announced); // the index going back: announced by the sample
-        if t.hello(5) {
+        if t.hello(5, 0) {
             announced.push("hello"); // not: the inferred reset's HELLO is adopted
         }
-        if t.hello(6) {
+        if t.hello(6, 0) {
             announced.push("hello"); // a new boot, announced by its HELLO ...
         }
         sample(&mut t, 0, &mut announced); // ... not again by its first sample
         sample(&mut t, 1, &mut announced);
-        if t.hello(7) {
+        if t.hello(7, 0) {
             announced.push("hello"); // a reset as the last thing received
         }
         assert_eq!(announced, ["sample", "sample", "hello", "hello"]);
@@ -468,7 +495,7 @@ mod tests {
                 if r < 0.02 {
                     let boot = rng.gen_range(1..4);
                     b.push_frame(&hello_frame(boot));
-                    t.hello(boot);
+                    t.hello(boot, 0);
                     continue;
                 }
                 idx = match r {

@@ -20,6 +20,7 @@ mod identify_gain;
 mod identify_glitched_cells;
 mod identify_held;
 mod identify_interpolated;
+mod identify_lying_stand;
 mod identify_noisy_steps;
 mod identify_quality;
 mod identify_real_data;

@@ -105,7 +105,7 @@ fn replayed(bytes: &[u8]) -> (Vec<(usize, f32)>, Tracker, usize) {
     let mut impulse_at = None;
     let mut on_frame = |f: Frame| match f.msg {
         Message::Hello(h) => {
-            tracker.hello(h.boot_id);
+            tracker.hello(h.boot_id, h.sample_rate_hz);
         }
         Message::Sample(s) => {
             let p = tracker.sample(s.sample_index, s.t_us);

@@ -13,4 +13,5 @@ mod daemon_replay;
 mod demo_http;
 mod host_faults;
 mod link_faults;
+mod lying_stand;
 mod mqtt_broker;

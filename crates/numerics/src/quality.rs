@@ -29,6 +29,12 @@
 //!   rises on a stand whose levels rise) or `G/g` outside `[1/4, 4]` is a number the data do
 //!   not support: refused, with both numbers named.
 //!
+//! - [`Flaw::ImplausibleDcGain`]: a DC gain (any output's) that is not a finite number or
+//!   exceeds [`MAX_ABS_DC_GAIN`] in magnitude — the physical plausibility bound. Thrust in N,
+//!   torque in N·m, speed in rev/min per unit throttle: the largest stands measure hundreds of
+//!   N and tens of thousands of rev/min at full throttle, so a gain above 10⁶ is no motor's (a
+//!   stand that sends ±3e38 among its samples gave −1.9e39).
+//!
 //! The checks are deliberately coarse: a model that passes may still be imprecise, and its
 //! `uncertainty` says by how much; a model that fails is certainly not the plant. The daemon
 //! publishes a failing model as a `model_unreliable` warning; `propid identify` prints it with
@@ -42,6 +48,9 @@ use crate::ModelReport;
 
 /// Relative jackknife standard deviation above which a value is unknown.
 pub const MAX_RELATIVE_SD: f64 = 1.0;
+/// Largest |DC gain| of a plausible model (output units per unit throttle: N, N·m, rev/min);
+/// see [`Flaw::ImplausibleDcGain`].
+pub const MAX_ABS_DC_GAIN: f64 = 1e6;
 /// A DC gain `G` agrees with the levels' slope `g` when `1/F ≤ G/g ≤ F`.
 pub const LEVEL_GAIN_FACTOR: f64 = 4.0;
 /// The levels' slope is resolved when it exceeds this many standard errors.
@@ -61,6 +70,8 @@ pub enum Flaw {
     /// A stand's command sampled more slowly than a motor–propeller settles
     /// ([`judge_sample_period`]): every sample is a steady state, the record holds no dynamics.
     SamplePeriodTooLong,
+    /// A DC gain beyond the physical plausibility bound [`MAX_ABS_DC_GAIN`] (or not finite).
+    ImplausibleDcGain,
 }
 
 impl Flaw {
@@ -71,6 +82,7 @@ impl Flaw {
             Flaw::DcGainUncertain => "dc_gain_uncertain",
             Flaw::DcGainContradictsLevels => "dc_gain_contradicts_levels",
             Flaw::SamplePeriodTooLong => "sample_period_too_long",
+            Flaw::ImplausibleDcGain => "implausible_dc_gain",
         }
     }
 }
@@ -95,6 +107,17 @@ pub fn judge(model: &ModelReport) -> Vec<Flaw> {
         .any(|&[re, _]| !(re.is_finite() && re < 0.0))
     {
         flaws.push(Flaw::UnstablePole);
+    }
+    let gains: Vec<f64> = match &model.dc_gain {
+        Gain::Scalar(g) => vec![*g],
+        Gain::List(v) => v.clone(),
+        Gain::Matrix(m) => m.iter().flatten().copied().collect(),
+    };
+    if gains
+        .iter()
+        .any(|g| !(g.is_finite() && g.abs() <= MAX_ABS_DC_GAIN))
+    {
+        flaws.push(Flaw::ImplausibleDcGain);
     }
     // judged for one output (a scalar gain) with both numbers finite
     if let (Gain::Scalar(v), Gain::Scalar(sd)) = (&model.dc_gain, &model.uncertainty.dc_gain) {
@@ -290,6 +313,20 @@ mod tests {
         // a slope within two standard errors of 0 says nothing
         let s = slope(1.0, Some(0.6));
         assert!(judge_gain(&report(json!({"dc_gain": -100.0})), &s).is_none());
+    }
+
+    #[test]
+    fn a_gain_no_motor_has_is_implausible() {
+        let m = report(json!({"dc_gain": -1.9e39}));
+        assert_eq!(judge(&m), vec![Flaw::ImplausibleDcGain]);
+        let m = report(json!({"dc_gain": 2.0e6}));
+        assert_eq!(judge(&m), vec![Flaw::ImplausibleDcGain]);
+        let m = report(json!({"dc_gain": null}));
+        assert_eq!(judge(&m), vec![Flaw::ImplausibleDcGain]);
+        // a big stand: 300 N at full throttle
+        let m = report(json!({"dc_gain": 300.0}));
+        assert!(judge(&m).is_empty());
+        assert_eq!(Flaw::ImplausibleDcGain.name(), "implausible_dc_gain");
     }
 
     #[test]

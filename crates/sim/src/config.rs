@@ -145,6 +145,26 @@ pub struct FaultConfig {
     /// SAMPLEs before whose frame a garbage burst is inserted, by `sample_index` (each costs the
     /// host one dropped frame). At most 65536 indices.
     pub garbage_before_samples_at: Vec<u32>,
+    /// A stand that lies (issue 27; the faults below are the firmware's, not the link's): a
+    /// runaway ESC — while armed with any throttle above 0, the motor gets full throttle and
+    /// every SAMPLE says so.
+    pub runaway_throttle: bool,
+    /// Every IMPULSE is answered BUSY (and not executed).
+    pub busy_impulses: bool,
+    /// SET_THROTTLE and IMPULSE are acknowledged OK and never executed (the motor never
+    /// moves; ARM, STOP, DISARM work).
+    pub ignore_commands: bool,
+    /// The rate the HELLO claims, Hz (0..=65535), whatever the stand samples at; absent: the
+    /// true one.
+    pub hello_rate_hz: Option<u16>,
+    /// The device clock (`t_us`) steps by `clock_jump_us` every this many samples while the
+    /// sample index runs on, 0 (never) ..= 2^32-1.
+    pub clock_jump_every_samples: u32,
+    /// The step of each clock jump, µs (negative: backwards), -10^9..=10^9.
+    pub clock_jump_us: i64,
+    /// Every this many SAMPLEs (from index 0) four in a row carry an absurd thrust with
+    /// THRUST_VALID set: 3e38, -inf, -3e38, +inf; 0 = never, else 4 or more.
+    pub absurd_thrust_every_samples: u32,
 }
 
 impl Default for FaultConfig {
@@ -166,6 +186,13 @@ impl Default for FaultConfig {
             drop_samples_at: Vec::new(),
             corrupt_samples_at: Vec::new(),
             garbage_before_samples_at: Vec::new(),
+            runaway_throttle: false,
+            busy_impulses: false,
+            ignore_commands: false,
+            hello_rate_hz: None,
+            clock_jump_every_samples: 0,
+            clock_jump_us: 0,
+            absurd_thrust_every_samples: 0,
         }
     }
 }
@@ -299,6 +326,20 @@ impl FaultConfig {
         check_f64("faults.freeze_after_s", self.freeze_after_s, 0.0, 86_400.0)?;
         check_f64("faults.hangup_every_s", self.hangup_every_s, 0.0, 86_400.0)?;
         check_f64("faults.reset_every_s", self.reset_every_s, 0.0, 86_400.0)?;
+        if self.absurd_thrust_every_samples > 0 {
+            check_int(
+                "faults.absurd_thrust_every_samples",
+                self.absurd_thrust_every_samples as i64,
+                4,
+                u32::MAX as i64,
+            )?;
+        }
+        check_int(
+            "faults.clock_jump_us",
+            self.clock_jump_us,
+            -1_000_000_000,
+            1_000_000_000,
+        )?;
         check_int(
             "faults.reopen_after_ms",
             self.reopen_after_ms,
@@ -332,6 +373,18 @@ impl FaultConfig {
             && self.drop_samples_at.is_empty()
             && self.corrupt_samples_at.is_empty()
             && self.garbage_before_samples_at.is_empty()
+            && !self.lies()
+    }
+
+    /// True when the firmware lies (runaway throttle, BUSY, ignored commands, a HELLO rate, clock
+    /// jumps, absurd values).
+    pub fn lies(&self) -> bool {
+        self.runaway_throttle
+            || self.busy_impulses
+            || self.ignore_commands
+            || self.hello_rate_hz.is_some()
+            || self.clock_jump_every_samples > 0
+            || self.absurd_thrust_every_samples > 0
     }
 }
 

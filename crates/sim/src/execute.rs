@@ -26,6 +26,7 @@ impl<D: Dynamics> Firmware<D> {
         let t = msg.msg_type();
         let now = self.now_us;
         self.last_cmd_us = now;
+        self.log_command(seq, msg);
         if let Some(stored) = self.dedup.lookup(seq, t, now) {
             self.stats.duplicates += 1;
             self.ack(seq, t, AckResult::from_u8(stored), true, now);
@@ -116,6 +117,9 @@ impl<D: Dynamics> Firmware<D> {
         if !self.armed {
             return AckResult::BadState;
         }
+        if self.lies().ignore_commands {
+            return AckResult::Ok;
+        }
         if s.level > THROTTLE_FULL_SCALE {
             return AckResult::OutOfRange;
         }
@@ -137,6 +141,12 @@ impl<D: Dynamics> Firmware<D> {
     fn impulse(&mut self, i: Impulse) -> AckResult {
         if !self.armed {
             return AckResult::BadState;
+        }
+        if self.lies().busy_impulses {
+            return AckResult::Busy;
+        }
+        if self.lies().ignore_commands {
+            return AckResult::Ok;
         }
         if i.level > THROTTLE_FULL_SCALE || i.width_us == 0 || i.width_us > MAX_IMPULSE_US {
             return AckResult::OutOfRange;

@@ -168,6 +168,11 @@ impl FaultInjector {
         self.enabled = on;
     }
 
+    /// The faults configured (the firmware reads its own misbehaviours here).
+    pub fn config(&self) -> &FaultConfig {
+        &self.cfg
+    }
+
     /// The counts so far.
     pub fn stats(&self) -> FaultStats {
         self.stats

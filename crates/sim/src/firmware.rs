@@ -35,6 +35,9 @@ use propid_wire::protocol::{
     MAX_FRAME_LEN,
 };
 
+/// Commands kept between two [`Firmware::take_commands`] (a runner takes them every turn).
+pub const MAX_COMMAND_LOG: usize = 1 << 16;
+
 /// Protocol minor version the firmware speaks.
 pub const PROTO_MINOR: u8 = 0;
 
@@ -129,6 +132,10 @@ pub struct Firmware<D: Dynamics> {
     tx_seq: u16,
     faults: FaultInjector,
     pub(crate) stats: FirmwareStats,
+    /// Every well-formed command received, in order (`seq`, message), until taken.
+    commands: Vec<(u16, Message)>,
+    /// The clock's offset from its clock jumps so far, µs (`clock_jump_us`).
+    clock_offset_us: i64,
 }
 
 impl<D: Dynamics> Firmware<D> {
@@ -171,6 +178,8 @@ impl<D: Dynamics> Firmware<D> {
             tx_seq: 0,
             faults,
             stats: FirmwareStats::default(),
+            commands: Vec::new(),
+            clock_offset_us: 0,
         };
         fw.emit(Message::Hello(fw.hello()));
         fw.emit_event(EventCode::ResetCause, 0, 0, 0);
@@ -230,9 +239,31 @@ impl<D: Dynamics> Firmware<D> {
         &self.dynamics
     }
 
-    /// Device clock on the wire for device time `t` (µs since boot), wrapping at 2³².
+    /// Device clock on the wire for device time `t` (µs since boot), wrapping at 2³² (shifted
+    /// by the clock jumps so far, `clock_jump_us`).
     pub fn wire_t_us(&self, t: u64) -> u32 {
-        self.cfg.initial_t_us.wrapping_add(t as u32)
+        self.cfg
+            .initial_t_us
+            .wrapping_add(t as u32)
+            .wrapping_add(self.clock_offset_us as u32)
+    }
+
+    /// The commands received since the last call (`seq`, message): the host's every command,
+    /// for tests that check them against the plan.
+    pub fn take_commands(&mut self) -> Vec<(u16, Message)> {
+        std::mem::take(&mut self.commands)
+    }
+
+    /// Logs a command received (see [`Self::take_commands`]).
+    pub(crate) fn log_command(&mut self, seq: u16, msg: Message) {
+        if self.commands.len() < MAX_COMMAND_LOG {
+            self.commands.push((seq, msg));
+        }
+    }
+
+    /// The configured misbehaviours (`[faults]`: runaway throttle, BUSY, ...).
+    pub(crate) fn lies(&self) -> &super::config::FaultConfig {
+        self.faults.config()
     }
 
     /// Runs the device clock to `now_us`: every boundary up to it (SAMPLEs, pulse edges,
@@ -284,7 +315,10 @@ impl<D: Dynamics> Firmware<D> {
         if self.armed && b.saturating_sub(self.last_cmd_us) >= self.watchdog_us {
             self.watchdog_trip(b);
         }
-        let (u, flags) = self.commit(b);
+        let (mut u, flags) = self.commit(b);
+        if self.lies().runaway_throttle && self.armed && u > 0 {
+            u = propid_wire::protocol::message::THROTTLE_FULL_SCALE;
+        }
         self.cur_throttle = u;
         self.cur_flags = flags;
         let m = self
@@ -352,8 +386,19 @@ impl<D: Dynamics> Firmware<D> {
 
     fn send_sample(&mut self, b: u64, throttle: u16, mut flags: SampleFlags, m: &Measurement) {
         self.stats.samples += 1;
-        let thrust = m.thrust_n - self.tare.0;
+        let mut thrust = m.thrust_n - self.tare.0;
         let torque = m.torque_nm - self.tare.1;
+        let index = self.index.wrapping_sub(1);
+        let every = self.lies().clock_jump_every_samples;
+        if every > 0 && index > 0 && index % every == 0 {
+            self.clock_offset_us += self.lies().clock_jump_us;
+        }
+        let every = self.lies().absurd_thrust_every_samples;
+        if every > 0 && index % every < 4 {
+            const ABSURD: [f64; 4] = [3e38, f64::NEG_INFINITY, -3e38, f64::INFINITY];
+            thrust = ABSURD[(index % every) as usize];
+            flags.insert(SampleFlags::THRUST_VALID);
+        }
         let channels = [
             (SampleFlags::THRUST_VALID, thrust),
             (SampleFlags::TORQUE_VALID, torque),
@@ -423,7 +468,10 @@ impl<D: Dynamics> Firmware<D> {
             fw_version: self.cfg.fw_version,
             boot_id: self.boot_id,
             t_us: self.wire_t_us(t),
-            sample_rate_hz: self.rate_hz.min(u16::MAX as u32) as u16,
+            sample_rate_hz: self
+                .lies()
+                .hello_rate_hz
+                .unwrap_or(self.rate_hz.min(u16::MAX as u32) as u16),
             channels: 0b1_1111,
             motor_poles: self.cfg.motor_poles,
             caps: caps::IMPULSE | caps::RAMP | caps::TARE | caps::SET_RATE,

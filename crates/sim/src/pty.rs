@@ -40,6 +40,7 @@ use super::faults::{FaultInjector, FaultStats};
 use super::firmware::{Firmware, FirmwareStats};
 use super::pace::MonoClock;
 use super::SimError;
+use propid_wire::protocol::Message;
 
 mod link;
 mod schedule;
@@ -131,7 +132,12 @@ pub struct SimReport {
 struct Shared {
     stop: AtomicBool,
     report: Mutex<SimReport>,
+    /// Every command the host wrote, over all boots (at most [`MAX_COMMANDS`]).
+    commands: Mutex<Vec<(u16, Message)>>,
 }
+
+/// Commands kept in [`SimHandle::commands`]'s log.
+pub const MAX_COMMANDS: usize = 1 << 20;
 
 /// Runs the simulated stand on a pty until `stop` is set, `opts.seconds` pass, or a hang-up
 /// without re-open. `on_path(host_path, slave_path)` is called every time a pty is opened:
@@ -382,6 +388,10 @@ fn serve(
                     Ok(n) if n > 0 => {
                         bytes_in += n as u64;
                         fw.feed(clock.now_us(), &rx[..n]);
+                        let taken = fw.take_commands();
+                        let mut log = shared.commands.lock().unwrap_or_else(|p| p.into_inner());
+                        let room = MAX_COMMANDS.saturating_sub(log.len());
+                        log.extend(taken.into_iter().take(room));
                     }
                     Ok(_) => {}
                     Err(_) => wire.reader_present = false,
@@ -523,6 +533,16 @@ impl SimHandle {
             .report
             .lock()
             .map(|r| r.clone())
+            .unwrap_or_default()
+    }
+
+    /// Every well-formed command the host wrote so far, in order, over all boots (`seq`,
+    /// message; the first [`MAX_COMMANDS`]): what tests hold against the plan.
+    pub fn commands(&self) -> Vec<(u16, Message)> {
+        self.shared
+            .commands
+            .lock()
+            .map(|c| c.clone())
             .unwrap_or_default()
     }
 

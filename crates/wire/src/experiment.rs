@@ -21,8 +21,11 @@
 //! [`Notice::LinkFailed`]. An IMPULSE whose ACK is lost is not re-sent once the device's EVENT
 //! IMPULSE_START says it fired (the pulse is counted then): with `retry_ms` near a second a
 //! re-send would fire it a second time, one pulse more at the level than the plan counted. An
-//! IMPULSE answered BUSY is tried again 20 ms later with a new seq; any other refusal ends the
-//! plan with [`Notice::Refused`] and a STOP. A HELLO with a new boot id means the device reset:
+//! IMPULSE answered BUSY is tried again 20 ms later with a new seq, at most `max_retries` times
+//! and for one `pulse_spacing_ms`, then it is a refusal; any other refusal ends the plan with
+//! [`Notice::Refused`] and a STOP. The device's samples are held against the commands
+//! (`verify.rs`): a throttle outside what was commanded, levels or pulses acknowledged and
+//! never seen, a sample rate other than the HELLO's end the plan with a STOP too. A HELLO with a new boot id means the device reset:
 //! [`Notice::DeviceReset`], and the plan is over unless `rearm_on_reset` says to hand-shake, ARM
 //! and resume at the interrupted operating point (`recover.rs`: also what a reconnect and a
 //! stall of the link do). A watchdog trip ends it too. [`Experiment::abort`] sends STOP (re-sent until acknowledged) for shutdown.
@@ -41,6 +44,10 @@
 mod config;
 mod plan;
 mod recover;
+mod verify;
 
 pub use config::{ExperimentConfig, ExperimentConfigError};
 pub use plan::{Experiment, Notice, Output, Phase};
+pub use verify::{
+    MIN_SAMPLES_TO_JUDGE, PULSES_UNSEEN_LIMIT, THROTTLE_MISMATCH_MS, THROTTLE_TOLERANCE,
+};

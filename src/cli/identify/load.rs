@@ -66,8 +66,13 @@ pub struct Source {
     /// `input_range`, `input_range_from`).
     #[serde(flatten)]
     pub read: ColumnsRead,
-    /// Sample rate used, Hz.
+    /// Sample rate used, Hz (a recording's: measured from the device clock, clock jumps left
+    /// out).
     pub rate_hz: f64,
+    /// The rate the recording's HELLO claims, Hz (TSP/1 recordings with a HELLO), printed
+    /// beside the measured one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub nominal_rate_hz: Option<f64>,
     /// Samples in the record.
     pub samples: usize,
     /// Samples marked missing by the file (lost, empty cells).
@@ -221,6 +226,10 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
             outputs: output_names,
             read,
             rate_hz,
+            nominal_rate_hz: tsp1
+                .as_ref()
+                .and_then(|s| s.dt_nominal_s)
+                .map(|dt| 1.0 / dt),
             samples: rec.len(),
             missing: rec.missing_count(),
             outliers: 0,

@@ -83,6 +83,39 @@ fn warnings_of(
     .collect()
 }
 
+/// What a recording's stream says about its device clock, by the one rule of `propid run` and
+/// `replay` (`propid_wire::stream::SampleAssembler`): `clock_jump` (value: how many; the rate is
+/// measured without them, no span of time crosses one) and `hello_rate_mismatch` (value: the
+/// HELLO's rate; the measured one is `rate_hz`).
+fn stream_warnings(source: &super::load::Source) -> Vec<IdentifyWarning> {
+    let Some(t) = &source.tsp1 else {
+        return Vec::new();
+    };
+    let mut w = Vec::new();
+    let jumps = t.assemble.clock_jumps;
+    if jumps > 0 {
+        w.push(IdentifyWarning {
+            kind: "clock_jump",
+            message: format!(
+                "the device clock jumped {jumps} time(s) while the sample index ran on: the                  sample period is measured without the jumps ({:.4} Hz)",
+                source.rate_hz
+            ),
+            value: jumps as f64,
+        });
+    }
+    if let (true, Some(n)) = (t.assemble.rate_mismatches > 0, source.nominal_rate_hz) {
+        w.push(IdentifyWarning {
+            kind: "hello_rate_mismatch",
+            message: format!(
+                "the HELLO claims {n:.4} Hz, the device clock measures {:.4} Hz: the measured                  rate is used",
+                source.rate_hz
+            ),
+            value: n,
+        });
+    }
+    w
+}
+
 /// What the thrust's static map warns of: an expo outside the blend, levels that do not
 /// repeat, a reading at zero command taken out of the curves.
 fn thrust_map_warnings(map: &propid_numerics::stand::StaticMap) -> Vec<IdentifyWarning> {
@@ -267,11 +300,14 @@ impl<'a> Output<'a> {
             static_map: &stand.static_map,
             stabilization: model.stabilization.as_ref(),
             quality: Quality::of(&model.report, levels, loaded.input_is_a_command),
-            warnings: warnings_of(
-                &model.report,
-                loaded.commanded,
-                stand.static_map.get("thrust"),
-            ),
+            warnings: stream_warnings(&loaded.source)
+                .into_iter()
+                .chain(warnings_of(
+                    &model.report,
+                    loaded.commanded,
+                    stand.static_map.get("thrust"),
+                ))
+                .collect(),
         }
     }
 
@@ -296,9 +332,12 @@ impl<'a> Output<'a> {
             let _ = writeln!(o, "left out  {}: {}", u.column, u.reason);
         }
         let _ = writeln!(o, "outputs   {}", s.outputs.join(", "));
+        let nominal = s
+            .nominal_rate_hz
+            .map_or(String::new(), |n| format!(" (HELLO: {n:.4} Hz)"));
         let _ = writeln!(
             o,
-            "rate      {:.4} Hz, {} samples ({} missing)",
+            "rate      {:.4} Hz{nominal}, {} samples ({} missing)",
             s.rate_hz, s.samples, s.missing
         );
         if s.outliers > 0 {
@@ -522,11 +561,15 @@ impl<'a> Partial<'a> {
             steps: &stand.steps,
             steps_by_direction: by_direction(&stand.steps),
             static_map: &stand.static_map,
-            warnings: stand
-                .static_map
-                .get("thrust")
+            warnings: stream_warnings(&loaded.source)
                 .into_iter()
-                .flat_map(thrust_map_warnings)
+                .chain(
+                    stand
+                        .static_map
+                        .get("thrust")
+                        .into_iter()
+                        .flat_map(thrust_map_warnings),
+                )
                 .collect(),
             stand,
         }

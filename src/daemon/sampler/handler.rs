@@ -45,7 +45,7 @@ impl Handler {
     pub(super) fn on_frame(&mut self, frame: Frame) {
         match &frame.msg {
             // one `segment` item per segment, as the tracker announces it (its "Announcing")
-            Message::Hello(h) if self.tracker.hello(h.boot_id) => {
+            Message::Hello(h) if self.tracker.hello(h.boot_id, h.sample_rate_hz) => {
                 self.send(Item::Segment { boot_id: h.boot_id });
             }
             Message::Sample(s) => {
@@ -60,6 +60,23 @@ impl Handler {
                         before: placed.index,
                         count: placed.lost_before,
                     });
+                }
+                if let Some((step_us, expected_us)) = placed.clock_jump {
+                    // the window closes before this sample: no fit spans the jump
+                    self.send(Item::ClockJump {
+                        index: placed.index,
+                        step_us,
+                        expected_us,
+                    });
+                }
+                if let Some((hello_hz, measured_hz)) = placed.rate_mismatch {
+                    self.send(Item::RateMismatch {
+                        hello_hz,
+                        measured_hz,
+                    });
+                    if let Some(plan) = self.plan.as_mut() {
+                        plan.on_rate_mismatch(self.now_us, hello_hz, measured_hz);
+                    }
                 }
                 if placed.duplicate {
                     // dropped (counted in `duplicates`), as ingest does

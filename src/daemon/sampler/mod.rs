@@ -86,6 +86,9 @@ pub trait Plan: Send {
     fn poll(&mut self, now_us: u64);
     /// Stop the motor now (shutdown): the plan sends STOP.
     fn abort(&mut self, now_us: u64);
+    /// The device's measured sample rate disagrees with its HELLO's (the assembler's rule):
+    /// the plan, which sizes pulses from the HELLO's, stops.
+    fn on_rate_mismatch(&mut self, _now_us: u64, _hello_hz: u16, _measured_hz: f64) {}
     /// Drains what the plan wants sent (`(seq, message)`; a re-send keeps its seq) and what it
     /// reports.
     fn next(&mut self, send: &mut dyn FnMut(u16, &Message), notes: &mut dyn FnMut(PlanNote));

@@ -21,6 +21,10 @@
 //!   the level ends, the window fills, a new device segment starts, or the stream ends. A pulse is
 //!   complete when the next one starts or the level ends (the plan spaces pulses so the response
 //!   has decayed by then).
+//! - A device clock jump ([`Window::on_clock_jump`]) closes the window like a segment (what
+//!   is complete, all before the jump, is identified; the rest is `window_interrupted` with
+//!   `closed_by: "clock_jump"`): the window's `dt` comes from its own clock, and no fit spans
+//!   a jump.
 //! - After an identification the window restarts at the new pulse, keeping the second half of
 //!   the last pulse's response (decayed: the new pulse's pre-pulse baseline). Each model is
 //!   therefore from K fresh pulses, and the window stays bounded.
@@ -261,6 +265,13 @@ impl Window {
         self.next_index = None;
         self.announced_pulse = None;
         self.close(Reason::Segment, identify)
+    }
+
+    /// The device clock jumped before the next sample: what is complete is identified (its
+    /// samples all precede the jump), the rest dropped and returned as for a segment; the
+    /// index runs on (the next sample starts a new window at its level).
+    pub fn on_clock_jump(&mut self, identify: impl FnMut(&WindowView<'_>)) -> Option<Interrupted> {
+        self.close(Reason::ClockJump, identify)
     }
 
     /// End of the stream: what is complete is identified; returns the window left with fewer

@@ -49,6 +49,8 @@ pub enum Reason {
     Full,
     /// The device started a new segment.
     Segment,
+    /// The device clock jumped (no fit spans it).
+    ClockJump,
     /// The stream ended.
     End,
 }

@@ -151,6 +151,37 @@ impl<I: Identifier> Worker<I> {
                 self.stats.segments += 1;
                 self.emit(&Line::Event(Event::Segment { boot_id }));
             }
+            Item::ClockJump {
+                index,
+                step_us,
+                expected_us,
+            } => {
+                let mut done = None;
+                let identifier = &mut self.identifier;
+                let live = self.live.is_some();
+                let cut = self
+                    .window
+                    .on_clock_jump(|v| done = Some(identify_one(identifier, v, live)));
+                if let Some(d) = done {
+                    self.publish_model(d);
+                }
+                if let Some(w) = cut {
+                    self.publish_cut(w);
+                }
+                self.stats.clock_jumps += 1;
+                self.emit(&Line::Warning(Warning::ClockJump {
+                    sample_index: index,
+                    step_us,
+                    expected_us,
+                }));
+            }
+            Item::RateMismatch {
+                hello_hz,
+                measured_hz,
+            } => self.emit(&Line::Warning(Warning::HelloRateMismatch {
+                hello_hz,
+                measured_hz,
+            })),
             Item::Event(e) => {
                 if EventCode::from_u8(e.code) == EventCode::ImpulseStart {
                     self.window.on_pulse_event(e.sample_index);

@@ -143,6 +143,31 @@ impl ExperimentConfig {
         check_i("retry_ms", self.retry_ms as u64, 10, 1000)?;
         check_i("max_retries", self.max_retries as u64, 0, 10)?;
         check_i("max_rearms", self.max_rearms as u64, 0, 100)?;
+        self.check_pulse_levels()
+    }
+
+    /// Every pulse level `level + delta` (each level with each signed amplitude the train
+    /// uses: `+a`, and `−a` with `alternate_sign`) must lie in 0..=1: a device clamps what lies
+    /// outside (`levels = [0.95]` with `pulse_amplitudes = [0.1]` pulses to 100 %, `levels =
+    /// [0.02]` with `−0.05` cuts the motor to 0 %), a pulse the plan never meant. The pair is
+    /// refused, named (`levels[i] ± pulse_amplitudes[j]`), before anything is sent.
+    fn check_pulse_levels(&self) -> Result<(), ExperimentConfigError> {
+        for (i, &l) in self.levels.iter().enumerate() {
+            for (j, &a) in self.pulse_amplitudes.iter().enumerate() {
+                let (sign, v) = if l + a > 1.0 + 1e-9 {
+                    ('+', l + a)
+                } else if self.alternate_sign && l - a < -1e-9 {
+                    ('-', l - a)
+                } else {
+                    continue;
+                };
+                return Err(refuse(
+                    format!("levels[{i}] {sign} pulse_amplitudes[{j}]"),
+                    format!("{l} {sign} {a} = {v}"),
+                    "every pulse level (level ± amplitude) in 0..=1: a device would clamp it",
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -187,6 +212,37 @@ mod tests {
         let e = c.validate().unwrap_err();
         assert_eq!(e.key, "levels[1]");
         assert_eq!(e.value, "NaN");
+    }
+
+    #[test]
+    fn a_pulse_level_outside_0_to_1_is_refused_by_its_pair() {
+        let c = ExperimentConfig {
+            levels: vec![0.95],
+            pulse_amplitudes: vec![0.1, 0.5],
+            ..ExperimentConfig::default()
+        };
+        let e = c.validate().unwrap_err();
+        assert_eq!(e.key, "levels[0] + pulse_amplitudes[0]", "{e}");
+        assert!(e.value.contains("1.05"), "{e}");
+        let c = ExperimentConfig {
+            levels: vec![0.3, 0.02],
+            ..ExperimentConfig::default()
+        };
+        let e = c.validate().unwrap_err();
+        assert_eq!(e.key, "levels[1] - pulse_amplitudes[0]", "{e}");
+        // without alternating signs only +a is fired
+        let c = ExperimentConfig {
+            levels: vec![0.02],
+            alternate_sign: false,
+            ..ExperimentConfig::default()
+        };
+        c.validate().unwrap();
+        // the edges themselves are pulse levels
+        let c = ExperimentConfig {
+            levels: vec![0.1, 0.9],
+            ..ExperimentConfig::default()
+        };
+        c.validate().unwrap();
     }
 
     #[test]

@@ -77,6 +77,37 @@ pub enum Notice {
         /// The device's answer.
         result: AckResult,
     },
+    /// The throttle the device reports applying stayed outside what the plan commanded for
+    /// longer than [`super::THROTTLE_MISMATCH_MS`] (a runaway ESC, a stand that lies). The plan
+    /// is over (a STOP is sent).
+    ThrottleMismatch {
+        /// Lowest throttle the plan commanded at that moment (fraction).
+        commanded_min: f64,
+        /// Highest throttle the plan commanded at that moment (fraction).
+        commanded_max: f64,
+        /// The throttle the device reported (fraction), at the last sample.
+        applied: f64,
+        /// How long it has been outside, ms (host clock).
+        for_ms: u64,
+    },
+    /// The device acknowledged commands its samples never show: a level that never appears,
+    /// or [`super::PULSES_UNSEEN_LIMIT`] pulses in a row with no sign of them. The plan is
+    /// over (a STOP is sent).
+    CommandsNotExecuted {
+        /// Protocol name of the command (`SET_THROTTLE` or `IMPULSE`).
+        command: &'static str,
+        /// The level it commanded (fraction; for a pulse `level + delta`).
+        level: f64,
+    },
+    /// The device's measured sample rate disagrees with its HELLO's (see
+    /// [`Experiment::sample_rate_disagrees`]): pulse widths are sized from the HELLO's. The
+    /// plan is over (a STOP is sent).
+    RateMismatch {
+        /// The HELLO's rate, Hz.
+        hello_hz: u16,
+        /// The rate measured from the samples, Hz.
+        measured_hz: f64,
+    },
     /// A command went unanswered after all re-sends. The plan is over.
     LinkFailed {
         /// Protocol name of the command.
@@ -184,6 +215,12 @@ pub struct Experiment {
     pub(super) last_frame_us: Option<u64>,
     /// The caller runs a stall watchdog ([`Experiment::set_stall_watchdog`]).
     stall_watchdog: bool,
+    /// The throttle the plan commanded before the current operating point (the ramp's start).
+    pub(super) from_level: f64,
+    /// BUSY answers to the IMPULSE being fired, and when it was first sent.
+    pub(super) busy: Option<(u32, u64)>,
+    /// The device's samples checked against the commands (`verify.rs`).
+    pub(super) check: super::verify::StandCheck,
 }
 
 impl Experiment {
@@ -209,6 +246,9 @@ impl Experiment {
             rearms: 0,
             last_frame_us: None,
             stall_watchdog: false,
+            from_level: 0.0,
+            busy: None,
+            check: Default::default(),
         })
     }
 
@@ -319,7 +359,9 @@ impl Experiment {
                 }
             }
             Message::Ack(a) => self.on_ack(a, now_us),
+            Message::Sample(s) => self.on_sample(&s, now_us),
             Message::Event(e) if e.code == EventCode::ImpulseStart => {
+                self.check.pulse_shown = true;
                 self.on_impulse_start(e.t_us, now_us)
             }
             Message::Event(e) if e.code == EventCode::WatchdogTrip && !self.is_over() => {
@@ -338,6 +380,15 @@ impl Experiment {
             return self.verified(displaced, now_us);
         }
         if a.result == AckResult::Busy && matches!(f.msg, Message::Impulse(_)) {
+            // tried again 20 ms later, but not for ever: after `max_retries` more BUSYs or one
+            // pulse spacing since it was first sent, a refusal
+            let (n, since) = self.busy.get_or_insert((0, f.first_sent_us));
+            *n += 1;
+            let spacing = self.cfg.pulse_spacing_ms as u64 * 1000;
+            if *n > self.cfg.max_retries || now_us >= *since + spacing {
+                self.busy = None;
+                return self.refused(f.msg.name(), a.result, now_us);
+            }
             self.wait_until_us = Some(now_us + BUSY_RETRY_US);
             return;
         }
@@ -409,6 +460,8 @@ impl Experiment {
     /// Pulse number `self.pulses` at the current level fired at device time `t_us`: noticed,
     /// counted, the next one after `pulse_spacing_ms`.
     fn pulse_fired(&mut self, t_us: u32, now_us: u64) {
+        self.busy = None;
+        self.check.pulse_fired();
         let delta = self.cfg.pulse_delta(self.pulses);
         self.notice(Notice::PulseFired {
             index: self.level_idx,
@@ -422,6 +475,13 @@ impl Experiment {
 
     /// A timed wait ended.
     fn wait_over(&mut self, now_us: u64) {
+        // a pulse's spacing ended: did the stand show the level and the pulses?
+        if self.phase == Phase::Pulsing
+            && self.busy.is_none()
+            && self.stand_ignored_commands(now_us)
+        {
+            return;
+        }
         match self.phase {
             Phase::Settling => {
                 self.phase = Phase::Pulsing;
@@ -474,6 +534,11 @@ impl Experiment {
     }
 
     fn go_to_level(&mut self, idx: usize, now_us: u64) {
+        self.from_level = match self.phase {
+            Phase::Pulsing => self.cfg.levels[self.level_idx],
+            _ => 0.0,
+        };
+        self.check.new_level();
         self.level_idx = idx;
         self.pulses = 0;
         self.phase = Phase::Ramping;
@@ -509,6 +574,7 @@ impl Experiment {
     }
 
     pub(super) fn halt(&mut self, n: Notice) {
+        self.busy = None;
         self.phase = Phase::Halted;
         self.verifying = None;
         self.rearm_pending = false;

@@ -26,14 +26,42 @@
 //!   segment boundary is *not* device time, and no analysis window may straddle one.
 //! - EVENT IMPULSE_START / IMPULSE_END / WATCHDOG_TRIP become record events at the record
 //!   position of their `sample_index` (events before the first sample wait for it).
+//! - **Clock jumps** (issue 27 item 7). Every sample's clock step `Δt` is held against its
+//!   index step `Δi` and a period `P`: it agrees when `Δt > 0` and `|Δt − Δi·P|` is at most
+//!   [`CLOCK_JUMP_PERIODS`] periods plus [`CLOCK_JUMP_REL`] of `Δi·P`. `P` is the HELLO's period, the period of the
+//!   last step that agreed, or the period of the step just before when that one was a jump
+//!   (a HELLO that lies about the rate costs one jump, not one per sample). A step that agrees
+//!   with none is a jump ([`Assembled::ClockJump`], counted in `clock_jumps`; a backward one in
+//!   `clock_backwards` too): the samples go on at their indices (the index is the device's
+//!   count of periods, the clock the part that lied), the clock is re-based at the sample
+//!   after it, and no span of time crosses it — neither the record's `dt` nor a daemon window
+//!   (closed there). The first step of a segment without a HELLO rate has nothing to agree
+//!   with and is taken.
+//! - **Rate** ([`Assembled::RateMismatch`], once per segment): after [`RATE_CHECK_SAMPLES`]
+//!   index steps that agreed, the rate they measure against the HELLO's: off by more than
+//!   [`RATE_TOLERANCE`] (relative) is a HELLO that lies (the host sizes pulses from it). A
+//!   HELLO rate of 0 is no rate (a CSV bench's made-up HELLO says 0 before it measured one)
+//!   and is not checked.
 //! - `dt`: the device clock over the sample count, `Σ (t_last − t_first) / Σ (idx_last −
-//!   idx_first)` summed over segments (a least-squares-free average immune to jitter and to
-//!   gaps); the nominal HELLO rate only when no segment spans two samples.
+//!   idx_first)` summed over segments and the spans between clock jumps (a least-squares-free
+//!   average immune to jitter and to gaps); the nominal HELLO rate only when no segment spans
+//!   two samples.
 
 use serde::Serialize;
 
 use super::clock::{Step, Unwrap32};
 use crate::record::RecordEventKind;
+
+/// A clock step agrees with a period `P` within this many periods (plus [`CLOCK_JUMP_REL`]):
+/// a CSV bench's jitter placed on the nearest index is within one.
+pub const CLOCK_JUMP_PERIODS: f64 = 2.0;
+/// ... plus this fraction of the step's expected length (a long gap's clock may drift).
+pub const CLOCK_JUMP_REL: f64 = 0.1;
+/// Index steps that agreed, in a segment, before its measured rate is held against the HELLO's.
+pub const RATE_CHECK_SAMPLES: u64 = 200;
+/// Largest relative difference between the measured rate and the HELLO's (a crystal is off by
+/// 10⁻⁴; a CSV bench's clock a few per cent).
+pub const RATE_TOLERANCE: f64 = 0.1;
 
 /// Assembly limits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -70,8 +98,12 @@ pub struct AssembleStats {
     pub segments: u64,
     /// Device clock wraps seen.
     pub clock_wraps: u64,
-    /// Samples whose clock went backwards while the index went forward.
+    /// Samples whose clock went backwards while the index went forward (clock jumps too).
     pub clock_backwards: u64,
+    /// Clock steps that disagree with their index step (see the module documentation).
+    pub clock_jumps: u64,
+    /// Segments whose measured rate disagrees with the HELLO's.
+    pub rate_mismatches: u64,
     /// Record events placed.
     pub events: u64,
     /// Events that could not be placed (before their segment, or too many pending).
@@ -108,8 +140,26 @@ pub enum Assembled<T> {
     Duplicate,
     /// The device clock wrapped (2³² µs) at the sample that follows.
     ClockWrap,
-    /// The device clock went back while the index went forward (at the sample that follows).
+    /// The device clock went back while the index went forward (at the sample that follows;
+    /// a [`Assembled::ClockJump`] follows).
     ClockBackwards,
+    /// The device clock stepped by `step_us` where the index step says `expected_us`: the
+    /// clock is re-based at the sample that follows (position `k`); no span of time crosses it.
+    ClockJump {
+        /// Position of the sample after the jump.
+        k: usize,
+        /// The clock's step, µs (negative: backwards).
+        step_us: i64,
+        /// The step the index step and the period expected, µs.
+        expected_us: f64,
+    },
+    /// The segment's measured rate disagrees with the HELLO's (once per segment).
+    RateMismatch {
+        /// The HELLO's rate, Hz.
+        hello_hz: u16,
+        /// The rate the samples' clock measures, Hz.
+        measured_hz: f64,
+    },
     /// A device event at position `k`.
     Event {
         /// Position.
@@ -168,6 +218,30 @@ struct Segment {
     clock: Unwrap32,
     idx_first: u64,
     t_first: u64,
+    /// Time and index steps of the segment's spans closed by clock jumps.
+    spans: (u64, u64),
+    /// Period (µs) of the last step that agreed.
+    agreed: Option<f64>,
+    /// Period (µs) of the step just before, when it was a jump.
+    jumped: Option<f64>,
+    /// The rate was held against the HELLO's.
+    rate_checked: bool,
+}
+
+impl Segment {
+    /// Time and index steps measured in this segment (clock jumps left out).
+    fn measured(&self) -> (u64, u64) {
+        (
+            self.spans.0 + (self.clock.value() - self.t_first),
+            self.spans.1 + (self.idx.value() - self.idx_first),
+        )
+    }
+}
+
+/// Whether a clock step `dt` µs over `di` index steps agrees with period `p` µs.
+fn agrees(dt: i64, di: u64, p: f64) -> bool {
+    let expected = di as f64 * p;
+    dt > 0 && (dt as f64 - expected).abs() <= CLOCK_JUMP_PERIODS * p + CLOCK_JUMP_REL * expected
 }
 
 const MAX_PENDING_EVENTS: usize = 64;
@@ -220,8 +294,9 @@ impl SampleAssembler {
     pub fn dt_s(&self) -> Option<f64> {
         let (mut t, mut n) = (self.span_t_us, self.span_samples);
         if let Some(s) = &self.seg {
-            t += s.clock.value() - s.t_first;
-            n += s.idx.value() - s.idx_first;
+            let (st, sn) = s.measured();
+            t += st;
+            n += sn;
         }
         if n > 0 && t > 0 {
             Some(t as f64 / n as f64 / 1e6)
@@ -305,6 +380,7 @@ impl SampleAssembler {
         value: T,
         on: &mut impl FnMut(Assembled<T>),
     ) {
+        let nominal = self.nominal_dt_s().map(|p| p * 1e6);
         let Some(seg) = self.seg.as_mut() else {
             let cause = if self.is_empty() {
                 SegmentCause::First
@@ -339,17 +415,42 @@ impl SampleAssembler {
             let cause = SegmentCause::GapTooLong { lost };
             return self.start_segment(cause, sample_index, t_us, value, on);
         }
-        let wraps = seg.clock.wraps();
-        if seg.clock.step(t_us) == Step::Backward {
-            self.stats.clock_backwards += 1;
-            on(Assembled::ClockBackwards);
+        let step_us = seg.clock.project(t_us).unwrap_or(0) - seg.clock.value() as i64;
+        let period = step_us as f64 / d as f64;
+        let ok = [nominal, seg.agreed, seg.jumped]
+            .iter()
+            .flatten()
+            .any(|&p| agrees(step_us, d, p))
+            || (step_us > 0 && nominal.is_none() && seg.agreed.is_none());
+        let mut jump = None;
+        if ok {
+            let wraps = seg.clock.wraps();
+            seg.clock.step(t_us);
+            let wrapped = seg.clock.wraps() - wraps;
+            self.stats.clock_wraps += wrapped;
+            if wrapped > 0 {
+                on(Assembled::ClockWrap);
+            }
+            seg.agreed = Some(period);
+            seg.jumped = None;
+        } else {
+            if step_us < 0 {
+                self.stats.clock_backwards += 1;
+                on(Assembled::ClockBackwards);
+            }
+            self.stats.clock_jumps += 1;
+            let expected_us = d as f64 * nominal.or(seg.agreed).unwrap_or(f64::NAN);
+            jump = Some((step_us, expected_us));
+            // re-based: the spans so far kept, the jump left out, the index runs on
+            let (st, sn) = seg.measured();
+            seg.spans = (st, sn - d);
+            seg.clock = Unwrap32::start(t_us);
+            seg.t_first = seg.clock.value();
+            seg.idx_first = seg.idx.value();
+            seg.jumped = (step_us > 0).then_some(period);
         }
-        let wrapped = seg.clock.wraps() - wraps;
-        self.stats.clock_wraps += wrapped;
-        if wrapped > 0 {
-            on(Assembled::ClockWrap);
-        }
-        let t = seg.clock.value();
+        let mismatch = self.check_rate();
+        let t = self.seg.as_ref().map_or(0, |s| s.clock.value());
         if lost > 0 {
             self.filled += lost;
             self.stats.samples_lost += lost;
@@ -360,7 +461,38 @@ impl SampleAssembler {
             });
             self.next_k += lost as usize;
         }
+        if let Some((step_us, expected_us)) = jump {
+            on(Assembled::ClockJump {
+                k: self.next_k,
+                step_us,
+                expected_us,
+            });
+        }
+        if let Some((hello_hz, measured_hz)) = mismatch {
+            on(Assembled::RateMismatch {
+                hello_hz,
+                measured_hz,
+            });
+        }
         self.emit_sample(t, value, on);
+    }
+
+    /// The segment's measured rate against the HELLO's, once [`RATE_CHECK_SAMPLES`] index
+    /// steps agreed: `Some((hello, measured))` when they disagree (once per segment).
+    fn check_rate(&mut self) -> Option<(u16, f64)> {
+        let hello = self.nominal_rate_hz.filter(|&r| r > 0)?;
+        let seg = self.seg.as_mut()?;
+        let (t, n) = seg.measured();
+        if seg.rate_checked || n < RATE_CHECK_SAMPLES || t == 0 {
+            return None;
+        }
+        seg.rate_checked = true;
+        let measured = n as f64 * 1e6 / t as f64;
+        if (measured / f64::from(hello) - 1.0).abs() <= RATE_TOLERANCE {
+            return None;
+        }
+        self.stats.rate_mismatches += 1;
+        Some((hello, measured))
     }
 
     fn emit_sample<T>(&mut self, t_us: u64, value: T, on: &mut impl FnMut(Assembled<T>)) {
@@ -389,6 +521,10 @@ impl SampleAssembler {
             clock,
             idx_first: idx.value(),
             t_first: clock.value(),
+            spans: (0, 0),
+            agreed: None,
+            jumped: None,
+            rate_checked: false,
         };
         self.seg = Some(s);
         self.stats.segments += 1;
@@ -404,8 +540,9 @@ impl SampleAssembler {
 
     fn end_segment(&mut self) {
         if let Some(s) = self.seg.take() {
-            self.span_t_us += s.clock.value() - s.t_first;
-            self.span_samples += s.idx.value() - s.idx_first;
+            let (t, n) = s.measured();
+            self.span_t_us += t;
+            self.span_samples += n;
         }
     }
 }

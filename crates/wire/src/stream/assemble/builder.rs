@@ -231,9 +231,12 @@ impl Store {
                 kind: RecordEventKind::SegmentStart,
             }),
             Assembled::Event { k, kind } => self.events.push(RecordEvent { sample: k, kind }),
+            // counted by the assembler; the samples keep their places
             Assembled::Duplicate
             | Assembled::ClockWrap
             | Assembled::ClockBackwards
+            | Assembled::ClockJump { .. }
+            | Assembled::RateMismatch { .. }
             | Assembled::EventDropped { .. } => {}
         }
     }

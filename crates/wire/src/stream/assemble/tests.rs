@@ -351,3 +351,125 @@ fn every_sample_says_what_happened_as_typed_items() {
         (487, 1, 1, 1, 4, 1)
     );
 }
+
+/// 1 kHz samples 0..n with the clock stepping by `jump_us` before sample `at` (and on).
+fn jumped(n: u32, at: u32, jump_us: i64) -> Vec<Frame> {
+    let mut frames = vec![hello(1)];
+    frames.extend((0..n).map(|i| {
+        let t = 1_000_000i64 + 1000 * i as i64 + if i >= at { jump_us } else { 0 };
+        sample(i, t as u32, ALL)
+    }));
+    frames
+}
+
+#[test]
+fn a_clock_jump_forward_or_back_keeps_the_samples_and_leaves_dt_alone() {
+    for jump in [20_000i64, -500_000, 3_000_000] {
+        let (r, a, _) = build(&jumped(1000, 400, jump));
+        assert_eq!((a.clock_jumps, a.segments, r.len()), (1, 1, 1000), "{jump}");
+        assert!(r.missing.iter().all(|m| !m), "{jump}");
+        assert!((r.dt_s - 1e-3).abs() < 1e-12, "{jump}: dt {}", r.dt_s);
+        assert_eq!(a.clock_backwards, u64::from(jump < 0));
+        assert_eq!(a.rate_mismatches, 0);
+    }
+    // several, both ways (the replay: dt 0.021..0.028 s for 0.001 s; backward: 248 Hz)
+    let mut frames = vec![hello(1)];
+    let mut t = 0i64;
+    for i in 0..3000u32 {
+        t += match i % 500 {
+            100 => 25_000,
+            350 => -40_000,
+            _ => 1000,
+        };
+        frames.push(sample(i, t as u32, ALL));
+    }
+    let (r, a, _) = build(&frames);
+    assert_eq!(a.clock_jumps, 12);
+    assert!((r.dt_s - 1e-3).abs() < 1e-12, "dt {}", r.dt_s);
+}
+
+#[test]
+fn a_clock_jump_is_said_at_its_sample() {
+    let mut a = SampleAssembler::new(AssembleOptions::default());
+    a.hello(1, 1000);
+    let mut said = Vec::new();
+    for (i, t) in [
+        (0u32, 0u32),
+        (1, 1000),
+        (2, 51_000),
+        (3, 52_000),
+        (4, 2_000),
+    ] {
+        a.sample(i, t, (), &mut |x| said.push(x));
+    }
+    use Assembled as A;
+    let jumps: Vec<_> = said
+        .iter()
+        .filter(|x| matches!(x, A::ClockJump { .. } | A::ClockBackwards))
+        .collect();
+    assert_eq!(
+        jumps,
+        vec![
+            &A::ClockJump {
+                k: 2,
+                step_us: 50_000,
+                expected_us: 1000.0
+            },
+            &A::ClockBackwards,
+            &A::ClockJump {
+                k: 4,
+                step_us: -50_000,
+                expected_us: 1000.0
+            },
+        ]
+    );
+}
+
+#[test]
+fn jitter_and_gaps_are_no_clock_jumps() {
+    // a CSV bench's rows placed on the nearest index: ±0.5 period of jitter; gaps of 50
+    let mut frames = vec![hello(1)];
+    let mut i = 0u32;
+    for k in 0..2000u32 {
+        i += if k % 100 == 99 { 50 } else { 1 };
+        let jitter = [0i64, 450, -450, 300, -200][k as usize % 5];
+        frames.push(sample(i, (1000 * i as i64 + 5000 + jitter) as u32, ALL));
+    }
+    let (_, a, _) = build(&frames);
+    assert_eq!((a.clock_jumps, a.rate_mismatches), (0, 0));
+}
+
+#[test]
+fn a_hello_that_lies_about_the_rate_is_said_once_and_the_clock_is_believed() {
+    // HELLO says 1000 Hz, the samples come at 500 Hz
+    let mut a = SampleAssembler::new(AssembleOptions::default());
+    a.hello(1, 1000);
+    let mut mismatch = Vec::new();
+    for i in 0..1000u32 {
+        a.sample(i, 2000 * i, (), &mut |x| {
+            if let Assembled::RateMismatch {
+                hello_hz,
+                measured_hz,
+            } = x
+            {
+                mismatch.push((hello_hz, measured_hz));
+            }
+        });
+    }
+    assert_eq!(mismatch, vec![(1000, 500.0)]);
+    // within two HELLO periods of the HELLO's: no jump, a rate
+    assert_eq!(a.stats().clock_jumps, 0);
+    assert!((a.dt_s().unwrap() - 2e-3).abs() < 1e-12);
+    // 65 535 Hz claimed
+    let mut a = SampleAssembler::new(AssembleOptions::default());
+    a.hello(1, 65_535);
+    let mut n = 0;
+    for i in 0..1000u32 {
+        a.sample(i, 1000 * i, (), &mut |x| {
+            n += usize::from(matches!(x, Assembled::RateMismatch { .. }))
+        });
+    }
+    assert_eq!((n, a.stats().rate_mismatches), (1, 1));
+    assert_eq!(a.stats().clock_jumps, 1, "the first step only");
+    assert!((a.dt_s().unwrap() - 1e-3).abs() < 1e-12);
+}
