@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use propid::cli::diagnose::{load, Args};
 use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs};
-use propid::diagnose::{self, Diagnosis};
+use propid_diagnose::{self as diagnose, Diagnosis};
 use propid_numerics::order::HankelSize;
 use propid_numerics::svd::SvdChoice;
 use propid_sim::plant::PlantConfig;

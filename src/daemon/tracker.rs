@@ -4,10 +4,10 @@
 //! so this tracker does not decide anything itself: every SAMPLE goes through ingest's
 //! [`SampleAssembler`] (the streaming half of `propid identify`'s TSP/1 reader) and the
 //! tracker translates what it says into a [`Placed`] for the sampler. The rules are therefore
-//! those of [`crate::ingest::assemble`]:
+//! those of [`propid_ingest::assemble`]:
 //!
 //! - **Unwrap.** `t_us` (µs, wraps every 2³² µs ≈ 71.6 min) and `sample_index` are unwrapped
-//!   by [`crate::ingest::clock::Unwrap32`]: the forward distance is `(now − last) mod 2³²`; a
+//!   by [`propid_ingest::clock::Unwrap32`]: the forward distance is `(now − last) mod 2³²`; a
 //!   distance of 2³¹ or more is a step *backwards*.
 //! - **Gaps.** Within a segment the next index must be `last + 1`. A forward jump of `d > 1` is
 //!   a gap of `d − 1` lost samples: counted in `samples_lost`, handed on as a gap, never bridged.
@@ -41,8 +41,8 @@
 //! positions instead), and the unwrapped index and time of device EVENTs in the current
 //! segment's numbering.
 
-use crate::ingest::assemble::{AssembleOptions, AssembleStats, Assembled, SampleAssembler};
-use crate::ingest::clock::Unwrap32;
+use propid_ingest::assemble::{AssembleOptions, AssembleStats, Assembled, SampleAssembler};
+use propid_ingest::clock::Unwrap32;
 use propid_wire::stream::SegmentCause;
 
 /// What the tracker says about one SAMPLE.
@@ -213,7 +213,7 @@ fn project(u: &Unwrap32, raw: u32) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ingest::assemble::RecordBuilder;
+    use propid_ingest::assemble::RecordBuilder;
     use propid_wire::protocol::message::{EscProtocol, Frame, Hello, Message};
     use rand::{Rng, SeedableRng};
 

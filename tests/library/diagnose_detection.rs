@@ -7,7 +7,7 @@
 //! (`asymmetric_dynamics`, `stiffness_nonlinearity`) are checked on a few cases here and on 20
 //! in the detection table.
 
-use propid::diagnose::{self, Diagnosis, Finding};
+use propid_diagnose::{self as diagnose, Diagnosis, Finding};
 use propid_sim::plant::PlantConfig;
 use propid_sim::synth::{self, Measured};
 

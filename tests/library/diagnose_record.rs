@@ -1,7 +1,7 @@
 //! `diagnose_record` on `Record`s: missing samples, a clipping sensor, and bad input (typed
 //! errors, no panic).
 
-use propid::diagnose::{self, DiagnoseError, Options};
+use propid_diagnose::{self as diagnose, DiagnoseError, Options};
 use propid_sim::effects::{Saturation, SaturationSignal};
 use propid_sim::synth;
 use propid_wire::record::{names, Channel, Record};

@@ -2,8 +2,8 @@
 //! floor measured within 20 % of the injected noise; a case with a hidden effect is
 //! `effects_found`; a record whose thrust falls as the command rises is warned about.
 
-use propid::diagnose::verdict::{VerdictKind, WarningKind};
-use propid::diagnose::{self, noise::FloorSource, Diagnosis};
+use propid_diagnose::verdict::{VerdictKind, WarningKind};
+use propid_diagnose::{self as diagnose, noise::FloorSource, Diagnosis};
 use propid_sim::synth;
 
 fn run(u: &[f64], y: &[f64], v: &[f64]) -> Diagnosis {

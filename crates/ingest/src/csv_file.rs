@@ -36,7 +36,7 @@
 //! rule of `csv_file/layout.rs`. A file without a header is refused unless the caller names its
 //! columns (`--columns`, which for a file with a header replace its names): a column order is
 //! never guessed (§6's header-less order is a property of a TSP/1 CSV *stream*, read by
-//! [`crate::ingest::tsp`]). A thrust column whose name says no unit, and a time column without
+//! [`crate::tsp`]). A thrust column whose name says no unit, and a time column without
 //! a unit counting whole milliseconds or microseconds, are refused naming `--columns`: their
 //! unit is not guessed. Bad rows are counted, never fatal: a
 //! wrong checksum, text in the time, input or an output column, a row with too few fields. An

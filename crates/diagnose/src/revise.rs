@@ -341,9 +341,9 @@ fn passes_against(ctx: &Ctx, before: &Fit, after: &Fit, names: &[&str]) -> Optio
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::effects::dead_time::DeadTimeParams;
-    use crate::diagnose::effects::extra_mode::ExtraModeParams;
-    use crate::diagnose::model::Core;
+    use crate::effects::dead_time::DeadTimeParams;
+    use crate::effects::extra_mode::ExtraModeParams;
+    use crate::model::Core;
 
     fn model() -> Model {
         Model::new(Core::default())
@@ -366,13 +366,13 @@ mod tests {
     /// A lightly damped 2nd-order plant behind a dead time of 3 samples, driven by a staircase
     /// with a small deterministic noise. The mode that fits it best in the delay's place has a
     /// share above 1 (an inverse response: the Padé stand-in for a delay,
-    /// [`crate::diagnose::effects::extra_mode::MAX_SHARE`]) and fails the addition tests; the
+    /// [`crate::effects::extra_mode::MAX_SHARE`]) and fails the addition tests; the
     /// same mode with share 1 (a plain lag in series, plausible) still takes up part of the
     /// delay, and the greedy model that holds it must be revised: the mode swapped for the
     /// delay (one parameter, and the mode adds nothing once the delay is in), with its length.
     #[test]
     fn a_delay_fitted_as_an_extra_mode_is_swapped_back() {
-        use crate::diagnose::model::{simulate, Signals};
+        use crate::model::{simulate, Signals};
         let dt = 0.01;
         let levels = [0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65];
         let u: Vec<f64> = levels
@@ -425,7 +425,7 @@ mod tests {
             }),
             2,
         );
-        let greedy = crate::diagnose::effects::extra_mode::ExtraMode
+        let greedy = crate::effects::extra_mode::ExtraMode
             .extend(&ctx, &base)
             .expect("a mode can be fitted");
         assert!(greedy.sse < base.sse, "the mode takes up part of the delay");
@@ -448,9 +448,9 @@ mod tests {
                     zeta,
                     gain: 1.0,
                 });
-                let (lag, _) = crate::diagnose::fit::linear_refit(&lag, &ctx.sig, ctx.est.clone());
+                let (lag, _) = crate::fit::linear_refit(&lag, &ctx.sig, ctx.est.clone());
                 let (sse, n) =
-                    crate::diagnose::fit::sse(&lag, &ctx.sig, ctx.est.clone(), &mut Vec::new());
+                    crate::fit::sse(&lag, &ctx.sig, ctx.est.clone(), &mut Vec::new());
                 Fit { model: lag, sse, n }
             })
             .min_by(|a, b| a.sse.total_cmp(&b.sse))
@@ -506,8 +506,8 @@ mod tests {
     /// 0 Hz it passes. On white noise alone the local score is the score.
     #[test]
     fn a_drift_under_a_misfit_elsewhere_in_the_spectrum_passes_the_local_test() {
-        use crate::diagnose::effects::baseline_drift::BaselineDriftParams;
-        use crate::diagnose::model::Signals;
+        use crate::effects::baseline_drift::BaselineDriftParams;
+        use crate::model::Signals;
         let (n, dt) = (1000, 0.01);
         let u: Vec<f64> = (0..n).map(|k| 0.5 + 0.1 * ((k / 100) % 2) as f64).collect();
         // The mean of `rate · t` over the record is `rate · 5 s`.

@@ -20,10 +20,10 @@
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{Core, Model};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::fit::Fit;
+use crate::model::{Core, Model};
 use propid_numerics::discretise::discretise_second_order;
 use propid_numerics::nonlinear_core::CoreLaw;
 use propid_numerics::step_response::{step_figures, Step};
@@ -231,7 +231,7 @@ mod tests {
 
     #[test]
     fn a_direction_faster_than_half_a_sample_is_implausible() {
-        use crate::diagnose::model::Core;
+        use crate::model::Core;
         // Down 9× slower than up around an 8 Hz core: spin-up τ ≈ 7 ms, spin-down ≈ 60 ms.
         let p = AsymmetricDynamicsParams {
             log_ratio: 9.0f64.ln(),

@@ -7,12 +7,12 @@ use propid_numerics::discretise::discretise_second_order;
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{max_freq_hz, Core, Model};
-use crate::diagnose::spectrum::peaks;
-use crate::diagnose::summary::{second_order_poles, LinearPart};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::fit::Fit;
+use crate::model::{max_freq_hz, Core, Model};
+use crate::spectrum::peaks;
+use crate::summary::{second_order_poles, LinearPart};
 
 /// The published name.
 pub const NAME: &str = "extra_mode";

@@ -141,7 +141,7 @@ pub fn summary(core: &Core, path: PathTaken, fit_percent: f64) -> EraBaseline {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::model::Signals;
+    use crate::model::Signals;
 
     #[test]
     fn a_refusal_of_the_core_is_a_typed_cause() {

@@ -313,9 +313,9 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::effects::saturation::{Clipped, SaturationParams};
-    use crate::diagnose::effects::static_nonlinearity::StaticNonlinearityParams;
-    use crate::diagnose::effects::supply_sag::SupplySagParams;
+    use crate::effects::saturation::{Clipped, SaturationParams};
+    use crate::effects::static_nonlinearity::StaticNonlinearityParams;
+    use crate::effects::supply_sag::SupplySagParams;
     use propid_sim::plant::{Plant, PlantConfig};
 
     fn signals<'a>(u: &'a [f64], y: &'a [f64]) -> Signals<'a> {
@@ -415,7 +415,7 @@ mod tests {
 
     #[test]
     fn the_voltage_is_as_late_as_the_output_side_of_the_delay() {
-        use crate::diagnose::effects::dead_time::DeadTimeParams;
+        use crate::effects::dead_time::DeadTimeParams;
         // Throttle 1 throughout, a voltage step at sample 10, a static core (fast, gain 1):
         // the sag scales the input by 1 + g (V − V_r).
         let u = vec![1.0; 30];
@@ -470,8 +470,8 @@ mod tests {
 
     #[test]
     fn core_terms_reproduce_the_plants_nonlinear_core() {
-        use crate::diagnose::effects::asymmetric_dynamics::AsymmetricDynamicsParams;
-        use crate::diagnose::effects::stiffness_nonlinearity::StiffnessNonlinearityParams;
+        use crate::effects::asymmetric_dynamics::AsymmetricDynamicsParams;
+        use crate::effects::stiffness_nonlinearity::StiffnessNonlinearityParams;
         use propid_sim::effects::{AsymmetricDynamics, EffectsConfig, StiffnessNonlinearity};
         let effects = EffectsConfig {
             asymmetric_dynamics: Some(AsymmetricDynamics {

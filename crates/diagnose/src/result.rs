@@ -201,7 +201,7 @@ pub struct InputLead {
 pub struct Traces {
     /// Sample period, seconds.
     pub dt_s: f64,
-    /// The segmentation's rules the diagnosis used ([`crate::diagnose::ctx::Ctx::rules`]).
+    /// The segmentation's rules the diagnosis used ([`crate::ctx::Ctx::rules`]).
     pub rules: propid_numerics::segment::SegmentRules,
     /// Input.
     pub u: Vec<f64>,

@@ -334,7 +334,7 @@ pub fn warnings(m: &ModelSummary, name: &'static str, band: [f64; 2]) -> Vec<War
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::noise::FloorSource;
+    use crate::noise::FloorSource;
 
     fn floor(rms: f64) -> NoiseFloor {
         NoiseFloor {
@@ -387,8 +387,8 @@ mod tests {
 
     #[test]
     fn a_pole_faster_than_a_sample_is_warned_and_named_second_beside_a_resolved_one() {
-        use crate::diagnose::fit::Fit;
-        use crate::diagnose::model::{Core, Model};
+        use crate::fit::Fit;
+        use crate::model::{Core, Model};
         let dt = 1e-3;
         let summary = |fn_hz, zeta| {
             let fit = Fit {

@@ -19,10 +19,10 @@
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{Core, Signals};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::fit::Fit;
+use crate::model::{Core, Signals};
 
 /// The published name.
 pub const NAME: &str = "baseline_drift";
@@ -166,7 +166,7 @@ impl Term for BaselineDriftParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::model::Signals;
+    use crate::model::Signals;
 
     fn ctx<'a>(u: &'a [f64], y: &'a [f64]) -> Ctx<'a> {
         Ctx {

@@ -94,7 +94,7 @@ pub fn select_pair<S>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::search::{select, Selection};
+    use crate::search::{select, Selection};
 
     #[test]
     fn two_effects_that_fail_held_out_alone_are_taken_together() {

@@ -13,10 +13,10 @@
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{Core, Model};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::fit::Fit;
+use crate::model::{Core, Model};
 use propid_numerics::nonlinear_core::CoreLaw;
 
 /// The published name.

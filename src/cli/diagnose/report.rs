@@ -11,8 +11,8 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::result::{Diagnosis, Traces};
-use super::spectrum::periodogram;
+use propid_diagnose::result::{Diagnosis, Traces};
+use propid_diagnose::spectrum::periodogram;
 use crate::plot::stabilization;
 use propid_numerics::okid::{okid, OkidOptions};
 use propid_numerics::segment::{self, Command, SegmentRules};

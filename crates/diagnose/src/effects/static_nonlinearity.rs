@@ -5,10 +5,10 @@
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{Core, Model, Signals};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::fit::Fit;
+use crate::model::{Core, Model, Signals};
 
 /// The published name.
 pub const NAME: &str = "static_nonlinearity";

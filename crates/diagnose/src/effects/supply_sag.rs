@@ -40,12 +40,12 @@
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
-use crate::diagnose::effects::baseline_drift::measured_estimation_samples;
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{simulate, Core, Model, Signals};
-use crate::diagnose::search::SCORE_THRESHOLD;
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::effects::baseline_drift::measured_estimation_samples;
+use crate::fit::Fit;
+use crate::model::{simulate, Core, Model, Signals};
+use crate::search::SCORE_THRESHOLD;
 
 /// The published name.
 pub const NAME: &str = "supply_sag";
@@ -412,7 +412,7 @@ pub const MAP_REVERSAL: f64 = 0.02;
 /// sample with the input held there (the states start in steady state).
 pub fn map_turns_back(
     ctx: &Ctx,
-    m: &crate::diagnose::model::Model,
+    m: &crate::model::Model,
     vhat: &VoltageOfThrottle,
 ) -> bool {
     let us = ctx
@@ -588,7 +588,7 @@ mod tests {
         sag: SupplySagParams,
         volt: impl Fn(usize, f64) -> f64,
     ) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-        use crate::diagnose::model::simulate;
+        use crate::model::simulate;
         let u: Vec<f64> = levels
             .iter()
             .flat_map(|&l| std::iter::repeat(l).take(150))
@@ -639,7 +639,7 @@ mod tests {
     /// The sag fitted on the baseline of `(u, y, v)`: the fit and the identifiability test.
     fn fit_sag(u: &[f64], y: &[f64], v: &[f64]) -> (Fit, Result<(), String>) {
         let ctx = context(u, y, v);
-        let base = crate::diagnose::search::baseline(&ctx, &Default::default(), &[]);
+        let base = crate::search::baseline(&ctx, &Default::default(), &[]);
         let after = SupplySag.extend(&ctx, &base).expect("a voltage channel");
         let verdict = SupplySag.identifiable(&ctx, &base, &after);
         (after, verdict)
@@ -660,7 +660,7 @@ mod tests {
             let sag = SupplySagParams::new(0.1, truth, share);
             let (u, y, v) = sagging(&levels, 0.05, sag, volt);
             let ctx = context(&u, &y, &v);
-            let base = crate::diagnose::search::baseline(&ctx, &Default::default(), &[]);
+            let base = crate::search::baseline(&ctx, &Default::default(), &[]);
             let drive = SupplySag.extend(&ctx, &base).unwrap();
             let settled = side(&ctx, &drive).expect("settled off the drive");
             let t = settled.model.term(NAME).unwrap();
@@ -681,7 +681,7 @@ mod tests {
         // A gain on the drive stays there.
         let (u, y, v) = sagging(&levels, 0.05, SupplySagParams::drive(0.1), volt);
         let ctx = context(&u, &y, &v);
-        let base = crate::diagnose::search::baseline(&ctx, &Default::default(), &[]);
+        let base = crate::search::baseline(&ctx, &Default::default(), &[]);
         let drive = SupplySag.extend(&ctx, &base).unwrap();
         assert!(side(&ctx, &drive).is_none());
         assert!((gain_per_volt(&drive) - 0.1).abs() < 0.002);
@@ -745,13 +745,13 @@ mod tests {
         let mut ctx = Ctx::whole(0.01, u, y);
         ctx.sig.voltage = Some(v);
         ctx.sig.v_ref = mean(v);
-        let base = crate::diagnose::search::baseline(&ctx, &Default::default(), &[]);
+        let base = crate::search::baseline(&ctx, &Default::default(), &[]);
         detectability(&ctx, &base).expect("a voltage channel")
     }
 
     #[test]
     fn a_sag_is_undetectable_where_the_voltage_has_no_variation_of_its_own() {
-        use crate::diagnose::search::SCORE_THRESHOLD;
+        use crate::search::SCORE_THRESHOLD;
         // A bench supply held at 16 V (a millivolt of ripple), or a voltage that only dips
         // with the load: even thrust ∝ V² leaves nothing a fit could score.
         for volt in [

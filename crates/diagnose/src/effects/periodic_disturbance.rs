@@ -4,11 +4,11 @@
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Scale, Term};
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{max_freq_hz, Core, Model, Signals};
-use crate::diagnose::spectrum::{band_level, peaks, steady_power};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::fit::Fit;
+use crate::model::{max_freq_hz, Core, Model, Signals};
+use crate::spectrum::{band_level, peaks, steady_power};
 
 /// The published name.
 pub const NAME: &str = "periodic_disturbance";

@@ -35,7 +35,6 @@ pub mod model;
 pub mod noise;
 pub mod pair;
 pub mod rejected;
-pub mod report;
 pub mod result;
 pub mod revise;
 pub mod search;

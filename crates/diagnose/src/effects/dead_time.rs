@@ -20,11 +20,11 @@ use propid_numerics::step_response::step_figures;
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Effect, Place, Term};
-use crate::diagnose::effects::baseline_drift::{affine_r2, measured_estimation_samples};
-use crate::diagnose::fit::Fit;
-use crate::diagnose::model::{Core, Signals};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Effect, Place, Term};
+use crate::effects::baseline_drift::{affine_r2, measured_estimation_samples};
+use crate::fit::Fit;
+use crate::model::{Core, Signals};
 
 /// The published name.
 pub const NAME: &str = "dead_time";
@@ -201,7 +201,7 @@ impl Effect for DeadTime {
             }
         };
         // Beside a whole sample of input lead one sample of delay would only undo the lead
-        // (`crate::diagnose::lead`): the shortest delay tried is then 2.
+        // (`crate::lead`): the shortest delay tried is then 2.
         let first = if cur.model.core.lead >= 1.0 { 2 } else { 1 };
         let step = coarse_step(cur.model.core.fn_hz, ctx.sig.dt_s).max(dmax / 32);
         let mut coarse: Vec<(usize, f64)> = (first..=dmax.max(first))
@@ -414,7 +414,7 @@ mod tests {
             .collect();
         let y = vec![0.0; n];
         let r2 = |u: &[f64]| confounding(&Ctx::whole(0.02, u, &y));
-        let unidentifiable = crate::diagnose::effects::baseline_drift::UNIDENTIFIABLE_R2;
+        let unidentifiable = crate::effects::baseline_drift::UNIDENTIFIABLE_R2;
         assert!(r2(&ramp) >= unidentifiable, "{}", r2(&ramp));
         assert!(r2(&stairs) < unidentifiable, "{}", r2(&stairs));
         assert!(r2(&noise) < 0.5, "{}", r2(&noise));

@@ -128,8 +128,8 @@ pub fn canonical(fit: &Fit) -> Option<Fit> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnose::model::{simulate, Signals};
-    use crate::diagnose::{diagnose, Options};
+    use crate::model::{simulate, Signals};
+    use crate::{diagnose, Options};
     use propid_sim::synth;
 
     #[test]

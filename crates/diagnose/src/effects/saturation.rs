@@ -6,10 +6,10 @@
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::diagnose::ctx::Ctx;
-use crate::diagnose::effect::{to_map, Detected, Effect, Place, Term};
-use crate::diagnose::fit::{linear_refit, Fit};
-use crate::diagnose::model::{Core, Signals};
+use crate::ctx::Ctx;
+use crate::effect::{to_map, Detected, Effect, Place, Term};
+use crate::fit::{linear_refit, Fit};
+use crate::model::{Core, Signals};
 
 /// The published name.
 pub const NAME: &str = "saturation";
