@@ -1,4 +1,4 @@
-//! `propid diagnose` end to end: the real binary on CSV files (PROTOCOL.md §6) written from the
+//! `propid diagnose` end to end: the real binary on CSV files (docs/PROTOCOL.md §6) written from the
 //! simulated plant with a hidden effect, `--json` shape, `--report` files, exit codes.
 
 use std::path::Path;

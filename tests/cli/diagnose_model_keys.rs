@@ -7,7 +7,7 @@ use std::process::Command;
 use propid_sim::synth;
 use serde_json::Value;
 
-/// Writes a PROTOCOL.md §6 CSV (t_us, throttle 0..10000, thrust_N) of a synthetic case with a
+/// Writes a docs/PROTOCOL.md §6 CSV (t_us, throttle 0..10000, thrust_N) of a synthetic case with a
 /// hidden dead time, so that `extended` is not null.
 fn write_csv(path: &Path) {
     let (mut cfg, _) = synth::case("clean", 3).unwrap();

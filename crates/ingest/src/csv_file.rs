@@ -1,5 +1,5 @@
 //! CSV files into a [`Record`]: exported logs of commercial stands, hobby benches, benchmark
-//! archives, TSP/1 CSV (PROTOCOL.md §6) with a header.
+//! archives, TSP/1 CSV (docs/PROTOCOL.md §6) with a header.
 //!
 //! Lines, checksums, comments, separators and fields follow the one CSV dialect of the project
 //! ([`protocol::csv::line`](propid_wire::protocol::csv::line): comments `#…`, optional `*HH`

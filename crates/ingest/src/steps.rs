@@ -21,7 +21,7 @@
 //!    moved by `M/2 − 1` samples to undo the lead of
 //!    the centred mean; the command is taken to have changed one sample before the response
 //!    moves (a measurement is taken at the end of the period in which the command was applied,
-//!    PROTOCOL.md §3). Expect ±1–2 samples of uncertainty on small steps.
+//!    docs/PROTOCOL.md §3). Expect ±1–2 samples of uncertainty on small steps.
 //! 4. The new level is the median of the first window of `settle_samples` (10) samples whose
 //!    smoothed range is below `settle_fraction·thr` (`thr/2`: the response has settled);
 //!    scanning resumes there.

@@ -86,7 +86,7 @@ pub struct RawPublish {
     pub http: Option<String>,
 }
 
-/// `[csv]` as written: how a CSV bench (PROTOCOL.md §6) is read.
+/// `[csv]` as written: how a CSV bench (docs/PROTOCOL.md §6) is read.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCsv {

@@ -1,4 +1,4 @@
-//! The CSV fallback of TSP/1 (PROTOCOL.md §6) as the daemon speaks it, sans-IO: text in,
+//! The CSV fallback of TSP/1 (docs/PROTOCOL.md §6) as the daemon speaks it, sans-IO: text in,
 //! TSP/1 [`Frame`]s out, commands out as CSV lines.
 //!
 //! The daemon is built on binary frames (the sampler's tracker, the experiment plan, the
