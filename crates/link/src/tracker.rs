@@ -41,8 +41,8 @@
 //! positions instead), and the unwrapped index and time of device EVENTs in the current
 //! segment's numbering.
 
-use propid_ingest::assemble::{AssembleOptions, AssembleStats, Assembled, SampleAssembler};
-use propid_ingest::clock::Unwrap32;
+use propid_wire::stream::assemble::{AssembleOptions, AssembleStats, Assembled, SampleAssembler};
+use propid_wire::stream::clock::Unwrap32;
 use propid_wire::stream::SegmentCause;
 
 /// What the tracker says about one SAMPLE.
@@ -213,7 +213,7 @@ fn project(u: &Unwrap32, raw: u32) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use propid_ingest::assemble::RecordBuilder;
+    use propid_wire::stream::assemble::RecordBuilder;
     use propid_wire::protocol::message::{EscProtocol, Frame, Hello, Message};
     use rand::{Rng, SeedableRng};
 
