@@ -1,21 +1,8 @@
-//! A clock coarser than the rows: time stamps that repeat for several rows and then step by
-//! one tick (a logger that writes `hh:mm:ss` ten times a second, a spreadsheet that saved its
-//! date-time column in whole seconds, a millisecond clock under a faster loop).
+//! A clock coarser than the rows: time stamps that repeat for several rows and then step by one
+//! tick (a logger that writes `hh:mm:ss` ten times a second, a spreadsheet that saved its date-
+//! time column in whole seconds, a millisecond clock under a faster loop).
 //!
-//! Read as they stand, every row but the first of a tick has a time that does not increase and
-//! is dropped ([`super::resample`], step 1): a 50 Hz log stamped in whole seconds kept one row
-//! in fifty and was read as a 1 Hz table. The rows of a tick were logged within it, in order,
-//! so they are spread evenly over it: row `j` of the `n` rows stamped `s` is at
-//! `s + j·r/n`, `r` the tick. A record cut inside a tick (its first and last ticks hold fewer
-//! rows) has those rows spaced as the typical tick's (`r/n₀`, `n₀` the median rows per tick
-//! of the ticks between), the first tick's anchored at its end.
-//!
-//! Taken only when the stamps say so: most rows (at least [`MIN_REPEATED_SHARE`]) share their
-//! stamp with a neighbour, the stamps never go back, at least three ticks are there, the
-//! typical tick holds two rows or more, and every step between stamps is a whole number of
-//! ticks (within 1 %; the median step one tick; a tick with no row is a gap, left to the
-//! resampler). Anything else (a
-//! few duplicated rows, a second run appended) is left to the drop rule, which counts it.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/ingest/src/coarse_clock.rs`.
 
 use serde::Serialize;
 

@@ -1,34 +1,8 @@
-//! A slow sensor written on every row as its last reading, repeated: the other way stand
-//! software leaves a sensor's cells "not updated" (besides leaving them empty, which
-//! [`super::resample`] reads as missing). Bitcraze's system-ID deck logs its load cell this
-//! way: the thrust changes on one row in ten and repeats in between.
+//! A slow sensor written on every row as its last reading, repeated: the other way stand software
+//! leaves a sensor's cells "not updated" (besides leaving them empty, which [`super::resample`]
+//! reads as missing).
 //!
-//! A held value is as old as the hold: carried as it is, a sensor read every `L` rows lags by
-//! about `L / 2` rows on average and moves in steps, a dead time and a staircase that look like
-//! dynamics (the Bitcraze log's steps read a dead time of 0.23 s so, 0.17 s read at the load
-//! cell's own rate). Read as what it is — one reading per run of repeats, at the row where it
-//! first appears — the channel goes through [`super::resample`] at its own rate like a channel
-//! with empty cells: interpolated between its own readings, never held.
-//!
-//! **Rule** ([`held_period`]). Over the channel's numbers in row order, the runs of exactly
-//! equal consecutive values have lengths `m_1, m_2, …`; `L` is their median. The channel is
-//! held when `L ≥ 2`, there are at least [`MIN_RUNS`] runs, and at least [`REGULAR_SHARE`] of
-//! them have a length of `L` or `L + 1` (also `L − 1` when `L ≥ 3`: a sensor whose period is
-//! not a whole number of rows alternates). A measured signal repeats a value by chance only
-//! when it is quantised coarsely against its noise, and then its run lengths scatter
-//! (geometrically: at a mean length of 2, only about 40 % are 2 or 3), so the rule needs the
-//! regularity of a clock, not just repeats. Only measured channels are examined: a command
-//! holds its levels by design.
-//!
-//! **Reading** ([`unhold`]). The first cell of each run is a reading; so is every `L`-th cell of
-//! a run longer than `L + 1` (a reading that did not change: the sensor at rest, still
-//! reporting); the other cells are left empty (NaN).
-//!
-//! **The command is the other way round** ([`hold_command`]). A logger that writes the command
-//! only on the rows where it changes leaves its other cells empty; an ESC keeps its last
-//! command, so each empty cell after the first command takes the last one written (a zero-order
-//! hold). Interpolated like a sensor, a step would become a ramp between two changes, and the
-//! rows after the last change would be missing.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/ingest/src/held.rs`.
 
 /// Fewest runs of repeats for a channel to be called held.
 pub const MIN_RUNS: usize = 20;

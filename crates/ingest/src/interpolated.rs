@@ -1,25 +1,8 @@
-//! A slow sensor that the stand software (or a script before it) already interpolated onto
-//! every row: the third way a sensor's rows can hold values that are not its readings, beside
-//! empty cells ([`super::resample`]) and a repeated last reading ([`super::held`]). A logger
-//! that resamples its load cell's 10 Hz readings onto a 100 Hz row clock writes nine of every
-//! ten rows on the straight line between two readings.
+//! A slow sensor that the stand software (or a script before it) already interpolated onto every
+//! row: the third way a sensor's rows can hold values that are not its readings, beside empty
+//! cells ([`super::resample`]) and a repeated last reading ([`super::held`]).
 //!
-//! Such rows carry no lag (a line between two readings is what [`super::resample`] makes of
-//! empty cells too), so the values are kept. What changes is what they are: not measurements
-//! at that instant. Whatever needs the readings themselves — the noise floor of `diagnose`,
-//! whose second differences are exactly zero on a line — takes them from the record's mark
-//! ([`propid_wire::record::Channel::interpolated`]), which this module sets.
-//!
-//! **Rule** ([`exporter_interpolated`]). A value `y_k` lies on the sloped line through its
-//! neighbours when `|y_{k+1} − 2 y_k + y_{k−1}| ≤ ε m` and `|y_{k+1} − y_{k−1}| > ε m`, with
-//! `m = max(|y_{k−1}|, |y_k|, |y_{k+1}|)` and `ε =` [`COLLINEAR`] (a few units of rounding in a
-//! number printed to 9–17 digits). A measured signal does that only by chance: a sensor
-//! quantised coarsely against its noise gives three codes in a row a few per cent of the
-//! time, a smooth signal printed with few digits as rarely. The channel is taken as
-//! interpolated when at least [`INTERPOLATED_SHARE`] of its values (with both neighbours) do,
-//! and those values are marked. A level (a flat run, `y_{k+1} = y_{k−1}`) is never marked: a
-//! sensor at rest repeats, it does not interpolate. Only measured channels are examined, and
-//! only those whose rows the reader did not already mark.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/ingest/src/interpolated.rs`.
 
 /// Relative size under which a sloped second difference is taken for a line (module doc).
 pub const COLLINEAR: f64 = 1e-9;

@@ -1,65 +1,7 @@
 //! Irregular timestamps onto a uniform grid, each channel at its own rate, with the jitter
 //! measured and reported.
 //!
-//! Logged timestamps from hobby firmware and PC-side stand software are rarely uniform: host
-//! arrival times come in USB bursts (three rows 1 ms apart, then a 40 ms pause), exporters write
-//! duplicate times, and rows go missing. Stand software also writes a row whenever *any* sensor
-//! reports, leaving the cells of the sensors that did not report empty (an RCbenchmark/Tyto
-//! export with a slow load cell: thrust on one row in four). The identification core needs
-//! `t_k = t_0 + k·dt` for every channel.
-//!
-//! Method (documented because results depend on it):
-//! 0. Stamps coarser than the rows (a tick holding several rows, [`super::coarse_clock`]) are
-//!    spread evenly over their tick ([`Jitter::coarse_clock`]).
-//! 1. Rows whose time is not strictly after the previous kept row (duplicates, steps back) are
-//!    dropped and counted ([`Jitter::non_increasing`]).
-//! 2. The grid period is `1/fs` when the rate is given, otherwise the **median** spacing of the
-//!    kept rows (robust to bursts and gaps).
-//! 3. If every spacing is within 10 % of that period (`max |Δt_i − dt| ≤ 0.1 dt`), the grid is
-//!    the rows as they are ([`Jitter::resampled`] = false): re-interpolating near-uniform data
-//!    would only low-pass it. Otherwise the grid is `t_0 + k·dt` ([`Jitter::resampled`]).
-//! 4. Each channel is carried onto the grid **from its own samples** (the rows where its cell
-//!    holds a number; an empty cell is a missing value of that channel only): a grid point on
-//!    one of its own samples takes it; any other takes the **linear interpolation** between the
-//!    two own samples around it. Linear interpolation is a two-tap FIR whose gain at frequency
-//!    `f` is between 1 and `sinc²(f·Δ)` for the local sample spacing `Δ`; for the slow dynamics
-//!    of a motor (a few Hz at 50 Hz logging) this is a small, bounded attenuation, and unlike a
-//!    higher-order interpolant it never overshoots at a step. A **command** is carried by
-//!    holding its last own sample instead: an ESC keeps the last command it was sent until the
-//!    next, so the command in force at a grid time is the last row's at or before it, and a
-//!    value between two commands (1587.5 µs between 1550 and 1600) was never sent. Measured on
-//!    the vanderploeg 90PERCENT log (rows 22 ms apart with 2.5 ms of jitter): held, the
-//!    diagnosis names the same three effects with the same 2-sample delay and an estimation
-//!    residual RMS of 0.0288 N instead of 0.0313 N; a table of steady averages (a row every
-//!    5–19 s) has its levels at the commands it ran.
-//! 5. A channel's **own rate** bounds what is bridged: its own period `dt_c` is the median
-//!    spacing of its own samples; a grid point whose two own samples are more than
-//!    `1.5·max(dt, dt_c)` apart, and which lies more than `0.75·dt` from both, is in a gap of
-//!    that channel (a dropped reading, a logging pause): it is not bridged but left NaN, and the
-//!    reader marks it missing when the channel is one it identifies. A channel whose every cell is
-//!    filled has `dt_c = dt` and follows the rows exactly as before; grid points before a
-//!    channel's first or after its last own sample are NaN (nothing is extrapolated).
-//!
-//! 6. A **table of steady states** is carried by holding, every channel and across every
-//!    spacing: when the command is held and the rows are further apart than a response takes
-//!    to settle ([`SegmentRules::samples_are_steady`] at the median spacing: a stand's table of
-//!    steady averages, one row per command every 5–19 s), each row is a level the stand
-//!    measured at the command it ran, and it stands until the next row. Interpolated, the
-//!    output between two rows would blend two levels under one command (vanderploeg's 1550 µs
-//!    level read as 3.63 N between its row's 3.12 N and the next level's 3.80 N), and the gap
-//!    rule of step 5 would drop every level that took longer than one and a half median
-//!    spacings to settle. Each grid point is then a copy of one row ([`Jitter::steady_rows`]).
-//!
-//! Why interpolation rather than holding the last value: a held value is as old as the
-//! channel's period, so a slow channel held onto a fast grid lags by half its period on average
-//! and by a whole one just after each change — a bias in dead time and phase that looks like
-//! dynamics. Interpolation between a channel's own samples has no lag at the instants it
-//! measured and invents no level it did not measure (every value lies between two measured
-//! ones). The grid points it fills across empty cells are counted per channel
-//! ([`Carried::bridged`]) so that a reader can report how much of a channel was carried.
-//!
-//! The jitter (median, 5th and 95th percentile and largest spacing, RMS deviation from the grid
-//! period) is reported so that the user can judge the timing of the source.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/ingest/src/resample.rs`.
 
 use propid_numerics::segment::SegmentRules;
 use serde::Serialize;

@@ -1,36 +1,6 @@
 //! Steps found from the response alone, for records whose command was not logged.
 //!
-//! A load-cell log of a step test without the command column still holds the steps: the
-//! response sits on a plateau, moves, and settles on another. This module finds them so that
-//! OKID has an input to work with.
-//!
-//! Method:
-//! The thresholds are [`ResponseStepRules`], part of the one set of segmentation rules
-//! ([`propid_numerics::segment::SegmentRules::response`]); their defaults are quoted here.
-//!
-//! 1. `s` = centred moving average over `smooth_samples` (6) samples of a `median_samples` (3)
-//!    running median of the response (the median removes spikes; an even-length mean removes
-//!    rotor ripple aliased to the Nyquist frequency exactly and attenuates slower ripple).
-//! 2. Noise `σ` of `s` = 1.4826 · MAD of `(s_k − 2 s_{k−M} + s_{k−2M})/√6` (`M` the smoothing
-//!    window: on a plateau or a ramp these second differences are noise only, edges are a few
-//!    outliers that the median ignores); range `R` = 99th − 1st percentile of `s`; threshold
-//!    `thr = max(noise_sigmas·σ, range_fraction·R)` (`max(6σ, 0.05 R)`).
-//! 3. From the current level `L` (median of the first settled window), the first sample with
-//!    `|s_k − L| > thr` is a step. Its **onset** is found by walking back while `s` is still more
-//!    than `max(onset_sigmas·σ, onset_fraction·thr)` (`max(3σ, thr/4)`) away from `L`, then
-//!    moved by `M/2 − 1` samples to undo the lead of
-//!    the centred mean; the command is taken to have changed one sample before the response
-//!    moves (a measurement is taken at the end of the period in which the command was applied,
-//!    docs/PROTOCOL.md §3). Expect ±1–2 samples of uncertainty on small steps.
-//! 4. The new level is the median of the first window of `settle_samples` (10) samples whose
-//!    smoothed range is below `settle_fraction·thr` (`thr/2`: the response has settled);
-//!    scanning resumes there.
-//!    A record that never settles (a ramp) yields no further steps.
-//!
-//! The synthetic input for identification is the *level* sequence: before the first step the
-//! initial level, from each step on the level it settles at. The identified model therefore has
-//! a DC gain of about 1 (output per output), and what it carries is the dynamics: time constants,
-//! natural frequency and damping.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/ingest/src/steps.rs`.
 
 use propid_numerics::outliers::MAD_TO_SD;
 use propid_numerics::segment::{ResponseStepRules, SegmentRules};

@@ -1,45 +1,6 @@
 //! Sampler-side stream bookkeeping, pure: the device clock, sample-index gaps and boot segments.
 //!
-//! A live run and the offline ingest of its recording must place every sample by **one** rule,
-//! so this tracker does not decide anything itself: every SAMPLE goes through ingest's
-//! [`SampleAssembler`] (the streaming half of `propid identify`'s TSP/1 reader) and the
-//! tracker translates what it says into a [`Placed`] for the sampler. The rules are therefore
-//! those of [`propid_ingest::assemble`]:
-//!
-//! - **Unwrap.** `t_us` (µs, wraps every 2³² µs ≈ 71.6 min) and `sample_index` are unwrapped
-//!   by [`propid_ingest::clock::Unwrap32`]: the forward distance is `(now − last) mod 2³²`; a
-//!   distance of 2³¹ or more is a step *backwards*.
-//! - **Gaps.** Within a segment the next index must be `last + 1`. A forward jump of `d > 1` is
-//!   a gap of `d − 1` lost samples: counted in `samples_lost`, handed on as a gap, never bridged.
-//! - **Largest gap.** A gap longer than [`AssembleOptions::max_gap_samples`] (ingest's default,
-//!   65 536 samples: a minute at 1 kHz), or one that would take the samples filled in so far past
-//!   `max_gap_samples + 10 × samples received`, is not a gap the window could mask: the samples
-//!   are still counted as lost, but the segment ends at its last sample and a new one starts at
-//!   the far side ([`Placed::new_segment`] *and* [`Placed::lost_before`]). A corrupted frame
-//!   whose absurd index passed the CRC, or a device that silently restarted its counter far
-//!   away, therefore never turns into millions of "lost" samples bridged inside one window.
-//! - **Duplicates.** The same index again is dropped and counted (`duplicates`).
-//! - **Resets.** A backward index with no new HELLO is a device reset whose HELLO was lost: a
-//!   new segment; the next HELLO (of that new boot) is adopted without splitting it again.
-//! - **Boots.** A HELLO whose `boot_id` differs from the current one ends the segment (the
-//!   device reset: disarmed, counters restarted); the next sample starts the new one. The host
-//!   never re-arms by itself; the experiment plan is told and decides.
-//! - **Announcing.** Every segment is announced exactly once, at the first thing that shows
-//!   it: the HELLO that starts it ([`Tracker::hello`] returns true), else its first sample
-//!   ([`Placed::announce`]: the first sample of a stream without HELLO, the index going back, a
-//!   gap too long to mask). A HELLO of a new boot with no sample after it (a device reset at the
-//!   very end of a run) is announced like any other. This is the daemon's one decision of what
-//!   a `segment` line is; the published `segments` counter counts those lines
-//!   ([`crate::daemon::stats::WorkStats::segments`]), so the two agree by construction. The
-//!   record's own segment count (segments holding samples, as `propid identify` counts them) is
-//!   the assembler's ([`Tracker::assemble_stats`]).
-//!
-//! The tracker does not diff the assembler's counters: the assembler says, per sample, what
-//! happened as typed items ([`Assembled`]: a gap, a duplicate, a segment start and its
-//! [`SegmentCause`], a clock wrap), and the tracker translates those. What it adds is the
-//! sampler's view: the unwrapped *device* index of each sample (the assembler counts record
-//! positions instead), and the unwrapped index and time of device EVENTs in the current
-//! segment's numbering.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/link/src/tracker.rs`.
 
 use propid_wire::stream::assemble::{AssembleOptions, AssembleStats, Assembled, SampleAssembler};
 use propid_wire::stream::clock::Unwrap32;
@@ -213,8 +174,8 @@ fn project(u: &Unwrap32, raw: u32) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use propid_wire::stream::assemble::RecordBuilder;
     use propid_wire::protocol::message::{EscProtocol, Frame, Hello, Message};
+    use propid_wire::stream::assemble::RecordBuilder;
     use rand::{Rng, SeedableRng};
 
     #[test]

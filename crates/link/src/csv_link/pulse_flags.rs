@@ -1,22 +1,6 @@
 //! Pulse flags for CSV rows, which carry none.
 //!
-//! A binary SAMPLE says which samples a device-timed pulse covered (IMPULSE_ACTIVE); the worker
-//! takes rising edges of that flag as pulse starts. A CSV bench only shows the throttle it
-//! applied, so the same facts are read off the throttle column by the pulse rule of
-//! [`propid_numerics::segment`]: a run of at most `max_pulse_samples` samples that leaves the
-//! level by more than the level tolerance and comes back to it is a **pulse**, and its samples
-//! get IMPULSE_ACTIVE; anything else (a step, a ramp) passes unflagged. It is the rule a
-//! recorded file is segmented by, fed one sample at a time
-//! ([`PulseClassifier`]), so a record and the stream it came from answer the same.
-//!
-//! This needs a look-ahead of at most `max_pulse_samples`, so samples are held in a delay line
-//! of that fixed capacity while a run may still be a pulse (a pulse of one sample period — the
-//! Kronecker delta of the ERA derivation — delays its own sample by one row). A delay line is
-//! the price of the missing flag: the worker's windows then see exactly what a binary stand
-//! would have flagged, so a CSV bench is identified by the same code path.
-//!
-//! The rule runs on the wire's throttle steps (`1/THROTTLE_FULL_SCALE`), the tolerance rounded
-//! to whole steps, so that a value is compared exactly as the wire carries it.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/link/src/csv_link/pulse_flags.rs`.
 
 use propid_numerics::segment::{Decision, PulseClassifier, SegmentRules};
 use propid_wire::protocol::message::{Sample, SampleFlags, THROTTLE_FULL_SCALE};
