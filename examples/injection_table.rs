@@ -151,7 +151,7 @@ fn main() {
                 within += usize::from(o.within(&inj));
                 errors.extend(o.error.filter(|e| e.is_finite()).map(f64::abs));
                 for n in named(&got) {
-                    if n != effect && !clean_names.contains(&n) {
+                    if n != effect.as_str() && !clean_names.contains(&n) {
                         *also.entry(n).or_default() += 1;
                     }
                 }

@@ -285,7 +285,11 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         let _ = writeln!(
             t,
             "extended by {}: validation fit {:.2} % ({:+.2} points, residual RMS × {:.3})",
-            e.effects.join(", "),
+            e.effects
+                .iter()
+                .map(|e| e.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
             e.fit_percent,
             g.fit_percent_points,
             g.rms_ratio

@@ -19,10 +19,10 @@
 use std::path::Path;
 
 use super::{CliError, UsageError};
+use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
 use propid_ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
 use propid_ingest::steps::{find_steps, StepFinding};
 use propid_ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
-use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
 use propid_wire::protocol::csv::encoding::{decode, utf16_mark, Encoding};
 use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};

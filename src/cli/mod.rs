@@ -15,8 +15,8 @@ pub mod walkthrough;
 
 use crate::daemon::source::SourceError;
 use crate::daemon::{ConfigError, DaemonError};
-use propid_diagnose::DiagnoseError;
 use load::{LoadError, NoSteps};
+use propid_diagnose::DiagnoseError;
 use propid_numerics::identify::AnyError;
 use propid_sim::SimError;
 use walkthrough::WalkthroughError;

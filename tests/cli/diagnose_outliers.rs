@@ -9,13 +9,14 @@
 use std::path::Path;
 
 use crate::support::propid;
+use propid_numerics::EffectName;
 use propid_sim::synth;
 use propid_testkit::inject::Samples;
 use propid_testkit::{add_noise, throttle, Plant};
 use serde_json::Value;
 
 /// The simulated case `effect` #0 as a CSV file's samples.
-fn case(effect: &str) -> Samples {
+fn case(effect: Option<EffectName>) -> Samples {
     let (_, m) = synth::case(effect, 0).unwrap();
     Samples {
         dt_s: synth::DT_S,
@@ -89,7 +90,7 @@ fn a_spike_and_a_dropout_are_left_out_and_counted_and_change_no_finding() {
         }
     }
     // the summary says it
-    let s = case("clean");
+    let s = case(None);
     let mut bad = s.clone();
     let a = quiet_sample(&s.u, 3000);
     bad.y[a] = 0.0;

@@ -4,7 +4,7 @@
 //! samples, simulated over the whole record).
 
 use super::ctx::Ctx;
-use super::effects::{baseline_drift, dead_time, supply_sag};
+use super::effects::REGISTRY;
 use super::era_start::{self, EraStart};
 use super::fit::Fit;
 use super::folds::{fit_percent, Folds};
@@ -15,7 +15,7 @@ use super::result::{
 };
 use super::search::Searched;
 use super::summary::ModelSummary;
-use super::verdict::{self, Residual};
+use super::verdict::{self, Residual, Warning};
 
 /// Fit percent of a fit on the validation samples (`ctx.val`); its simulation over the whole
 /// record is left in `sim`.
@@ -92,18 +92,22 @@ pub fn assemble(
     if let Some(e) = &extended {
         warnings.extend(verdict::warnings(&e.model, "extended", band));
     }
-    warnings.extend(verdict::drift_warning(baseline_drift::confounding(ctx)));
-    warnings.extend(verdict::dead_time_warning(dead_time::confounding(ctx)));
-    if !findings.iter().any(|f| f.effect == supply_sag::NAME) {
-        if let Some(d) = supply_sag::detectability(ctx, &cur) {
-            let model = if extended.is_some() {
-                "extended"
-            } else {
-                "baseline"
-            };
-            warnings.extend(verdict::supply_sag_warning(&d, model));
-        }
-    }
+    // What the effects say about this record (a confounded effect, one that could not have
+    // shown), in the order of their kinds.
+    let model = if extended.is_some() {
+        "extended"
+    } else {
+        "baseline"
+    };
+    let mut said: Vec<Warning> = REGISTRY
+        .iter()
+        .filter_map(|e| {
+            let found = findings.iter().any(|f| f.effect == e.name());
+            e.warning(ctx, &cur, found, model)
+        })
+        .collect();
+    said.sort_by_key(|w| w.kind);
+    warnings.extend(said);
     // The published (extended) model's lead: a canonical form may have moved it into the
     // dead time (`super::lead::canonical`).
     let lead = cur.model.core.lead;

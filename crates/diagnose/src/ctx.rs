@@ -1,11 +1,10 @@
-//! The data of one diagnosis (signals, estimation and validation samples) and the fitting
-//! steps every effect uses: Levenberg–Marquardt from one start, the best of several starts,
-//! residuals and the validation error.
+//! The data of one diagnosis ([`Ctx`]: signals, estimation and validation samples, the
+//! segmentation's rules) and the estimation samples an effect's evidence is read on; the
+//! fitting steps on it are in [`crate::fit`].
 
 use std::ops::Range;
 
-use super::fit::{levenberg_marquardt, linear_refit, Fit};
-use super::model::{simulate, Core, Model, Signals};
+use super::signals::Signals;
 use propid_numerics::segment::SegmentRules;
 
 /// The data, the estimation range and the validation range.
@@ -23,49 +22,32 @@ pub struct Ctx<'a> {
     pub rules: SegmentRules,
 }
 
-impl Ctx<'_> {
-    /// Levenberg–Marquardt on the estimation samples from `start`, at most `iters` steps.
-    pub fn lm(&self, start: &Model, iters: usize) -> Fit {
-        levenberg_marquardt(start, &self.sig, self.est.clone(), iters)
-    }
+/// The estimation samples from `first` on whose output is measured.
+pub fn measured_estimation_samples(ctx: &Ctx, first: usize) -> Vec<usize> {
+    ctx.est
+        .clone()
+        .filter(|&k| k >= first && ctx.sig.y.get(k).is_some_and(|y| y.is_finite()))
+        .collect()
+}
 
-    /// Every start scored after a linear refit (gain, offset, linear terms), then
-    /// Levenberg–Marquardt (40 steps) from the `keep` best; the best result wins. With no
-    /// usable start: the first start with the default core and an infinite SSE.
-    pub fn best_of(&self, starts: impl IntoIterator<Item = Model>, keep: usize) -> Fit {
-        let starts: Vec<Model> = starts.into_iter().collect();
-        let fallback = starts
-            .first()
-            .map_or_else(Model::default, |m| m.with_core(Core::default()));
-        let mut scored: Vec<(f64, Model)> = starts
-            .into_iter()
-            .map(|p| {
-                let (q, s) = linear_refit(&p, &self.sig, self.est.clone());
-                (s, q)
-            })
-            .filter(|(s, _)| s.is_finite())
-            .collect();
-        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut best: Option<Fit> = None;
-        for (_, p) in scored.into_iter().take(keep.max(1)) {
-            let f = self.lm(&p, 40);
-            if best.as_ref().map_or(true, |b| f.sse < b.sse) {
-                best = Some(f);
-            }
-        }
-        best.unwrap_or(Fit {
-            model: fallback,
-            sse: f64::INFINITY,
-            n: 0,
-        })
+/// `R²` of `a` fitted by `[1, b]` over the samples `ks` (the squared correlation of `a` and
+/// `b` there): how far one is an affine function of the other, the measure of both the drift's
+/// and the dead time's identifiability. 0 when either is constant there (to within 1e-12 of
+/// its mean) or with fewer than 3 samples.
+pub fn affine_r2(ks: &[usize], a: impl Fn(usize) -> f64, b: impl Fn(usize) -> f64) -> f64 {
+    if ks.len() < 3 {
+        return 0.0;
     }
-
-    /// The simulation residual of a fit on the estimation samples.
-    pub fn residual(&self, f: &Fit) -> Vec<f64> {
-        let mut buf = vec![0.0; self.sig.u.len()];
-        simulate(&f.model, &self.sig, &mut buf);
-        self.est.clone().map(|k| self.sig.y[k] - buf[k]).collect()
+    let m = ks.len() as f64;
+    let mean = |f: &dyn Fn(usize) -> f64| ks.iter().map(|&k| f(k)).sum::<f64>() / m;
+    let (ma, mb) = (mean(&a), mean(&b));
+    let sab = mean(&|k| (a(k) - ma) * (b(k) - mb));
+    let saa = mean(&|k| (a(k) - ma).powi(2));
+    let sbb = mean(&|k| (b(k) - mb).powi(2));
+    if !(saa > 1e-24 * ma * ma && sbb > 1e-24 * mb * mb && saa > 0.0 && sbb > 0.0) {
+        return 0.0;
     }
+    (sab * sab / (saa * sbb)).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]

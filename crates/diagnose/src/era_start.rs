@@ -8,7 +8,8 @@
 use serde::Serialize;
 
 use super::ctx::Ctx;
-use super::model::{simulate, Core, Model};
+use super::model::{simulate, Model};
+use super::signals::Core;
 use propid_numerics::identify::{identify_any_with, AnyError, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::order::HankelSize;
@@ -141,7 +142,7 @@ pub fn summary(core: &Core, path: PathTaken, fit_percent: f64) -> EraBaseline {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Signals;
+    use crate::signals::Signals;
 
     #[test]
     fn a_refusal_of_the_core_is_a_typed_cause() {

@@ -7,13 +7,16 @@
 //!   simulation error `r = y − ŷ(θ)` over the estimation samples, with a forward-difference
 //!   Jacobian and Marquardt's diagonal scaling, `(JᵀJ + λ diag JᵀJ) δ = Jᵀ r`. Frequencies and
 //!   damping ratios are adjusted in logarithm so that they stay positive.
+//! - [`Ctx::lm`], [`Ctx::best_of`], [`Ctx::residual`]: those steps on the data of one diagnosis.
 
 use std::ops::Range;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::effect::Scale;
-use super::model::{simulate, simulate_places, Model, Signals};
+use super::ctx::Ctx;
+use super::model::{simulate, simulate_places, Model};
+use super::signals::{Core, Signals};
+use super::term::Scale;
 
 /// A fitted model and its residual sum of squares on the estimation samples.
 #[derive(Debug, Clone)]
@@ -227,5 +230,51 @@ pub fn levenberg_marquardt(p0: &Model, sig: &Signals, range: Range<usize>, max_i
         model: p,
         sse: cost,
         n,
+    }
+}
+
+/// The fitting steps every effect uses on the data of one diagnosis.
+impl Ctx<'_> {
+    /// Levenberg–Marquardt on the estimation samples from `start`, at most `iters` steps.
+    pub fn lm(&self, start: &Model, iters: usize) -> Fit {
+        levenberg_marquardt(start, &self.sig, self.est.clone(), iters)
+    }
+
+    /// Every start scored after a linear refit (gain, offset, linear terms), then
+    /// Levenberg–Marquardt (40 steps) from the `keep` best; the best result wins. With no
+    /// usable start: the first start with the default core and an infinite SSE.
+    pub fn best_of(&self, starts: impl IntoIterator<Item = Model>, keep: usize) -> Fit {
+        let starts: Vec<Model> = starts.into_iter().collect();
+        let fallback = starts
+            .first()
+            .map_or_else(Model::default, |m| m.with_core(Core::default()));
+        let mut scored: Vec<(f64, Model)> = starts
+            .into_iter()
+            .map(|p| {
+                let (q, s) = linear_refit(&p, &self.sig, self.est.clone());
+                (s, q)
+            })
+            .filter(|(s, _)| s.is_finite())
+            .collect();
+        scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut best: Option<Fit> = None;
+        for (_, p) in scored.into_iter().take(keep.max(1)) {
+            let f = self.lm(&p, 40);
+            if best.as_ref().map_or(true, |b| f.sse < b.sse) {
+                best = Some(f);
+            }
+        }
+        best.unwrap_or(Fit {
+            model: fallback,
+            sse: f64::INFINITY,
+            n: 0,
+        })
+    }
+
+    /// The simulation residual of a fit on the estimation samples.
+    pub fn residual(&self, f: &Fit) -> Vec<f64> {
+        let mut buf = vec![0.0; self.sig.u.len()];
+        simulate(&f.model, &self.sig, &mut buf);
+        self.est.clone().map(|k| self.sig.y[k] - buf[k]).collect()
     }
 }

@@ -1,41 +1,7 @@
-//! How a diagnosis is validated: blocked cross-validation over the command's steps, or a
-//! hold-out tail when the command has no steps.
+//! How a diagnosis is validated: blocked cross-validation over the command's steps, or a hold-out
+//! tail when the command has no steps.
 //!
-//! **Why.** A staircase whose top level appears only at the end cannot be validated on its
-//! last 30 %: a model fitted on the first 70 % never saw that level, so the score is pure
-//! extrapolation (an effect that only shows at high throttle, like a supply sag, is then
-//! rejected because the validation samples are a level the fit never saw).
-//!
-//! **Folds** ([`Folds::from_input`]). The levels of the command are the segmentation's
-//! ([`propid_numerics::segment::levels`] under [`SegmentRules::DEFAULT`], the one owner of the
-//! step rule). With at least [`MIN_FOLDS`] levels the record is cut into contiguous blocks, every
-//! cut at a step (samples before the first level belong to the first block):
-//! - up to `MAX_FOLDS / 2` levels: each level gives two blocks, the step into it with the first
-//!   half of its hold, and the second half of the hold. No level is ever held out whole, so no
-//!   fold asks for an operating point the fit never saw (the top level of a staircase that
-//!   reaches it only at the end is scored on its step with its steady half fitted, and the
-//!   other way round);
-//! - more levels: at most [`MAX_FOLDS`] blocks of consecutive whole levels, grouped evenly
-//!   (each fold has fitted levels on both sides, except the first and the last).
-//!
-//! A block with fewer than [`MIN_FOLD_SAMPLES`] measured outputs joins the one before it.
-//! Without steps (noise, multisines, sweeps, ramps: fewer than [`MIN_FOLDS`] levels) there is
-//! one fold, the hold-out tail: the first `estimation_fraction` of the samples are fitted, the
-//! rest scored ([`Method::Holdout`]).
-//!
-//! **Scores** ([`cross_validate`]). For fold `F` the model is refitted on every sample outside
-//! `F` (the outputs inside `F` are masked as missing; the simulation still runs through `F` from
-//! the measured input, so the states carry over), by Levenberg–Marquardt from the fit on all
-//! samples; it is scored on `F` alone: `fit_F = 100 (1 − ‖y_F − ŷ_F‖ / ‖y_F − ȳ‖)`, with `ȳ`
-//! the mean of every held-out output (of all folds together: the record under blocked
-//! cross-validation, the tail under hold-out). The reference is the record's mean, not the
-//! fold's: a fold of one or two levels varies little about its own mean, so a model whose
-//! level is slightly off would score far below zero there although it predicts the record
-//! well; against `ȳ` a fold scores 0 for the constant that best predicts the whole record and
-//! 100 for a perfect prediction, and the folds' fits are comparable. The figure is the mean of
-//! the folds' fits. The parameters that effects choose on a grid (a
-//! dead time's whole samples, a clip level) are kept at the values chosen on all samples; the
-//! continuous ones (core, gain, offset, exponents, voltage gain, ...) are refitted per fold.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/folds.rs`.
 
 use std::ops::Range;
 
@@ -44,7 +10,8 @@ use serde::Serialize;
 
 use super::ctx::Ctx;
 use super::fit::{levenberg_marquardt, Fit};
-use super::model::{simulate, Signals};
+use super::model::simulate;
+use super::signals::Signals;
 
 /// Fewest levels for blocked cross-validation (fewer: the hold-out tail).
 pub const MIN_FOLDS: usize = 3;

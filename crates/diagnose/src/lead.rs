@@ -1,45 +1,13 @@
 //! The input's lead: when, within a sample, a logged command takes effect.
 //!
-//! The core is sampled as a zero-order hold: input sample `u_k` acts from its row's time `t_k`
-//! to the next, so the output at `t_k` has not yet answered it. A stand's logger need not work
-//! that way: one that sends the command, then reads the load cell and writes both on one row
-//! logs a thrust that has already answered the command beside it for part of a sample; a
-//! smooth input sampled at the row instants (the Silverbox benchmark) is, on average, half a
-//! sample ahead of its hold. A model that holds the input from its row then has to imitate a
-//! response that starts before it can (a time constant far below a sample, `ζ` ≫ 1) and
-//! leaves a residual at every step that no effect accounts for. A delay cannot be negative,
-//! so [`super::effects::dead_time`] cannot mend it.
-//!
-//! **Model.** With a lead `α` (a share of a sample), `u_k` acts over
-//! `[t_k − α·dt, t_{k+1} − α·dt)`: the interval `[t_k, t_{k+1})` holds `u_k` for
-//! `(1 − α)·dt`, then `u_{k+1}`, each integrated exactly (`x_{k+1} = A_α (A_{1−α} x_k +
-//! B_{1−α} u_k) + B_α u_{k+1}`, the discretisations of the same core over the two parts: the
-//! modified z-transform of a fractional advance). `α = 0` is the plain hold.
-//!
-//! **Choice.** `α` is not a free parameter of every fit: it is a property of the record's
-//! logging, chosen once on the baseline and kept by every model (so the effects' scores
-//! compare models with the same timing). The baseline is fitted at each of [`LEADS`]; a lead
-//! is taken only when its baseline beats the plain hold by the effects' own evidence
-//! (`n ln(SSE_0 / SSE_α) ≥` [`super::search::SCORE_THRESHOLD`] and an RMS at least
-//! [`super::search::MIN_RMS_DROP`] lower), the best of those; a record
-//! with a delay, or none of either, keeps the plain hold. A whole sample of lead is a dead
-//! time of −1 sample: beside a dead time of `d ≥ 2` samples the model is published in its
-//! canonical form, `d − 1` samples and no lead ([`canonical`]; the same simulation), so that a
-//! dead time is always the delay the output shows. A strong effect can hide the lead
-//! from the baseline (a fast pole of an overdamped core imitates the early answer as well as
-//! the lead does while a static map dominates the residual), so the final model is checked
-//! too ([`better_lead`]: every parameter refitted at each lead); when one beats it by the same
-//! evidence the search runs again from the baseline at that lead, and its result is taken when
-//! its held-out figure is higher. A same-row logger (first-order
-//! thrust, τ = 2.4 samples, its row's thrust one sample into the response) takes `α = 1`,
-//! and a staircase that left the residual at 4 × the noise with a 2 ms time constant is
-//! explained to the noise.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/lead.rs`.
 
+use super::baseline::baseline;
 use super::ctx::Ctx;
-use super::effects::dead_time::{self, DeadTimeParams};
 use super::fit::Fit;
-use super::model::{Core, Model};
-use super::search::{baseline, MIN_RMS_DROP, SCORE_THRESHOLD};
+use super::model::Model;
+use super::signals::Core;
+use crate::thresholds::{MIN_RMS_DROP, SCORE_THRESHOLD};
 
 /// The leads tried, shares of a sample.
 pub const LEADS: [f64; 5] = [0.0, 0.25, 0.5, 0.75, 1.0];
@@ -106,7 +74,7 @@ fn clearly_better(n: usize, before: f64, after: f64) -> bool {
 /// it; a model whose voltage is read at the throttle's time beside a lead keeps its form.
 pub fn canonical(fit: &Fit) -> Option<Fit> {
     let core = fit.model.core;
-    let delay = fit.model.term(dead_time::NAME)?;
+    let delay = fit.model.terms().find(|t| t.input_delay() > 0)?;
     let (d, s) = (delay.input_delay(), delay.voltage_delay());
     let reads_voltage = fit.model.terms().any(|t| t.reads_voltage());
     if core.lead != 1.0 || d < 2 || (reads_voltage && s == 0) {
@@ -114,10 +82,7 @@ pub fn canonical(fit: &Fit) -> Option<Fit> {
     }
     let model = fit
         .model
-        .with(DeadTimeParams {
-            delay_samples: d - 1,
-            sensor_samples: s.saturating_sub(1),
-        })
+        .with_boxed(delay.one_sample_shorter()?)
         .with_core(Core { lead: 0.0, ..core });
     Some(Fit {
         model,
@@ -128,8 +93,11 @@ pub fn canonical(fit: &Fit) -> Option<Fit> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::{simulate, Signals};
+    use crate::effects::dead_time::{self, DeadTimeParams};
+    use crate::model::simulate;
+    use crate::signals::Signals;
     use crate::{diagnose, Options};
+    use propid_numerics::EffectName;
     use propid_sim::synth;
 
     #[test]
@@ -179,7 +147,7 @@ mod tests {
         // the same plants logged one sample later beside their command (y'_k = y_{k+1}: the
         // thrust read after the command was sent, both on one row): a lead, and no dead time.
         for i in 0..3 {
-            let (_, m) = synth::case("clean", i).unwrap();
+            let (_, m) = synth::case(None, i).unwrap();
             let held = diagnose(synth::DT_S, &m.u, &m.y, &[], None, &Options::default());
             let held = held.unwrap();
             assert!(held.input_lead.is_none(), "{i}: {:?}", held.input_lead);
@@ -205,7 +173,10 @@ mod tests {
                 held.baseline.fit_percent
             );
             assert!(
-                early.findings.iter().all(|f| f.effect != "dead_time"),
+                early
+                    .findings
+                    .iter()
+                    .all(|f| f.effect != EffectName::DeadTime),
                 "{i}"
             );
         }

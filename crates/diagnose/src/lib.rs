@@ -23,6 +23,7 @@
 //! record has one), never the simulator's configuration.
 
 pub mod assemble;
+pub mod baseline;
 pub mod ctx;
 pub mod effect;
 pub mod effects;
@@ -31,6 +32,7 @@ pub mod error;
 pub mod fit;
 pub mod folds;
 pub mod lead;
+pub mod linear_part;
 pub mod model;
 pub mod noise;
 pub mod pair;
@@ -38,15 +40,17 @@ pub mod rejected;
 pub mod result;
 pub mod revise;
 pub mod search;
+pub mod signals;
 pub mod spectrum;
 pub mod summary;
+pub mod term;
+pub mod thresholds;
 pub mod verdict;
 
 use serde_json::Value;
 
 use ctx::Ctx;
 pub use error::DiagnoseError;
-use model::{Core, Signals};
 use propid_numerics::outliers::isolated_outliers_of_readings;
 use propid_numerics::quality::judge_sample_period;
 use propid_numerics::segment::SegmentRules;
@@ -56,6 +60,7 @@ pub use result::{
     Diagnosis, Extended, Finding, FoldFit, Gain, InputLead, Source, Split, Stage, Traces,
     Validation,
 };
+use signals::{Core, Signals};
 pub use summary::ModelSummary;
 
 /// Longest sample period diagnosed, s: above it the highest frequency a mode may take
@@ -281,6 +286,7 @@ pub fn findings_json(d: &Diagnosis) -> Vec<Value> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use propid_numerics::EffectName;
     use propid_sim::synth;
 
     /// The object keys of a JSON text in document order (what `--json` prints: derived
@@ -311,7 +317,7 @@ mod tests {
 
     #[test]
     fn the_json_shape_is_pinned() {
-        let (_, m) = synth::case("dead_time", 0).unwrap();
+        let (_, m) = synth::case(Some(EffectName::DeadTime), 0).unwrap();
         let d = diagnose(
             synth::DT_S,
             &m.u,
@@ -350,16 +356,16 @@ mod tests {
         // the detection table's simulated cases: every effect (and none), 20 plants each; an
         // effect must never be left out as isolated outliers or a start-up transient before it
         // can be named (a baseline drift is linear: never a start-up transient)
-        let names = std::iter::once("clean").chain(effects::names());
+        let names = std::iter::once(None).chain(effects::names().map(Some));
         for name in names {
             for i in 0..20 {
                 let Ok((_, m)) = synth::case(name, i) else {
                     continue;
                 };
                 let found = propid_numerics::outliers::isolated_outliers(&m.y, &[], &m.u);
-                assert!(found.is_empty(), "{name} #{i}: {found:?}");
+                assert!(found.is_empty(), "{name:?} #{i}: {found:?}");
                 let t = start_transient(&m.y, &[], &m.u, &SegmentRules::DEFAULT);
-                assert_eq!(t, None, "{name} #{i}");
+                assert_eq!(t, None, "{name:?} #{i}");
             }
         }
     }

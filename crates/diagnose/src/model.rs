@@ -26,49 +26,18 @@ use nalgebra::Vector2;
 use propid_numerics::discretise::discretise_second_order;
 use propid_numerics::nonlinear_core::{CoreLaw, NonlinearCore};
 
-use super::effect::{Place, Scale, Term};
-use super::effects;
+use super::signals::{Core, Signals};
+use super::term::{Place, Scale, Term};
+use propid_numerics::EffectName;
 
-/// The 2nd-order core `T'' + 2ζωn T' + ωn² T = ωn² K v` and the output offset `c`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Core {
-    /// Natural frequency `fn = ωn / 2π`, Hz.
-    pub fn_hz: f64,
-    /// Damping ratio `ζ`.
-    pub zeta: f64,
-    /// Static gain `K`, output units per unit throttle.
-    pub gain: f64,
-    /// Output offset `c`, output units.
-    pub offset: f64,
-    /// The input's lead `α` (0..1), a share of a sample: each input sample takes effect `α·dt`
-    /// before its own row's time (0: at its row, the zero-order hold of a command sent at the
-    /// sample instant). Not fitted with the rest: chosen once for the record
-    /// ([`super::lead`]) and kept by every model.
-    pub lead: f64,
-}
-
-impl Default for Core {
-    fn default() -> Self {
-        Core {
-            fn_hz: 1.0,
-            zeta: 0.7,
-            gain: 1.0,
-            offset: 0.0,
-            lead: 0.0,
-        }
-    }
-}
-
-impl Core {
-    /// The parameters the fit adjusts: `fn`, `ζ` (in logarithm), `K`, `c`.
-    fn free(&self) -> [(f64, Scale); 4] {
-        [
-            (self.fn_hz, Scale::Log),
-            (self.zeta, Scale::Log),
-            (self.gain, Scale::Linear),
-            (self.offset, Scale::Linear),
-        ]
-    }
+/// The core's parameters the fit adjusts: `fn`, `ζ` (in logarithm), `K`, `c`.
+fn core_free(core: &Core) -> [(f64, Scale); 4] {
+    [
+        (core.fn_hz, Scale::Log),
+        (core.zeta, Scale::Log),
+        (core.gain, Scale::Linear),
+        (core.offset, Scale::Linear),
+    ]
 }
 
 /// A model: the core and the terms of the effects it includes (kept in registry order, the
@@ -98,10 +67,8 @@ impl Model {
     pub fn with_boxed(&self, term: Box<dyn Term>) -> Model {
         let mut m = self.clone();
         m.terms.retain(|t| t.name() != term.name());
-        let at = effects::position(term.name());
-        let i = m
-            .terms
-            .partition_point(|t| effects::position(t.name()) <= at);
+        let at = term.name();
+        let i = m.terms.partition_point(|t| t.name() <= at);
         m.terms.insert(i, term);
         m
     }
@@ -130,10 +97,14 @@ impl Model {
     }
 
     /// This model with each share of its dead time on the output's side
-    /// ([`Term::with_voltage_delay`], the shares of [`effects::dead_time::shares`]: from none
-    /// to all of it, ascending), paired with the share; empty without a dead time.
+    /// ([`Term::voltage_delay_shares`]: from none to all of it, ascending), paired with the
+    /// share; empty without a dead time.
     pub fn with_each_voltage_delay(&self) -> Vec<(usize, Model)> {
-        effects::dead_time::shares(self.input_delay())
+        let Some(delayed) = self.terms().find(|t| !t.voltage_delay_shares().is_empty()) else {
+            return Vec::new();
+        };
+        delayed
+            .voltage_delay_shares()
             .into_iter()
             .filter_map(|s| {
                 let t = self.terms().find_map(|t| t.with_voltage_delay(s))?;
@@ -143,7 +114,7 @@ impl Model {
     }
 
     /// The term of effect `name`, if the model has it.
-    pub fn term(&self, name: &str) -> Option<&dyn Term> {
+    pub fn term(&self, name: EffectName) -> Option<&dyn Term> {
         self.terms().find(|t| t.name() == name)
     }
 
@@ -154,7 +125,7 @@ impl Model {
 
     /// The free parameters: the core's, then each term's in registry order.
     pub fn free(&self) -> Vec<(f64, Scale)> {
-        let mut f = self.core.free().to_vec();
+        let mut f = core_free(&self.core).to_vec();
         for t in self.terms() {
             f.extend(t.free());
         }
@@ -179,23 +150,6 @@ impl Model {
     pub fn has_nan(&self) -> bool {
         self.free().iter().any(|(v, _)| v.is_nan())
     }
-}
-
-/// The data a model is fitted to.
-#[derive(Debug, Clone, Copy)]
-pub struct Signals<'a> {
-    /// Sample period, seconds.
-    pub dt_s: f64,
-    /// Input (throttle 0..1), gaps filled with the previous value.
-    pub u: &'a [f64],
-    /// Measured output; `NaN` where missing.
-    pub y: &'a [f64],
-    /// Supply voltage, if measured (gaps filled).
-    pub voltage: Option<&'a [f64]>,
-    /// Reference throttle of the static map (mean of the input).
-    pub u_ref: f64,
-    /// Reference voltage of the supply term (the record's mean voltage).
-    pub v_ref: f64,
 }
 
 /// Steps per sample of a core with a nonlinear law (exponential midpoint rule in each).
@@ -402,8 +356,11 @@ mod tests {
             .with(SupplySagParams::drive(0.1))
             .with(StaticNonlinearityParams { exponent: 2.0 })
             .with(SupplySagParams::drive(0.2));
-        let names: Vec<&str> = m.terms().map(|t| t.name()).collect();
-        assert_eq!(names, ["static_nonlinearity", "supply_sag"]);
+        let names: Vec<EffectName> = m.terms().map(|t| t.name()).collect();
+        assert_eq!(
+            names,
+            [EffectName::StaticNonlinearity, EffectName::SupplySag]
+        );
         let values: Vec<f64> = m.free().iter().map(|f| f.0).collect();
         assert_eq!(values, [1.0, 0.7, 1.0, 0.0, 2.0, 0.2]);
         let mut m2 = m.clone();

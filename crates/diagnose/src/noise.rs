@@ -1,45 +1,7 @@
-//! The noise floor of a record, measured from the data itself (issue 11): how small a residual
-//! any model of this output can honestly reach.
+//! The noise floor of a record, measured from the data itself (issue 11): how small a residual any
+//! model of this output can honestly reach.
 //!
-//! **Steady holds** (preferred). Over the holds of the command
-//! ([`propid_numerics::segment::holds`], the one segmentation, [`SegmentRules::DEFAULT`]), the
-//! second differences `d_k = y_{k+1} − 2 y_k + y_{k−1}` of the output, all three samples inside
-//! one hold and measured, are pooled and
-//!
-//! `σ = median |d_k| / (Φ⁻¹(3/4) · √6)`, `Φ⁻¹(3/4) = 0.6745`.
-//!
-//! For white noise `e` of RMS `σ`, `d_k ~ N(0, 6σ²)` (`1 + 4 + 1`), so the median of `|d_k|` is
-//! `0.6745 √6 σ`. Why this estimator is not biased by what else moves inside a hold: the second
-//! difference of a linear drift is exactly zero, and of a smooth trend (a slow sag, the tail of
-//! a step response) it is `y'' dt²`, tiny against the noise at the stand's sample rates; the
-//! first samples of a hold, where a step response still bends sharply, give large `|d_k|` but
-//! are a few samples of hundreds, which the median ignores (breakdown point 50 %). Noise
-//! correlated over several samples (a filtered load cell) has less power in `d_k` than white
-//! noise of the same RMS: the floor is then *under*-estimated, which only makes the verdict
-//! stricter ([`super::verdict`]) — never a model called explained above the noise.
-//!
-//! **Readings, not interpolation.** The loader carries a sparse channel (a load cell written on
-//! one row in four, or repeating its last reading: [`crate::ingest::held`]) onto the grid by
-//! linear interpolation between its own readings, and says which samples it interpolated
-//! ([`propid_wire::record::Channel::interpolated`], the one record of it). An interpolated
-//! sample lies on the straight line through its neighbours, so its `d_k` is zero: pooled with
-//! the readings, the floor would come out near zero (Bitcraze's 10-row hold read 10⁻¹⁵ N). The
-//! differences are therefore taken over the output's **readings** in each hold (consecutive
-//! readings, a missing sample breaking the chain); for white noise the readings' second
-//! differences have the same `6σ²` at any spacing. An output read on every row (every TSP/1
-//! record, a dense CSV column, a quantised sensor repeating a code) has every sample a reading.
-//!
-//! **High-order fit** (fallback, when the holds give fewer than [`MIN_HOLD_SAMPLES`]
-//! differences — random, chirp or multisine inputs — or a median of zero: an output quantised
-//! coarser than its noise). An ARX model of order [`ARX_ORDER`],
-//! `y_k = Σ_{i=1..n} a_i y_{k−i} + Σ_{i=1..n} b_i u_{k−i} + c`, least squares over the whole
-//! record (rows with a missing sample skipped); the floor is its one-step residual RMS,
-//! `√(SSE / (m − p))` with `m` rows and `p = 2n + 1` parameters. Order 8 follows a 2nd-order
-//! plant with a few samples of delay and an extra mode; its one-step prediction error is the
-//! part of the output no linear model of the input predicts. An interpolated output is fitted
-//! over its readings alone, the input taken at the same samples: an interpolated sample lies
-//! on the line to the *next* reading, so as a regressor it would hand the fit the very reading
-//! it is to predict (a held load cell's floor read 10⁻¹⁶ N so).
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/noise.rs`.
 
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;

@@ -1,35 +1,7 @@
 //! The pair step of the forward search: two effects that are only right together.
 //!
-//! **Why.** Forward selection adds one effect at a time and takes an addition only when it
-//! raises the held-out figure. Two effects can each fit in-sample and each lower the held-out
-//! figure alone, yet raise it together: on a thrust stand whose thrust curve hardens and whose
-//! supply sags with the load, a voltage-dependent gain fitted without the static map bends
-//! the whole staircase the wrong way on the held-out steps (about −20 pp on vanderploeg
-//! 90PERCENT), and the map alone misplaces the levels the sag lowers; nothing is taken.
-//!
-//! **Rule.** When no single candidate is taken, the candidates that passed the in-sample
-//! addition tests (score ≥ [`SCORE_THRESHOLD`], so ≥ 40 in-sample) are paired, strongest
-//! first ([`pairs`]: the [`PAIR_POOL`] highest scores, at most [`MAX_PAIR_FITS`] pairs, in
-//! order of their summed scores). For a pair `(a, b)`, `a` the stronger, `b` is fitted on top
-//! of `M + a` with every parameter refitted jointly (`M + a + b`). The pair is taken when
-//! - each term still passes the addition tests of the search given the other
-//!   (`M + a → M + a + b` for `b`, `M + b → M + a + b` for `a`: neither rides on the other);
-//! - its score against the current model, `n ln(SSE_M / SSE_{M+a+b})`, is at least
-//!   `2 ·` [`SCORE_THRESHOLD`] (two effects' worth of evidence) and its RMS drop at least
-//!   [`MIN_RMS_DROP`];
-//! - its held-out figure is higher than the current model's by more than [`MIN_CV_GAIN_PP`].
-//!
-//! Of the pairs that pass, the one with the highest held-out figure is taken
-//! ([`select_pair`]): a pair of a true effect and a flexible imitator of the other (a
-//! saturation bending the top level like a sag) may pass too, and the held-out figure is the
-//! judge between them.
-//!
-//! **Reported values.** Both findings carry the pair's step: `a`'s score is its own against
-//! `M`, `b`'s its score given `a`; the **pair's held-out gain is reported on `a`**, and `b`'s
-//! `cv_gain_pp` is 0 (the gain is the pair's, not to be counted twice). Each finding's
-//! evidence says it was taken as a pair, and with which effect.
-
-use super::search::{MIN_CV_GAIN_PP, MIN_RMS_DROP, SCORE_THRESHOLD};
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/pair.rs`.
+use crate::thresholds::{MIN_CV_GAIN_PP, MIN_RMS_DROP, SCORE_THRESHOLD};
 
 /// How many of the strongest candidates are paired.
 pub const PAIR_POOL: usize = 3;

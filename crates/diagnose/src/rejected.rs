@@ -12,13 +12,13 @@
 
 use serde::Serialize;
 
-use super::effects;
+use propid_numerics::EffectName;
 
 /// One candidate tried and not taken (`"rejected"`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Rejected {
     /// Effect name (one of [`super::effects::REGISTRY`]).
-    pub effect: String,
+    pub effect: EffectName,
     /// Its score `n ln(SSE_before / SSE_after)` on the model it was tried on.
     pub score: f64,
     /// The held-out figure's change it brought, percentage points (null when it was not
@@ -32,10 +32,10 @@ impl Rejected {
     /// A candidate that passed the in-sample tests but changed the held-out figure by
     /// `cv_gain_pp` (≤ the search's minimum gain; not finite when a fold's prediction
     /// diverged: then null).
-    pub fn held_out(effect: &str, score: f64, cv_gain_pp: f64) -> Rejected {
+    pub fn held_out(effect: EffectName, score: f64, cv_gain_pp: f64) -> Rejected {
         if !cv_gain_pp.is_finite() {
             return Rejected {
-                effect: effect.to_string(),
+                effect,
                 score,
                 cv_gain_pp: None,
                 reason: "fits in-sample but its held-out prediction diverges: not taken".into(),
@@ -47,7 +47,7 @@ impl Rejected {
             "does not raise the held-out fit".to_string()
         };
         Rejected {
-            effect: effect.to_string(),
+            effect,
             score,
             cv_gain_pp: Some(cv_gain_pp),
             reason: format!("fits in-sample but {change}: not taken"),
@@ -58,14 +58,14 @@ impl Rejected {
     /// (`by_gain_pp`), which was taken in its place (`search::Selection::BestFigure`); a later
     /// step, on the model with `by`, gives the latest word on it.
     pub fn outranked(
-        effect: &str,
+        effect: EffectName,
         score: f64,
         cv_gain_pp: f64,
-        by: &str,
+        by: EffectName,
         by_gain_pp: f64,
     ) -> Rejected {
         Rejected {
-            effect: effect.to_string(),
+            effect,
             score,
             cv_gain_pp: Some(cv_gain_pp),
             reason: format!(
@@ -90,14 +90,14 @@ impl Ledger {
     }
 
     /// Drops the entry of `effect` (tried again, it no longer fits in-sample).
-    pub fn forget(&mut self, effect: &str) {
+    pub fn forget(&mut self, effect: EffectName) {
         self.entries.retain(|e| e.effect != effect);
     }
 
     /// The entries of the effects not in `taken`, in catalogue order.
-    pub fn rejected(mut self, taken: &[String]) -> Vec<Rejected> {
+    pub fn rejected(mut self, taken: &[EffectName]) -> Vec<Rejected> {
         self.entries.retain(|e| !taken.contains(&e.effect));
-        self.entries.sort_by_key(|e| effects::position(&e.effect));
+        self.entries.sort_by_key(|e| e.effect);
         self.entries
     }
 }
@@ -109,26 +109,32 @@ mod tests {
     #[test]
     fn the_latest_word_wins_and_taken_effects_are_dropped() {
         let mut l = Ledger::default();
-        l.note(Rejected::held_out("supply_sag", 120.0, -1.3));
-        l.note(Rejected::held_out("dead_time", 60.0, -0.2));
-        l.note(Rejected::held_out("supply_sag", 90.0, -2.0));
+        l.note(Rejected::held_out(EffectName::SupplySag, 120.0, -1.3));
+        l.note(Rejected::held_out(EffectName::DeadTime, 60.0, -0.2));
+        l.note(Rejected::held_out(EffectName::SupplySag, 90.0, -2.0));
         let r = l.clone().rejected(&[]);
         assert_eq!(r.len(), 2);
         assert_eq!(
-            (r[0].effect.as_str(), r[1].effect.as_str()),
-            ("dead_time", "supply_sag")
+            (r[0].effect, r[1].effect),
+            (EffectName::DeadTime, EffectName::SupplySag)
         );
         assert_eq!(r[1].cv_gain_pp, Some(-2.0));
         assert_eq!(
             r[1].reason,
             "fits in-sample but lowers the held-out fit by 2.0 pp: not taken"
         );
-        let r = l.clone().rejected(&["dead_time".to_string()]);
+        let r = l.clone().rejected(&[EffectName::DeadTime]);
         assert_eq!(r.len(), 1);
-        assert_eq!(r[0].effect, "supply_sag");
-        let diverged = Rejected::held_out("saturation", 63.0, f64::NEG_INFINITY);
+        assert_eq!(r[0].effect, EffectName::SupplySag);
+        let diverged = Rejected::held_out(EffectName::Saturation, 63.0, f64::NEG_INFINITY);
         assert_eq!(diverged.cv_gain_pp, None);
-        let second = Rejected::outranked("asymmetric_dynamics", 364.0, 0.32, "dead_time", 0.8);
+        let second = Rejected::outranked(
+            EffectName::AsymmetricDynamics,
+            364.0,
+            0.32,
+            EffectName::DeadTime,
+            0.8,
+        );
         assert_eq!(second.cv_gain_pp, Some(0.32));
         assert_eq!(
             second.reason,
@@ -136,7 +142,7 @@ mod tests {
              more (0.80 pp) and was taken in its place: not taken"
         );
         assert!(diverged.reason.contains("diverges"), "{}", diverged.reason);
-        l.forget("supply_sag");
+        l.forget(EffectName::SupplySag);
         assert_eq!(l.rejected(&[]).len(), 1);
     }
 }

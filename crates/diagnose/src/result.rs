@@ -1,6 +1,7 @@
 //! What `diagnose` publishes (the JSON of `propid diagnose --json`, issue 5). The models are
 //! summarised in [`super::summary`].
 
+use propid_numerics::EffectName;
 use serde::Serialize;
 use serde_json::{Map, Value};
 
@@ -26,7 +27,7 @@ pub struct Stage {
 #[derive(Debug, Clone, Serialize)]
 pub struct Extended {
     /// Names of the effects it includes, in the order found.
-    pub effects: Vec<String>,
+    pub effects: Vec<EffectName>,
     /// The model.
     pub model: ModelSummary,
     /// The held-out figure (as the baseline's), percent.
@@ -37,7 +38,7 @@ pub struct Extended {
 #[derive(Debug, Clone, Serialize)]
 pub struct Finding {
     /// Effect name (one of [`super::effects::REGISTRY`]).
-    pub effect: String,
+    pub effect: EffectName,
     /// Test statistic `n ln(SSE_before / SSE_after)` (larger is stronger evidence).
     pub score: f64,
     /// Held-out gain of this addition: the held-out figure ([`Validation`]) of the model with

@@ -1,42 +1,7 @@
-//! Undoing a greedy choice of the forward search ([`super::search`]): the revision step run
-//! each time the forward additions stop.
+//! Undoing a greedy choice of the forward search ([`super::search`]): the revision step run each
+//! time the forward additions stop.
 //!
-//! Forward selection takes one candidate at a time (the strongest by score with one hold-out
-//! tail, the best held-out under blocked cross-validation: [`super::search::Selection`]), and
-//! a flexible effect can mimic a simpler one: a dead time of 2 samples in a lightly damped log
-//! is fitted first, and better, by an `extra_mode` (3 parameters: a series mode whose phase lag
-//! imitates the delay); once
-//! the mode is in, the delay adds nothing (its score is ≈ 0) and is never named. The greedy path
-//! cannot leave that corner. The revision tries, for every effect `X` the search took (effects
-//! read off the data stay), the model `R` without it (every other parameter refitted jointly)
-//! and every untaken effect `Y` fitted on `R` (`F = R + Y`); `Y` must pass the addition tests
-//! on `R` (score ≥ [`SCORE_THRESHOLD`], RMS drop ≥ [`MIN_RMS_DROP`], plausible). Then `X` is
-//! fitted afresh on `F` (`G = F + X`, from its own starts, not from the values that mimicked
-//! `Y`), and one of three changes is a candidate:
-//!
-//! - **swap** `X → Y` when `X` fails the addition tests on `F` (once `Y` is in, `X` explains
-//!   nothing more at the search's own level) and `Y` is the more parsimonious: fewer parameters
-//!   ([`param_count`]), or as many and a lower SSE. Two effects that each leave the other nothing
-//!   to add explain the same feature of the data; the likelihood-ratio test cannot tell them
-//!   apart (their difference is below the threshold), so the one with fewer parameters is kept —
-//!   the rule of an information criterion, with the search's own threshold as the price of the
-//!   extra parameters;
-//! - **add** `Y` (keeping a refitted `X`) when `X` passes on `F` and `G` passes the addition
-//!   tests against the current model: `Y` is a real addition that the greedy path could not
-//!   reach because `X`'s parameters had absorbed it;
-//! - **remove** `X` when `X` fails the addition tests on `R` (the later effects took over what
-//!   it explained); a term the current model holds at implausible values
-//!   ([`Term::plausible`](super::effect::Term::plausible) on the model as it stands: a later
-//!   joint refit moved it there) is removed whatever the held-out figure, as an implausible
-//!   addition is refused whatever it gains.
-//!
-//! A change is kept only when the held-out figure ([`super::folds`]) agrees: not lower for a
-//! swap or a removal (the simpler model must predict the held-out steps as well), higher for an
-//! addition (as for a forward addition). The candidates are tried removal first, then swaps
-//! (fewest parameters, then lowest SSE), then additions (highest score); the first kept change is
-//! applied and the forward search resumes. Every change either drops parameters at equal
-//! evidence or adds a tested effect, and the search makes at most [`MAX_REVISIONS`] of them, so
-//! it ends.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/revise.rs`.
 
 use super::ctx::Ctx;
 use super::effect::Effect;
@@ -44,20 +9,18 @@ use super::effects::REGISTRY;
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Scores};
 use super::model::Model;
-use super::search::{MIN_RMS_DROP, SCORE_THRESHOLD};
 use super::spectrum::band_level;
-
-/// Most revisions (changes kept) in one search.
-pub const MAX_REVISIONS: usize = 4;
+use crate::thresholds::{MIN_CV_GAIN_PP, MIN_RMS_DROP, SCORE_THRESHOLD};
+use propid_numerics::EffectName;
 
 /// Parameters of a term: its free ones, and one for a term without any (a delay or a clip
 /// level searched on a grid is one parameter all the same).
-pub fn param_count(m: &Model, name: &str) -> usize {
+pub fn param_count(m: &Model, name: EffectName) -> usize {
     m.term(name).map_or(0, |t| t.free().len().max(1))
 }
 
 /// `m` without the term of effect `name`.
-pub fn without(m: &Model, name: &str) -> Model {
+pub fn without(m: &Model, name: EffectName) -> Model {
     m.terms()
         .filter(|t| t.name() != name)
         .fold(Model::new(m.core), |acc, t| acc.with_boxed(t.clone_box()))
@@ -68,7 +31,7 @@ pub fn without(m: &Model, name: &str) -> Model {
 /// effect's own test that the data can tell it apart, [`Effect::identifiable`]); for a term
 /// with a band ([`Term::band_hz`](super::effect::Term::band_hz)) that fails the score, its
 /// local score ([`local_score`]) when that passes.
-pub fn passes(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Option<f64> {
+pub fn passes(ctx: &Ctx, before: &Fit, after: &Fit, name: EffectName) -> Option<f64> {
     assess(ctx, before, after, name).ok()
 }
 
@@ -92,7 +55,7 @@ impl Refusal {
 
 /// [`passes`] with the reason of a refusal. The tests in order: a usable fit, the score (or
 /// the local score of a term with a band), the RMS drop, plausibility, then [`Effect::identifiable`] (last: it may fit again).
-pub fn assess(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Result<f64, Refusal> {
+pub fn assess(ctx: &Ctx, before: &Fit, after: &Fit, name: EffectName) -> Result<f64, Refusal> {
     let usable = after.sse.is_finite() && after.sse > 0.0 && before.sse > 0.0;
     if !usable {
         return Err(Refusal {
@@ -121,7 +84,7 @@ pub fn assess(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Result<f64, R
     let plausible = after
         .model
         .term(name)
-        .is_some_and(|t| t.plausible(ctx, &after.model));
+        .is_some_and(|t| t.plausible(ctx, &after.model.core, after.model.has_nan()));
     if !plausible {
         return refuse("fits in-sample but with physically implausible values: not taken".into());
     }
@@ -131,7 +94,7 @@ pub fn assess(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Result<f64, R
     if let Some(t) = after
         .model
         .terms()
-        .find(|t| t.name() != name && !t.plausible(ctx, &after.model))
+        .find(|t| t.name() != name && !t.plausible(ctx, &after.model.core, after.model.has_nan()))
     {
         return refuse(format!(
             "fits in-sample but drives {} to physically implausible values: not taken",
@@ -155,7 +118,7 @@ pub fn assess(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Result<f64, R
 /// (Whittle: the noise's variance at a frequency is its spectral density there), where the
 /// white-noise score, which counts the whole misfit as noise, misses a drift or a sinusoid
 /// that stands well clear of it. `None` for a term without a band.
-pub fn local_score(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Option<f64> {
+pub fn local_score(ctx: &Ctx, before: &Fit, after: &Fit, name: EffectName) -> Option<f64> {
     let band = after
         .model
         .term(name)?
@@ -170,12 +133,12 @@ pub fn local_score(ctx: &Ctx, before: &Fit, after: &Fit, name: &str) -> Option<f
 #[derive(Debug)]
 pub enum Change {
     /// Effect `out` leaves; `fit` is the model without it.
-    Remove { out: &'static str, fit: Fit },
+    Remove { out: EffectName, fit: Fit },
     /// Effect `out` is replaced by `into`: `fit` is `R + into`, `score` and `base` are
     /// `into`'s score on `R` and `R` itself.
     Swap {
-        out: &'static str,
-        into: &'static str,
+        out: EffectName,
+        into: EffectName,
         fit: Fit,
         score: f64,
         base: Fit,
@@ -183,7 +146,7 @@ pub enum Change {
     /// Effect `into` joins (with `X` refitted afresh): `fit` is the new model, `score` its
     /// score against the current one.
     Add {
-        into: &'static str,
+        into: EffectName,
         fit: Fit,
         score: f64,
     },
@@ -210,7 +173,7 @@ pub fn revise(
     folds: &Folds,
     cur: &Fit,
     cur_cv: &Scores,
-    searched: &[&'static str],
+    searched: &[EffectName],
     may_add: bool,
 ) -> Option<Kept> {
     let cv = |f: &Fit| cross_validate(ctx, folds, f);
@@ -220,13 +183,13 @@ pub fn revise(
     // Terms the current model holds at physically implausible values (a joint refit moved
     // them there, the supply's side settled after them): removed whatever the held-out figure
     // says, as an implausible addition is refused whatever it gains.
-    let implausible: Vec<&'static str> = searched
+    let implausible: Vec<EffectName> = searched
         .iter()
         .copied()
         .filter(|&x| {
             cur.model
                 .term(x)
-                .is_some_and(|t| !t.plausible(ctx, &cur.model))
+                .is_some_and(|t| !t.plausible(ctx, &cur.model.core, cur.model.has_nan()))
         })
         .collect();
     for &x_name in searched {
@@ -302,7 +265,7 @@ pub fn revise(
         };
         let f_cv = cv(fit);
         let kept = match change {
-            Change::Add { .. } => f_cv.mean > cur_cv.mean + super::search::MIN_CV_GAIN_PP,
+            Change::Add { .. } => f_cv.mean > cur_cv.mean + MIN_CV_GAIN_PP,
             Change::Remove { out, .. } if implausible.contains(&out) => true,
             _ => f_cv.mean >= cur_cv.mean,
         };
@@ -330,10 +293,10 @@ fn refit_into(ctx: &Ctx, x: &dyn Effect, f: &Fit) -> Option<Fit> {
 
 /// The addition tests for `after` against `before` where `after` has the terms `names`
 /// (plausible each): the score when it passes.
-fn passes_against(ctx: &Ctx, before: &Fit, after: &Fit, names: &[&str]) -> Option<f64> {
+fn passes_against(ctx: &Ctx, before: &Fit, after: &Fit, names: &[EffectName]) -> Option<f64> {
     let mut score = None;
     for n in names {
-        score = Some(passes(ctx, before, after, n)?);
+        score = Some(passes(ctx, before, after, *n)?);
     }
     score
 }
@@ -343,7 +306,7 @@ mod tests {
     use super::*;
     use crate::effects::dead_time::DeadTimeParams;
     use crate::effects::extra_mode::ExtraModeParams;
-    use crate::model::Core;
+    use crate::signals::Core;
 
     fn model() -> Model {
         Model::new(Core::default())
@@ -358,9 +321,9 @@ mod tests {
     #[test]
     fn a_delay_counts_one_parameter_and_a_mode_three() {
         let m = model();
-        assert_eq!(param_count(&m, "dead_time"), 1);
-        assert_eq!(param_count(&m, "extra_mode"), 3);
-        assert_eq!(param_count(&m, "supply_sag"), 0);
+        assert_eq!(param_count(&m, EffectName::DeadTime), 1);
+        assert_eq!(param_count(&m, EffectName::ExtraMode), 3);
+        assert_eq!(param_count(&m, EffectName::SupplySag), 0);
     }
 
     /// A lightly damped 2nd-order plant behind a dead time of 3 samples, driven by a staircase
@@ -372,7 +335,8 @@ mod tests {
     /// delay (one parameter, and the mode adds nothing once the delay is in), with its length.
     #[test]
     fn a_delay_fitted_as_an_extra_mode_is_swapped_back() {
-        use crate::model::{simulate, Signals};
+        use crate::model::simulate;
+        use crate::signals::Signals;
         let dt = 0.01;
         let levels = [0.3, 0.6, 0.4, 0.8, 0.5, 0.7, 0.35, 0.65];
         let u: Vec<f64> = levels
@@ -429,7 +393,7 @@ mod tests {
             .extend(&ctx, &base)
             .expect("a mode can be fitted");
         assert!(greedy.sse < base.sse, "the mode takes up part of the delay");
-        let mode = |m: &Model| m.term("extra_mode").map(|t| t.finding_params(dt));
+        let mode = |m: &Model| m.term(EffectName::ExtraMode).map(|t| t.finding_params(dt));
         let share = mode(&greedy.model)
             .and_then(|p| p["gain"].as_f64())
             .unwrap();
@@ -437,7 +401,7 @@ mod tests {
             share > 1.05,
             "the stand-in's inverse response: share {share}"
         );
-        assert!(passes(&ctx, &base, &greedy, "extra_mode").is_none());
+        assert!(passes(&ctx, &base, &greedy, EffectName::ExtraMode).is_none());
         // A mode with share 1 in the delay's place: the best of a grid of lags in series,
         // the core's linear parameters refitted.
         let greedy = (1..=12)
@@ -449,8 +413,7 @@ mod tests {
                     gain: 1.0,
                 });
                 let (lag, _) = crate::fit::linear_refit(&lag, &ctx.sig, ctx.est.clone());
-                let (sse, n) =
-                    crate::fit::sse(&lag, &ctx.sig, ctx.est.clone(), &mut Vec::new());
+                let (sse, n) = crate::fit::sse(&lag, &ctx.sig, ctx.est.clone(), &mut Vec::new());
                 Fit { model: lag, sse, n }
             })
             .min_by(|a, b| a.sse.total_cmp(&b.sse))
@@ -460,12 +423,15 @@ mod tests {
             "a lag in series takes up part of the delay too"
         );
         let cv = cross_validate(&ctx, &folds, &greedy);
-        let kept =
-            revise(&ctx, &folds, &greedy, &cv, &["extra_mode"], true).expect("a change is kept");
+        let kept = revise(&ctx, &folds, &greedy, &cv, &[EffectName::ExtraMode], true)
+            .expect("a change is kept");
         match kept.change {
             Change::Swap { out, into, fit, .. } => {
-                assert_eq!((out, into), ("extra_mode", "dead_time"));
-                let d = fit.model.term("dead_time").map(|t| t.finding_params(dt));
+                assert_eq!((out, into), (EffectName::ExtraMode, EffectName::DeadTime));
+                let d = fit
+                    .model
+                    .term(EffectName::DeadTime)
+                    .map(|t| t.finding_params(dt));
                 assert_eq!(d.and_then(|p| p["delay_samples"].as_u64()), Some(3));
             }
             other => panic!("expected a swap, got {other:?}"),
@@ -495,9 +461,9 @@ mod tests {
                 0.5,
             )
         };
-        let refused = assess(&ctx, &before, &with_delay(-2.8), "dead_time").unwrap_err();
+        let refused = assess(&ctx, &before, &with_delay(-2.8), EffectName::DeadTime).unwrap_err();
         assert!(refused.reason.contains("drives extra_mode"), "{refused:?}");
-        assert!(assess(&ctx, &before, &with_delay(0.8), "dead_time").is_ok());
+        assert!(assess(&ctx, &before, &with_delay(0.8), EffectName::DeadTime).is_ok());
     }
 
     /// A drift of 0.6 σ over the record under a strong 12 Hz component that no term models (a
@@ -507,7 +473,7 @@ mod tests {
     #[test]
     fn a_drift_under_a_misfit_elsewhere_in_the_spectrum_passes_the_local_test() {
         use crate::effects::baseline_drift::BaselineDriftParams;
-        use crate::model::Signals;
+        use crate::signals::Signals;
         let (n, dt) = (1000, 0.01);
         let u: Vec<f64> = (0..n).map(|k| 0.5 + 0.1 * ((k / 100) % 2) as f64).collect();
         // The mean of `rate · t` over the record is `rate · 5 s`.
@@ -567,11 +533,11 @@ mod tests {
             })
             .with(BaselineDriftParams { rate_per_s: rate }));
             let global = after.n as f64 * (before.sse / after.sse).ln();
-            let local = local_score(&ctx, &before, &after, "baseline_drift").unwrap();
+            let local = local_score(&ctx, &before, &after, EffectName::BaselineDrift).unwrap();
             (
                 global,
                 local,
-                passes(&ctx, &before, &after, "baseline_drift"),
+                passes(&ctx, &before, &after, EffectName::BaselineDrift),
             )
         };
         // σ ≈ 0.3 / √2 from the misfit; a drift of 0.6 σ over 10 s (its RMS drop passes the
@@ -591,9 +557,9 @@ mod tests {
 
     #[test]
     fn without_drops_one_term_and_keeps_the_rest() {
-        let m = without(&model(), "extra_mode");
-        assert!(m.term("extra_mode").is_none());
-        assert!(m.term("dead_time").is_some());
+        let m = without(&model(), EffectName::ExtraMode);
+        assert!(m.term(EffectName::ExtraMode).is_none());
+        assert!(m.term(EffectName::DeadTime).is_some());
         assert_eq!(m.core, Core::default());
     }
 }

@@ -1,77 +1,23 @@
-//! The baseline fit and the forward search over the catalogue of effects.
+//! The forward search over the catalogue of effects, from the baseline of [`crate::baseline`].
 //!
-//! **Test statistic.** For an extension `e` of the current model `M` (both fitted by
-//! output-error least squares on the same `n` estimation samples), the score is the Gaussian
-//! log-likelihood ratio `S = n · ln(SSE_M / SSE_{M+e})`. With white noise and no effect, `S` is
-//! asymptotically χ² with as many degrees of freedom as `e` adds (1–3), so a threshold of 40
-//! puts the false-alarm probability per test below 1e-7 in theory; real residuals are coloured,
-//! which is why the threshold was set on measured clean cases (see `docs/diagnose.md`) and why
-//! an effect must also lower the residual RMS by at least 1 % and improve the held-out figure.
-//!
-//! **Search: forward selection on a joint fit.** Effects recognised straight from the data
-//! ([`Effect::detect`], e.g. a sensor clip) are named first and kept in every model. Then
-//! forward stepwise: every effect not yet in the model is fitted on top of it
-//! ([`Effect::extend`]: every parameter of the model, the core's, the earlier effects' and the
-//! new one's, fitted together); the candidates that pass the score, the RMS drop and
-//! plausibility ([`Term::plausible`](super::effect::Term::plausible)) are judged on the
-//! **held-out figure** ([`super::folds`]: the mean fit of the blocked cross-validation folds,
-//! or the hold-out tail), and one is taken only when it raises the current model's; its gain
-//! in percentage points is the finding's `cv_gain_pp`. Which one ([`Selection`]): under blocked
-//! cross-validation, the one with the highest figure; with one hold-out tail, the first in
-//! order of score whose figure is higher. The score ranks what fits the estimation samples
-//! best, and a flexible effect (a time scale per direction, a series mode) can out-score a
-//! simpler true one there that predicts the held-out steps better: bitcraze cf21's load cell,
-//! 10 samples behind the command, scored 364 for `asymmetric_dynamics` against 229 for
-//! `dead_time` but gained 0.32 pp held-out against 0.80 (taken by score, the search then added
-//! a series mode and ended 0.35 pp below the model with the delay alone). The mean over folds,
-//! each refitted without its levels, is a figure to choose by; one tail is a single draw (on
-//! a ramp, an extrapolation past the levels fitted), and the best of several candidates on it
-//! is partly the best on that draw's noise: there the score orders and the tail only vetoes
-//! (dantonio's ramp with a supply sag hidden: chosen by the tail, a cubic spring displaced the
-//! sag in 20 of 20 draws). When none is, two candidates that each fitted
-//! in-sample are tried together ([`super::pair`]: both added and fitted jointly, two effects'
-//! worth of evidence, the best pair must raise the held-out figure; its gain is reported on
-//! the stronger, 0 on the other). Repeat (at most `max_effects` effects in all).
-//!
-//! **Published values.** Each extension refits every parameter of the model jointly, so the
-//! parameters of an effect move when later effects join (a supply sag's gain per volt fitted
-//! before the static map takes the map's curvature into it). The findings report the values
-//! of the final model, the one published; each finding's score and held-out gain stay those of
-//! its step. Candidates that fitted in-sample and were not taken are reported with their
-//! reason ([`super::rejected`]).
-//!
-//! **Revision.** Greedy forward selection cannot undo a choice: a flexible effect taken first
-//! (a series mode whose phase lag imitates a dead time) leaves a simpler true one nothing to
-//! add. Each time the additions stop, [`super::revise`] tries, for every effect the search
-//! took, to remove it or to replace it by an untaken one with the model refitted jointly
-//! (same score and RMS thresholds; the simpler of two effects that each leave the other nothing
-//! to add is kept; the held-out figure must not fall), or to add an effect the taken one had
-//! absorbed; a kept change is applied and the forward search resumes (its module doc gives the
-//! rule and its reasoning).
-//!
-//! **Input lead.** Every model of a search shares one input lead ([`super::lead`]), chosen on
-//! the baseline; when the final model shows a different one, the search runs again from the
-//! baseline at that lead and the run with the higher held-out figure is kept.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/search.rs`.
 
+use crate::thresholds::{MAX_REVISIONS, MIN_CV_GAIN_PP};
+use propid_numerics::EffectName;
+
+use super::baseline::baseline;
 use super::ctx::Ctx;
 use super::effect::Effect;
-use super::effects::{supply_sag, REGISTRY};
+use super::effects::REGISTRY;
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, Method, Scores};
 use super::lead;
-use super::model::{Core, Model};
+use super::model::Model;
 use super::pair::{joint_evidence, select_pair};
 use super::rejected::{Ledger, Rejected};
 use super::result::Finding;
-use super::revise::{assess, revise, Change, Kept, MAX_REVISIONS};
-
-/// Decision threshold on the score `n ln(SSE_M / SSE_{M+e})`.
-pub const SCORE_THRESHOLD: f64 = 40.0;
-/// Smallest accepted relative drop of the estimation residual RMS.
-pub const MIN_RMS_DROP: f64 = 0.01;
-
-/// Smallest held-out gain of an addition, percentage points (the figure must rise).
-pub const MIN_CV_GAIN_PP: f64 = 0.0;
+use super::revise::{assess, revise, Change, Kept};
+use super::signals::Core;
 
 /// What the search found.
 #[derive(Debug, Clone)]
@@ -92,45 +38,8 @@ pub struct Searched {
 
 impl Searched {
     /// Names of the effects found, in the order found.
-    pub fn effects(&self) -> Vec<String> {
-        self.findings.iter().map(|f| f.effect.clone()).collect()
-    }
-}
-
-/// The 2nd-order baseline with the terms of `template`: a grid over `fn` and `ζ` (gain,
-/// offset and linear terms by least squares), then Levenberg–Marquardt from the best two grid
-/// points and from every extra start (the core's ERA model); the best result wins.
-pub fn baseline(ctx: &Ctx, template: &Model, extra_starts: &[Core]) -> Fit {
-    let dt = ctx.sig.dt_s;
-    let n = ctx.est.len().max(2) as f64;
-    let f_lo = (5.0 / (n * dt)).min(0.1 / dt);
-    let f_hi = 0.3 / dt;
-    let mut starts = Vec::new();
-    for i in 0..14 {
-        let fn_hz = f_lo * (f_hi / f_lo).powf(i as f64 / 13.0);
-        for zeta in [0.3, 0.7, 1.2, 2.5] {
-            starts.push(template.with_core(Core {
-                fn_hz,
-                zeta,
-                lead: template.core.lead,
-                ..Core::default()
-            }));
-        }
-    }
-    let grid = ctx.best_of(starts, 2);
-    let extra = ctx.best_of(
-        extra_starts.iter().map(|c| {
-            template.with_core(Core {
-                lead: template.core.lead,
-                ..*c
-            })
-        }),
-        1,
-    );
-    if extra.sse < grid.sse {
-        extra
-    } else {
-        grid
+    pub fn effects(&self) -> Vec<EffectName> {
+        self.findings.iter().map(|f| f.effect).collect()
     }
 }
 
@@ -188,7 +97,7 @@ fn search_from(
             let f = baseline(ctx, &template, era_starts);
             let f_cv = cv(&f);
             findings.push(Finding {
-                effect: e.name().to_string(),
+                effect: e.name(),
                 score: d.score,
                 cv_gain_pp: f_cv.mean - cur_cv.mean,
                 evidence,
@@ -213,11 +122,13 @@ fn search_from(
     // held-out figure does not fall. When it changes the model, the search and its revisions
     // run again on it (a term that stood in for the side's misfit can then be removed, and
     // what it kept out taken).
-    if let Some(f) = supply_sag::side(ctx, &g.cur) {
-        let f_cv = cv(&f);
-        if f_cv.mean >= g.cur_cv.mean {
-            (g.cur, g.cur_cv) = (f, f_cv);
-            g.grow(ctx, folds, rule, max_effects, &cv);
+    for e in REGISTRY {
+        if let Some(f) = e.settle(ctx, &g.cur) {
+            let f_cv = cv(&f);
+            if f_cv.mean >= g.cur_cv.mean {
+                (g.cur, g.cur_cv) = (f, f_cv);
+                g.grow(ctx, folds, rule, max_effects, &cv);
+            }
         }
     }
     let Growth {
@@ -231,7 +142,7 @@ fn search_from(
         cur = c;
     }
     final_values(&mut findings[detected..], &cur, ctx);
-    let taken: Vec<String> = findings.iter().map(|f| f.effect.clone()).collect();
+    let taken: Vec<EffectName> = findings.iter().map(|f| f.effect).collect();
     Some(Searched {
         base,
         base_cv,
@@ -293,7 +204,7 @@ impl Growth {
                 }
                 (self.cur, self.cur_cv) = (step.fit, step.cv);
             }
-            let searched: Vec<&'static str> = self.findings[self.detected..]
+            let searched: Vec<EffectName> = self.findings[self.detected..]
                 .iter()
                 .filter_map(|f| REGISTRY.iter().map(|e| e.name()).find(|n| *n == f.effect))
                 .collect();
@@ -320,7 +231,7 @@ impl Growth {
 /// What one forward step takes: one effect, or a pair ([`super::pair`]), each as (score,
 /// effect, held-out gain in pp, the effect it was taken with), and the model with them.
 struct Step {
-    taken: Vec<(f64, &'static dyn Effect, f64, Option<&'static str>)>,
+    taken: Vec<(f64, &'static dyn Effect, f64, Option<EffectName>)>,
     fit: Fit,
     cv: Scores,
 }
@@ -349,7 +260,7 @@ fn forward(
         match assess(ctx, cur, &f, e.name()) {
             Ok(score) => candidates.push((score, (e, f))),
             Err(r) if r.fits() => ledger.note(Rejected {
-                effect: e.name().to_string(),
+                effect: e.name(),
                 score: r.score,
                 cv_gain_pp: None,
                 reason: r.reason,
@@ -358,12 +269,12 @@ fn forward(
             Err(_) => ledger.forget(e.name()),
         }
     }
-    let scores: Vec<(&str, f64)> = candidates
+    let scores: Vec<(EffectName, f64)> = candidates
         .iter()
         .map(|(s, (e, _))| (e.name(), *s))
         .collect();
     let pool = candidates.clone();
-    let mut tried: Vec<(&str, f64)> = Vec::new();
+    let mut tried: Vec<(EffectName, f64)> = Vec::new();
     let taken = select(rule, candidates, cur_figure, |(e, f)| {
         let s = cv(f);
         tried.push((e.name(), s.mean));
@@ -435,12 +346,12 @@ fn apply(
     cur_cv: &mut Scores,
     ledger: &mut Ledger,
 ) {
-    let effect = |name: &str| REGISTRY.iter().copied().find(|e| e.name() == name);
+    let effect = |name: EffectName| REGISTRY.iter().copied().find(|e| e.name() == name);
     let score_of = |before: &Fit, after: &Fit| after.n as f64 * (before.sse / after.sse).ln();
     match kept.change {
         Change::Remove { out, fit } => {
             ledger.note(Rejected {
-                effect: out.to_string(),
+                effect: out,
                 score: score_of(&fit, &*cur),
                 cv_gain_pp: Some(cur_cv.mean - kept.cv.mean),
                 reason: "taken, then removed by the revision: once the other effects were in, \
@@ -459,7 +370,7 @@ fn apply(
         } => {
             let gain = kept.cv.mean - kept.base_cv.as_ref().map_or(cur_cv.mean, |s| s.mean);
             ledger.note(Rejected {
-                effect: out.to_string(),
+                effect: out,
                 score: score_of(&base, &*cur),
                 cv_gain_pp: kept.base_cv.as_ref().map(|s| cur_cv.mean - s.mean),
                 reason: format!(
@@ -556,7 +467,7 @@ fn finding(
     );
     let term = after.model.term(e.name());
     Finding {
-        effect: e.name().to_string(),
+        effect: e.name(),
         score,
         cv_gain_pp,
         evidence: term.map_or_else(
@@ -575,7 +486,7 @@ fn finding(
 /// step's.
 fn final_values(findings: &mut [Finding], f: &Fit, ctx: &Ctx) {
     for finding in findings {
-        if let Some(t) = f.model.term(&finding.effect) {
+        if let Some(t) = f.model.term(finding.effect) {
             finding.params = t.finding_params(ctx.sig.dt_s);
             finding.evidence = t.evidence(&f.model.core, ctx, &finding.drop);
         }

@@ -1,55 +1,11 @@
 //! Honest verdicts (issue 11): is the final model's residual at the noise floor
 //! ([`super::noise`]), and are the fitted models physically plausible?
 //!
-//! **Verdict.** The final model is the extended one when effects were found, else the
-//! baseline; `r` is its simulation residual RMS on the validation samples, `σ` the noise floor.
-//! - `explained`: no effect found and `r ≤ k σ`;
-//! - `effects_found`: effects found and `r ≤ k σ`;
-//! - `unexplained`: otherwise (or no floor could be measured).
-//!
-//! `k =` [`EXPLAINED_FACTOR`] `= 1.5`. A perfect model leaves `r ≈ σ`; `r ≤ 1.5 σ` allows a
-//! systematic error of at most `√(1.5² − 1) σ ≈ 1.1 σ` RMS, i.e. a model error that is lost
-//! in the noise sample by sample. The margin also absorbs the floor's own uncertainty: the
-//! median-of-second-differences estimate scatters by about `±10 %` over a few hundred samples and
-//! reads the white part of the noise only, and the output-error residual carries the estimation
-//! error of the model's parameters. Anything further above the noise is not called explained.
-//!
-//! `unexplained_share = max(0, 1 − σ² / r²)`: the share of the final residual's power above the
-//! noise, i.e. that no effect in the catalogue accounts for.
-//!
-//! **Warnings** (each published model, baseline and extended):
-//! - `nonpositive_gain`: DC gain (thrust per unit command) `≤ 0`: more command, less thrust.
-//! - `time_constant_below_sample`: a stable pole with `τ = −1 / Re s` shorter than one sample
-//!   period: a dynamic the data cannot resolve. Beside a slower pole of `τ ≥ dt` it is an
-//!   overdamped core fitting a first-order response, and the message says that instead.
-//! - `mode_outside_band`: the dominant mode (the core's `fn` when underdamped, its slow real
-//!   pole's `|s| / 2π` when overdamped) outside the excited band `[1/T, f_hi]`: `T` the record
-//!   length, `f_hi` the frequency below which [`BAND_POWER`] `= 99 %` of the power of the
-//!   input's first difference `Δu` lies (Hann periodogram, [`super::spectrum::periodogram`]).
-//!   `Δu` of a staircase or pulses is a train of impulses, flat up to Nyquist: the band is the
-//!   whole record's; a smooth input (slow ramp, low chirp) excites only its low band, and a mode
-//!   fitted above it is not measured but extrapolated.
-//! - `baseline_drift_unidentifiable` (the baseline): the time `t` is an affine function of the
-//!   command to within `1 − R²` ([`super::effects::baseline_drift::confounding`], `value` =
-//!   `R²`): a `baseline_drift` is then indistinguishable from a change of the static map, and
-//!   finding none (or one) says nothing about it.
-//! - `dead_time_unidentifiable` (the baseline): the command delayed by a couple of samples is an
-//!   affine function of itself to within `1 − R²` ([`super::effects::dead_time::confounding`],
-//!   `value` = `R²`): a delay is then a shift of the thrust curve or a lag, and finding none
-//!   (or one) says nothing about it.
-//! - `supply_sag_unidentifiable` (the final model, when no `supply_sag` was found): the supply
-//!   voltage's own variation, beyond what the throttle explains, is too small for even a
-//!   propeller-strong voltage dependence to reach the search's score
-//!   ([`super::effects::supply_sag::detectability`], `value` = that score): finding no sag says
-//!   nothing about the supply.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/verdict.rs`.
 
 use serde::Serialize;
 
-use super::effects::baseline_drift::UNIDENTIFIABLE_R2;
-use super::effects::dead_time::CONFOUNDING_SHIFT;
-use super::effects::supply_sag::{Detectability, EXPONENT_MAX};
 use super::noise::NoiseFloor;
-use super::search::SCORE_THRESHOLD;
 use super::spectrum::periodogram;
 use super::summary::ModelSummary;
 
@@ -143,7 +99,7 @@ pub fn verdict(floor: Option<&NoiseFloor>, residual: &Residual, effects_found: b
 }
 
 /// Kind of a warning.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum WarningKind {
     /// DC gain `≤ 0`.
@@ -176,66 +132,6 @@ pub struct Warning {
     /// The excited band `[lo, hi]`, Hz (`mode_outside_band` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub band_hz: Option<[f64; 2]>,
-}
-
-/// The `baseline_drift_unidentifiable` warning when `r2` (the share of `t` explained by the
-/// command) reaches [`UNIDENTIFIABLE_R2`].
-pub fn drift_warning(r2: f64) -> Option<Warning> {
-    (r2 >= UNIDENTIFIABLE_R2).then(|| Warning {
-        kind: WarningKind::BaselineDriftUnidentifiable,
-        message: format!(
-            "baseline drift not identifiable: the command runs one way through the record (time \
-             is affine in it to R² = {r2:.5}), so a drift of the output cannot be told from a \
-             change of the thrust curve; a ramp up and back down, or holds, would separate them"
-        ),
-        model: "baseline",
-        value: r2,
-        band_hz: None,
-    })
-}
-
-/// The `dead_time_unidentifiable` warning when `r2` (the share of the command delayed by
-/// [`CONFOUNDING_SHIFT`] samples that an affine function of the command explains) reaches
-/// [`UNIDENTIFIABLE_R2`] ([`super::effects::dead_time::confounding`]).
-pub fn dead_time_warning(r2: f64) -> Option<Warning> {
-    (r2 >= UNIDENTIFIABLE_R2).then(|| Warning {
-        kind: WarningKind::DeadTimeUnidentifiable,
-        message: format!(
-            "dead time not identifiable: the command is smooth against the sample period (delayed \
-             by {CONFOUNDING_SHIFT} samples it is an affine function of itself to R² = {r2:.5}), \
-             so a delay of the output cannot be told from a shift of the thrust curve or a lag; \
-             steps or holds would show it"
-        ),
-        model: "baseline",
-        value: r2,
-        band_hz: None,
-    })
-}
-
-/// The `supply_sag_unidentifiable` warning of model `model` (`"baseline"` or `"extended"`)
-/// when `d.score`, the most a propeller-strong supply term driven by the voltage's own
-/// variation could score on it ([`super::effects::supply_sag::detectability`]), is below
-/// [`SCORE_THRESHOLD`].
-pub fn supply_sag_warning(d: &Detectability, model: &'static str) -> Option<Warning> {
-    (d.score < SCORE_THRESHOLD).then(|| Warning {
-        kind: WarningKind::SupplySagUnidentifiable,
-        message: format!(
-            "supply sag not identifiable: the supply voltage varies by {:.3} V RMS beyond what \
-             the throttle explains; even with thrust ∝ V^{EXPONENT_MAX} that would change the \
-             output by {:.2} % RMS, which would score {:.0} < {SCORE_THRESHOLD} above the {model} \
-             model's residual ({:.1} % RMS of the output): a sag can be neither found nor ruled \
-             out in this record (the voltage's variation with the throttle cannot be told from \
-             the thrust curve). A supply that discharges across repeated levels, or is stepped, \
-             would show it",
-            d.own_rms_v,
-            100.0 * d.relative_change,
-            d.score,
-            100.0 * d.relative_residual,
-        ),
-        model,
-        value: d.score,
-        band_hz: None,
-    })
 }
 
 /// The excited band `[1/T, f_hi]` of input `u` sampled every `dt_s` (see the module doc).
@@ -388,7 +284,8 @@ mod tests {
     #[test]
     fn a_pole_faster_than_a_sample_is_warned_and_named_second_beside_a_resolved_one() {
         use crate::fit::Fit;
-        use crate::model::{Core, Model};
+        use crate::model::Model;
+        use crate::signals::Core;
         let dt = 1e-3;
         let summary = |fn_hz, zeta| {
             let fit = Fit {

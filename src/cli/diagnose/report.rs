@@ -11,9 +11,9 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
+use crate::plot::stabilization;
 use propid_diagnose::result::{Diagnosis, Traces};
 use propid_diagnose::spectrum::periodogram;
-use crate::plot::stabilization;
 use propid_numerics::okid::{okid, OkidOptions};
 use propid_numerics::segment::{self, Command, SegmentRules};
 
@@ -304,7 +304,7 @@ fn markdown(title: &str, d: &Diagnosis, pulses: usize, sv: &[f64]) -> String {
             let _ = writeln!(
                 s,
                 "\n**Extended** by {}: validation fit **{:.2} %** ({:+.2} points; residual RMS × {:.3}).\n",
-                e.effects.join(", "),
+                e.effects.iter().map(|e| e.as_str()).collect::<Vec<_>>().join(", "),
                 e.fit_percent,
                 g.fit_percent_points,
                 g.rms_ratio

@@ -1,35 +1,22 @@
-//! `asymmetric_dynamics`: spin-up and spin-down differ. An ESC drives the rotor up; without
-//! active braking only drag brings it down (slower), with active braking it may come down
-//! faster. The core runs on one time scale while the input drives the output up and on another
-//! while the output falls back:
+//! `asymmetric_dynamics`: spin-up and spin-down differ.
 //!
-//! ```text
-//!   T'' + 2ζω T' + ω² T = ω² K v,   ω = ωn / up     while K v − T ≥ 0 (driven up)
-//!                                   ω = ωn / down   otherwise         (falling back)
-//!   up = e^(−r/2),  down = e^(r/2),  down / up = e^r
-//! ```
-//!
-//! `up` and `down` are dimensionless: the factor by which every time constant of the core
-//! (`fn_hz`, `zeta` of the fitted model, their geometric mean) is multiplied in that direction;
-//! `down_over_up` > 1 means the output falls back more slowly than it rises. The evidence
-//! states both time constants in seconds, by the same two-point fit `propid identify`'s `steps`
-//! use ([`propid_numerics::step_response`]) on the model's own step response in each direction.
-//! Only for a throttle-like input (never negative): the direction is that of a motor.
-//! Stepped by [`propid_numerics::nonlinear_core`].
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/effects/asymmetric_dynamics.rs`.
 
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{Core, Model};
+use crate::signals::Core;
+use crate::term::{to_map, Place, Scale, Term};
 use propid_numerics::discretise::discretise_second_order;
 use propid_numerics::nonlinear_core::CoreLaw;
 use propid_numerics::step_response::{step_figures, Step};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "asymmetric_dynamics";
+pub const NAME: EffectName = EffectName::AsymmetricDynamics;
 /// Largest plausible ratio of the two time scales.
 pub const MAX_RATIO: f64 = 10.0;
 /// Least share of the input's movement each direction must have in the estimation part
@@ -61,7 +48,7 @@ struct Published {
 }
 
 impl Effect for AsymmetricDynamics {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -84,7 +71,7 @@ impl Effect for AsymmetricDynamics {
 }
 
 impl Term for AsymmetricDynamicsParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -100,11 +87,11 @@ impl Term for AsymmetricDynamicsParams {
     /// [`time_constant_s`]) that differ by at least one sample period: a smaller difference is
     /// below what the record resolves (as `identify` calls a time constant below one sample
     /// unresolvable).
-    fn plausible(&self, ctx: &Ctx, model: &Model) -> bool {
-        if model.has_nan() || self.log_ratio.abs() > MAX_RATIO.ln() {
+    fn plausible(&self, ctx: &Ctx, core: &Core, has_nan: bool) -> bool {
+        if has_nan || self.log_ratio.abs() > MAX_RATIO.ln() {
             return false;
         }
-        let tau = |scale: f64| time_constant_s(model.core.fn_hz / scale, model.core.zeta);
+        let tau = |scale: f64| time_constant_s(core.fn_hz / scale, core.zeta);
         match (tau(self.up()), tau(self.down())) {
             // The difference must show on the sample grid, and neither direction may be
             // faster than half a sample (a time constant the record cannot resolve).
@@ -228,10 +215,11 @@ pub fn time_constant_s(fn_hz: f64, zeta: f64) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::Model;
 
     #[test]
     fn a_direction_faster_than_half_a_sample_is_implausible() {
-        use crate::model::Core;
+        use crate::signals::Core;
         // Down 9× slower than up around an 8 Hz core: spin-up τ ≈ 7 ms, spin-down ≈ 60 ms.
         let p = AsymmetricDynamicsParams {
             log_ratio: 9.0f64.ln(),
@@ -243,7 +231,8 @@ mod tests {
         })
         .with(p);
         let (u, y) = (vec![0.5; 10], vec![0.0; 10]);
-        let plausible_at = |dt_s: f64| p.plausible(&Ctx::whole(dt_s, &u, &y), &model);
+        let plausible_at =
+            |dt_s: f64| p.plausible(&Ctx::whole(dt_s, &u, &y), &model.core, model.has_nan());
         // At 50 Hz the spin-up is faster than half a sample (10 ms): not resolvable; at 200 Hz
         // it is, and the directions differ by more than a sample.
         assert!(!plausible_at(0.02));

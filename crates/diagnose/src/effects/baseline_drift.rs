@@ -1,36 +1,22 @@
-//! `baseline_drift`: the output creeps linearly in time whatever the input does (load-cell
-//! creep, temperature): `ŷ ← ŷ + r t`.
+//! `baseline_drift`: the output creeps linearly in time whatever the input does (load-cell creep,
+//! temperature): `ŷ ← ŷ + r t`.
 //!
-//! **Identifiability.** The drift's regressor `t` competes with the static map's: a command
-//! `u` that runs one way through the whole record, slowly against the dynamics (a thrust-curve
-//! ramp), is an affine function of time, `u = a + b t`, and then a drift of the output is
-//! indistinguishable from a change of the map: `K u + r t = (K + r/b) u − r a/b`, and with a
-//! curved map the drift is read only through the assumed shape of the curve (a drift hidden in
-//! a measured ramp is named as a steeper or more curved map). [`confounding`] measures it: `R²`
-//! of the least-squares fit of `t` by `[1, u]` over the estimation samples (the fitted rate's
-//! variance grows as `1 / (1 − R²)`). At `R² ≥` [`UNIDENTIFIABLE_R2`] diagnose says so (a
-//! `baseline_drift_unidentifiable` warning) rather than nothing. The command, not the fitted
-//! response, is the measure: the 2nd-order baseline bends its response (a slow mode) to imitate
-//! a curved map, and would hide the ramp. A staircase holds each level while `t` runs on (`R²`
-//! of a monotone staircase of `L` equal levels is about `1 − 1/L²`) and a ramp up and back down
-//! is uncorrelated with `t`: on those the drift is read from the creep within the holds, or from
-//! the difference between the way up and the way down at the same command.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/effects/baseline_drift.rs`.
 
+use crate::thresholds::UNIDENTIFIABLE_R2;
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
-use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::ctx::{affine_r2, measured_estimation_samples, Ctx};
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{Core, Signals};
+use crate::signals::{Core, Signals};
+use crate::term::{to_map, Place, Scale, Term};
+use crate::verdict::{Warning, WarningKind};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "baseline_drift";
-
-/// `R²` at and above which the drift is called unidentifiable: the fitted rate's variance
-/// inflated a thousandfold, `t` affine in the command to within 0.1 % of its variance (a
-/// monotone staircase needs about 30 equal levels to get there).
-pub const UNIDENTIFIABLE_R2: f64 = 0.999;
+pub const NAME: EffectName = EffectName::BaselineDrift;
 
 /// `R²` of `t` fitted by `[1, u]` over the estimation samples with a measured output, `u` the
 /// command (module doc); 0 when the command is constant there.
@@ -40,32 +26,20 @@ pub fn confounding(ctx: &Ctx) -> f64 {
     affine_r2(&ks, |k| k as f64 * dt, |k| ctx.sig.u[k])
 }
 
-/// The estimation samples from `first` on whose output is measured.
-pub fn measured_estimation_samples(ctx: &Ctx, first: usize) -> Vec<usize> {
-    ctx.est
-        .clone()
-        .filter(|&k| k >= first && ctx.sig.y.get(k).is_some_and(|y| y.is_finite()))
-        .collect()
-}
-
-/// `R²` of `a` fitted by `[1, b]` over the samples `ks` (the squared correlation of `a` and
-/// `b` there): how far one is an affine function of the other, the measure of both the drift's
-/// and the dead time's identifiability. 0 when either is constant there (to within 1e-12 of
-/// its mean) or with fewer than 3 samples.
-pub fn affine_r2(ks: &[usize], a: impl Fn(usize) -> f64, b: impl Fn(usize) -> f64) -> f64 {
-    if ks.len() < 3 {
-        return 0.0;
-    }
-    let m = ks.len() as f64;
-    let mean = |f: &dyn Fn(usize) -> f64| ks.iter().map(|&k| f(k)).sum::<f64>() / m;
-    let (ma, mb) = (mean(&a), mean(&b));
-    let sab = mean(&|k| (a(k) - ma) * (b(k) - mb));
-    let saa = mean(&|k| (a(k) - ma).powi(2));
-    let sbb = mean(&|k| (b(k) - mb).powi(2));
-    if !(saa > 1e-24 * ma * ma && sbb > 1e-24 * mb * mb && saa > 0.0 && sbb > 0.0) {
-        return 0.0;
-    }
-    (sab * sab / (saa * sbb)).clamp(0.0, 1.0)
+/// The `baseline_drift_unidentifiable` warning when `r2` (the share of `t` explained by the
+/// command) reaches [`UNIDENTIFIABLE_R2`].
+fn drift_warning(r2: f64) -> Option<Warning> {
+    (r2 >= UNIDENTIFIABLE_R2).then(|| Warning {
+        kind: WarningKind::BaselineDriftUnidentifiable,
+        message: format!(
+            "baseline drift not identifiable: the command runs one way through the record (time \
+             is affine in it to R² = {r2:.5}), so a drift of the output cannot be told from a \
+             change of the thrust curve; a ramp up and back down, or holds, would separate them"
+        ),
+        model: "baseline",
+        value: r2,
+        band_hz: None,
+    })
 }
 
 /// The catalogue entry.
@@ -87,7 +61,7 @@ struct Published {
 }
 
 impl Effect for BaselineDrift {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -96,10 +70,20 @@ impl Effect for BaselineDrift {
         let start = cur.model.with(BaselineDriftParams { rate_per_s: 0.0 });
         Some(ctx.best_of([start], 1))
     }
+
+    fn warning(
+        &self,
+        ctx: &Ctx,
+        _cur: &Fit,
+        _found: bool,
+        _model: &'static str,
+    ) -> Option<Warning> {
+        drift_warning(confounding(ctx))
+    }
 }
 
 impl Term for BaselineDriftParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -166,7 +150,7 @@ impl Term for BaselineDriftParams {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::Signals;
+    use crate::signals::Signals;
 
     fn ctx<'a>(u: &'a [f64], y: &'a [f64]) -> Ctx<'a> {
         Ctx {

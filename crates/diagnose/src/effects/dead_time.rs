@@ -1,33 +1,25 @@
-//! `dead_time`: a transport delay of the throttle (ESC update, filtering, logging),
-//! `v_k = u_{k−d}` with `d` whole samples (the first sample held before the record starts).
+//! `dead_time`: a transport delay of the throttle (ESC update, filtering, logging), `v_k =
+//! u_{k−d}` with `d` whole samples (the first sample held before the record starts).
 //!
-//! **Which side of the plant.** A delay on the throttle's side (the ESC's update) and one on
-//! the output's side (a load cell's filter, a logger's buffer) give the same model as long as
-//! only the throttle drives it. A supply voltage measured beside the thrust does not pass
-//! through the load cell: with a `sensor_samples` share `s` of the delay on the output's side,
-//! the model sees `V_{k−s}` (the voltage is as late as the thrust it is compared with). The
-//! share matters only when a term reads the voltage ([`Term::reads_voltage`], the supply sag);
-//! it is searched then and published as `sensor_delay_samples` when it is not 0. A thrust
-//! channel shifted by 3 samples in vanderploeg's log was found as 4 samples (SSE 1.59) with the
-//! voltage taken at the throttle's time, as 5 (SSE 0.66, the clean log's 2 + 3) with the share.
-//!
-//! **Range.** Delays up to [`delay_search_samples`]: 0.15 s (at least 16 samples), raised to
-//! what the command's steps show ([`steps_delay_samples`]: a slow load cell delays a
-//! Crazyflie stand's thrust by 0.23 s).
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/effects/dead_time.rs`.
 
+use crate::thresholds::{CONFOUNDING_SHIFT, UNIDENTIFIABLE_R2};
 use propid_numerics::segment::{self, Command, SegmentRules};
 use propid_numerics::step_response::step_figures;
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Term};
-use crate::effects::baseline_drift::{affine_r2, measured_estimation_samples};
+use crate::ctx::{affine_r2, measured_estimation_samples};
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{Core, Signals};
+use crate::signals::{Core, Signals};
+use crate::term::{to_map, Place, Term};
+use crate::verdict::{Warning, WarningKind};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "dead_time";
+pub const NAME: EffectName = EffectName::DeadTime;
 /// Longest dead time searched, seconds (ESC update, filtering and logging of a motor stand).
 pub const MAX_DELAY_S: f64 = 0.15;
 /// Yet never fewer delays than this are searched: a slowly sampled log counts its delay in its
@@ -74,10 +66,6 @@ pub fn steps_delay_samples(sig: &Signals, rules: &SegmentRules) -> Option<f64> {
     Some(d[d.len() / 2])
 }
 
-/// Samples of delay at which [`confounding`] compares the command with itself: the shortest
-/// delays the injection tests hide (2–6 samples) and a stand's logger adds.
-pub const CONFOUNDING_SHIFT: usize = 2;
-
 /// `R²` of the command delayed by [`CONFOUNDING_SHIFT`] samples fitted by `[1, u_k]` over the
 /// estimation samples with a measured output; 0 when the command is constant there.
 ///
@@ -97,6 +85,24 @@ pub fn confounding(ctx: &Ctx) -> f64 {
         .filter(|&k| k < u.len())
         .collect();
     affine_r2(&ks, |k| u[k - d], |k| u[k])
+}
+
+/// The `dead_time_unidentifiable` warning when `r2` (the share of the command delayed by
+/// [`CONFOUNDING_SHIFT`] samples that an affine function of the command explains) reaches
+/// [`UNIDENTIFIABLE_R2`] ([`confounding`]).
+fn dead_time_warning(r2: f64) -> Option<Warning> {
+    (r2 >= UNIDENTIFIABLE_R2).then(|| Warning {
+        kind: WarningKind::DeadTimeUnidentifiable,
+        message: format!(
+            "dead time not identifiable: the command is smooth against the sample period (delayed \
+             by {CONFOUNDING_SHIFT} samples it is an affine function of itself to R² = {r2:.5}), \
+             so a delay of the output cannot be told from a shift of the thrust curve or a lag; \
+             steps or holds would show it"
+        ),
+        model: "baseline",
+        value: r2,
+        band_hz: None,
+    })
 }
 
 /// The catalogue entry.
@@ -137,7 +143,7 @@ struct Published {
 }
 
 impl Effect for DeadTime {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -243,6 +249,16 @@ impl Effect for DeadTime {
         }
         Some(best)
     }
+
+    fn warning(
+        &self,
+        ctx: &Ctx,
+        _cur: &Fit,
+        _found: bool,
+        _model: &'static str,
+    ) -> Option<Warning> {
+        dead_time_warning(confounding(ctx))
+    }
 }
 
 /// The shares of a delay of `all` samples tried on the output's side: every one from 0 to
@@ -291,7 +307,7 @@ pub fn coarse_step(fn_hz: f64, dt_s: f64) -> usize {
 }
 
 impl Term for DeadTimeParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -315,6 +331,18 @@ impl Term for DeadTimeParams {
         Some(Box::new(DeadTimeParams {
             sensor_samples: samples.min(self.delay_samples),
             ..*self
+        }))
+    }
+
+    /// [`shares`] of its delay.
+    fn voltage_delay_shares(&self) -> Vec<usize> {
+        shares(self.delay_samples)
+    }
+
+    fn one_sample_shorter(&self) -> Option<Box<dyn Term>> {
+        Some(Box::new(DeadTimeParams {
+            delay_samples: self.delay_samples.saturating_sub(1),
+            sensor_samples: self.sensor_samples.saturating_sub(1),
         }))
     }
 
@@ -414,7 +442,7 @@ mod tests {
             .collect();
         let y = vec![0.0; n];
         let r2 = |u: &[f64]| confounding(&Ctx::whole(0.02, u, &y));
-        let unidentifiable = crate::effects::baseline_drift::UNIDENTIFIABLE_R2;
+        let unidentifiable = UNIDENTIFIABLE_R2;
         assert!(r2(&ramp) >= unidentifiable, "{}", r2(&ramp));
         assert!(r2(&stairs) < unidentifiable, "{}", r2(&stairs));
         assert!(r2(&noise) < 0.5, "{}", r2(&noise));

@@ -8,14 +8,17 @@ use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{max_freq_hz, Core, Model};
+use crate::linear_part::{second_order_poles, LinearPart};
+use crate::model::max_freq_hz;
+use crate::signals::Core;
 use crate::spectrum::peaks;
-use crate::summary::{second_order_poles, LinearPart};
+use crate::term::{to_map, Place, Scale, Term};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "extra_mode";
+pub const NAME: EffectName = EffectName::ExtraMode;
 
 /// Largest plausible share `g` of the output through the mode. The path's numerator is
 /// `(1 − g) s² + 2ζ_m ω_m (1 − g) s + ω_m²`: for `g > 1` its `s²` coefficient is negative and it
@@ -56,7 +59,7 @@ struct Published {
 }
 
 impl Effect for ExtraMode {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -88,7 +91,7 @@ impl Effect for ExtraMode {
 }
 
 impl Term for ExtraModeParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -102,7 +105,7 @@ impl Term for ExtraModeParams {
 
     /// A mode below 0.95 Nyquist with damping within 0.002..5 and a share within (0,
     /// [`MAX_SHARE`]] (no inverse response: see there).
-    fn plausible(&self, ctx: &Ctx, _model: &Model) -> bool {
+    fn plausible(&self, ctx: &Ctx, _core: &Core, _has_nan: bool) -> bool {
         let fmax = max_freq_hz(ctx.sig.dt_s);
         (self.fn_hz > 0.0 && self.fn_hz < 0.95 * fmax)
             && (0.002..=5.0).contains(&self.zeta)

@@ -15,6 +15,7 @@ pub mod stiffness_nonlinearity;
 pub mod supply_sag;
 
 use super::effect::Effect;
+use propid_numerics::EffectName;
 
 /// Every effect, in catalogue order: the order the search tries them in (ties go to the
 /// first), the order of their free parameters in a model, and the order of terms that act at
@@ -31,14 +32,9 @@ pub static REGISTRY: &[&dyn Effect] = &[
     &stiffness_nonlinearity::StiffnessNonlinearity,
 ];
 
-/// The published names of the effects, in catalogue order.
-pub fn names() -> impl Iterator<Item = &'static str> {
+/// The names of the effects, in catalogue order.
+pub fn names() -> impl Iterator<Item = EffectName> {
     REGISTRY.iter().map(|e| e.name())
-}
-
-/// Position of effect `name` in the registry (past the end for a name it does not list).
-pub fn position(name: &str) -> usize {
-    names().position(|n| n == name).unwrap_or(REGISTRY.len())
 }
 
 #[cfg(test)]
@@ -46,8 +42,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_published_names_are_kept_in_catalogue_order() {
-        let names: Vec<&str> = names().collect();
+    fn the_registry_lists_every_effect_in_catalogue_order() {
+        assert_eq!(names().collect::<Vec<_>>(), EffectName::ALL);
+        let names: Vec<&str> = names().map(EffectName::as_str).collect();
         assert_eq!(
             names,
             [
@@ -62,7 +59,5 @@ mod tests {
                 "stiffness_nonlinearity",
             ]
         );
-        assert_eq!(position("extra_mode"), 2);
-        assert_eq!(position("no_such_effect"), REGISTRY.len());
     }
 }

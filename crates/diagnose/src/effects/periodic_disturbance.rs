@@ -5,13 +5,16 @@ use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{max_freq_hz, Core, Model, Signals};
+use crate::model::max_freq_hz;
+use crate::signals::{Core, Signals};
 use crate::spectrum::{band_level, peaks, steady_power};
+use crate::term::{to_map, Place, Scale, Term};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "periodic_disturbance";
+pub const NAME: EffectName = EffectName::PeriodicDisturbance;
 
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
@@ -41,7 +44,7 @@ struct Published {
 }
 
 impl Effect for PeriodicDisturbance {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -98,7 +101,7 @@ impl PeriodicDisturbanceParams {
 }
 
 impl Term for PeriodicDisturbanceParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -111,7 +114,7 @@ impl Term for PeriodicDisturbanceParams {
     }
 
     /// At least 5 periods in the estimation part, below Nyquist.
-    fn plausible(&self, ctx: &Ctx, _model: &Model) -> bool {
+    fn plausible(&self, ctx: &Ctx, _core: &Core, _has_nan: bool) -> bool {
         let fmax = max_freq_hz(ctx.sig.dt_s);
         let span_s = ctx.est.len() as f64 * ctx.sig.dt_s;
         self.freq_hz >= 5.0 / span_s && self.freq_hz < fmax

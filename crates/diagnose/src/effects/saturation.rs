@@ -7,12 +7,14 @@ use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Detected, Effect, Place, Term};
+use crate::effect::{Detected, Effect};
 use crate::fit::{linear_refit, Fit};
-use crate::model::{Core, Signals};
+use crate::signals::{Core, Signals};
+use crate::term::{to_map, Place, Term};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "saturation";
+pub const NAME: EffectName = EffectName::Saturation;
 
 /// Distinct values under a flat top that must be a continuous signal's ([`Saturation`]'s
 /// detection).
@@ -55,7 +57,7 @@ struct Published {
 }
 
 impl Effect for Saturation {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -152,7 +154,7 @@ impl Effect for Saturation {
 }
 
 impl Term for SaturationParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 

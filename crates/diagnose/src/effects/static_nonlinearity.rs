@@ -6,12 +6,14 @@ use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{Core, Model, Signals};
+use crate::signals::{Core, Signals};
+use crate::term::{to_map, Place, Scale, Term};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "static_nonlinearity";
+pub const NAME: EffectName = EffectName::StaticNonlinearity;
 
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
@@ -34,7 +36,7 @@ struct Published {
 }
 
 impl Effect for StaticNonlinearity {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -52,7 +54,7 @@ impl Effect for StaticNonlinearity {
 }
 
 impl Term for StaticNonlinearityParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -65,7 +67,7 @@ impl Term for StaticNonlinearityParams {
     }
 
     /// An exponent within 0.1..10.
-    fn plausible(&self, _ctx: &Ctx, _model: &Model) -> bool {
+    fn plausible(&self, _ctx: &Ctx, _core: &Core, _has_nan: bool) -> bool {
         (0.1..=10.0).contains(&self.exponent)
     }
 

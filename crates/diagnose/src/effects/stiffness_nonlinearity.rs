@@ -14,13 +14,15 @@ use serde::Serialize;
 use serde_json::{json, Map, Value};
 
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Scale, Term};
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{Core, Model};
+use crate::signals::Core;
+use crate::term::{to_map, Place, Scale, Term};
 use propid_numerics::nonlinear_core::CoreLaw;
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "stiffness_nonlinearity";
+pub const NAME: EffectName = EffectName::StiffnessNonlinearity;
 /// Plausible range of the small-signal stiffness factor `1 + 3 ε T²` at the largest
 /// displacement of the data (below: a softening spring near its fold, where the core has no
 /// steady state; above: a term that is no longer a correction).
@@ -60,7 +62,7 @@ struct Published {
 }
 
 impl Effect for StiffnessNonlinearity {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -88,7 +90,7 @@ impl Effect for StiffnessNonlinearity {
 }
 
 impl Term for StiffnessNonlinearityParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -103,14 +105,14 @@ impl Term for StiffnessNonlinearityParams {
     /// The stiffness factor `1 + 3 ε T²` at the largest displacement `|y − c|` of the
     /// estimation samples within [`STIFFNESS_FACTOR`], and at least
     /// [`MIN_STIFFNESS_CHANGE`] away from 1.
-    fn plausible(&self, ctx: &Ctx, model: &Model) -> bool {
-        let c = model.core.offset;
+    fn plausible(&self, ctx: &Ctx, core: &Core, has_nan: bool) -> bool {
+        let c = core.offset;
         let t_max = ctx.sig.y[ctx.est.clone()]
             .iter()
             .filter(|v| v.is_finite())
             .fold(0.0f64, |m, &y| m.max((y - c).abs()));
         let change = 3.0 * self.k3_per_k1 * t_max * t_max;
-        !model.has_nan()
+        !has_nan
             && STIFFNESS_FACTOR.contains(&(1.0 + change))
             && change.abs() >= MIN_STIFFNESS_CHANGE
     }

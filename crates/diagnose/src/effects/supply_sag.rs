@@ -1,61 +1,28 @@
-//! `supply_sag`: the gain follows the supply voltage (a sagging battery gives less thrust per
-//! unit throttle): `v ← v · (1 + g_V (V_k − V_r))` with `V_r` the mean voltage of the record
-//! (the voltage is a measured input, known on every sample). `g_V` is the relative gain change
-//! per volt at `V_r`. Needs a voltage channel.
+//! `supply_sag`: the gain follows the supply voltage (a sagging battery gives less thrust per unit
+//! throttle): `v ← v · (1 + g_V (V_k − V_r))` with `V_r` the mean voltage of the record (the
+//! voltage is a measured input, known on every sample).
 //!
-//! **Which side.** A motor's speed follows its supply through the motor's own lag: the term
-//! scales the drive, before the dynamics. A gain that acts on the measured output at once (a
-//! load-cell bridge excited from the supply, an output multiplied by a voltage after the fact)
-//! scales `ŷ` instead, after the dynamics: the two agree in steady state but not through a
-//! lightly damped mode or a nonlinear core (a cubic spring answers a scaled drive by less than
-//! the scale). The search fits the term on the drive; on the final model [`side`] refits it on
-//! the output and split between both (`(1 − s) g_V` on the drive, `s g_V` on the output, `s`
-//! the output's share) and keeps what the data favour (and the held-out figure does not
-//! contradict). Measured on the Silverbox slice with a sag hidden on its output (the
-//! injection table's draws): `g_V` came back 20 % low on the drive, within 1 % with the side
-//! settled (on the output).
-//!
-//! **Identifiability.** A voltage that only follows the command (the load's IR drop on a
-//! monotone ramp, a battery that discharges while a staircase climbs) makes `v` a function of
-//! the throttle alone: a static map, which `static_nonlinearity` describes as well, and `g_V`
-//! then measures the map's curvature, not the supply. The term is taken only when the voltage's
-//! own variation counts ([`SupplySag::identifiable`]): the extended model is refitted with the
-//! voltage replaced by its smooth function of the throttle ([`voltage_from_throttle`]), and the
-//! real voltage must beat it by the search's own score threshold — unless that alternative
-//! needs a thrust that falls as the throttle rises ([`map_turns_back`]): a supply that
-//! collapses on the top level (a current-limited bench supply, a battery at its limit) gives
-//! less thrust there than on the level below. The voltage explains that; a propeller's static
-//! map cannot, so the smooth function of the throttle is no alternative there.
-//!
-//! **Detectability.** Only the voltage's own variation, `V − V̂(u)`, can show a supply term
-//! beside a static map; a bench supply held constant, or a battery whose voltage only dips with
-//! the load, leaves none. [`detectability`] bounds what it could show: the change a gain as
-//! strong as a propeller's (thrust ∝ V^[`EXPONENT_MAX`], `g = 2 / V_r`) driven by
-//! `V − V̂(u)` alone would make to the final model's output, `δ_k = (ŷ_k − c) g (V_k − V̂_k)`,
-//! scored as the search scores an addition that explains it whole on top of the final residual,
-//! `n ln(1 + Σ δ² / SSE)`. Below [`SCORE_THRESHOLD`] no plausible supply term could be named in
-//! this record, and diagnose says so (a `supply_sag_unidentifiable` warning) rather than
-//! nothing.
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/effects/supply_sag.rs`.
 
+use crate::thresholds::{EXPONENT_MAX, SCORE_THRESHOLD};
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
+use crate::ctx::measured_estimation_samples;
 use crate::ctx::Ctx;
-use crate::effect::{to_map, Effect, Place, Scale, Term};
-use crate::effects::baseline_drift::measured_estimation_samples;
+use crate::effect::Effect;
 use crate::fit::Fit;
-use crate::model::{simulate, Core, Model, Signals};
-use crate::search::SCORE_THRESHOLD;
+use crate::model::{simulate, Model};
+use crate::signals::{Core, Signals};
+use crate::term::{to_map, Place, Scale, Term};
+use crate::verdict::{Warning, WarningKind};
+use propid_numerics::EffectName;
 
 /// The published name.
-pub const NAME: &str = "supply_sag";
+pub const NAME: EffectName = EffectName::SupplySag;
 
 /// Exponents `n` of the starts `g_V = n / V_r` (thrust ∝ V^1–2 on a motor; one negative start).
 pub const START_EXPONENTS: [f64; 4] = [-1.0, 0.5, 1.5, 4.0];
-
-/// Exponent `n` of the strongest plausible supply dependence, thrust ∝ V^n: a propeller whose
-/// speed follows the voltage (`ω ∝ K_v V`, thrust ∝ ω²).
-pub const EXPONENT_MAX: f64 = 2.0;
 
 /// Score `n ln(SSE_drive / SSE_output)` by which the output must fit better than the drive to
 /// be taken as what the supply scales (2: a likelihood ratio of e).
@@ -63,6 +30,32 @@ pub const OUTPUT_SCORE: f64 = 2.0;
 /// Score by which the term on both sides, its output share fitted, must fit better than the
 /// better side alone (one parameter more; a likelihood ratio of e⁵).
 pub const BOTH_SCORE: f64 = 10.0;
+
+/// The `supply_sag_unidentifiable` warning of model `model` (`"baseline"` or `"extended"`)
+/// when `d.score`, the most a propeller-strong supply term driven by the voltage's own
+/// variation could score on it ([`detectability`]), is below
+/// [`SCORE_THRESHOLD`].
+fn supply_sag_warning(d: &Detectability, model: &'static str) -> Option<Warning> {
+    (d.score < SCORE_THRESHOLD).then(|| Warning {
+        kind: WarningKind::SupplySagUnidentifiable,
+        message: format!(
+            "supply sag not identifiable: the supply voltage varies by {:.3} V RMS beyond what \
+             the throttle explains; even with thrust ∝ V^{EXPONENT_MAX} that would change the \
+             output by {:.2} % RMS, which would score {:.0} < {SCORE_THRESHOLD} above the {model} \
+             model's residual ({:.1} % RMS of the output): a sag can be neither found nor ruled \
+             out in this record (the voltage's variation with the throttle cannot be told from \
+             the thrust curve). A supply that discharges across repeated levels, or is stepped, \
+             would show it",
+            d.own_rms_v,
+            100.0 * d.relative_change,
+            d.score,
+            100.0 * d.relative_residual,
+        ),
+        model,
+        value: d.score,
+        band_hz: None,
+    })
+}
 
 /// The catalogue entry.
 #[derive(Debug, Clone, Copy)]
@@ -205,7 +198,7 @@ struct Published {
 }
 
 impl Effect for SupplySag {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -252,6 +245,18 @@ impl Effect for SupplySag {
              variation scores {own:.0} < {SCORE_THRESHOLD}), so a voltage gain cannot be told \
              from a static map of the throttle in this record: not taken"
         ))
+    }
+
+    /// What the supply scales, settled on the model the search ends with ([`side`]).
+    fn settle(&self, ctx: &Ctx, cur: &Fit) -> Option<Fit> {
+        side(ctx, cur)
+    }
+
+    fn warning(&self, ctx: &Ctx, cur: &Fit, found: bool, model: &'static str) -> Option<Warning> {
+        if found {
+            return None;
+        }
+        supply_sag_warning(&detectability(ctx, cur)?, model)
     }
 }
 
@@ -410,11 +415,7 @@ pub const MAP_REVERSAL: f64 = 0.02;
 /// propeller's thrust does not fall as the throttle rises at a fixed supply, so a "static map"
 /// that must do so is not one. The steady output at a level is the model's first simulated
 /// sample with the input held there (the states start in steady state).
-pub fn map_turns_back(
-    ctx: &Ctx,
-    m: &crate::model::Model,
-    vhat: &VoltageOfThrottle,
-) -> bool {
+pub fn map_turns_back(ctx: &Ctx, m: &crate::model::Model, vhat: &VoltageOfThrottle) -> bool {
     let us = ctx
         .est
         .clone()
@@ -453,7 +454,7 @@ pub fn map_turns_back(
 }
 
 impl Term for SupplySagParams {
-    fn name(&self) -> &'static str {
+    fn name(&self) -> EffectName {
         NAME
     }
 
@@ -639,7 +640,7 @@ mod tests {
     /// The sag fitted on the baseline of `(u, y, v)`: the fit and the identifiability test.
     fn fit_sag(u: &[f64], y: &[f64], v: &[f64]) -> (Fit, Result<(), String>) {
         let ctx = context(u, y, v);
-        let base = crate::search::baseline(&ctx, &Default::default(), &[]);
+        let base = crate::baseline::baseline(&ctx, &Default::default(), &[]);
         let after = SupplySag.extend(&ctx, &base).expect("a voltage channel");
         let verdict = SupplySag.identifiable(&ctx, &base, &after);
         (after, verdict)
@@ -660,7 +661,7 @@ mod tests {
             let sag = SupplySagParams::new(0.1, truth, share);
             let (u, y, v) = sagging(&levels, 0.05, sag, volt);
             let ctx = context(&u, &y, &v);
-            let base = crate::search::baseline(&ctx, &Default::default(), &[]);
+            let base = crate::baseline::baseline(&ctx, &Default::default(), &[]);
             let drive = SupplySag.extend(&ctx, &base).unwrap();
             let settled = side(&ctx, &drive).expect("settled off the drive");
             let t = settled.model.term(NAME).unwrap();
@@ -681,7 +682,7 @@ mod tests {
         // A gain on the drive stays there.
         let (u, y, v) = sagging(&levels, 0.05, SupplySagParams::drive(0.1), volt);
         let ctx = context(&u, &y, &v);
-        let base = crate::search::baseline(&ctx, &Default::default(), &[]);
+        let base = crate::baseline::baseline(&ctx, &Default::default(), &[]);
         let drive = SupplySag.extend(&ctx, &base).unwrap();
         assert!(side(&ctx, &drive).is_none());
         assert!((gain_per_volt(&drive) - 0.1).abs() < 0.002);
@@ -745,13 +746,12 @@ mod tests {
         let mut ctx = Ctx::whole(0.01, u, y);
         ctx.sig.voltage = Some(v);
         ctx.sig.v_ref = mean(v);
-        let base = crate::search::baseline(&ctx, &Default::default(), &[]);
+        let base = crate::baseline::baseline(&ctx, &Default::default(), &[]);
         detectability(&ctx, &base).expect("a voltage channel")
     }
 
     #[test]
     fn a_sag_is_undetectable_where_the_voltage_has_no_variation_of_its_own() {
-        use crate::search::SCORE_THRESHOLD;
         // A bench supply held at 16 V (a millivolt of ripple), or a voltage that only dips
         // with the load: even thrust ∝ V² leaves nothing a fit could score.
         for volt in [

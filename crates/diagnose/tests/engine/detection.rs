@@ -8,13 +8,14 @@
 //! in the detection table.
 
 use propid_diagnose::{self as diagnose, Diagnosis, Finding};
+use propid_numerics::EffectName;
 use propid_sim::plant::PlantConfig;
 use propid_sim::synth::{self, Measured};
 
 const CASES: u64 = 20;
 
 fn run(name: &str, i: u64) -> (PlantConfig, Diagnosis, Measured) {
-    let (cfg, m) = synth::case(name, i).expect("valid plant");
+    let (cfg, m) = synth::case(EffectName::from_name(name), i).expect("valid plant");
     let d = diagnose::diagnose(
         synth::DT_S,
         &m.u,
@@ -52,7 +53,7 @@ fn check_cases(
     for i in cases {
         let (cfg, d, m) = run(name, i);
         let names: Vec<&str> = d.findings.iter().map(|f| f.effect.as_str()).collect();
-        let Some(f) = d.findings.iter().find(|f| f.effect == name) else {
+        let Some(f) = d.findings.iter().find(|f| f.effect.as_str() == name) else {
             failures.push(format!("case {i}: not named (found {names:?})"));
             continue;
         };

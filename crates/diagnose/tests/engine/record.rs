@@ -2,6 +2,7 @@
 //! errors, no panic).
 
 use propid_diagnose::{self as diagnose, DiagnoseError, Options};
+use propid_numerics::EffectName;
 use propid_sim::effects::{Saturation, SaturationSignal};
 use propid_sim::synth;
 use propid_wire::record::{names, Channel, Record};
@@ -19,7 +20,7 @@ fn record(u: Vec<f64>, y: Vec<f64>, missing: Vec<bool>) -> Record {
 
 #[test]
 fn missing_samples_are_skipped_and_a_clean_plant_stays_clean() {
-    let (_, m) = synth::case("clean", 3).unwrap();
+    let (_, m) = synth::case(None, 3).unwrap();
     let n = m.u.len();
     let mut missing = vec![false; n];
     let (mut u, mut y) = (m.u.clone(), m.y.clone());
@@ -37,7 +38,7 @@ fn missing_samples_are_skipped_and_a_clean_plant_stays_clean() {
 
 #[test]
 fn unmarked_nan_and_absent_channels_are_typed_errors() {
-    let (_, m) = synth::case("clean", 1).unwrap();
+    let (_, m) = synth::case(None, 1).unwrap();
     let mut y = m.y.clone();
     y[77] = f64::NAN;
     let n = y.len();
@@ -96,7 +97,7 @@ fn short_constant_and_non_finite_inputs_are_refused() {
 #[test]
 fn a_clipping_sensor_is_named_with_its_level() {
     for i in 0..4 {
-        let (mut cfg, _) = synth::case("clean", i).unwrap();
+        let (mut cfg, _) = synth::case(None, i).unwrap();
         // Clip between the thrust at throttle 0.58 and at 0.65: the top operating point reads flat.
         let level = cfg.gain_n_per_throttle * 0.62;
         cfg.effects.saturation = Some(Saturation {
@@ -116,7 +117,7 @@ fn a_clipping_sensor_is_named_with_its_level() {
         let f = d
             .findings
             .iter()
-            .find(|f| f.effect == "saturation")
+            .find(|f| f.effect == EffectName::Saturation)
             .expect("saturation named");
         assert_eq!(f.params["signal"], "sensor");
         let est = f.params["level"].as_f64().unwrap();

@@ -6,32 +6,22 @@
 //! into the repository, see `../shared/data/README.md`; this record is built from the
 //! simulated plant.)
 
-use std::path::Path;
-
+use propid_diagnose::diagnose;
 use propid_sim::plant::{Plant, PlantConfig};
-
-use super::support::propid;
+use serde_json::Value;
 
 const DT_S: f64 = 0.005;
 const LEVELS: [f64; 5] = [0.3, 0.4, 0.5, 0.6, 0.75];
 /// Relative gain change per volt of the hidden sag.
 const GAIN_PER_VOLT: f64 = 0.08;
 
-/// Writes the staircase (1.5 s per level) as a §6 CSV with the supply voltage: 16.8 V, then
-/// 14.0 V on the top level. The plant sees `u (1 + g (V − 16.8))`; the file holds `u`.
-fn write_staircase(path: &Path) {
-    write_staircase_read_late(path, 0);
-}
-
-/// The staircase of [`write_staircase`] with its thrust read `late` samples late (a load
-/// cell's filter: the thrust column shifted, the throttle and the voltage at their own time).
-fn write_staircase_read_late(path: &Path, late: usize) {
-    write_staircase_on(path, late, 14.0);
-}
-
-/// The staircase with the supply at `top_v` volts on the top level (16.8 V: a bench supply
-/// that holds, no sag) and its thrust read `late` samples late.
-fn write_staircase_on(path: &Path, late: usize, top_v: f64) {
+/// The diagnosis of the staircase (1.5 s per level, logged as a §6 CSV would hold it: the
+/// throttle in steps of 1/10 000, thrust to 5 decimals, volts to 3) with the supply at `top_v`
+/// volts on the top level (16.8 V: a bench supply that holds, no sag; else 16.8 V below it)
+/// and its thrust read `late` samples late (a load cell's filter: the thrust shifted, the
+/// throttle and the voltage at their own time), as `diagnose --json` publishes it. The plant
+/// sees `u (1 + g (V − 16.8))`; the record holds `u`.
+fn staircase_on(late: usize, top_v: f64) -> Value {
     let cfg = PlantConfig {
         noise_rms_n: 0.01,
         ..PlantConfig::default()
@@ -52,22 +42,19 @@ fn write_staircase_on(path: &Path, late: usize, top_v: f64) {
             thrust.push(m.thrust_n);
         }
     }
-    let mut s = String::from("t_us,throttle,thrust_N,voltage_V\n");
-    for (k, (t_us, thr, volt)) in rows.into_iter().enumerate() {
-        let y = thrust[k.saturating_sub(late)];
-        s.push_str(&format!("{t_us},{thr},{y:.5},{volt:.3}\n"));
-    }
-    std::fs::write(path, s).unwrap();
+    let logged = |x: f64, digits: usize| format!("{x:.digits$}").parse::<f64>().unwrap();
+    let u: Vec<f64> = rows.iter().map(|r| r.1 as f64 / 10000.0).collect();
+    let v: Vec<f64> = rows.iter().map(|r| logged(r.2, 3)).collect();
+    let y: Vec<f64> = (0..rows.len())
+        .map(|k| logged(thrust[k.saturating_sub(late)], 5))
+        .collect();
+    let d = diagnose(DT_S, &u, &y, &[], Some(&v), &Default::default()).expect("a diagnosis");
+    serde_json::to_value(&d).unwrap()
 }
 
 #[test]
 fn a_sag_on_the_last_level_only_is_found_by_blocked_cross_validation_over_steps() {
-    let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("staircase.csv");
-    write_staircase(&csv);
-    let (code, out, err) = propid(&["diagnose", csv.to_str().unwrap(), "--json"]);
-    assert_eq!(code, 0, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let v = staircase_on(0, 14.0);
     let val = &v["validation"];
     assert_eq!(val["method"], "blocked_cv", "{val}");
     let folds = val["folds"].as_array().unwrap();
@@ -107,7 +94,7 @@ fn a_sag_on_the_last_level_only_is_found_by_blocked_cross_validation_over_steps(
 }
 
 /// The delay of the `dead_time` finding and its output-side share (0 when not named).
-fn delay(v: &serde_json::Value) -> (u64, u64) {
+fn delay(v: &Value) -> (u64, u64) {
     v["findings"]
         .as_array()
         .unwrap()
@@ -126,14 +113,7 @@ fn a_thrust_read_late_beside_a_voltage_on_time_is_a_delay_on_the_output_side() {
     // The load cell lags by 8 samples (40 ms); the voltage, measured elsewhere, does not. The
     // delay is found 8 samples longer than the record's own, with the voltage aligned to the
     // late thrust (the share on the output's side), and the sag keeps its value.
-    let dir = tempfile::tempdir().unwrap();
-    let diagnose = |late: usize| {
-        let csv = dir.path().join(format!("late{late}.csv"));
-        write_staircase_read_late(&csv, late);
-        let (code, out, err) = propid(&["diagnose", csv.to_str().unwrap(), "--json"]);
-        assert_eq!(code, 0, "{err}");
-        serde_json::from_str::<serde_json::Value>(&out).unwrap()
-    };
+    let diagnose = |late: usize| staircase_on(late, 14.0);
     let (clean, late) = (diagnose(0), diagnose(8));
     let ((d0, s0), (d, s)) = (delay(&clean), delay(&late));
     assert!(
@@ -158,7 +138,7 @@ fn a_thrust_read_late_beside_a_voltage_on_time_is_a_delay_on_the_output_side() {
 }
 
 /// The kinds of the warnings of a `diagnose --json` output.
-fn warning_kinds(v: &serde_json::Value) -> Vec<String> {
+fn warning_kinds(v: &Value) -> Vec<String> {
     v["warnings"]
         .as_array()
         .unwrap()
@@ -172,15 +152,8 @@ fn a_supply_that_never_varies_is_said_to_leave_a_sag_unidentifiable() {
     // The staircase on a bench supply that holds 16.8 V: no sag is named, and diagnose says a
     // sag could not have been seen (the voltage has no variation to show one), while on the
     // sagging supply the sag is named and nothing is said to be unidentifiable.
-    let dir = tempfile::tempdir().unwrap();
-    let diagnose = |top_v: f64| {
-        let csv = dir.path().join(format!("top{top_v}.csv"));
-        write_staircase_on(&csv, 0, top_v);
-        let (code, out, err) = propid(&["diagnose", csv.to_str().unwrap(), "--json"]);
-        assert_eq!(code, 0, "{err}");
-        serde_json::from_str::<serde_json::Value>(&out).unwrap()
-    };
-    let named = |v: &serde_json::Value| {
+    let diagnose = |top_v: f64| staircase_on(0, top_v);
+    let named = |v: &Value| {
         v["findings"]
             .as_array()
             .unwrap()

@@ -4,6 +4,7 @@
 
 use propid_diagnose::verdict::{VerdictKind, WarningKind};
 use propid_diagnose::{self as diagnose, noise::FloorSource, Diagnosis};
+use propid_numerics::EffectName;
 use propid_sim::synth;
 
 fn run(u: &[f64], y: &[f64], v: &[f64]) -> Diagnosis {
@@ -13,7 +14,7 @@ fn run(u: &[f64], y: &[f64], v: &[f64]) -> Diagnosis {
 #[test]
 fn clean_cases_are_explained_with_the_injected_noise_as_floor() {
     for i in 0..6 {
-        let (cfg, m) = synth::case("clean", i).unwrap();
+        let (cfg, m) = synth::case(None, i).unwrap();
         let d = run(&m.u, &m.y, &m.voltage);
         let f = d.noise_floor.expect("a noise floor");
         eprintln!(
@@ -38,7 +39,7 @@ fn clean_cases_are_explained_with_the_injected_noise_as_floor() {
 #[test]
 fn a_found_effect_that_reaches_the_floor_is_effects_found() {
     for name in ["dead_time", "static_nonlinearity"] {
-        let (_, m) = synth::case(name, 0).unwrap();
+        let (_, m) = synth::case(EffectName::from_name(name), 0).unwrap();
         let d = run(&m.u, &m.y, &m.voltage);
         eprintln!("{name}: residual {:?}, verdict {:?}", d.residual, d.verdict);
         assert!(!d.findings.is_empty(), "{name}");
@@ -56,7 +57,7 @@ fn a_found_effect_that_reaches_the_floor_is_effects_found() {
 #[test]
 fn a_large_unmodelled_error_is_unexplained_not_explained() {
     // The output of a clean case plus a slow sawtooth no effect in the catalogue describes.
-    let (_, m) = synth::case("clean", 0).unwrap();
+    let (_, m) = synth::case(None, 0).unwrap();
     let y: Vec<f64> =
         m.y.iter()
             .enumerate()
@@ -69,7 +70,7 @@ fn a_large_unmodelled_error_is_unexplained_not_explained() {
 
 #[test]
 fn thrust_that_falls_with_the_command_is_a_nonpositive_gain_warning() {
-    let (_, m) = synth::case("clean", 0).unwrap();
+    let (_, m) = synth::case(None, 0).unwrap();
     let u: Vec<f64> = m.u.iter().map(|v| 1.0 - v).collect();
     let d = run(&u, &m.y, &m.voltage);
     assert!(
