@@ -37,6 +37,7 @@ pub mod pty;
 pub mod record;
 pub mod rx;
 pub mod synth;
+pub mod truth;
 
 #[cfg(test)]
 mod experiment_tests;

@@ -15,7 +15,7 @@
 use serde::Serialize;
 
 use super::table::MotorRow;
-use super::truth::{self, Figures};
+use propid_sim::truth::{self, Figures};
 use propid_numerics::nullable;
 use propid_sim::plant::PlantConfig;
 

@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use super::truth::{self, Expected, Figures, DEAD_TOL_SAMPLES, GAIN_TOL, TAU_TOL};
+use propid_sim::truth::{self, Expected, Figures, DEAD_TOL_SAMPLES, GAIN_TOL, TAU_TOL};
 use crate::daemon::line::{ScheduleRow, WindowModel};
 use propid_sim::plant::{PlantConfig, PlantKind};
 

@@ -20,7 +20,7 @@
 use nalgebra::{DMatrix, DVector};
 use propid_numerics::step_response::{step_figures, Step};
 use propid_numerics::ModelReport;
-use propid_sim::plant::{MotorLinear, PlantConfig};
+use crate::plant::{MotorLinear, PlantConfig};
 
 /// Largest relative difference of a model's DC gain from the truth's `g`.
 pub const GAIN_TOL: f64 = 0.15;
@@ -143,7 +143,7 @@ pub fn within(f: &Figures, t: &MotorLinear) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use propid_sim::plant::PlantKind;
+    use crate::plant::PlantKind;
 
     fn motor() -> PlantConfig {
         PlantConfig {
