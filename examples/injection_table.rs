@@ -104,7 +104,7 @@ fn main() {
     let keep = std::env::var_os("PROPID_INJECTION_KEEP").map(PathBuf::from);
     for effect in EFFECTS
         .into_iter()
-        .filter(|e| only.map_or(true, |o| o == e))
+        .filter(|e| only.map_or(true, |o| o == e.as_str()))
     {
         for (path, log) in logs.iter().filter(|(_, l)| l.takes(effect)) {
             let Some(s) = samples(path, log) else {

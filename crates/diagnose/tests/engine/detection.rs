@@ -235,13 +235,7 @@ fn false_alarm_rate_on_50_clean_cases_is_at_most_5_percent() {
         for i in range {
             let (_, d, _) = run("clean", i);
             if !d.findings.is_empty() {
-                found.push((
-                    i,
-                    d.findings
-                        .iter()
-                        .map(|f| f.effect.clone())
-                        .collect::<Vec<_>>(),
-                ));
+                found.push((i, d.findings.iter().map(|f| f.effect).collect::<Vec<_>>()));
             } else {
                 assert!(d.extended.is_none() && d.gain.is_none());
             }
