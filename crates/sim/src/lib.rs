@@ -38,6 +38,7 @@ pub mod record;
 pub mod rx;
 pub mod synth;
 pub mod truth;
+pub mod walkthrough;
 
 #[cfg(test)]
 mod experiment_tests;

@@ -17,10 +17,10 @@
 //! `d` samples of delay need order `d + 1`): with the demo's 2 samples its dead time reads one
 //! sample short.
 
+use crate::plant::{MotorLinear, PlantConfig};
 use nalgebra::{DMatrix, DVector};
 use propid_numerics::step_response::{step_figures, Step};
 use propid_numerics::ModelReport;
-use crate::plant::{MotorLinear, PlantConfig};
 
 /// Largest relative difference of a model's DC gain from the truth's `g`.
 pub const GAIN_TOL: f64 = 0.15;

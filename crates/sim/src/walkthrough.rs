@@ -27,7 +27,33 @@ use propid_numerics::svd::{SvdChoice, Triplets};
 use propid_numerics::workspace::{IdentOptions, Limits, Workspace};
 use propid_numerics::ModelReport;
 
-use super::WalkthroughError;
+use propid_numerics::{IdentError, SvdError};
+
+/// Why the walkthrough's derivation could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum WalkthroughError {
+    /// The simulated set-up is out of range.
+    #[error("{0}")]
+    Setup(&'static str),
+    /// The exact full-order model does not exist.
+    #[error("H_1 is singular: no exact full-order model")]
+    SingularH1,
+    /// The SVD of the Hankel matrix failed.
+    #[error("SVD of H_1: {0}")]
+    Svd(#[source] SvdError),
+    /// The noise distribution refused its standard deviation.
+    #[error("noise: {0}")]
+    Noise(#[source] rand_distr::NormalError),
+    /// The identification core refused its set-up.
+    #[error(transparent)]
+    Core(IdentError),
+    /// ERA failed on the measured Markov parameters.
+    #[error("ERA: {0}")]
+    Era(#[source] IdentError),
+    /// The core's report does not hold a consistent `(A, B, C, D)`.
+    #[error("the ERA report has inconsistent matrix sizes")]
+    InconsistentReport,
+}
 
 /// What the walkthrough simulates.
 #[derive(Debug, Clone, Copy, PartialEq)]
