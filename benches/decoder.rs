@@ -5,7 +5,7 @@
 //! elements (samples)/s for the ingest group.
 
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use propid::ingest::read_record;
+use propid_ingest::read_record;
 use propid_wire::protocol::message::{Hello, Sample, SampleFlags};
 use propid_wire::protocol::{encode_frame, Decoder, EscProtocol, Message, MAX_FRAME_LEN};
 

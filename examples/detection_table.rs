@@ -10,12 +10,13 @@
 //! DATA_DIR defaults to `$PROPID_SHARED_DATA`, else `../shared/data`). Prints Markdown;
 //! `scripts/detection_table.sh` puts it into `docs/diagnose.md`.
 
+use propid_numerics::EffectName;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 use propid::cli::diagnose::{load, Args};
 use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs};
-use propid::diagnose::{self, Diagnosis};
+use propid_diagnose::{self as diagnose, Diagnosis};
 use propid_numerics::order::HankelSize;
 use propid_numerics::svd::SvdChoice;
 use propid_sim::plant::PlantConfig;
@@ -360,36 +361,38 @@ fn verdict_text(d: &Diagnosis) -> String {
 /// `v_mean` is the record's mean supply voltage: the simulated stand scales the throttle by
 /// `1 + g (V − battery_v)`, diagnose reports the gain per volt at the mean voltage `V̄`, and
 /// the two are the same law when `g_V = g / (1 + g (V̄ − battery_v))`.
-fn param_error(name: &str, cfg: &PlantConfig, d: &Diagnosis, v_mean: f64) -> Option<f64> {
+fn param_error(name: EffectName, cfg: &PlantConfig, d: &Diagnosis, v_mean: f64) -> Option<f64> {
     let f = d.findings.iter().find(|f| f.effect == name)?;
     let get = |k: &str| f.params.get(k).and_then(|v| v.as_f64());
     let e = &cfg.effects;
     let rel = |est: f64, truth: f64| ((est - truth) / truth).abs();
     Some(match name {
-        "dead_time" => {
+        EffectName::DeadTime => {
             let truth = (e.dead_time.as_ref()?.delay_s / synth::DT_S).round();
             (get("delay_samples")? - truth).abs()
         }
-        "static_nonlinearity" => rel(get("exponent")?, e.static_nonlinearity.as_ref()?.exponent),
-        "extra_mode" => rel(get("fn_hz")?, e.extra_mode.as_ref()?.fn_hz),
-        "baseline_drift" => rel(get("rate_per_s")?, e.baseline_drift.as_ref()?.rate_per_s),
-        "periodic_disturbance" => rel(
+        EffectName::StaticNonlinearity => {
+            rel(get("exponent")?, e.static_nonlinearity.as_ref()?.exponent)
+        }
+        EffectName::ExtraMode => rel(get("fn_hz")?, e.extra_mode.as_ref()?.fn_hz),
+        EffectName::BaselineDrift => rel(get("rate_per_s")?, e.baseline_drift.as_ref()?.rate_per_s),
+        EffectName::PeriodicDisturbance => rel(
             get("amplitude")?,
             e.periodic_disturbance.as_ref()?.amplitude,
         ),
-        "supply_sag" => {
+        EffectName::SupplySag => {
             let g = e.supply_sag.as_ref()?.gain_per_volt;
             rel(
                 get("gain_per_volt")?,
                 g / (1.0 + g * (v_mean - cfg.battery_v)),
             )
         }
-        "saturation" => (get("level")? - e.saturation.as_ref()?.level).abs(),
-        "asymmetric_dynamics" => {
+        EffectName::Saturation => (get("level")? - e.saturation.as_ref()?.level).abs(),
+        EffectName::AsymmetricDynamics => {
             let a = e.asymmetric_dynamics.as_ref()?;
             rel(get("down_over_up")?, a.down_scale / a.up_scale)
         }
-        "stiffness_nonlinearity" => {
+        EffectName::StiffnessNonlinearity => {
             let truth = e.stiffness_nonlinearity.as_ref()?.k3_per_k1;
             let curvature = f.params.get("curvature").and_then(|v| v.as_str());
             if curvature != Some(if truth > 0.0 { "hardens" } else { "softens" }) {
@@ -397,14 +400,13 @@ fn param_error(name: &str, cfg: &PlantConfig, d: &Diagnosis, v_mean: f64) -> Opt
             }
             rel(get("k3_per_k1")?, truth)
         }
-        _ => return None,
     })
 }
 
-fn unit(name: &str) -> &'static str {
+fn unit(name: EffectName) -> &'static str {
     match name {
-        "dead_time" => "samples (abs)",
-        "saturation" => "throttle (abs)",
+        EffectName::DeadTime => "samples (abs)",
+        EffectName::Saturation => "throttle (abs)",
         _ => "relative",
     }
 }
@@ -430,7 +432,7 @@ fn main() {
         let mut gains = Vec::new();
         let mut ratios = Vec::new();
         for i in 0..cases {
-            let Ok((cfg, m)) = synth::case(name, i) else {
+            let Ok((cfg, m)) = synth::case(Some(name), i) else {
                 continue;
             };
             let Ok(d) = diagnose::diagnose(synth::DT_S, &m.u, &m.y, &[], Some(&m.voltage), &opts)
@@ -446,7 +448,7 @@ fn main() {
                     "{name} case {i}: also {:?}",
                     d.findings
                         .iter()
-                        .map(|f| (&f.effect, f.score))
+                        .map(|f| (f.effect.as_str(), f.score))
                         .collect::<Vec<_>>()
                 );
             }
@@ -485,7 +487,7 @@ fn main() {
     let mut alarms = 0;
     let mut fits = Vec::new();
     for i in 0..clean_cases {
-        let Ok((_, m)) = synth::case("clean", i) else {
+        let Ok((_, m)) = synth::case(None, i) else {
             continue;
         };
         let Ok(d) = diagnose::diagnose(synth::DT_S, &m.u, &m.y, &[], Some(&m.voltage), &opts)
@@ -499,7 +501,7 @@ fn main() {
                 "clean case {i}: {:?}",
                 d.findings
                     .iter()
-                    .map(|f| (&f.effect, f.score))
+                    .map(|f| (f.effect.as_str(), f.score))
                     .collect::<Vec<_>>()
             );
         }

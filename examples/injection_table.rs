@@ -104,7 +104,7 @@ fn main() {
     let keep = std::env::var_os("PROPID_INJECTION_KEEP").map(PathBuf::from);
     for effect in EFFECTS
         .into_iter()
-        .filter(|e| only.map_or(true, |o| o == e))
+        .filter(|e| only.map_or(true, |o| o == e.as_str()))
     {
         for (path, log) in logs.iter().filter(|(_, l)| l.takes(effect)) {
             let Some(s) = samples(path, log) else {
@@ -151,7 +151,7 @@ fn main() {
                 within += usize::from(o.within(&inj));
                 errors.extend(o.error.filter(|e| e.is_finite()).map(f64::abs));
                 for n in named(&got) {
-                    if n != effect && !clean_names.contains(&n) {
+                    if n != effect.as_str() && !clean_names.contains(&n) {
                         *also.entry(n).or_default() += 1;
                     }
                 }

@@ -16,8 +16,8 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
 use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs, Quality};
-use propid::ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
-use propid::ingest::steps::find_steps;
+use propid_ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
+use propid_ingest::steps::find_steps;
 use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};

@@ -6,7 +6,7 @@ installs them into a virtual environment under target/.
 
   compare_python_control.py generate N OUT.csv [--seed S]
       writes a pulse experiment on a mass-spring-damper-like thrust response at 1 kHz
-      (PROTOCOL.md section 6 header `t_s,throttle,thrust_N`, throttle as the TSP/1 level
+      (docs/PROTOCOL.md section 6 header `t_s,throttle,thrust_N`, throttle as the TSP/1 level
       0..10000): an operating point, one one-sample throttle pulse after 100 samples, its
       response over the rest of the record, Gaussian thrust noise (with --pulses K, K pulses
       spread evenly).

@@ -22,7 +22,5 @@
 
 pub mod cli;
 pub mod daemon;
-pub mod diagnose;
-pub mod ingest;
 pub mod input;
 pub mod plot;

@@ -3,15 +3,17 @@
 //! (binary or CSV dialect) or any CSV form `propid identify` reads; the supply voltage is used
 //! when the file has one.
 
+mod report;
+
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use super::columns_read::ColumnsRead;
 use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
 use super::{CliError, UsageError};
-use crate::diagnose::noise::FloorSource;
-use crate::diagnose::verdict::VerdictKind;
-use crate::diagnose::{self, report, DiagnoseError, Diagnosis};
+use propid_diagnose::noise::FloorSource;
+use propid_diagnose::verdict::VerdictKind;
+use propid_diagnose::{self as diagnose, DiagnoseError, Diagnosis};
 use propid_wire::record::names;
 
 /// Arguments of `propid diagnose`.
@@ -283,7 +285,11 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         let _ = writeln!(
             t,
             "extended by {}: validation fit {:.2} % ({:+.2} points, residual RMS × {:.3})",
-            e.effects.join(", "),
+            e.effects
+                .iter()
+                .map(|e| e.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
             e.fit_percent,
             g.fit_percent_points,
             g.rms_ratio

@@ -5,7 +5,7 @@
 //! CSV stream, goes through [`read_record_with`] (channels by canonical name, device events
 //! kept), everything else through the CSV reader [`read_csv`] (exported stand logs: aliases,
 //! units, the command's scale decided and stated, empty cells per channel, BOM, files without a
-//! time column; a file without a header needs `--columns`; see [`crate::ingest::csv_file`]).
+//! time column; a file without a header needs `--columns`; see [`propid_ingest::csv_file`]).
 //! The input is the command column (throttle) unless `--input NAME` names another, or
 //! `--input none` ([`NO_INPUT`]) asks for none. Errors are the same for both subcommands: an
 //! unreadable file is an I/O error (exit 7), an empty or bad file, an absent channel or column,
@@ -19,10 +19,10 @@
 use std::path::Path;
 
 use super::{CliError, UsageError};
-use crate::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
-use crate::ingest::steps::{find_steps, StepFinding};
-use crate::ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
 use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
+use propid_ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
+use propid_ingest::steps::{find_steps, StepFinding};
+use propid_ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
 use propid_wire::protocol::csv::encoding::{decode, utf16_mark, Encoding};
 use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};

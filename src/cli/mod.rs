@@ -16,8 +16,8 @@ pub mod walkthrough;
 
 use crate::daemon::source::SourceError;
 use crate::daemon::{ConfigError, DaemonError};
-use crate::diagnose::DiagnoseError;
 use load::{LoadError, NoSteps};
+use propid_diagnose::DiagnoseError;
 use propid_numerics::identify::AnyError;
 use propid_sim::SimError;
 use walkthrough::WalkthroughError;

@@ -1,9 +1,8 @@
 //! `propid walkthrough [--out DIR]`: reproduces the ERA derivation the project grew from on a
 //! simulated noisy mass–spring–damper and writes SVG plots, a Markdown page tying them
 //! together (`walkthrough.md`) and the identified against the true `m, d, k`
-//! (`walkthrough.json`). The mathematics is in [`derivation`].
+//! (`walkthrough.json`). The mathematics is in [`propid_sim::walkthrough`].
 
-mod derivation;
 mod page;
 mod plot;
 
@@ -11,33 +10,14 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use super::CliError;
-use derivation::{Derivation, Setup};
-use propid_numerics::{IdentError, SvdError};
+use propid_sim::walkthrough::{Derivation, Setup, WalkthroughError as DerivationError};
 
 /// Why the walkthrough could not be derived or drawn (`propid walkthrough` exits 4).
 #[derive(Debug, thiserror::Error)]
 pub enum WalkthroughError {
-    /// The simulated set-up is out of range.
-    #[error("{0}")]
-    Setup(&'static str),
-    /// The exact full-order model does not exist.
-    #[error("H_1 is singular: no exact full-order model")]
-    SingularH1,
-    /// The SVD of the Hankel matrix failed.
-    #[error("SVD of H_1: {0}")]
-    Svd(#[source] SvdError),
-    /// The noise distribution refused its standard deviation.
-    #[error("noise: {0}")]
-    Noise(#[source] rand_distr::NormalError),
-    /// The identification core refused its set-up.
+    /// The derivation failed ([`propid_sim::walkthrough`]).
     #[error(transparent)]
-    Core(IdentError),
-    /// ERA failed on the measured Markov parameters.
-    #[error("ERA: {0}")]
-    Era(#[source] IdentError),
-    /// The core's report does not hold a consistent `(A, B, C, D)`.
-    #[error("the ERA report has inconsistent matrix sizes")]
-    InconsistentReport,
+    Derivation(#[from] DerivationError),
     /// No singular value to draw.
     #[error("no singular values to plot")]
     NoSingularValues,
@@ -63,7 +43,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
         seed: args.seed,
         ..Setup::default()
     };
-    let d = Derivation::run(setup)?;
+    let d = Derivation::run(setup).map_err(WalkthroughError::from)?;
     std::fs::create_dir_all(&args.out)
         .map_err(|e| CliError::io(format!("creating {}", args.out.display()), e))?;
     let files = page::plots(&d, &args.out)?;

@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-/// SAMPLE flag bits (PROTOCOL.md §3).
+/// SAMPLE flag bits (docs/PROTOCOL.md §3).
 pub mod flags {
     /// The motor is armed.
     pub const ARMED: u16 = 1 << 0;
@@ -59,7 +59,7 @@ impl SampleItem {
 /// A device EVENT, placed in the segment's numbering.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EventItem {
-    /// Event code (PROTOCOL.md §3, 0x44).
+    /// Event code (docs/PROTOCOL.md §3, 0x44).
     pub code: u8,
     /// Code-specific argument.
     pub arg: u16,
@@ -84,9 +84,9 @@ pub enum Notice {
     Stopped,
     /// STOP was not acknowledged within the shutdown timeout.
     StopUnacknowledged,
-    /// The link speaks the CSV fallback (PROTOCOL.md §6).
+    /// The link speaks the CSV fallback (docs/PROTOCOL.md §6).
     CsvLink,
-    /// A CSV bench that never acknowledged a command: sampled only, no plan (PROTOCOL.md §6).
+    /// A CSV bench that never acknowledged a command: sampled only, no plan (docs/PROTOCOL.md §6).
     PassiveBench,
     /// Nothing heard from a live link for [`super::sampler::SILENCE_TIMEOUT`] after it opened.
     NoData,

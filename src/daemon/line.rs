@@ -138,7 +138,7 @@ impl ScheduleRow {
 /// A device EVENT as published (its kind is the [`Event`] or [`Warning`] variant).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct DeviceEvent {
-    /// Event code (PROTOCOL.md §3, 0x44).
+    /// Event code (docs/PROTOCOL.md §3, 0x44).
     pub code: u8,
     /// Code-specific argument.
     pub arg: u16,
@@ -202,7 +202,7 @@ pub enum Event {
     },
     /// The shutdown STOP was acknowledged.
     ShutdownStopAcknowledged,
-    /// The link speaks the CSV fallback (PROTOCOL.md §6).
+    /// The link speaks the CSV fallback (docs/PROTOCOL.md §6).
     CsvLink,
     /// The raw recording goes to this file from now on (the first, or the next after a
     /// rotation; never one that existed).

@@ -15,7 +15,6 @@
 //! run and the replay of its recording publish the same model lines.
 
 pub mod config;
-pub mod csv_link;
 #[cfg(test)]
 mod fixtures;
 pub mod http;
@@ -33,10 +32,11 @@ pub mod sampler;
 pub mod shutdown;
 pub mod source;
 pub mod stats;
-pub mod tracker;
 pub mod window;
 pub mod wire;
 pub mod worker;
+
+pub use propid_link::{csv_link, tracker};
 
 pub use config::{Config, ConfigError};
 pub use publish::Publisher;

@@ -1,4 +1,4 @@
-//! `propid diagnose` end to end: the real binary on CSV files (PROTOCOL.md §6) written from the
+//! `propid diagnose` end to end: the real binary on CSV files (docs/PROTOCOL.md §6) written from the
 //! simulated plant with a hidden effect, `--json` shape, `--report` files, exit codes.
 
 use std::path::Path;
@@ -47,7 +47,7 @@ fn json_of(out: &std::process::Output) -> serde_json::Value {
 fn hidden_dead_time_in_a_csv_is_named_with_json_shape_and_report() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("stand.csv");
-    let (mut cfg, _) = synth::case("clean", 2).unwrap();
+    let (mut cfg, _) = synth::case(None, 2).unwrap();
     cfg.effects.dead_time = Some(propid_sim::effects::DeadTime { delay_s: 0.03 });
     write_csv(&csv, &cfg, 11, true);
     let report = dir.path().join("report");
@@ -104,7 +104,7 @@ fn hidden_dead_time_in_a_csv_is_named_with_json_shape_and_report() {
 fn clean_csv_without_voltage_gives_empty_findings_and_null_extended() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("clean.csv");
-    let (cfg, _) = synth::case("clean", 4).unwrap();
+    let (cfg, _) = synth::case(None, 4).unwrap();
     write_csv(&csv, &cfg, 5, false);
     let v = json_of(&propid(&["diagnose", csv.to_str().unwrap(), "--json"]));
     assert_eq!(v["findings"].as_array().unwrap().len(), 0, "{v}");
@@ -165,12 +165,7 @@ fn bad_input_gives_clear_errors_and_exit_codes() {
 fn a_named_input_that_is_no_command_keeps_its_name() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("shaker.csv");
-    let m = synth::run(
-        &synth::case("clean", 4).unwrap().0,
-        &synth::throttle_plan(),
-        5,
-    )
-    .unwrap();
+    let m = synth::run(&synth::case(None, 4).unwrap().0, &synth::throttle_plan(), 5).unwrap();
     let mut s = String::from("t_us,force_N,acc\n");
     for k in 0..m.u.len() {
         let t_us = (k as f64 * synth::DT_S * 1e6).round() as u64;

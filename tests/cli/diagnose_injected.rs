@@ -8,6 +8,7 @@
 //! the vanderploeg and bitcraze cf21 staircases (each on top of the log's own) and a supply sag
 //! hidden in the vanderploeg and dantonio logs are tested here.
 
+use propid_numerics::EffectName;
 use std::path::{Path, PathBuf};
 
 use crate::identify_real_data::shared;
@@ -75,20 +76,20 @@ fn samples(path: &Path, log: &Log) -> Samples {
 
 /// `draws` seeded draws of `effect` in each of the logs named `wanted` (the shared ones when
 /// present), each found within tolerance.
-fn hidden_effect_is_found(effect: &str, wanted: &[&str], draws: u64) {
+fn hidden_effect_is_found(effect: EffectName, wanted: &[&str], draws: u64) {
     hidden_effect_is_found_on_top(effect, wanted, draws, false);
 }
 
 /// [`hidden_effect_is_found`]; with `on_top` the clean log may already name the effect (a
 /// stand's own delay), and the injected one is judged on top of it ([`judge`]).
-fn hidden_effect_is_found_on_top(effect: &str, wanted: &[&str], draws: u64, on_top: bool) {
+fn hidden_effect_is_found_on_top(effect: EffectName, wanted: &[&str], draws: u64, on_top: bool) {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("injected.csv");
     for (path, log) in logs(wanted) {
         let s = samples(&path, &log);
         let clean = findings(&file, &s);
         assert!(
-            on_top || clean.iter().all(|f| f["effect"] != effect),
+            on_top || clean.iter().all(|f| f["effect"] != effect.as_str()),
             "{}: the clean log already names {effect}: {clean:?}",
             log.name
         );
@@ -114,7 +115,7 @@ fn hidden_effect_is_found_on_top(effect: &str, wanted: &[&str], draws: u64, on_t
 #[test]
 fn a_sinusoid_hidden_in_real_logs_is_found_with_its_frequency_and_amplitude() {
     hidden_effect_is_found(
-        "periodic_disturbance",
+        EffectName::PeriodicDisturbance,
         &[
             "silverbox",
             "cascaded_tanks",
@@ -132,7 +133,7 @@ fn a_sinusoid_hidden_in_real_logs_is_found_with_its_frequency_and_amplitude() {
 #[test]
 fn a_drift_hidden_in_real_logs_is_found_with_its_rate() {
     hidden_effect_is_found(
-        "baseline_drift",
+        EffectName::BaselineDrift,
         &["silverbox", "robot_arm", "vanderploeg 90PERCENT"],
         2,
     );
@@ -151,8 +152,8 @@ fn a_drift_or_a_delay_in_a_one_way_ramp_is_said_unidentifiable() {
             .is_some_and(|w| w.iter().any(|w| w["kind"] == kind))
     };
     let kinds = [
-        ("baseline_drift", "baseline_drift_unidentifiable"),
-        ("dead_time", "dead_time_unidentifiable"),
+        (EffectName::BaselineDrift, "baseline_drift_unidentifiable"),
+        (EffectName::DeadTime, "dead_time_unidentifiable"),
     ];
     for (path, log) in logs(&["dantonio ramp", "silverbox", "robot_arm", "cascaded_tanks"]) {
         let s = samples(&path, &log);
@@ -179,7 +180,7 @@ fn a_drift_or_a_delay_in_a_one_way_ramp_is_said_unidentifiable() {
 /// data, `diagnose_staircase` hides the same kind of delay in a simulated staircase.
 #[test]
 fn a_delay_hidden_in_a_motor_stand_log_is_found_on_top_of_its_own() {
-    hidden_effect_is_found_on_top("dead_time", &["vanderploeg 90PERCENT"], 2, true);
+    hidden_effect_is_found_on_top(EffectName::DeadTime, &["vanderploeg 90PERCENT"], 2, true);
 }
 
 /// The motor-stand logs with a supply voltage, when present: their thrust scaled by the
@@ -190,7 +191,7 @@ fn a_delay_hidden_in_a_motor_stand_log_is_found_on_top_of_its_own() {
 #[test]
 fn a_supply_sag_hidden_in_a_motor_stand_log_is_found_with_its_gain() {
     hidden_effect_is_found_on_top(
-        "supply_sag",
+        EffectName::SupplySag,
         &["vanderploeg 90PERCENT", "dantonio ramp"],
         2,
         true,
@@ -209,8 +210,12 @@ fn a_supply_gain_on_a_nonlinear_springs_output_is_found_there() {
         let s = samples(&path, &log);
         let clean = findings(&file, &s);
         for k in 0..2 {
-            let inj =
-                Injection::draw("supply_sag", &s, &mut StdRng::seed_from_u64(1000 + k)).unwrap();
+            let inj = Injection::draw(
+                EffectName::SupplySag,
+                &s,
+                &mut StdRng::seed_from_u64(1000 + k),
+            )
+            .unwrap();
             let got = findings(&file, &inject(&s, &inj));
             let o = judge(&inj, &clean, &got);
             assert!(o.error.is_some_and(|e| e.abs() < 0.02), "{inj:?} → {o:?}");
@@ -243,8 +248,12 @@ fn a_delay_hidden_behind_a_slow_load_cell_is_found_on_top_of_its_own() {
             "the load cell's own delay: {clean:?}"
         );
         for k in 0..2 {
-            let inj =
-                Injection::draw("dead_time", &s, &mut StdRng::seed_from_u64(1000 + k)).unwrap();
+            let inj = Injection::draw(
+                EffectName::DeadTime,
+                &s,
+                &mut StdRng::seed_from_u64(1000 + k),
+            )
+            .unwrap();
             let got = findings(&file, &inject(&s, &inj));
             let o = judge(&inj, &clean, &got);
             assert!(o.within(&inj), "{inj:?} → {o:?}; findings {got:?}");

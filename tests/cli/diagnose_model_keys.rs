@@ -7,10 +7,10 @@ use std::process::Command;
 use propid_sim::synth;
 use serde_json::Value;
 
-/// Writes a PROTOCOL.md §6 CSV (t_us, throttle 0..10000, thrust_N) of a synthetic case with a
+/// Writes a docs/PROTOCOL.md §6 CSV (t_us, throttle 0..10000, thrust_N) of a synthetic case with a
 /// hidden dead time, so that `extended` is not null.
 fn write_csv(path: &Path) {
-    let (mut cfg, _) = synth::case("clean", 3).unwrap();
+    let (mut cfg, _) = synth::case(None, 3).unwrap();
     cfg.effects.dead_time = Some(propid_sim::effects::DeadTime { delay_s: 0.02 });
     let m = synth::run(&cfg, &synth::throttle_plan(), 7).unwrap();
     let mut s = String::from("t_us,throttle,thrust_N\n");

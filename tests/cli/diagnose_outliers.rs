@@ -9,13 +9,14 @@
 use std::path::Path;
 
 use crate::support::propid;
+use propid_numerics::EffectName;
 use propid_sim::synth;
 use propid_testkit::inject::Samples;
 use propid_testkit::{add_noise, throttle, Plant};
 use serde_json::Value;
 
 /// The simulated case `effect` #0 as a CSV file's samples.
-fn case(effect: &str) -> Samples {
+fn case(effect: Option<EffectName>) -> Samples {
     let (_, m) = synth::case(effect, 0).unwrap();
     Samples {
         dt_s: synth::DT_S,
@@ -53,12 +54,16 @@ fn quiet_sample(u: &[f64], at: usize) -> usize {
 fn a_spike_and_a_dropout_are_left_out_and_counted_and_change_no_finding() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("rec.csv");
-    for effect in ["clean", "dead_time", "periodic_disturbance"] {
+    for effect in [
+        None,
+        Some(EffectName::DeadTime),
+        Some(EffectName::PeriodicDisturbance),
+    ] {
         let s = case(effect);
         let clean = diagnose(&file, &s);
         assert_eq!(
             clean["source"]["outliers"], 0,
-            "{effect}: {}",
+            "{effect:?}: {}",
             clean["source"]
         );
         let peak = s.y.iter().copied().fold(f64::MIN, f64::max);
@@ -67,20 +72,27 @@ fn a_spike_and_a_dropout_are_left_out_and_counted_and_change_no_finding() {
         bad.y[a] = 2.0 * peak;
         bad.y[b] = 0.0;
         let got = diagnose(&file, &bad);
-        assert_eq!(got["source"]["outliers"], 2, "{effect}: {}", got["source"]);
+        assert_eq!(
+            got["source"]["outliers"], 2,
+            "{effect:?}: {}",
+            got["source"]
+        );
         assert_eq!(got["source"]["samples"], s.y.len());
         assert_eq!(got["source"]["missing"], 0);
-        assert_eq!(named(&got), named(&clean), "{effect}");
-        assert_eq!(got["verdict"]["kind"], clean["verdict"]["kind"], "{effect}");
+        assert_eq!(named(&got), named(&clean), "{effect:?}");
+        assert_eq!(
+            got["verdict"]["kind"], clean["verdict"]["kind"],
+            "{effect:?}"
+        );
         // the fits move by no more than two samples' worth of data
         let fit = |v: &Value| v["baseline"]["fit_percent"].as_f64().unwrap();
         assert!(
             (fit(&got) - fit(&clean)).abs() < 0.5,
-            "{effect}: {} vs {}",
+            "{effect:?}: {} vs {}",
             fit(&got),
             fit(&clean)
         );
-        if effect != "clean" {
+        if let Some(effect) = effect {
             assert_eq!(
                 named(&clean)[0],
                 format!("\"{effect}\""),
@@ -89,7 +101,7 @@ fn a_spike_and_a_dropout_are_left_out_and_counted_and_change_no_finding() {
         }
     }
     // the summary says it
-    let s = case("clean");
+    let s = case(None);
     let mut bad = s.clone();
     let a = quiet_sample(&s.u, 3000);
     bad.y[a] = 0.0;

@@ -9,7 +9,6 @@ mod diagnose_model_keys;
 mod diagnose_outliers;
 mod diagnose_rejected;
 mod diagnose_sim;
-mod diagnose_staircase;
 mod diagnose_units;
 mod host_faults_cli;
 mod identify_cli;

@@ -1,5 +1,5 @@
 //! One placer: a CSV-stream recording replayed (the daemon's wire → CSV link → tracker, what
-//! `propid replay` runs) and the same recording identified (`propid::ingest::read_record`)
+//! `propid replay` runs) and the same recording identified (`propid_ingest::read_record`)
 //! place every row at the same index — with timestamp jitter, lost rows, a repeated row, a row
 //! out of order, the bench's 32-bit `micros()` wrapping, HELLO and EVENT lines and a bench
 //! restart in the recording.
@@ -8,7 +8,7 @@ use propid::daemon::config::Config;
 use propid::daemon::runner::csv_options;
 use propid::daemon::tracker::Tracker;
 use propid::daemon::wire::Wire;
-use propid::ingest::read_record;
+use propid_ingest::read_record;
 use propid_sim::csv::CsvWriter;
 use propid_wire::protocol::message::{
     EscProtocol, Event, EventCode, Frame, Hello, Message, Sample, SampleFlags,

@@ -6,7 +6,7 @@
 use crate::daemon_proc;
 
 use daemon_proc::{dropped_total, kind, of_type, stats, BIN};
-use propid::ingest::read_record;
+use propid_ingest::read_record;
 use propid_wire::protocol::message::SampleFlags;
 use propid_wire::protocol::{encode_frame, Decoder, EventCode, Message, MAX_FRAME_LEN};
 use serde_json::Value;

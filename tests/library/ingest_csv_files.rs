@@ -2,7 +2,7 @@
 //! wrong checksum, a missing column, text in a number field, an empty file), each a clear error
 //! or a counted, skipped row.
 
-use propid::ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, InputChoice};
+use propid_ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, InputChoice};
 use propid_numerics::outliers::is_reading;
 use propid_wire::protocol::csv::checksum;
 

@@ -2,7 +2,7 @@
 //! record contract: channels as long as the mask, NaN exactly at missing samples, events sorted
 //! and inside the record, a positive sample period.
 
-use propid::ingest::read_record;
+use propid_ingest::read_record;
 use propid_wire::protocol::message::{Event, EventCode, Sample, SampleFlags};
 use propid_wire::protocol::{encode_frame, Message, MAX_FRAME_LEN};
 use propid_wire::record::Record;
@@ -94,8 +94,8 @@ proptest! {
             }
             // Only events, or a single sample without a known rate.
             Err(e) => prop_assert!(
-                matches!(e, propid::ingest::IngestError::NoSamples
-                    | propid::ingest::IngestError::NoTimebase),
+                matches!(e, propid_ingest::IngestError::NoSamples
+                    | propid_ingest::IngestError::NoTimebase),
                 "{e}"
             ),
         }

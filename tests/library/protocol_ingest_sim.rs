@@ -3,7 +3,7 @@
 //! impulse edges at their exact samples, the gaps of dropped and corrupted samples as missing
 //! samples (counted, never bridged), and the device clock unwrapped.
 
-use propid::ingest::read_record;
+use propid_ingest::read_record;
 use propid_sim::config::SimConfig;
 use propid_sim::record::record;
 use propid_wire::protocol::{Decoder, Message};

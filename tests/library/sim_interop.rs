@@ -1,6 +1,6 @@
 //! The simulated stand's output read by the project's own ingest (binary and CSV dialect).
 
-use propid::ingest::tsp::read_record;
+use propid_ingest::tsp::read_record;
 use propid_sim::config::{FaultConfig, SimConfig, StandConfig, WireProtocol};
 use propid_sim::dynamics::EchoStand;
 use propid_sim::faults::FaultInjector;

@@ -33,6 +33,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod discretise;
+pub mod effect_name;
 pub mod eig;
 pub mod era;
 pub mod error;
@@ -65,6 +66,7 @@ pub mod svd;
 pub mod uncertainty;
 pub mod workspace;
 
+pub use effect_name::EffectName;
 pub use error::IdentError;
 pub use markov::MarkovSeq;
 pub use model::Model;

@@ -46,10 +46,10 @@ pub enum ConfigError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum WireProtocol {
-    /// TSP/1 binary frames (COBS + CRC), PROTOCOL.md §2–4.
+    /// TSP/1 binary frames (COBS + CRC), docs/PROTOCOL.md §2–4.
     #[default]
     Tsp,
-    /// The CSV text fallback, PROTOCOL.md §6.
+    /// The CSV text fallback, docs/PROTOCOL.md §6.
     Csv,
 }
 

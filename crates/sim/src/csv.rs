@@ -1,4 +1,4 @@
-//! The simulated stand speaking the CSV dialect (`protocol = "csv"`, PROTOCOL.md §6), for hosts
+//! The simulated stand speaking the CSV dialect (`protocol = "csv"`, docs/PROTOCOL.md §6), for hosts
 //! that speak the text fallback of simple Arduino benches. The dialect itself — lines, commands,
 //! the bench's rows and `#` lines — is the protocol's
 //! ([`propid_wire::protocol::csv`]); this is the bench's side of it:

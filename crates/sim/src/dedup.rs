@@ -1,4 +1,4 @@
-//! The device's memory of recent commands (PROTOCOL.md §4, reliability): the last 8
+//! The device's memory of recent commands (docs/PROTOCOL.md §4, reliability): the last 8
 //! `(seq, type, result)`, so that a command the host re-sends because an ACK was lost is answered
 //! again with the stored result and the DUPLICATE flag, without being executed twice.
 

@@ -9,7 +9,7 @@ use super::SimError;
 /// `step(u)` is called at the start of a sample period with the throttle held during it and
 /// returns what the sensors read *at that instant*, before `u` acts (the plant has no
 /// feed-through). The firmware calls it at the boundary between periods `k−1` and `k` with
-/// `u_k`, so the reading is the end-of-period measurement of sample `k−1` (PROTOCOL.md §3).
+/// `u_k`, so the reading is the end-of-period measurement of sample `k−1` (docs/PROTOCOL.md §3).
 pub trait Dynamics: Send {
     /// Holds `throttle` (0..1) for the next period; returns the reading at its start.
     fn step(&mut self, throttle: f64) -> Measurement;

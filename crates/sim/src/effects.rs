@@ -19,6 +19,7 @@
 //! load-cell path (extra mode) → drift and disturbance → noise → sensor clip → quantisation.
 
 use crate::delay_line::DelayLine;
+use propid_numerics::EffectName;
 
 use nalgebra::{Matrix2, Vector2};
 use serde::Deserialize;
@@ -165,20 +166,29 @@ pub struct EffectsConfig {
 
 impl EffectsConfig {
     /// Names of the effects switched on, in catalogue order.
-    pub fn names(&self) -> Vec<&'static str> {
+    pub fn names(&self) -> Vec<EffectName> {
         let mut v = Vec::new();
         let on = [
-            (self.dead_time.is_some(), "dead_time"),
-            (self.static_nonlinearity.is_some(), "static_nonlinearity"),
-            (self.extra_mode.is_some(), "extra_mode"),
-            (self.baseline_drift.is_some(), "baseline_drift"),
-            (self.periodic_disturbance.is_some(), "periodic_disturbance"),
-            (self.supply_sag.is_some(), "supply_sag"),
-            (self.saturation.is_some(), "saturation"),
-            (self.asymmetric_dynamics.is_some(), "asymmetric_dynamics"),
+            (self.dead_time.is_some(), EffectName::DeadTime),
+            (
+                self.static_nonlinearity.is_some(),
+                EffectName::StaticNonlinearity,
+            ),
+            (self.extra_mode.is_some(), EffectName::ExtraMode),
+            (self.baseline_drift.is_some(), EffectName::BaselineDrift),
+            (
+                self.periodic_disturbance.is_some(),
+                EffectName::PeriodicDisturbance,
+            ),
+            (self.supply_sag.is_some(), EffectName::SupplySag),
+            (self.saturation.is_some(), EffectName::Saturation),
+            (
+                self.asymmetric_dynamics.is_some(),
+                EffectName::AsymmetricDynamics,
+            ),
             (
                 self.stiffness_nonlinearity.is_some(),
-                "stiffness_nonlinearity",
+                EffectName::StiffnessNonlinearity,
             ),
         ];
         for (is_on, name) in on {
@@ -516,7 +526,7 @@ mod tests {
     fn asymmetric_dynamics_and_a_hardening_spring_act_in_the_core() {
         let text = "[effects.asymmetric_dynamics]\nup_scale = 1.0\ndown_scale = 3.0\n";
         let cfg: PlantConfig = toml::from_str(text).unwrap();
-        assert_eq!(cfg.effects.names(), vec!["asymmetric_dynamics"]);
+        assert_eq!(cfg.effects.names(), vec![EffectName::AsymmetricDynamics]);
         let cfg = clean(cfg.effects);
         // Time to 63 % of a step up and of the same step down: three times longer down.
         let t63 = |from: f64, to: f64| {
@@ -558,7 +568,10 @@ mod tests {
     fn effects_parse_from_toml_and_bad_values_are_named() {
         let text = "[effects.dead_time]\ndelay_s = 0.02\n[effects.saturation]\nlevel = 0.7\n";
         let cfg: PlantConfig = toml::from_str(text).unwrap();
-        assert_eq!(cfg.effects.names(), vec!["dead_time", "saturation"]);
+        assert_eq!(
+            cfg.effects.names(),
+            vec![EffectName::DeadTime, EffectName::Saturation]
+        );
         assert!(toml::from_str::<PlantConfig>("[effects.dead_time]\ndelay = 1\n").is_err());
         let e = EffectsConfig {
             extra_mode: Some(ExtraMode {

@@ -1,4 +1,4 @@
-//! The firmware's command semantics (PROTOCOL.md §4): every command is answered with one ACK;
+//! The firmware's command semantics (docs/PROTOCOL.md §4): every command is answered with one ACK;
 //! a repeat of one of the last 8 `(seq, type)` within a second gets the stored result with the
 //! DUPLICATE flag and is not executed again (a pulse never fires twice).
 //!

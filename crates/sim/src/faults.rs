@@ -295,7 +295,7 @@ impl FaultInjector {
     /// sample listed in `corrupt_samples_at` gets one flipped bit in [`Self::push_frame`].
     ///
     /// The firmware asks before it gives the sample a link `seq`, so the host sees a
-    /// `sample_index` jump without a `seq` jump: a device-side drop (PROTOCOL.md §3).
+    /// `sample_index` jump without a `seq` jump: a device-side drop (docs/PROTOCOL.md §3).
     pub fn before_sample(&mut self, index: u32) -> bool {
         self.corrupt_next_sample = false;
         if !self.link_up {

@@ -1,4 +1,4 @@
-//! The stand's firmware as a sans-IO state machine (device side of TSP/1, PROTOCOL.md §3–4).
+//! The stand's firmware as a sans-IO state machine (device side of TSP/1, docs/PROTOCOL.md §3–4).
 //!
 //! Host bytes go in with the device time they arrived ([`Firmware::feed`]); the device clock is
 //! run forward with [`Firmware::advance`]; device bytes come out of [`Firmware::drain_output`].

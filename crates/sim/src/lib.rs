@@ -1,6 +1,6 @@
 //! The simulated thrust stand.
 //!
-//! The stand's firmware side of TSP/1 (`../shared/PROTOCOL.md`) runs here against a simulated
+//! The stand's firmware side of TSP/1 (`docs/PROTOCOL.md`) runs here against a simulated
 //! motor + propeller, so that the daemon, its tests and `propid demo` exercise exactly the code
 //! they would run against hardware. The layers, pure first:
 //!
@@ -40,6 +40,8 @@ pub mod pty;
 pub mod record;
 pub mod rx;
 pub mod synth;
+pub mod truth;
+pub mod walkthrough;
 
 #[cfg(test)]
 mod experiment_tests;

@@ -6,6 +6,7 @@
 //! 0.58), each held for 3 s; after 0.3 s of settling, pulses every 0.3 s, 10 samples (20 ms)
 //! wide, with amplitudes cycling through +0.05, −0.05, +0.10, −0.10. 7 500 samples in all.
 
+use propid_numerics::EffectName;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
@@ -88,16 +89,16 @@ pub fn random_plant(rng: &mut StdRng, overdamped: bool) -> PlantConfig {
 }
 
 /// Switches on effect `name` in `cfg` with random parameters (ranges in the source, documented
-/// in `docs/diagnose.md`). Unknown names leave the plant clean.
-pub fn hide_effect(cfg: &mut PlantConfig, name: &str, rng: &mut StdRng) {
+/// in `docs/diagnose.md`).
+pub fn hide_effect(cfg: &mut PlantConfig, name: EffectName, rng: &mut StdRng) {
     let mut e = EffectsConfig::default();
     match name {
-        "dead_time" => {
+        EffectName::DeadTime => {
             e.dead_time = Some(DeadTime {
                 delay_s: rng.gen_range(0.01..0.05),
             })
         }
-        "static_nonlinearity" => {
+        EffectName::StaticNonlinearity => {
             let exponent = if rng.gen_bool(0.5) {
                 rng.gen_range(1.5..2.5)
             } else {
@@ -105,7 +106,7 @@ pub fn hide_effect(cfg: &mut PlantConfig, name: &str, rng: &mut StdRng) {
             };
             e.static_nonlinearity = Some(StaticNonlinearity { exponent });
         }
-        "extra_mode" => {
+        EffectName::ExtraMode => {
             let lo = (3.0 * cfg.fn_hz).max(25.0);
             e.extra_mode = Some(ExtraMode {
                 fn_hz: rng.gen_range(lo..80.0),
@@ -113,32 +114,32 @@ pub fn hide_effect(cfg: &mut PlantConfig, name: &str, rng: &mut StdRng) {
                 gain: 1.0,
             });
         }
-        "baseline_drift" => {
+        EffectName::BaselineDrift => {
             let r: f64 = rng.gen_range(0.01..0.03);
             e.baseline_drift = Some(BaselineDrift {
                 rate_per_s: if rng.gen_bool(0.5) { r } else { -r },
             });
         }
-        "periodic_disturbance" => {
+        EffectName::PeriodicDisturbance => {
             e.periodic_disturbance = Some(PeriodicDisturbance {
                 freq_hz: rng.gen_range(20.0..90.0),
                 amplitude: rng.gen_range(0.03..0.1),
                 phase_rad: rng.gen_range(0.0..std::f64::consts::TAU),
             });
         }
-        "supply_sag" => {
+        EffectName::SupplySag => {
             cfg.discharge_v_per_s = 0.1;
             e.supply_sag = Some(SupplySag {
                 gain_per_volt: rng.gen_range(0.03..0.1),
             });
         }
-        "saturation" => {
+        EffectName::Saturation => {
             e.saturation = Some(Saturation {
                 level: rng.gen_range(0.6..0.7),
                 signal: SaturationSignal::Throttle,
             });
         }
-        "asymmetric_dynamics" => {
+        EffectName::AsymmetricDynamics => {
             // Spin-down slower (drag only) or, every other draw, faster (active braking), by a
             // ratio of 1.6..2.5, around a geometric mean time scale of 0.8..1.25.
             let ratio: f64 = rng.gen_range(1.6..2.5);
@@ -153,7 +154,7 @@ pub fn hide_effect(cfg: &mut PlantConfig, name: &str, rng: &mut StdRng) {
                 down_scale: mean * ratio.sqrt(),
             });
         }
-        "stiffness_nonlinearity" => {
+        EffectName::StiffnessNonlinearity => {
             // ε T_r² (the relative stiffening at the reference thrust T_r = K/2): 0.08..0.25
             // hardening, or −0.06..−0.03 softening (the core keeps a steady state up to the
             // top of the experiment).
@@ -167,18 +168,21 @@ pub fn hide_effect(cfg: &mut PlantConfig, name: &str, rng: &mut StdRng) {
                 k3_per_k1: s / (t_ref * t_ref),
             });
         }
-        _ => {}
     }
     cfg.effects = e;
 }
 
-/// Case `i` of effect `name` (`"clean"` for none): a seeded random plant (overdamped for odd
-/// `i`) with the effect hidden, and its measured signals.
-pub fn case(name: &str, i: u64) -> Result<(PlantConfig, Measured), PlantError> {
-    let seed = 0x5eed_0000 + i * 7919 + name.len() as u64 * 104_729;
+/// Case `i` of effect `name` (`None`: a clean plant): a seeded random plant (overdamped for odd
+/// `i`) with the effect hidden, and its measured signals. The seed follows the length of the
+/// effect's published name (`"clean"` for none).
+pub fn case(name: Option<EffectName>, i: u64) -> Result<(PlantConfig, Measured), PlantError> {
+    let len = name.map_or("clean", EffectName::as_str).len();
+    let seed = 0x5eed_0000 + i * 7919 + len as u64 * 104_729;
     let mut rng = StdRng::seed_from_u64(seed);
     let mut cfg = random_plant(&mut rng, i % 2 == 1);
-    hide_effect(&mut cfg, name, &mut rng);
+    if let Some(name) = name {
+        hide_effect(&mut cfg, name, &mut rng);
+    }
     let m = run(&cfg, &throttle_plan(), seed ^ 0xabcdef)?;
     Ok((cfg, m))
 }

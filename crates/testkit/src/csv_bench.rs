@@ -1,5 +1,5 @@
 //! A CSV bench for the daemon tests: the rows a simple Arduino stand would print
-//! (PROTOCOL.md §6 header `t_us,throttle,thrust_N`) for a known plant.
+//! (docs/PROTOCOL.md §6 header `t_us,throttle,thrust_N`) for a known plant.
 
 use propid_wire::protocol::csv::line::append_checksum;
 

@@ -19,6 +19,7 @@
 //! the model's voltage-scaled input only where the output is zero at rest (thrust, a centred
 //! signal); a log whose output sits on a large offset would see part of the sag as a drift.
 
+use propid_numerics::EffectName;
 use propid_wire::record::Record;
 use rand::Rng;
 use serde_json::Value;
@@ -45,8 +46,8 @@ pub struct Log {
 
 impl Log {
     /// Whether `effect` can be injected in this log as the module table says.
-    pub fn takes(&self, effect: &str) -> bool {
-        effect != "supply_sag" || self.zero_at_rest
+    pub fn takes(&self, effect: EffectName) -> bool {
+        effect != EffectName::SupplySag || self.zero_at_rest
     }
 }
 
@@ -171,17 +172,17 @@ pub enum Injection {
     },
 }
 
-/// The effects, by their published names.
-pub const EFFECTS: [&str; 4] = [
-    "dead_time",
-    "periodic_disturbance",
-    "baseline_drift",
-    "supply_sag",
+/// The effects injected.
+pub const EFFECTS: [EffectName; 4] = [
+    EffectName::DeadTime,
+    EffectName::PeriodicDisturbance,
+    EffectName::BaselineDrift,
+    EffectName::SupplySag,
 ];
 
 impl Injection {
     /// The published name of the effect it should be found as.
-    pub fn effect(&self) -> &'static str {
+    pub fn effect(&self) -> EffectName {
         match self {
             Injection::DeadTime { .. } => EFFECTS[0],
             Injection::Periodic { .. } => EFFECTS[1],
@@ -199,14 +200,14 @@ impl Injection {
     /// `g = n / V̄` per volt at the mean voltage `V̄`: of the log's own voltage when it has one
     /// (0.27–0.54 per volt on a 1-cell log at 3.7 V), else of a battery falling 2–3.5 V from
     /// 16.8 V (0.066–0.13 per volt).
-    pub fn draw(effect: &str, s: &Samples, rng: &mut impl Rng) -> Option<Injection> {
+    pub fn draw(effect: EffectName, s: &Samples, rng: &mut impl Rng) -> Option<Injection> {
         let sigma = std_dev(&s.y);
         let span = s.u.len() as f64 * s.dt_s;
         Some(match effect {
-            "dead_time" => Injection::DeadTime {
+            EffectName::DeadTime => Injection::DeadTime {
                 samples: rng.gen_range(2..=6),
             },
-            "periodic_disturbance" => {
+            EffectName::PeriodicDisturbance => {
                 let (lo, hi) = ((20.0 / span).ln(), (0.25 / s.dt_s).ln());
                 Injection::Periodic {
                     freq_hz: rng.gen_range(lo..hi).exp(),
@@ -214,13 +215,13 @@ impl Injection {
                     phase: rng.gen_range(0.0..std::f64::consts::TAU),
                 }
             }
-            "baseline_drift" => {
+            EffectName::BaselineDrift => {
                 let sign = if rng.gen_bool(0.5) { 1.0 } else { -1.0 };
                 Injection::Drift {
                     rate_per_s: sign * rng.gen_range(0.3..1.0) * sigma / span,
                 }
             }
-            "supply_sag" => {
+            EffectName::SupplySag => {
                 let v_start = 16.8;
                 let v_end = v_start - rng.gen_range(2.0..3.5);
                 let v_mean = s
@@ -380,7 +381,7 @@ pub fn judge(inj: &Injection, clean: &[Value], injected: &[Value]) -> Outcome {
     let name = inj.effect();
     let param = |fs: &[Value], key: &str| {
         fs.iter()
-            .find(|f| f["effect"] == name)
+            .find(|f| f["effect"] == name.as_str())
             .and_then(|f| f[key].as_f64())
     };
     let rel = |got: f64, want: f64| got / want - 1.0;
@@ -517,7 +518,9 @@ mod tests {
                 _ => {}
             }
         }
-        assert!(Injection::draw("extra_mode", &s, &mut StdRng::seed_from_u64(3)).is_none());
+        assert!(
+            Injection::draw(EffectName::ExtraMode, &s, &mut StdRng::seed_from_u64(3)).is_none()
+        );
     }
 
     #[test]
@@ -535,7 +538,8 @@ mod tests {
                 gain_per_volt,
                 v_start,
                 v_end,
-            } = Injection::draw("supply_sag", &s, &mut StdRng::seed_from_u64(seed)).unwrap()
+            } = Injection::draw(EffectName::SupplySag, &s, &mut StdRng::seed_from_u64(seed))
+                .unwrap()
             else {
                 panic!("not a sag");
             };
@@ -546,7 +550,7 @@ mod tests {
         s.voltage = Some(vec![3.7; 100]);
         for seed in 0..20 {
             let Some(Injection::SupplySag { gain_per_volt, .. }) =
-                Injection::draw("supply_sag", &s, &mut StdRng::seed_from_u64(seed))
+                Injection::draw(EffectName::SupplySag, &s, &mut StdRng::seed_from_u64(seed))
             else {
                 panic!("not a sag");
             };

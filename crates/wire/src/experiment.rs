@@ -4,7 +4,7 @@
 //! [`encode_frame`](crate::protocol::encode_frame)) and tells the caller what happened
 //! ([`Output::Notice`]).
 //!
-//! The plan (PROTOCOL.md §4):
+//! The plan (docs/PROTOCOL.md §4):
 //! 1. handshake: HELLO_REQ, then wait for HELLO (boot id, sample rate) and its ACK;
 //! 2. ARM with the configured watchdog; from its ACK on, HEARTBEAT every `heartbeat_ms`
 //!    (fire-and-forget: their ACKs are not tracked, the next one follows anyway);

@@ -15,9 +15,9 @@
 use serde::Serialize;
 
 use super::table::MotorRow;
-use super::truth::{self, Figures};
 use propid_numerics::nullable;
 use propid_sim::plant::PlantConfig;
+use propid_sim::truth::{self, Figures};
 
 /// Gain, time constant and dead time of one response, as the page shows them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

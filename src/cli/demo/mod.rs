@@ -14,7 +14,6 @@
 
 mod live;
 mod table;
-mod truth;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;

@@ -5,9 +5,9 @@
 
 use std::fmt::Write as _;
 
-use super::truth::{self, Expected, Figures, DEAD_TOL_SAMPLES, GAIN_TOL, TAU_TOL};
 use crate::daemon::line::{ScheduleRow, WindowModel};
 use propid_sim::plant::{PlantConfig, PlantKind};
+use propid_sim::truth::{self, Expected, Figures, DEAD_TOL_SAMPLES, GAIN_TOL, TAU_TOL};
 
 /// One motor model as the table shows it: its level, its figures and the truth there.
 #[derive(Debug, Clone, Copy)]

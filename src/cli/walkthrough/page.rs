@@ -5,10 +5,10 @@ use std::path::Path;
 
 use plotters::style::RGBColor;
 
-use super::derivation::{Derivation, Responses};
 use super::plot::{self, Series};
 use super::WalkthroughError;
 use crate::cli::CliError;
+use propid_sim::walkthrough::{Derivation, Responses};
 
 const TRUTH: RGBColor = RGBColor(0, 0, 0);
 const MEASURED: RGBColor = RGBColor(150, 150, 150);

@@ -84,7 +84,7 @@ pub struct DeviceConfig {
     pub stall_timeout: Option<Duration>,
 }
 
-/// `[device] protocol`: which wire format the daemon expects (PROTOCOL.md §6).
+/// `[device] protocol`: which wire format the daemon expects (docs/PROTOCOL.md §6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WireProtocol {
     /// Decide from the first bytes ([`propid_wire::protocol::detect`]).

@@ -106,7 +106,7 @@ pub struct RawPublish {
     pub mqtt_queue_messages: Option<usize>,
 }
 
-/// `[csv]` as written: how a CSV bench (PROTOCOL.md §6) is read.
+/// `[csv]` as written: how a CSV bench (docs/PROTOCOL.md §6) is read.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RawCsv {

@@ -21,7 +21,7 @@
 //! `[device] protocol`: with `"auto"` the first bytes are held until the wire format is decided
 //! ([`Wire`]); the experiment plan starts then, so its first command is written in the format
 //! the device speaks. `"tsp"` and `"csv"` skip the detection. A CSV bench that never
-//! acknowledges the handshake's PING is *passive* (PROTOCOL.md §6): the plan is dropped, a
+//! acknowledges the handshake's PING is *passive* (docs/PROTOCOL.md §6): the plan is dropped, a
 //! `passive_bench` warning is published, and the bench is sampled and identified from its
 //! throttle column.
 //!
@@ -120,7 +120,7 @@ pub struct SamplerConfig {
     pub stall_timeout: Option<Duration>,
 }
 
-/// PROTOCOL.md §1: expect a boot banner and a HELLO within 3 s of opening.
+/// docs/PROTOCOL.md §1: expect a boot banner and a HELLO within 3 s of opening.
 pub const SILENCE_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// What the sampler hands back.
@@ -138,7 +138,7 @@ pub struct SamplerOutcome {
 /// How long the link is still read after the plan ended on a fault, before the run ends.
 const HALT_DRAIN: Duration = Duration::from_millis(500);
 
-/// STOP re-send period (PROTOCOL.md §4: re-send after 50 ms without ACK).
+/// STOP re-send period (docs/PROTOCOL.md §4: re-send after 50 ms without ACK).
 const RESEND: Duration = Duration::from_millis(50);
 
 /// Seq of the shutdown STOP when no plan assigns one.
@@ -318,7 +318,7 @@ impl Sampler {
                 Some(PlanStatus::LinkFailed)
                     if self.wire.format() == Some(WireFormat::Csv) && self.wire.csv_acks() == 0 =>
                 {
-                    // PROTOCOL.md §6: a bench that never acknowledges is passive
+                    // docs/PROTOCOL.md §6: a bench that never acknowledges is passive
                     self.handler.plan = None;
                     self.handler.send(Item::Notice(Notice::PassiveBench));
                 }

@@ -24,7 +24,7 @@
 use super::hankel_size::HankelSize;
 use super::THRESHOLDS;
 use crate::hankel::HankelDims;
-use crate::workspace::Limits;
+use crate::workspace::limits::Limits;
 use crate::IdentError;
 
 /// `σ = √(Σ_i σ_i² / q)` over the outputs' Markov-parameter noise `noise` (`q` values); an

@@ -31,7 +31,7 @@ use std::sync::Arc;
 use realfft::num_complex::Complex;
 use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 
-use super::truncated::TruncatedError;
+use super::truncated::error::TruncatedError;
 use crate::hankel::{Hankel, HankelDims};
 
 /// Smallest FFT length for which a plan is made.

@@ -22,6 +22,9 @@
 
 mod engine;
 mod jackknife;
+pub mod limits;
+
+pub use limits::Limits;
 
 use engine::{max_p, Engine};
 
@@ -35,25 +38,6 @@ use super::{IdentError, MarkovSeq};
 
 type C64 = nalgebra::Complex<f64>;
 
-/// Sizes a [`Workspace`] is built for. Inputs beyond them give [`IdentError::LimitsExceeded`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct Limits {
-    /// Longest record (samples) or Markov sequence (blocks).
-    pub max_samples: usize,
-    /// Most output channels `q` (at most 64).
-    pub max_outputs: usize,
-    /// Most inputs `p` (pulse experiments have 1).
-    pub max_inputs: usize,
-    /// Highest model order.
-    pub max_order: usize,
-    /// Most Hankel block rows `r`.
-    pub max_block_rows: usize,
-    /// Most Hankel block columns `c`.
-    pub max_block_cols: usize,
-    /// Most pulses in one record.
-    pub max_pulses: usize,
-}
-
 /// Most Hankel block rows (and columns) a workspace sized from its data is given for an
 /// automatically sized Hankel (`propid identify` from the record, the daemon from its window):
 /// the automatic span covers the pulse response above the noise ([`crate::order`]), which at
@@ -61,20 +45,6 @@ pub struct Limits {
 /// first 12.8 ms of a 100 ms response gave fn 8 Hz ± 7 Hz for 12 Hz). The cap bounds the
 /// singular-vector buffers (`blocks × (order + 4)` doubles each: 1 MB at 8192 blocks).
 pub const AUTO_MAX_BLOCKS: usize = 8192;
-
-impl Default for Limits {
-    fn default() -> Self {
-        Self {
-            max_samples: 8192,
-            max_outputs: 3,
-            max_inputs: 1,
-            max_order: 12,
-            max_block_rows: 128,
-            max_block_cols: 128,
-            max_pulses: 256,
-        }
-    }
-}
 
 /// Options of one identification.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,7 +3,6 @@
 
 use serde::Deserialize;
 
-use super::motor::MotorConfig;
 use crate::effects::EffectsConfig;
 
 /// A plant parameter that cannot be simulated.
@@ -221,5 +220,86 @@ impl PlantConfig {
     pub fn current_a(&self, t_n: f64) -> f64 {
         let r = t_n.max(0.0) / self.reference_thrust_n();
         self.idle_current_a + self.current_at_reference_a * r.powf(1.5)
+    }
+}
+
+/// The `[plant.motor]` table: the motor plant's own parameters (the battery, the current model,
+/// `reference_throttle` and `rpm_at_reference` are the `[plant]` keys).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MotorConfig {
+    /// Thrust at `reference_throttle` in steady state with the battery unloaded, newtons (> 0).
+    pub thrust_at_reference_n: f64,
+    /// Spin-up time constant at `rpm_at_reference`, seconds (> 0).
+    pub tau_up_s: f64,
+    /// Spin-down time constant at `rpm_at_reference`, seconds (> 0).
+    pub tau_down_s: f64,
+    /// Exponent `γ` of the time constant's fall with speed, `τ ∝ (n_ref / n)^γ` (0..=2).
+    pub tau_speed_exponent: f64,
+    /// ESC dead time, seconds (0..=1; rounded to whole samples).
+    pub dead_time_s: f64,
+}
+
+impl Default for MotorConfig {
+    fn default() -> Self {
+        MotorConfig {
+            thrust_at_reference_n: 6.0,
+            tau_up_s: 0.030,
+            tau_down_s: 0.040,
+            tau_speed_exponent: 0.0,
+            dead_time_s: 0.008,
+        }
+    }
+}
+
+impl MotorConfig {
+    /// Checks every value; the error names the first bad key.
+    pub fn validate(&self) -> Result<(), PlantError> {
+        let positive = [
+            (
+                self.thrust_at_reference_n,
+                "plant.motor.thrust_at_reference_n",
+            ),
+            (self.tau_up_s, "plant.motor.tau_up_s"),
+            (self.tau_down_s, "plant.motor.tau_down_s"),
+        ];
+        for (v, key) in positive {
+            check(v.is_finite() && v > 0.0, key, v, "must be > 0")?;
+        }
+        let g = self.tau_speed_exponent;
+        let key = "plant.motor.tau_speed_exponent";
+        check(
+            g.is_finite() && (0.0..=2.0).contains(&g),
+            key,
+            g,
+            "must be in [0, 2]",
+        )?;
+        let d = self.dead_time_s;
+        let ok = d.is_finite() && (0.0..=1.0).contains(&d);
+        check(ok, "plant.motor.dead_time_s", d, "must be in [0, 1] s")
+    }
+
+    /// The thrust coefficient `k_T = T_ref / n_ref²`, N per (rev/min)².
+    pub fn k_t(&self, plant: &PlantConfig) -> f64 {
+        self.thrust_at_reference_n / (plant.rpm_at_reference * plant.rpm_at_reference)
+    }
+
+    /// Dead time in whole samples of `dt_s`.
+    pub fn dead_time_samples(&self, dt_s: f64) -> usize {
+        (self.dead_time_s / dt_s).round() as usize
+    }
+
+    /// Steady-state speed `n_ss(u, V)`, rev/min.
+    pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
+        plant.rpm_at_reference
+            * (u.max(0.0) / plant.reference_throttle)
+            * (voltage_v / plant.battery_v)
+    }
+
+    /// The time constant `τ(n, dir)` at speed `n` (rev/min), seconds.
+    pub fn tau_s(&self, plant: &PlantConfig, n: f64, up: bool) -> f64 {
+        let base = if up { self.tau_up_s } else { self.tau_down_s };
+        let floor = plant.rpm_at_reference / 10.0;
+        base * (plant.rpm_at_reference / n.max(floor)).powf(self.tau_speed_exponent)
     }
 }

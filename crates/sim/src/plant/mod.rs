@@ -53,7 +53,6 @@ mod motor_tests;
 mod tests;
 
 pub(crate) use config::check;
-pub use config::{PlantConfig, PlantError, PlantKind};
+pub use config::{MotorConfig, PlantConfig, PlantError, PlantKind};
 pub use linearise::{equilibrium, Equilibrium, MotorLinear};
 pub use model::{Measurement, Plant};
-pub use motor::MotorConfig;

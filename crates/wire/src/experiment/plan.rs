@@ -438,7 +438,7 @@ impl Experiment {
 
     /// The device's EVENT IMPULSE_START: while an IMPULSE is in flight (its ACK not yet
     /// received) this is the device saying it executed it. The pulse is counted and the IMPULSE
-    /// is not re-sent: a re-send that comes after the device's repeat memory (PROTOCOL.md §4:
+    /// is not re-sent: a re-send that comes after the device's repeat memory (docs/PROTOCOL.md §4:
     /// the last 8 commands, for one second; heartbeats count) is executed as a new command, a
     /// second pulse the plan never counted — the level then holds one pulse more than
     /// `pulses_per_level` and the host's last window at that level closes with a stray pulse

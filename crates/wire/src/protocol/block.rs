@@ -1,4 +1,4 @@
-//! Splitting a byte stream at the `0x00` delimiters of PROTOCOL.md §2 into COBS blocks, in one
+//! Splitting a byte stream at the `0x00` delimiters of docs/PROTOCOL.md §2 into COBS blocks, in one
 //! fixed buffer of 254 bytes (the longest legal block): the one splitter of both directions
 //! (the host's [`Decoder`](super::Decoder), the device's command reader).
 //!

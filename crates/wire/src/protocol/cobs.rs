@@ -1,7 +1,7 @@
 //! Consistent Overhead Byte Stuffing (Cheshire & Baker, IEEE/ACM ToN 7(2), 1999).
 //!
 //! COBS removes every `0x00` from a block so that `0x00` can delimit frames on the wire
-//! (PROTOCOL.md §2). The encoded block is a sequence of groups `code, data[code-1]`: each group
+//! (docs/PROTOCOL.md §2). The encoded block is a sequence of groups `code, data[code-1]`: each group
 //! stands for `code-1` non-zero bytes followed by one implicit zero, except a group with
 //! `code = 0xFF` (254 data bytes, no zero) and the last group (the implicit zero is dropped).
 //! Overhead: at most one byte per 254 bytes of input, at least one byte (see [`max_encoded_len`]).

@@ -1,4 +1,4 @@
-//! CRC-16/MCRF4XX, the frame check of TSP/1 (PROTOCOL.md §2).
+//! CRC-16/MCRF4XX, the frame check of TSP/1 (docs/PROTOCOL.md §2).
 //!
 //! Parameters (Rocksoft model): width 16, poly `0x1021` processed reflected (`0x8408`),
 //! init `0xFFFF`, refin = refout = true, xorout `0x0000`; check("123456789") = `0x6F91`.

@@ -89,7 +89,7 @@ pub struct DecodeStats {
 
 /// A frame whose integrity holds (valid COBS, at least 6 bytes, CRC correct): its `ver`,
 /// `type` and `seq` can be trusted, its version and payload are not checked yet. The device
-/// side answers such a frame even when it refuses it (PROTOCOL.md §4: VERSION, UNKNOWN_TYPE,
+/// side answers such a frame even when it refuses it (docs/PROTOCOL.md §4: VERSION, UNKNOWN_TYPE,
 /// BAD_LENGTH); an unchecked block has nobody to answer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RawFrame<'a> {

@@ -85,7 +85,7 @@ fn is_csv_line(line: &[u8]) -> bool {
 /// Bytes of a file examined by [`is_csv_stream`].
 pub const STREAM_LOOK: usize = 64 * 1024;
 
-/// True when CSV text is a TSP/1 CSV *stream* as a bench sends it (PROTOCOL.md §6; what
+/// True when CSV text is a TSP/1 CSV *stream* as a bench sends it (docs/PROTOCOL.md §6; what
 /// `propid run --record` writes of a CSV bench), not an exported log: among its first lines one
 /// carries a `*HH` checksum that checks, or is a comment only a bench writes (`# HELLO`,
 /// `#EVENT`, `#ACK`). A stream is placed by the stream placer ([`crate::stream`]) like a live

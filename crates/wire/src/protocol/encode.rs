@@ -1,4 +1,4 @@
-//! Frame encoder (PROTOCOL.md §2), both directions, no allocation:
+//! Frame encoder (docs/PROTOCOL.md §2), both directions, no allocation:
 //! `wire = COBS(ver type seq payload crc) 0x00`, CRC-16/MCRF4XX over `ver..payload`, all
 //! little-endian. The body is assembled on the stack, then COBS-encoded into the caller's buffer.
 

@@ -1,4 +1,4 @@
-//! TSP/1, the thrust-stand serial protocol (`../shared/PROTOCOL.md`), sans-IO.
+//! TSP/1, the thrust-stand serial protocol (`docs/PROTOCOL.md`), sans-IO.
 //!
 //! - [`crc`]: CRC-16/MCRF4XX; [`cobs`]: byte stuffing;
 //! - [`message`]: every message of both directions as typed `Copy` structs, [`Frame`];

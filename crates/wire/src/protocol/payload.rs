@@ -1,4 +1,4 @@
-//! Payload layouts of every TSP/1 message (PROTOCOL.md §3, §4): little-endian integers,
+//! Payload layouts of every TSP/1 message (docs/PROTOCOL.md §3, §4): little-endian integers,
 //! IEEE-754 binary32 floats, fixed offsets. Parsing checks the type's minimum length and ignores
 //! trailing bytes (fields may only be appended in later minor versions).
 

@@ -1,4 +1,4 @@
-//! The test vectors of PROTOCOL.md §5, byte for byte, in both directions.
+//! The test vectors of docs/PROTOCOL.md §5, byte for byte, in both directions.
 
 use super::message::*;
 use super::*;

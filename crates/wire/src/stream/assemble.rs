@@ -10,7 +10,7 @@
 //!   the daemon's sampler uses it on a live stream and reads what it says from these items.
 //! - [`RecordBuilder`] stores the channels and produces the [`Record`](crate::record::Record).
 //!
-//! Rules (PROTOCOL.md §3, issue 3 item 2):
+//! Rules (docs/PROTOCOL.md §3, issue 3 item 2):
 //! - The 32-bit `sample_index` and `t_us` are unwrapped ([`Unwrap32`]).
 //! - A forward jump of `d > 1` in `sample_index` is a gap: `d − 1` samples are missing (NaN and
 //!   marked in `Record::missing`), counted in `samples_lost`, never bridged. A gap longer than

@@ -1,4 +1,4 @@
-//! A CSV bench's stream (PROTOCOL.md §6) as the facts a binary device would have sent: every
+//! A CSV bench's stream (docs/PROTOCOL.md §6) as the facts a binary device would have sent: every
 //! data row placed at a sample index ([`RowPlacer`]), `# HELLO` lines believed by one rule
 //! ([`BootTracker`]), `#EVENT` lines placed by their time. The daemon's CSV link (live runs and
 //! `replay`) and recording ingest (`identify`) both read CSV through this one adapter, so a

@@ -1,4 +1,4 @@
-//! Sample indices for CSV rows, which carry none (PROTOCOL.md §6 rows are `t_us,throttle,…`):
+//! Sample indices for CSV rows, which carry none (docs/PROTOCOL.md §6 rows are `t_us,throttle,…`):
 //! the one placer of the project, used by the daemon's CSV link (live and `replay`) and by
 //! recording ingest (`identify`, through [`CsvStream`](super::csv_stream::CsvStream)), so that a
 //! recording replayed and the same recording identified place every row at the same index.

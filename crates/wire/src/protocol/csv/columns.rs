@@ -1,4 +1,4 @@
-//! CSV column names → canonical quantities and units (PROTOCOL.md §6), shared by the live
+//! CSV column names → canonical quantities and units (docs/PROTOCOL.md §6), shared by the live
 //! CSV decoder and by file readers (exported logs of commercial stands): the one alias table,
 //! the one unit table and the one quantity → name table ([`Quantity::name`]) of the project.
 //!

@@ -1,4 +1,4 @@
-//! Commands of the CSV fallback (PROTOCOL.md §6), one per line:
+//! Commands of the CSV fallback (docs/PROTOCOL.md §6), one per line:
 //! `PING`, `ARM <watchdog_ms>`, `DISARM`, `THR <0..10000> [ramp_ms]`, `IMP <level> <width_us>`,
 //! `STOP` (also the single byte `!`).
 //!

@@ -1,4 +1,4 @@
-//! What a CSV bench writes (PROTOCOL.md §6 and the keyword lines of propid's simulated stand,
+//! What a CSV bench writes (docs/PROTOCOL.md §6 and the keyword lines of propid's simulated stand,
 //! which benches may copy): written by [`device_line`] (the simulated stand) and read back by
 //! [`parse_ack`] and [`parse_comment`] (the daemon, file ingest).
 //!
@@ -38,7 +38,7 @@ pub enum CommentFact {
     Event(Event),
 }
 
-/// The event names of PROTOCOL.md §3, one table both ways.
+/// The event names of docs/PROTOCOL.md §3, one table both ways.
 const EVENT_NAMES: [(EventCode, &str); 9] = [
     (EventCode::ImpulseStart, "IMPULSE_START"),
     (EventCode::ImpulseEnd, "IMPULSE_END"),
@@ -59,7 +59,7 @@ pub fn event_name(c: EventCode) -> &'static str {
         .map_or("OTHER", |e| e.1)
 }
 
-/// The event code of a PROTOCOL.md §3 event name.
+/// The event code of a docs/PROTOCOL.md §3 event name.
 pub fn event_code(name: &str) -> Option<EventCode> {
     EVENT_NAMES.iter().find(|e| e.1 == name).map(|e| e.0)
 }

@@ -1,4 +1,4 @@
-//! Lines and fields of the CSV dialect (PROTOCOL.md §6): the one rule for splitting text into
+//! Lines and fields of the CSV dialect (docs/PROTOCOL.md §6): the one rule for splitting text into
 //! lines, checking a line's `*HH`, telling comments from data, choosing the separator and
 //! splitting fields. The stream decoder, the simulated bench's command reader, format
 //! detection and the file reader all use these.

@@ -1,4 +1,4 @@
-//! The CSV fallback of TSP/1 (PROTOCOL.md §6), sans-IO: the one CSV dialect of the project,
+//! The CSV fallback of TSP/1 (docs/PROTOCOL.md §6), sans-IO: the one CSV dialect of the project,
 //! used by the daemon's CSV link, the simulated CSV bench, recording ingest and the CSV file
 //! reader.
 //!

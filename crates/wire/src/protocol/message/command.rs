@@ -1,4 +1,4 @@
-//! The payloads of host → device commands (PROTOCOL.md §4): ARM and its key, SET_THROTTLE,
+//! The payloads of host → device commands (docs/PROTOCOL.md §4): ARM and its key, SET_THROTTLE,
 //! IMPULSE, SET_RATE (the other commands carry none).
 
 /// The ARM key, bytes "ARM!" read little-endian.

@@ -1,4 +1,4 @@
-//! 0x41 HELLO (PROTOCOL.md §3): the device's identity and state, with its ESC protocol and
+//! 0x41 HELLO (docs/PROTOCOL.md §3): the device's identity and state, with its ESC protocol and
 //! capability codes.
 
 use super::{floor_char_boundary, utf8_prefix, SampleFlags};

@@ -1,4 +1,4 @@
-//! TSP/1 messages, both directions (PROTOCOL.md §3, §4), as typed payload structs.
+//! TSP/1 messages, both directions (docs/PROTOCOL.md §3, §4), as typed payload structs.
 //!
 //! Everything here is `Copy` and fixed-size (a LOG text lives in a 200-byte array), so decoding
 //! a frame never allocates. Wire layouts (offsets, little-endian) live in

@@ -1,4 +1,4 @@
-//! The device's answers and reports (PROTOCOL.md §3): 0x43 ACK with its result codes, 0x44
+//! The device's answers and reports (docs/PROTOCOL.md §3): 0x43 ACK with its result codes, 0x44
 //! EVENT with its event codes, 0x45 LOG.
 
 use super::{floor_char_boundary, utf8_prefix};

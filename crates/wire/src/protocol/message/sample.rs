@@ -1,7 +1,7 @@
-//! 0x42 SAMPLE (PROTOCOL.md §3): one measurement, its flags, and the throttle scale of the
+//! 0x42 SAMPLE (docs/PROTOCOL.md §3): one measurement, its flags, and the throttle scale of the
 //! wire.
 
-/// SAMPLE flags (PROTOCOL.md §3), a `u16` bit set.
+/// SAMPLE flags (docs/PROTOCOL.md §3), a `u16` bit set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
 pub struct SampleFlags(pub u16);
 

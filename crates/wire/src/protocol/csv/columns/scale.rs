@@ -63,7 +63,7 @@ impl Scale {
     pub const DSHOT: Scale = Scale::new(48.0, 2047.0, "48..2047 (DShot)", "DShot");
     /// The usual ESC pulse width, µs (`--esc-us` gives another).
     pub const ESC_US: Scale = Scale::new(1000.0, 2000.0, "1000..2000 µs (ESC pulse)", "µs");
-    /// TSP/1's throttle level (PROTOCOL.md §6).
+    /// TSP/1's throttle level (docs/PROTOCOL.md §6).
     pub const TSP1_LEVEL: Scale = Scale::new(0.0, 10000.0, "0..10000 (TSP/1 level)", "TSP/1 level");
     /// A 16-bit PWM compare value (Crazyflie motors).
     pub const PWM16: Scale = Scale::new(0.0, 65535.0, "0..65535 (16-bit PWM)", "16-bit PWM");

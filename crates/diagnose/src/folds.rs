@@ -1,0 +1,274 @@
+//! How a diagnosis is validated: blocked cross-validation over the command's steps, or a hold-out
+//! tail when the command has no steps.
+//!
+//! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/folds.rs`.
+
+use std::ops::Range;
+
+use propid_numerics::segment::{levels, Command, SegmentRules};
+use serde::Serialize;
+
+use super::ctx::Ctx;
+use super::fit::{levenberg_marquardt, Fit};
+use super::model::simulate;
+use super::signals::Signals;
+
+/// Fewest levels for blocked cross-validation (fewer: the hold-out tail).
+pub const MIN_FOLDS: usize = 3;
+/// Most folds: levels beyond this many are grouped into consecutive blocks.
+pub const MAX_FOLDS: usize = 10;
+/// Fewest measured outputs in a fold; a block with fewer joins the one before it.
+pub const MIN_FOLD_SAMPLES: usize = 20;
+/// Levenberg–Marquardt steps of each fold's refit (from the fit on all samples).
+pub const FOLD_ITERS: usize = 20;
+
+/// How the held-out figure is measured.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Blocked cross-validation over whole levels of the command.
+    BlockedCv,
+    /// One hold-out tail (the command has no steps).
+    Holdout,
+}
+
+/// The folds of a record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Folds {
+    /// The method.
+    pub method: Method,
+    /// The held-out samples of each fold (half-open, in order). Under [`Method::Holdout`] one
+    /// fold, the tail.
+    pub folds: Vec<Range<usize>>,
+    /// The samples the published models are fitted on: all of them under
+    /// [`Method::BlockedCv`], the head before the tail under [`Method::Holdout`].
+    pub estimation: Range<usize>,
+}
+
+impl Folds {
+    /// The folds of the command `u` with output `y` (`NaN` = missing; see the module doc);
+    /// `estimation_fraction` is the head's share when the command has no steps; `rules` are
+    /// the segmentation's at the record's rate.
+    pub fn from_input(
+        u: &[f64],
+        y: &[f64],
+        estimation_fraction: f64,
+        rules: &SegmentRules,
+    ) -> Folds {
+        let n = u.len().min(y.len());
+        let u = &u[..n];
+        let measured = |r: &Range<usize>| y[r.clone()].iter().filter(|v| v.is_finite()).count();
+        let lv = levels(Command::new(u), rules);
+        if lv.len() >= MIN_FOLDS {
+            let mut cuts: Vec<usize> = if 2 * lv.len() <= MAX_FOLDS {
+                // Few levels: each level is two blocks, the step into it with the first half
+                // of its hold, and the rest of the hold.
+                lv.iter()
+                    .flat_map(|l| [l.start, l.start + (l.end - l.start) / 2])
+                    .collect()
+            } else {
+                // Many levels: blocks of consecutive whole levels, block b holding levels
+                // [b·L/k, (b+1)·L/k).
+                let k = lv.len().min(MAX_FOLDS);
+                (0..k).map(|b| lv[b * lv.len() / k].start).collect()
+            };
+            cuts[0] = 0;
+            cuts.push(n);
+            let mut folds: Vec<Range<usize>> = Vec::new();
+            for w in cuts.windows(2) {
+                let r = w[0]..w[1];
+                match folds.last_mut() {
+                    Some(last) if measured(&r) < MIN_FOLD_SAMPLES => last.end = r.end,
+                    _ => folds.push(r),
+                }
+            }
+            if folds.len() >= MIN_FOLDS && measured(&folds[0]) >= MIN_FOLD_SAMPLES {
+                return Folds {
+                    method: Method::BlockedCv,
+                    folds,
+                    estimation: 0..n,
+                };
+            }
+        }
+        let n_est = ((n as f64) * estimation_fraction.clamp(0.3, 0.9)).round() as usize;
+        Folds {
+            method: Method::Holdout,
+            folds: std::iter::once(n_est..n).collect(),
+            estimation: 0..n_est,
+        }
+    }
+}
+
+/// The held-out scores of one model structure.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scores {
+    /// Fit percent on each fold.
+    pub fits: Vec<f64>,
+    /// Their mean: the held-out figure.
+    pub mean: f64,
+    /// RMS of the held-out residuals of every fold together.
+    pub rms: f64,
+    /// The held-out prediction of every sample of a fold (NaN outside the folds).
+    pub prediction: Vec<f64>,
+}
+
+/// `100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)` over the finite outputs of `range` with `ȳ` their mean,
+/// and the SSE and count.
+pub fn fit_percent(y: &[f64], yhat: &[f64], range: Range<usize>) -> (f64, f64, usize) {
+    let fin = range.clone().filter(|&k| y[k].is_finite());
+    let (s, c) = fin.fold((0.0, 0usize), |(s, c), k| (s + y[k], c + 1));
+    fit_percent_about(y, yhat, range, s / c.max(1) as f64)
+}
+
+/// `100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)` over the finite outputs of `range` about a given `mean`,
+/// and the SSE and count.
+pub fn fit_percent_about(
+    y: &[f64],
+    yhat: &[f64],
+    range: Range<usize>,
+    mean: f64,
+) -> (f64, f64, usize) {
+    let ok = || {
+        range
+            .clone()
+            .filter(|&k| y[k].is_finite() && yhat[k].is_finite())
+    };
+    let m = ok().count();
+    let e2: f64 = ok().map(|k| (y[k] - yhat[k]).powi(2)).sum();
+    let d2: f64 = ok().map(|k| (y[k] - mean).powi(2)).sum();
+    (100.0 * (1.0 - (e2 / d2.max(1e-300)).sqrt()), e2, m)
+}
+
+/// The held-out scores of the fit `f` (module doc): each fold refitted without it and scored
+/// on it under [`Method::BlockedCv`]; `f` itself scored on the tail under [`Method::Holdout`].
+pub fn cross_validate(ctx: &Ctx, folds: &Folds, f: &Fit) -> Scores {
+    let n = ctx.sig.u.len();
+    let mut prediction = vec![f64::NAN; n];
+    let mut sim = vec![0.0; n];
+    let mut fits = Vec::with_capacity(folds.folds.len());
+    let (mut e2, mut m) = (0.0, 0usize);
+    let held = folds
+        .folds
+        .iter()
+        .flat_map(|r| r.clone())
+        .filter(|&k| ctx.sig.y[k].is_finite());
+    let (s, c) = held.fold((0.0, 0usize), |(s, c), k| (s + ctx.sig.y[k], c + 1));
+    let mean_y = s / c.max(1) as f64;
+    for fold in &folds.folds {
+        let model = match folds.method {
+            Method::Holdout => f.model.clone(),
+            Method::BlockedCv => {
+                let mut y = ctx.sig.y.to_vec();
+                for v in &mut y[fold.clone()] {
+                    *v = f64::NAN;
+                }
+                let sig = Signals { y: &y, ..ctx.sig };
+                let refit = levenberg_marquardt(&f.model, &sig, 0..n, FOLD_ITERS);
+                refit.model
+            }
+        };
+        simulate(&model, &ctx.sig, &mut sim);
+        prediction[fold.clone()].copy_from_slice(&sim[fold.clone()]);
+        let (fit, s, c) = fit_percent_about(ctx.sig.y, &sim, fold.clone(), mean_y);
+        fits.push(fit);
+        e2 += s;
+        m += c;
+    }
+    let mean = fits.iter().sum::<f64>() / fits.len().max(1) as f64;
+    Scores {
+        fits,
+        mean,
+        rms: (e2 / m.max(1) as f64).sqrt(),
+        prediction,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn staircase(levels: &[f64], per: usize) -> Vec<f64> {
+        levels
+            .iter()
+            .flat_map(|&l| std::iter::repeat(l).take(per))
+            .collect()
+    }
+
+    #[test]
+    fn a_short_staircase_is_cut_at_its_steps_and_the_middle_of_each_hold() {
+        let u = staircase(&[0.1, 0.3, 0.5, 0.7, 0.9], 100);
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
+        assert_eq!(f.method, Method::BlockedCv);
+        let want: Vec<Range<usize>> = (0..10).map(|i| 50 * i..50 * (i + 1)).collect();
+        assert_eq!(f.folds, want);
+        assert_eq!(f.estimation, 0..500);
+        // The top level (only at the end) is never held out whole: its step is scored with its
+        // steady half in the fit, and the other way round.
+        assert!(f.folds.iter().all(|r| r.len() < 100));
+    }
+
+    #[test]
+    fn many_levels_are_grouped_into_consecutive_blocks_of_whole_levels() {
+        let lv: Vec<f64> = (0..25).map(|i| 0.1 + 0.03 * i as f64).collect();
+        let u = staircase(&lv, 50);
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
+        assert_eq!(f.folds.len(), MAX_FOLDS);
+        // Every cut is at a step, the folds tile the record.
+        assert_eq!(f.folds[0].start, 0);
+        assert_eq!(f.folds.last().unwrap().end, u.len());
+        for w in f.folds.windows(2) {
+            assert_eq!(w[0].end, w[1].start);
+            assert_eq!(w[1].start % 50, 0, "{:?}", f.folds);
+        }
+    }
+
+    #[test]
+    fn pulses_on_a_level_stay_in_its_fold_and_a_lead_in_joins_the_first() {
+        let mut u = vec![0.0; 10]; // shorter than a level: no level of its own
+        u.extend(staircase(&[0.4, 0.6, 0.5], 200));
+        u[10 + 50] = 0.45; // a one-sample pulse on the first level
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
+        assert_eq!(
+            f.folds,
+            vec![0..110, 110..210, 210..310, 310..410, 410..510, 510..610]
+        );
+    }
+
+    #[test]
+    fn a_record_without_steps_keeps_the_hold_out_tail() {
+        let u: Vec<f64> = (0..1000).map(|k| (k as f64 * 0.37).sin()).collect();
+        let f = Folds::from_input(&u, &u, 0.7, &SegmentRules::DEFAULT);
+        assert_eq!(f.method, Method::Holdout);
+        assert_eq!(f.folds.len(), 1);
+        assert_eq!(f.folds[0], 700..1000);
+        assert_eq!(f.estimation, 0..700);
+        // Two levels are not enough for folds either.
+        let u = staircase(&[0.2, 0.6], 300);
+        let f = Folds::from_input(&u, &u, 0.5, &SegmentRules::DEFAULT);
+        assert_eq!(f.method, Method::Holdout);
+        assert_eq!(f.folds.len(), 1);
+        assert_eq!(f.folds[0], 300..600);
+    }
+
+    #[test]
+    fn a_block_with_too_few_measured_outputs_joins_the_one_before() {
+        let u = staircase(&[0.2, 0.4, 0.6, 0.8], 100);
+        let mut y = u.clone();
+        for v in &mut y[305..] {
+            *v = f64::NAN; // the last level's output was not measured
+        }
+        let f = Folds::from_input(&u, &y, 0.7, &SegmentRules::DEFAULT);
+        assert_eq!(
+            f.folds,
+            vec![0..50, 50..100, 100..150, 150..200, 200..250, 250..400]
+        );
+    }
+
+    #[test]
+    fn fit_percent_is_100_for_a_perfect_prediction_and_0_for_the_mean() {
+        let y = [1.0, 2.0, 3.0, f64::NAN, 5.0];
+        assert_eq!(fit_percent(&y, &y, 0..5).0, 100.0);
+        let mean = [2.75; 5];
+        assert!(fit_percent(&y, &mean, 0..5).0.abs() < 1e-12);
+    }
+}
