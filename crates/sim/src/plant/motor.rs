@@ -26,8 +26,15 @@
 //! motor `d = round(dead_time_s / dt)` samples late (ESC update and commutation latency), and,
 //! as with the 2nd-order plant, the throttle held during sample `k` shows in the thrust from
 //! sample `k + 1 + d` on.
+//!
+//! These are the equations of the stand model of the numerics layer
+//! ([`propid_numerics::stand_model`]: [`SpeedMap`], [`RotorLaw`], `T = k_T nᵉ` with `e = 2`),
+//! which steps them here ([`MotorConfig::stand_params`] gives the plant as that model's
+//! parameters, the truth its fit is held against); the simulated current
+//! `I_idle + I_ref (T/T_ref)^{3/2}` is its current law `I₀ + k_I n³` at `e = 2`.
 
 use crate::delay_line::DelayLine;
+use propid_numerics::stand_model::{load, CurrentLaw, RotorLaw, SpeedMap, StandParams, Supply};
 
 use serde::Deserialize;
 
@@ -100,18 +107,59 @@ impl MotorConfig {
         (self.dead_time_s / dt_s).round() as usize
     }
 
-    /// Steady-state speed `n_ss(u, V)`, rev/min.
-    pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
-        plant.rpm_at_reference
-            * (u.max(0.0) / plant.reference_throttle)
-            * (voltage_v / plant.battery_v)
+    /// The speed map of the stand model: `n_ref · (u / u_ref) · (V / V₀)`, no dead band.
+    pub fn speed_map(&self, plant: &PlantConfig) -> SpeedMap {
+        SpeedMap {
+            speed_ref: plant.rpm_at_reference,
+            command_zero: 0.0,
+            command_ref: plant.reference_throttle,
+            exponent: 1.0,
+            voltage_ref: plant.battery_v,
+        }
     }
 
-    /// The time constant `τ(n, dir)` at speed `n` (rev/min), seconds.
+    /// The rotor's lag in the stand model, its time constants given at `rpm_at_reference`.
+    pub fn rotor_law(&self, plant: &PlantConfig) -> RotorLaw {
+        RotorLaw {
+            tau_up_s: self.tau_up_s,
+            tau_down_s: self.tau_down_s,
+            tau_speed_exponent: self.tau_speed_exponent,
+            speed_ref: plant.rpm_at_reference,
+        }
+    }
+
+    /// The plant as the stand model's parameters (speed in rev/min; the dead time as the
+    /// plant steps it, whole samples of `dt_s`; torque `torque_m · T`; the battery unloaded and
+    /// not discharging).
+    pub fn stand_params(&self, plant: &PlantConfig, dt_s: f64) -> StandParams {
+        let n_ref = plant.rpm_at_reference;
+        StandParams {
+            dead_time_s: self.dead_time_samples(dt_s) as f64 * dt_s,
+            map: self.speed_map(plant),
+            rotor: self.rotor_law(plant),
+            thrust_exponent: 2.0,
+            k_t: self.k_t(plant),
+            k_q: plant.torque_m * self.k_t(plant),
+            current: CurrentLaw {
+                idle_a: plant.idle_current_a,
+                per_power: plant.current_at_reference_a / (n_ref * n_ref * n_ref),
+                per_acceleration: 0.0,
+            },
+            supply: Supply {
+                open_circuit_v: plant.battery_v,
+                resistance_ohm: plant.internal_resistance_ohm,
+            },
+        }
+    }
+
+    /// Steady-state speed `n_ss(u, V)`, rev/min ([`SpeedMap::speed_ss`]).
+    pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
+        self.speed_map(plant).speed_ss(u, voltage_v)
+    }
+
+    /// The time constant `τ(n, dir)` at speed `n` (rev/min), seconds ([`RotorLaw::tau_s`]).
     pub fn tau_s(&self, plant: &PlantConfig, n: f64, up: bool) -> f64 {
-        let base = if up { self.tau_up_s } else { self.tau_down_s };
-        let floor = plant.rpm_at_reference / 10.0;
-        base * (plant.rpm_at_reference / n.max(floor)).powf(self.tau_speed_exponent)
+        self.rotor_law(plant).tau_s(n, up)
     }
 }
 
@@ -143,9 +191,9 @@ impl Motor {
         self.n
     }
 
-    /// Thrust `k_T n²`, newtons.
+    /// Thrust `k_T n²`, newtons ([`load`]).
     pub(crate) fn thrust_n(&self, plant: &PlantConfig) -> f64 {
-        self.cfg.k_t(plant) * self.n * self.n
+        load(self.cfg.k_t(plant), self.n, 2.0)
     }
 
     /// The ESC's delay line: pushes `u`, returns the throttle of `d` samples ago (0 before the
@@ -157,8 +205,7 @@ impl Motor {
     /// Advances one sample with the (delayed, mapped) throttle `u` held and supply `voltage_v`.
     pub(crate) fn advance(&mut self, plant: &PlantConfig, u: f64, voltage_v: f64) {
         let target = self.cfg.speed_ss(plant, u, voltage_v);
-        let tau = self.cfg.tau_s(plant, self.n, target >= self.n);
-        self.n = target + (self.n - target) * (-self.dt_s / tau).exp();
+        self.n = self.cfg.rotor_law(plant).advance(self.n, target, self.dt_s);
     }
 
     /// Steady state at throttle `throttle` (the ESC's line full of it) and mapped throttle `u`,
