@@ -315,11 +315,11 @@ fn figure(f: &Figure, prec: usize) -> String {
     match f.value {
         Some(v) => {
             let v = match (v.abs(), prec) {
-                (a, _) if a != 0.0 && (a < 1e-3 || a >= 1e5) => format!("{v:.4e}"),
+                (a, _) if a != 0.0 && !(1e-3..1e5).contains(&a) => format!("{v:.4e}"),
                 _ => format!("{v:.prec$}"),
             };
             let sd = f.uncertainty.map_or_else(String::new, |s| {
-                if s != 0.0 && (s < 1e-3 || s >= 1e5) {
+                if s != 0.0 && !(1e-3..1e5).contains(&s) {
                     format!(" ± {s:.2e}")
                 } else {
                     format!(" ± {s:.prec$}")

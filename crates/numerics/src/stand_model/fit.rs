@@ -34,6 +34,11 @@
 //! so). `τ_down` needs the command to fall, `τ_up` to rise; `γ` needs moves to at least two
 //! levels: otherwise `τ_down = τ_up`, `γ = 0` are held and reported as not shown.
 //!
+//! A record longer than [`MAX_ROWS`] rows is fitted over the window of that many rows in which
+//! the command moves most often. A channel with more than [`MAX_READINGS`] readings is compared at every m-th of them (the
+//! rotor and the sensors still stepped over every row): a pulse experiment of 100 000 rows is
+//! fitted in seconds, its uncertainty that of the readings compared.
+//!
 //! # Weights and uncertainty
 //! Each channel's residuals are divided by its noise `σ_c`: first the readings' own (robust
 //! standard deviation of the differences of consecutive readings, `1.4826 · MAD / √2`), then,
@@ -46,8 +51,8 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::{
-    delay, fill_held, lag, rotor_course, CurrentLaw, Quantity, RotorLaw, SpeedMap, StandParams,
-    Supply,
+    delayed_at, fill_held, lag, rotor_course, CurrentLaw, Quantity, RotorLaw, SpeedMap,
+    StandParams, Supply,
 };
 use crate::levenberg_marquardt::{covariance, jacobian, minimise, LmOptions};
 use crate::segment::{self, Command, SegmentRules};
@@ -98,6 +103,15 @@ pub enum StandModelError {
 
 /// Fewest readings of a channel for it to take part.
 pub const MIN_READINGS: usize = 20;
+
+/// Most readings of a channel compared with the model: a longer record is compared at every
+/// m-th reading (its noise and refresh still read from all), which keeps a fit of 100 000 rows
+/// to seconds.
+pub const MAX_READINGS: usize = 8_000;
+
+/// Most rows a fit steps the stand over: a longer record is fitted over the window of this
+/// many rows in which the command moves most often ([`StandFit::window_s`]).
+pub const MAX_ROWS: usize = 30_000;
 
 /// Lower bound of a sensor's lag and of the rotor's time constants, s (a lag the rows cannot
 /// show ends there).
@@ -181,6 +195,8 @@ pub struct StandFit {
     pub channels: Vec<ChannelFit>,
     /// Jacobians computed.
     pub iterations: usize,
+    /// The span of the record fitted, s from its start ([`MAX_ROWS`]).
+    pub window_s: (f64, f64),
 }
 
 /// A channel ready for the fit.
@@ -275,6 +291,9 @@ fn prepare(c: &Channel<'_>, missing_len: usize) -> Prepared {
             (a.min(c.y[k]), b.max(c.y[k]))
         });
     let floor = 1e-6 * (hi - lo).abs().max(1e-9);
+    // A long record is compared at every m-th reading (the rotor still stepped over every row).
+    let m = rows.len().div_ceil(MAX_READINGS).max(1);
+    let rows: Vec<usize> = rows.into_iter().step_by(m).collect();
     Prepared {
         key: c.key,
         quantity: c.quantity,
@@ -296,7 +315,7 @@ fn moves(u: &[f64]) -> (bool, bool, usize) {
             (a.min(v), b.max(v))
         });
     let range = hi - lo;
-    if !(range > 0.0) {
+    if range.is_nan() || range <= 0.0 {
         return (false, false, 0);
     }
     let (mut up, mut down) = (false, false);
@@ -423,8 +442,11 @@ impl Problem {
                 let mut cols: Vec<Vec<f64>> = bases
                     .iter()
                     .map(|b| {
-                        let s = delay(&lag(b, self.dt, v.lag[c]), self.dt, v.delay[c]);
-                        ch.rows.iter().map(|&k| s[k]).collect()
+                        let s = lag(b, self.dt, v.lag[c]);
+                        ch.rows
+                            .iter()
+                            .map(|&k| delayed_at(&s, self.dt, v.delay[c], k))
+                            .collect()
                     })
                     .collect();
                 if ch.quantity != Quantity::Speed {
@@ -563,6 +585,65 @@ fn step_timing(
 
 /// Fits the stand model to `input` (module doc).
 pub fn fit(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
+    let (start, end) = window(input.command);
+    let channels: Vec<Channel<'_>> = input
+        .channels
+        .iter()
+        .map(|c| Channel {
+            y: &c.y[start.min(c.y.len())..end.min(c.y.len())],
+            interpolated: &c.interpolated
+                [start.min(c.interpolated.len())..end.min(c.interpolated.len())],
+            ..*c
+        })
+        .collect();
+    let within = FitInput {
+        command: &input.command[start..end],
+        voltage: input
+            .voltage
+            .map(|v| &v[start.min(v.len())..end.min(v.len())]),
+        channels: &channels,
+        ..*input
+    };
+    let mut f = fit_rows(&within)?;
+    f.window_s = (start as f64 * input.dt_s, end as f64 * input.dt_s);
+    Ok(f)
+}
+
+/// The rows fitted: all of a record of at most [`MAX_ROWS`], else the window of [`MAX_ROWS`]
+/// rows (on a grid of a twentieth of it) in which the command moves most often.
+fn window(command: &[f64]) -> (usize, usize) {
+    let len = command.len();
+    if len <= MAX_ROWS {
+        return (0, len);
+    }
+    let u = fill_held(command, 0.0);
+    let (lo, hi) = u
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let moved: Vec<usize> = u
+        .windows(2)
+        .map(|w| usize::from((w[1] - w[0]).abs() > 0.02 * (hi - lo)))
+        .collect();
+    let mut sum = vec![0usize; moved.len() + 1];
+    for (i, m) in moved.iter().enumerate() {
+        sum[i + 1] = sum[i] + m;
+    }
+    let stride = (MAX_ROWS / 20).max(1);
+    let best = (0..=len - MAX_ROWS)
+        .step_by(stride)
+        .max_by_key(|&s| {
+            (
+                sum[(s + MAX_ROWS - 1).min(moved.len())] - sum[s],
+                usize::MAX - s,
+            )
+        })
+        .unwrap_or(0);
+    (best, best + MAX_ROWS)
+}
+
+fn fit_rows(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
     let dt = input.dt_s;
     let len = input.command.len();
     let u = fill_held(input.command, 0.0);
@@ -689,14 +770,14 @@ pub fn fit(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
     };
     // Two passes: the readings' noise as weights, then the larger of it and the residuals'.
     let z0 = problem.z_of(&problem.base);
-    let (z1, _, it1) = problem.run(&z0, 40).ok_or(StandModelError::NotFitted)?;
+    let (z1, _, it1) = problem.run(&z0, 30).ok_or(StandModelError::NotFitted)?;
     let rms = problem.rms(&problem.values(&z1));
     for (ch, r) in problem.channels.iter_mut().zip(&rms) {
         if r.is_finite() {
             ch.sigma = ch.noise.max(*r);
         }
     }
-    let (z, cost, it2) = problem.run(&z1, 60).ok_or(StandModelError::NotFitted)?;
+    let (z, cost, it2) = problem.run(&z1, 40).ok_or(StandModelError::NotFitted)?;
     if !cost.is_finite() {
         return Err(StandModelError::NotFitted);
     }
@@ -890,6 +971,7 @@ fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> Stan
         supply_resistance_ohm,
         channels,
         iterations,
+        window_s: (0.0, problem.t_span + problem.dt),
     }
 }
 
@@ -910,7 +992,7 @@ fn supply_resistance(problem: &Problem) -> Option<Estimate> {
         .iter()
         .fold((0.0, 0.0), |(a, b), (i, v)| (a + i / n, b + v / n));
     let sii: f64 = pts.iter().map(|(i, _)| (i - mi).powi(2)).sum();
-    if !(sii > 0.0) {
+    if sii.is_nan() || sii <= 0.0 {
         return None;
     }
     let siv: f64 = pts.iter().map(|(i, v)| (i - mi) * (v - mv)).sum();

@@ -336,7 +336,7 @@ pub fn lag(x: &[f64], dt_s: f64, tau_s: f64) -> Vec<f64> {
     let Some(&first) = x.first() else {
         return Vec::new();
     };
-    if !(tau_s > 0.0) {
+    if tau_s.is_nan() || tau_s <= 0.0 {
         return x.to_vec();
     }
     let a = (-dt_s / tau_s).exp();
@@ -353,30 +353,35 @@ pub fn lag(x: &[f64], dt_s: f64, tau_s: f64) -> Vec<f64> {
 
 /// `x` delayed by `delay_s` (linear interpolation between samples; held at the record's ends).
 pub fn delay(x: &[f64], dt_s: f64, delay_s: f64) -> Vec<f64> {
-    let len = x.len();
-    if len == 0 || delay_s == 0.0 {
+    if delay_s == 0.0 {
         return x.to_vec();
     }
-    let shift = delay_s / dt_s;
-    (0..len)
-        .map(|k| {
-            let t = (k as f64 - shift).clamp(0.0, (len - 1) as f64);
-            let i = t.floor() as usize;
-            let f = t - i as f64;
-            if i + 1 < len {
-                x[i] + f * (x[i + 1] - x[i])
-            } else {
-                x[i]
-            }
-        })
+    (0..x.len())
+        .map(|k| delayed_at(x, dt_s, delay_s, k))
         .collect()
+}
+
+/// Row `k` of `x` delayed by `delay_s` (as [`delay`]).
+pub fn delayed_at(x: &[f64], dt_s: f64, delay_s: f64, k: usize) -> f64 {
+    let len = x.len();
+    if len == 0 {
+        return f64::NAN;
+    }
+    let t = (k as f64 - delay_s / dt_s).clamp(0.0, (len - 1) as f64);
+    let i = t.floor() as usize;
+    let f = t - i as f64;
+    if i + 1 < len {
+        x[i] + f * (x[i + 1] - x[i])
+    } else {
+        x[i]
+    }
 }
 
 /// `x` read every `refresh_s` (from the record's start) and held in between; as it is when the
 /// refresh is at most a row.
 pub fn hold(x: &[f64], dt_s: f64, refresh_s: f64) -> Vec<f64> {
     let period = refresh_s / dt_s;
-    if !(period > 1.0 + 1e-9) {
+    if period.is_nan() || period <= 1.0 + 1e-9 {
         return x.to_vec();
     }
     let mut last_slot = usize::MAX;

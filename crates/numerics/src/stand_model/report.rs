@@ -103,6 +103,8 @@ pub struct StandReport {
     pub sensors: BTreeMap<&'static str, SensorFigures>,
     /// Jacobians the fit computed.
     pub iterations: usize,
+    /// The span of the record fitted, s from its start (all of it up to 30 000 rows).
+    pub fitted_span_s: [f64; 2],
 }
 
 /// `"stand"` when the record gives no model: the reason.
@@ -253,5 +255,6 @@ pub fn report(f: &StandFit) -> StandReport {
         supply_resistance_ohm,
         sensors,
         iterations: f.iterations,
+        fitted_span_s: [f.window_s.0, f.window_s.1],
     }
 }

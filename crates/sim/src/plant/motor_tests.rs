@@ -201,8 +201,8 @@ fn the_stand_model_steps_the_motor_plant_and_its_fit_finds_the_plant_again() {
     // plant's rotor, row by row.
     let truth = cfg.motor.stand_params(&cfg, DT);
     let course = rotor_course(&truth, DT, &u, Some(&voltage));
-    for k in 0..u.len() {
-        assert!((course.speed[k] - rpm[k]).abs() < 1e-6, "row {k}");
+    for (k, (model, plant)) in course.speed.iter().zip(&rpm).enumerate() {
+        assert!((model - plant).abs() < 1e-6, "row {k}");
     }
     let channels = [
         Channel {
