@@ -49,8 +49,12 @@ use propid_numerics::order::HankelSize;
 use propid_numerics::segment::Command;
 use propid_numerics::stabilization::StabOptions;
 use propid_numerics::stand::{
-    response_step_figures, stand_figures, steady_levels, OutputChannel, StandFigures,
+    channel_step_timing, response_step_figures, stand_figures, steady_levels, ChannelTiming,
+    OutputChannel, StandFigures,
 };
+use propid_numerics::stand_model::fit::{fit, Channel, FitInput};
+use propid_numerics::stand_model::report::{Stand, StandRefused};
+use propid_numerics::stand_model::Quantity;
 use propid_numerics::static_map::{level_slope, LevelSlope};
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
@@ -154,6 +158,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let okid = OkidOptions::default();
     let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab));
     let stand = stand_for(&loaded);
+    let physics = Physics::of(&loaded);
     let model = match model {
         Ok(m) => m,
         Err(e) => {
@@ -161,7 +166,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
             // stated, and keep exit 4 (no identification) so that a script never takes the
             // figures for a model.
             if !(stand.steps.is_empty() && stand.static_map.is_empty()) {
-                let partial = summary::Partial::new(&loaded, &e, &stand);
+                let partial = summary::Partial::new(&loaded, &e, &stand, &physics);
                 if args.json {
                     super::stdout::line(&partial.json().map_err(CliError::Json)?)?;
                 } else {
@@ -177,7 +182,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let ops = operating_points(&input, &ident, &op_opts);
     let levels = levels_slope(&loaded);
-    let out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref());
+    let out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref(), &physics);
     if let Some(dir) = &args.report {
         report::write(dir, &out)
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
@@ -209,6 +214,74 @@ fn levels_slope(loaded: &load::Loaded) -> Option<LevelSlope> {
 /// model): for the real-data tables.
 pub fn stand_of(args: &Args) -> Result<StandFigures, CliError> {
     Ok(stand_for(&load::load(args)?))
+}
+
+/// The stand's physics (`"stand"`, [`propid_numerics::stand_model`]) and each step's timing
+/// on every output channel, when the input is a stand's command; `None`, `[]` otherwise.
+#[derive(Debug, Clone, Default)]
+pub struct Physics {
+    /// The stand model fitted to every channel of the stand the file has, or why not.
+    pub stand: Option<Stand>,
+    /// Per command step, its dead time and time constant on each channel.
+    pub timing: Vec<std::collections::BTreeMap<&'static str, ChannelTiming>>,
+}
+
+impl Physics {
+    fn of(loaded: &load::Loaded) -> Physics {
+        if !(loaded.commanded && loaded.input_is_a_command) {
+            return Physics::default();
+        }
+        let rules = loaded.segment_rules();
+        let cmd = Command::with_missing(&loaded.input, &loaded.missing);
+        let outputs: Vec<OutputChannel<'_>> = loaded
+            .stand
+            .iter()
+            .map(|(key, unit, y)| OutputChannel { key, unit, y })
+            .collect();
+        let timing = channel_step_timing(cmd, loaded.dt_s, &rules, &outputs);
+        let quantity = |key: &str| match key {
+            "rpm" => Some(Quantity::Speed),
+            "thrust" => Some(Quantity::Thrust),
+            "torque" => Some(Quantity::Torque),
+            "current" => Some(Quantity::Current),
+            _ => None,
+        };
+        let channels: Vec<Channel<'_>> = loaded
+            .stand
+            .iter()
+            .zip(&loaded.stand_interpolated)
+            .filter_map(|((key, _, y), flags)| {
+                Some(Channel {
+                    key,
+                    quantity: quantity(key)?,
+                    y,
+                    interpolated: flags,
+                })
+            })
+            .collect();
+        if rules.samples_are_steady() {
+            let refused = StandRefused {
+                refused: "a sample lasts longer than the response takes to settle: the record \
+                          shows no dynamics"
+                    .to_string(),
+            };
+            return Physics {
+                stand: Some(Stand::Refused(refused)),
+                timing,
+            };
+        }
+        let input = FitInput {
+            dt_s: loaded.dt_s,
+            command: &loaded.input,
+            voltage: loaded.voltage.as_deref(),
+            channels: &channels,
+            rules,
+        };
+        Physics {
+            stand: Some(Stand::of(fit(&input))),
+            timing,
+        }
+    }
 }
 
 /// The step figures and static maps of a loaded file: none when its input is a column that

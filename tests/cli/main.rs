@@ -28,6 +28,7 @@ mod identify_sim_recording;
 mod identify_slow_logs;
 mod identify_square_hankel;
 mod identify_stabilization;
+mod identify_stand_model;
 mod identify_units;
 mod identify_zero_offset;
 mod sim_cli;

@@ -25,6 +25,9 @@
 //!    [`report`] is the published, serde-serialisable [`report::ModelReport`].
 //! 8. [`stabilization`]: the stabilization diagram, the poles of every order `1..n_max`
 //!    realised from the model's own Hankel SVD, stable ones marked.
+//! 9. [`stand_model`]: the physical model of a motor–propeller stand (ESC dead time, rotor lag
+//!    per direction and speed, loads ∝ speedᵉ, supply sag, a sensor per channel), the simulated
+//!    stand's equations and their joint fit ([`levenberg_marquardt`]) to a record's channels.
 //!
 //! Measured accuracy with noise and timings: `docs/core.md`.
 
@@ -41,6 +44,7 @@ pub mod grouped;
 pub mod hankel;
 pub mod identify;
 pub mod indicators;
+pub mod levenberg_marquardt;
 pub mod linalg;
 pub mod markov;
 pub mod modal;
@@ -57,6 +61,7 @@ pub mod report;
 pub mod segment;
 pub mod stabilization;
 pub mod stand;
+pub mod stand_model;
 pub mod startup;
 pub mod statespace;
 pub mod static_map;

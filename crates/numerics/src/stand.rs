@@ -197,6 +197,46 @@ pub fn stand_figures(
     }
 }
 
+/// One step's timing on one channel: its dead time and time constant (the figures of
+/// [`step_figures`] on that channel's samples).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ChannelTiming {
+    /// Dead time θ, s.
+    pub dead_time_s: Option<f64>,
+    /// Time constant τ, s.
+    pub time_constant_s: Option<f64>,
+}
+
+/// The timing of every clean step of `cmd` on every channel of `outputs` (one map per step,
+/// by channel key, in the order of [`stand_figures`]' steps): the rotor's and the load
+/// cell's timing side by side. Empty when the command has no step.
+pub fn channel_step_timing(
+    cmd: Command<'_>,
+    dt_s: f64,
+    rules: &SegmentRules,
+    outputs: &[OutputChannel<'_>],
+) -> Vec<BTreeMap<&'static str, ChannelTiming>> {
+    if rules.samples_are_steady() {
+        return Vec::new();
+    }
+    segment::steps(cmd, rules)
+        .iter()
+        .map(|s| {
+            outputs
+                .iter()
+                .map(|o| {
+                    let f = step_figures(o.y, dt_s, s);
+                    let timing = ChannelTiming {
+                        dead_time_s: f.dead_time_s,
+                        time_constant_s: f.time_constant_s,
+                    };
+                    (o.key, timing)
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// Why a step found from the response has no dead time and no command levels.
 pub const NO_COMMAND: &str = "no command in the record: the step was found from the \
     response; timed from when it starts to move (no dead time), `from`/`to` unknown";

@@ -37,6 +37,11 @@ pub struct Loaded {
     pub input_is_a_command: bool,
     /// The static map's channels the file has: key, unit, samples (NaN = not measured).
     pub stand: Vec<(&'static str, &'static str, Vec<f64>)>,
+    /// Per channel of `stand`, the samples interpolated between its readings (empty: every
+    /// sample a reading; [`propid_wire::record::Channel::interpolated`]).
+    pub stand_interpolated: Vec<Vec<bool>>,
+    /// The supply voltage when the file has it (the stand model's speed map).
+    pub voltage: Option<Vec<f64>>,
     /// Description for the output.
     pub source: Source,
 }
@@ -125,6 +130,15 @@ pub const STAND_CHANNELS: [(&str, &str, &str); 4] = [
     ("current", names::CURRENT, "A"),
 ];
 
+/// The channels read when the file has them: the static map's, and the supply voltage.
+const OPTIONAL: [&str; 5] = [
+    STAND_CHANNELS[0].1,
+    STAND_CHANNELS[1].1,
+    STAND_CHANNELS[2].1,
+    STAND_CHANNELS[3].1,
+    names::VOLTAGE,
+];
+
 /// Reads FILE as the options say: the shared loader ([`crate::cli::load`]), then what identify
 /// keeps (the missing mask, device pulse starts, the JSON `"source"`), with the input found from
 /// the response's steps with `--input none`.
@@ -132,7 +146,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
     let req = Request {
         input: args.input.as_deref(),
         outputs: &args.output,
-        optional: &STAND_CHANNELS.map(|c| c.1),
+        optional: &OPTIONAL,
         fs_hz: args.fs,
         columns: args.columns.as_deref(),
         esc_us: args.esc_us.as_deref(),
@@ -191,11 +205,17 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         .filter(|c| rec.channel(c.1).is_some())
         .map(|&(key, channel, unit)| (key, unit, file.data(channel)))
         .collect();
+    let mut stand_interpolated: Vec<Vec<bool>> = STAND_CHANNELS
+        .iter()
+        .filter_map(|c| rec.channel(c.1))
+        .map(|c| c.interpolated.clone())
+        .collect();
     // An identified output that is none of them (a force in ADC counts, a benchmark's level)
     // has its map too, under `output`, in the column's own unit.
     if let Some(first) = file.outputs.first() {
         if !STAND_CHANNELS.iter().any(|c| c.1 == first) {
             stand.push((OUTPUT_KEY, "?", file.data(first)));
+            stand_interpolated.push(Vec::new());
         }
     }
     let (format, output_names, rate_hz, tsp1, csv) = match file.origin {
@@ -209,6 +229,7 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         Origin::Csv(src) => ("csv", src.outputs.clone(), src.rate_hz, None, Some(*src)),
     };
     let read = ColumnsRead::of(csv.as_ref());
+    let voltage = rec.channel(names::VOLTAGE).map(|c| c.data.clone());
     Ok(Loaded {
         dt_s: rec.dt_s,
         input,
@@ -219,6 +240,8 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         commanded,
         input_is_a_command,
         stand,
+        stand_interpolated,
+        voltage,
         source: Source {
             file: file.name,
             format,

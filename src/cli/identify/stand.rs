@@ -4,6 +4,7 @@
 use std::fmt::Write;
 
 use propid_numerics::stand::StandFigures;
+use propid_numerics::stand_model::report::{Figure, Stand};
 use propid_numerics::static_map::{not_repeatable, MIN_SHARE, NOISE_FACTOR};
 use propid_numerics::step_directions::by_direction;
 use propid_numerics::step_response::Direction;
@@ -273,5 +274,112 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
         if let Some(k) = &map.k_t {
             let _ = writeln!(o, "  k_t       {} N/(rad/s)²", pm(k.k_t, k.k_t_sd));
         }
+    }
+}
+
+/// Appends each step's dead time and time constant on every output channel, side by side
+/// (nothing when the steps have no timing per channel, or only one channel).
+pub fn write_channel_timing(o: &mut String, steps: &[super::summary::StepOut<'_>]) {
+    let keys: Vec<&'static str> = steps
+        .first()
+        .map(|s| s.channels.keys().copied().collect())
+        .unwrap_or_default();
+    if keys.len() < 2 {
+        return;
+    }
+    let _ = writeln!(o, "step timing per channel, dead time / tau (s):");
+    let mut head = format!("  {:>9}  {:>4}", "t (s)", "dir");
+    for k in &keys {
+        let _ = write!(head, "  {k:>17}");
+    }
+    let _ = writeln!(o, "{head}");
+    for s in steps {
+        let dir = match s.figures.direction {
+            Direction::Up => "up",
+            Direction::Down => "down",
+        };
+        let mut line = format!("  {:>9.3}  {dir:>4}", s.figures.t_s);
+        for k in &keys {
+            let cell = s.channels.get(k).map_or_else(
+                || "-".to_string(),
+                |c| format!("{} / {}", num(c.dead_time_s, 3), num(c.time_constant_s, 3)),
+            );
+            let _ = write!(line, "  {cell:>17}");
+        }
+        let _ = writeln!(o, "{line}");
+    }
+}
+
+/// A figure of the stand: `value ± sd (from channel)`, or `- (reason)`.
+fn figure(f: &Figure, prec: usize) -> String {
+    match f.value {
+        Some(v) => {
+            let v = match (v.abs(), prec) {
+                (a, _) if a != 0.0 && !(1e-3..1e5).contains(&a) => format!("{v:.4e}"),
+                _ => format!("{v:.prec$}"),
+            };
+            let sd = f.uncertainty.map_or_else(String::new, |s| {
+                if s != 0.0 && !(1e-3..1e5).contains(&s) {
+                    format!(" ± {s:.2e}")
+                } else {
+                    format!(" ± {s:.prec$}")
+                }
+            });
+            let from = f
+                .from
+                .as_deref()
+                .map_or_else(String::new, |c| format!("  (from {c})"));
+            let note = f
+                .note
+                .as_deref()
+                .map_or_else(String::new, |n| format!("; {n}"));
+            format!("{v}{sd}{from}{note}")
+        }
+        None => format!("-  ({})", f.reason.as_deref().unwrap_or("not shown")),
+    }
+}
+
+/// Appends the stand's physics (`"stand"`): each figure with the channel it came from, or why
+/// the record cannot show it.
+pub fn write_physics(o: &mut String, stand: Option<&Stand>) {
+    let r = match stand {
+        None => return,
+        Some(Stand::Refused(r)) => {
+            let _ = writeln!(o, "stand model: none ({})", r.refused);
+            return;
+        }
+        Some(Stand::Fitted(r)) => r,
+    };
+    let _ = writeln!(
+        o,
+        "stand model (the rotor timed on {}, each sensor against it):",
+        r.reference_channel
+    );
+    let rows: [(&str, &Figure, usize); 11] = [
+        ("esc dead time (s)", &r.esc_dead_time_s, 4),
+        ("rotor tau up (s)", &r.rotor_tau_up_s, 4),
+        ("rotor tau down (s)", &r.rotor_tau_down_s, 4),
+        ("tau speed exponent", &r.rotor_tau_speed_exponent, 3),
+        ("reference speed (rpm)", &r.reference_speed_rpm, 0),
+        ("command dead band u0", &r.command_zero, 4),
+        ("speed map exponent", &r.speed_map_exponent, 3),
+        ("thrust exponent e", &r.thrust_exponent, 3),
+        ("k_t", &r.k_t, 4),
+        ("k_q", &r.k_q, 4),
+        ("supply resistance (ohm)", &r.supply_resistance_ohm, 4),
+    ];
+    for (name, f, prec) in rows {
+        let _ = writeln!(o, "  {name:<24} {}", figure(f, prec));
+    }
+    for (key, s) in &r.sensors {
+        let _ = writeln!(
+            o,
+            "  sensor {key:<9} refresh {} s, {} readings, rms {}",
+            num(s.refresh_s.value, 4),
+            s.readings,
+            num(Some(s.rms), 4)
+        );
+        let _ = writeln!(o, "    {:<22} {}", "delay (s)", figure(&s.delay_s, 4));
+        let _ = writeln!(o, "    {:<22} {}", "tau (s)", figure(&s.tau_s, 4));
     }
 }

@@ -2,21 +2,53 @@
 
 use std::fmt::Write;
 
+use std::collections::BTreeMap;
+
 use serde::Serialize;
 
 use super::load::{Loaded, Source};
+use super::Physics;
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::quality::{judge, judge_gain, judge_sample_period, Flaw};
 use propid_numerics::report::Gain;
 use propid_numerics::stabilization::Stabilization;
+use propid_numerics::stand::ChannelTiming;
 use propid_numerics::stand::StandFigures;
+use propid_numerics::stand_model::report::Stand;
 use propid_numerics::static_map::LevelSlope;
 use propid_numerics::step_directions::{by_direction, DirectionFigures};
+use propid_numerics::step_response::StepFigures;
 use propid_numerics::ModelReport;
 
 /// Step figures' medians per direction (`"up"`, `"down"`).
 type ByDirection = std::collections::BTreeMap<&'static str, DirectionFigures>;
+
+/// One entry of `"steps"`: the step's figures on the identified output, and its dead time and
+/// time constant on every output channel of the stand (`"channels"`, by key; omitted when
+/// the input is no command).
+#[derive(Debug, Clone, Serialize)]
+pub struct StepOut<'a> {
+    /// The figures on the identified output.
+    #[serde(flatten)]
+    pub figures: &'a StepFigures,
+    /// Per channel key, the step's timing there.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub channels: BTreeMap<&'static str, ChannelTiming>,
+}
+
+/// The steps of `stand` with their timing per channel from `physics`.
+fn steps_out<'a>(stand: &'a StandFigures, physics: &Physics) -> Vec<StepOut<'a>> {
+    stand
+        .steps
+        .iter()
+        .enumerate()
+        .map(|(i, f)| StepOut {
+            figures: f,
+            channels: physics.timing.get(i).cloned().unwrap_or_default(),
+        })
+        .collect()
+}
 
 /// Everything `identify` prints.
 #[derive(Debug, Clone, Serialize)]
@@ -27,14 +59,18 @@ pub struct Output<'a> {
     pub source: Source,
     /// The gain schedule.
     pub operating_points: &'a OpTable,
-    /// Step figures, one per clean command step (empty without steps).
-    pub steps: &'a [propid_numerics::step_response::StepFigures],
+    /// Step figures, one per clean command step (empty without steps), each with its timing
+    /// on every output channel.
+    pub steps: Vec<StepOut<'a>>,
     /// Their medians per direction, `up` and `down` ([`propid_numerics::step_directions`]);
     /// omitted without steps.
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub steps_by_direction: ByDirection,
     /// Steady levels and fitted curves per output (empty without steps or a ramp).
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
+    /// The stand's physics ([`propid_numerics::stand_model::report`]): `null` when the input is
+    /// no stand's command, `{"refused": ...}` when the record cannot give it.
+    pub stand: Option<&'a Stand>,
     /// The stabilization diagram of the model's Hankel SVD (null when it cannot be realised).
     pub stabilization: Option<&'a Stabilization>,
     /// The quality checks of the model ([`propid_numerics::quality`], the daemon's rule).
@@ -287,6 +323,7 @@ impl<'a> Output<'a> {
         ops: &'a OpTable,
         stand: &'a StandFigures,
         levels: Option<&LevelSlope>,
+        physics: &'a Physics,
     ) -> Self {
         let mut source = loaded.source.clone();
         source.path = path_name(model.path);
@@ -295,9 +332,10 @@ impl<'a> Output<'a> {
             model: &model.report,
             source,
             operating_points: ops,
-            steps: &stand.steps,
+            steps: steps_out(stand, physics),
             steps_by_direction: by_direction(&stand.steps),
             static_map: &stand.static_map,
+            stand: physics.stand.as_ref(),
             stabilization: model.stabilization.as_ref(),
             quality: Quality::of(&model.report, levels, loaded.input_is_a_command),
             warnings: stream_warnings(&loaded.source)
@@ -517,10 +555,12 @@ impl<'a> Output<'a> {
             &mut o,
             &StandFigures {
                 command: "",
-                steps: self.steps.to_vec(),
+                steps: self.steps.iter().map(|s| s.figures.clone()).collect(),
                 static_map: self.static_map.clone(),
             },
         );
+        super::stand::write_channel_timing(&mut o, &self.steps);
+        super::stand::write_physics(&mut o, self.stand);
         o
     }
 }
@@ -536,31 +576,39 @@ pub struct Partial<'a> {
     pub error: String,
     /// Where the data came from.
     pub source: Source,
-    /// Step figures, one per clean command step.
-    pub steps: &'a [propid_numerics::step_response::StepFigures],
+    /// Step figures, one per clean command step, with their timing per channel.
+    pub steps: Vec<StepOut<'a>>,
     /// Their medians per direction (as [`Output::steps_by_direction`]).
     #[serde(skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub steps_by_direction: ByDirection,
     /// Steady levels and fitted curves per output.
     pub static_map: &'a std::collections::BTreeMap<&'static str, propid_numerics::stand::StaticMap>,
+    /// The stand's physics (as [`Output::stand`]).
+    pub stand: Option<&'a Stand>,
     /// Implausible figures (`expo_outside_blend`, `levels_not_repeatable`,
     /// `thrust_zero_offset`); empty when none.
     pub warnings: Vec<IdentifyWarning>,
     /// All the figures (for the human tables).
     #[serde(skip)]
-    stand: &'a StandFigures,
+    figures: &'a StandFigures,
 }
 
 impl<'a> Partial<'a> {
     /// The figures of `stand` with the failure `error`.
-    pub fn new(loaded: &Loaded, error: &impl std::fmt::Display, stand: &'a StandFigures) -> Self {
+    pub fn new(
+        loaded: &Loaded,
+        error: &impl std::fmt::Display,
+        stand: &'a StandFigures,
+        physics: &'a Physics,
+    ) -> Self {
         Self {
             model: None,
             error: error.to_string(),
             source: loaded.source.clone(),
-            steps: &stand.steps,
+            steps: steps_out(stand, physics),
             steps_by_direction: by_direction(&stand.steps),
             static_map: &stand.static_map,
+            stand: physics.stand.as_ref(),
             warnings: stream_warnings(&loaded.source)
                 .into_iter()
                 .chain(
@@ -571,7 +619,7 @@ impl<'a> Partial<'a> {
                         .flat_map(thrust_map_warnings),
                 )
                 .collect(),
-            stand,
+            figures: stand,
         }
     }
 
@@ -591,7 +639,9 @@ impl<'a> Partial<'a> {
             let _ = writeln!(o, "warning   {}: {}", w.kind, w.message);
         }
         let _ = writeln!(o, "(the step figures and the static map need no model:)");
-        super::stand::write_tables(&mut o, self.stand);
+        super::stand::write_tables(&mut o, self.figures);
+        super::stand::write_channel_timing(&mut o, &self.steps);
+        super::stand::write_physics(&mut o, self.stand);
         o
     }
 }

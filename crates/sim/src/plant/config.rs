@@ -2,6 +2,7 @@
 //! defaults, and the range checks that name the first bad key.
 
 use serde::Deserialize;
+use propid_numerics::stand_model::{CurrentLaw, RotorLaw, SpeedMap, StandParams, Supply};
 
 use crate::effects::EffectsConfig;
 
@@ -289,17 +290,58 @@ impl MotorConfig {
         (self.dead_time_s / dt_s).round() as usize
     }
 
-    /// Steady-state speed `n_ss(u, V)`, rev/min.
-    pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
-        plant.rpm_at_reference
-            * (u.max(0.0) / plant.reference_throttle)
-            * (voltage_v / plant.battery_v)
+    /// The speed map of the stand model: `n_ref · (u / u_ref) · (V / V₀)`, no dead band.
+    pub fn speed_map(&self, plant: &PlantConfig) -> SpeedMap {
+        SpeedMap {
+            speed_ref: plant.rpm_at_reference,
+            command_zero: 0.0,
+            command_ref: plant.reference_throttle,
+            exponent: 1.0,
+            voltage_ref: plant.battery_v,
+        }
     }
 
-    /// The time constant `τ(n, dir)` at speed `n` (rev/min), seconds.
+    /// The rotor's lag in the stand model, its time constants given at `rpm_at_reference`.
+    pub fn rotor_law(&self, plant: &PlantConfig) -> RotorLaw {
+        RotorLaw {
+            tau_up_s: self.tau_up_s,
+            tau_down_s: self.tau_down_s,
+            tau_speed_exponent: self.tau_speed_exponent,
+            speed_ref: plant.rpm_at_reference,
+        }
+    }
+
+    /// The plant as the stand model's parameters (speed in rev/min; the dead time as the
+    /// plant steps it, whole samples of `dt_s`; torque `torque_m · T`; the battery unloaded and
+    /// not discharging).
+    pub fn stand_params(&self, plant: &PlantConfig, dt_s: f64) -> StandParams {
+        let n_ref = plant.rpm_at_reference;
+        StandParams {
+            dead_time_s: self.dead_time_samples(dt_s) as f64 * dt_s,
+            map: self.speed_map(plant),
+            rotor: self.rotor_law(plant),
+            thrust_exponent: 2.0,
+            k_t: self.k_t(plant),
+            k_q: plant.torque_m * self.k_t(plant),
+            current: CurrentLaw {
+                idle_a: plant.idle_current_a,
+                per_power: plant.current_at_reference_a / (n_ref * n_ref * n_ref),
+                per_acceleration: 0.0,
+            },
+            supply: Supply {
+                open_circuit_v: plant.battery_v,
+                resistance_ohm: plant.internal_resistance_ohm,
+            },
+        }
+    }
+
+    /// Steady-state speed `n_ss(u, V)`, rev/min ([`SpeedMap::speed_ss`]).
+    pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
+        self.speed_map(plant).speed_ss(u, voltage_v)
+    }
+
+    /// The time constant `τ(n, dir)` at speed `n` (rev/min), seconds ([`RotorLaw::tau_s`]).
     pub fn tau_s(&self, plant: &PlantConfig, n: f64, up: bool) -> f64 {
-        let base = if up { self.tau_up_s } else { self.tau_down_s };
-        let floor = plant.rpm_at_reference / 10.0;
-        base * (plant.rpm_at_reference / n.max(floor)).powf(self.tau_speed_exponent)
+        self.rotor_law(plant).tau_s(n, up)
     }
 }

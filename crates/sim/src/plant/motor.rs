@@ -26,8 +26,15 @@
 //! motor `d = round(dead_time_s / dt)` samples late (ESC update and commutation latency), and,
 //! as with the 2nd-order plant, the throttle held during sample `k` shows in the thrust from
 //! sample `k + 1 + d` on.
+//!
+//! These are the equations of the stand model of the numerics layer
+//! ([`propid_numerics::stand_model`]: [`SpeedMap`], [`RotorLaw`], `T = k_T nᵉ` with `e = 2`),
+//! which steps them here ([`MotorConfig::stand_params`] gives the plant as that model's
+//! parameters, the truth its fit is held against); the simulated current
+//! `I_idle + I_ref (T/T_ref)^{3/2}` is its current law `I₀ + k_I n³` at `e = 2`.
 
 use crate::delay_line::DelayLine;
+use propid_numerics::stand_model::{load, RotorLaw, SpeedMap};
 
 use super::{MotorConfig, PlantConfig, PlantError};
 
@@ -59,9 +66,9 @@ impl Motor {
         self.n
     }
 
-    /// Thrust `k_T n²`, newtons.
+    /// Thrust `k_T n²`, newtons ([`load`]).
     pub(crate) fn thrust_n(&self, plant: &PlantConfig) -> f64 {
-        self.cfg.k_t(plant) * self.n * self.n
+        load(self.cfg.k_t(plant), self.n, 2.0)
     }
 
     /// The ESC's delay line: pushes `u`, returns the throttle of `d` samples ago (0 before the
@@ -73,8 +80,7 @@ impl Motor {
     /// Advances one sample with the (delayed, mapped) throttle `u` held and supply `voltage_v`.
     pub(crate) fn advance(&mut self, plant: &PlantConfig, u: f64, voltage_v: f64) {
         let target = self.cfg.speed_ss(plant, u, voltage_v);
-        let tau = self.cfg.tau_s(plant, self.n, target >= self.n);
-        self.n = target + (self.n - target) * (-self.dt_s / tau).exp();
+        self.n = self.cfg.rotor_law(plant).advance(self.n, target, self.dt_s);
     }
 
     /// Steady state at throttle `throttle` (the ESC's line full of it) and mapped throttle `u`,

@@ -172,3 +172,81 @@ fn core_effects_of_the_second_order_plant_are_refused_on_the_motor_not_ignored()
     cfg.kind = PlantKind::SecondOrder;
     assert!(Plant::new(&cfg, DT, 0).is_ok());
 }
+
+#[test]
+fn the_stand_model_steps_the_motor_plant_and_its_fit_finds_the_plant_again() {
+    use propid_numerics::segment::SegmentRules;
+    use propid_numerics::stand_model::fit::{fit, Channel, FitInput};
+    use propid_numerics::stand_model::{rotor_course, Quantity};
+    let cfg = PlantConfig {
+        noise_rms_n: 0.01,
+        ..motor()
+    };
+    let per = 250;
+    let u: Vec<f64> = [0.3, 0.5, 0.4, 0.7, 0.6, 0.35, 0.55]
+        .iter()
+        .flat_map(|&l| std::iter::repeat(l).take(per))
+        .collect();
+    let mut p = Plant::new(&cfg, DT, 7).unwrap();
+    p.settle(u[0]);
+    let rows: Vec<Measurement> = u.iter().map(|&x| p.step(x)).collect();
+    let col = |f: fn(&Measurement) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
+    let (rpm, thrust, current, voltage) = (
+        col(|m| m.rpm),
+        col(|m| m.thrust_n),
+        col(|m| m.current_a),
+        col(|m| m.voltage_v),
+    );
+    // One home for the physics: the model's rotor under the plant's own voltage is the
+    // plant's rotor, row by row.
+    let truth = cfg.motor.stand_params(&cfg, DT);
+    let course = rotor_course(&truth, DT, &u, Some(&voltage));
+    for (k, (model, plant)) in course.speed.iter().zip(&rpm).enumerate() {
+        assert!((model - plant).abs() < 1e-6, "row {k}");
+    }
+    let channels = [
+        Channel {
+            key: "rpm",
+            quantity: Quantity::Speed,
+            y: &rpm,
+            interpolated: &[],
+        },
+        Channel {
+            key: "thrust",
+            quantity: Quantity::Thrust,
+            y: &thrust,
+            interpolated: &[],
+        },
+        Channel {
+            key: "current",
+            quantity: Quantity::Current,
+            y: &current,
+            interpolated: &[],
+        },
+    ];
+    let f = fit(&FitInput {
+        dt_s: DT,
+        command: &u,
+        voltage: Some(&voltage),
+        channels: &channels,
+        rules: SegmentRules::for_record(DT, true),
+    })
+    .unwrap();
+    let close = |what: &str, got: f64, want: f64, tol: f64| {
+        assert!((got - want).abs() <= tol, "{what}: {got} vs {want} ± {tol}")
+    };
+    close("θ", f.dead_time_s.0, 2.0 * DT, 0.001);
+    close("τ_up", f.tau_up_s.0, cfg.motor.tau_up_s, 0.001);
+    close("τ_down", f.tau_down_s.0, cfg.motor.tau_down_s, 0.0015);
+    close("γ", f.tau_speed_exponent.0, 0.0, 0.05);
+    close("e", f.thrust_exponent.0, 2.0, 0.02);
+    let k_t_rad = truth.k_t * (60.0 / std::f64::consts::TAU).powi(2);
+    close("k_t", f.k_t_rad.unwrap().0 / k_t_rad, 1.0, 0.02);
+    close("u0", f.command_zero.0, 0.0, 0.01);
+    close(
+        "R",
+        f.supply_resistance_ohm.unwrap().0,
+        cfg.internal_resistance_ohm,
+        0.01,
+    );
+}

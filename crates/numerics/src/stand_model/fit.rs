@@ -1,0 +1,1006 @@
+//! The stand model ([`super`]) fitted jointly to whichever channels a record has (speed,
+//! thrust, torque, current; any mix), each weighted by its own noise.
+//!
+//! # What is fitted
+//! The speed is relative in the fit (`n_ref = 1` at the record's highest command `u_ref` and
+//! mean supply voltage `V_ref`): every amplitude then enters linearly, and is found by least
+//! squares for each value of the others (variable projection, Golub & Pereyra 1973, "The
+//! differentiation of pseudo-inverses and nonlinear least squares problems", SIAM J. Numer.
+//! Anal. 10(2), 413–432). Per channel, over its readings only (a held channel's interpolated
+//! rows are no readings):
+//!
+//! ```text
+//!   speed:          y = n_ref · S[ν]                           (a speed sensor reads no offset)
+//!   thrust, torque: y = K · S[νᵉ] + c + d t                    (K = k nᵉ_ref; c, d offset, creep)
+//!   current:        y = K_I · S[ν^{e+1}] + K_J · S[ν ν'] + c + d t
+//! ```
+//!
+//! `S` is the channel's sensor (lag `τ_s`, delay `δ`), `ν` the relative speed of the rotor
+//! course. The nonlinear parameters — the dead time `θ`, `ln τ_up`, `ln τ_down`, `γ`, the dead
+//! band `u₀`, the map's exponent `a`, `e`, and each channel's `δ` and `ln τ_s` — are found by
+//! [`crate::levenberg_marquardt`] within bounds, from the step figures of the channels
+//! ([`crate::step_response`]: the reference channel's median dead time and τ per direction, each
+//! other channel's extra dead time and τ over it) and the power law of the reference channel's
+//! static map.
+//!
+//! # The reference channel and what cannot be told apart
+//! Delays in series add and two first-order lags in series are symmetric in their time
+//! constants: the speed sensor's delay and lag cannot be told from the ESC's and the rotor's.
+//! The reference channel (the speed when the record has it, else the thrust, torque, current)
+//! therefore has no sensor delay or lag of its own: the rotor's figures include them, and every
+//! other channel's sensor is timed against it. Without a speed channel the speed's unit and the
+//! map's exponent are unknown: the speed is taken `∝ (u − u₀)·V` (`a = 1`), `e` is the thrust's
+//! exponent on that speed, and `k_T`, `k_Q` cannot be given in rad/s ([`super::report`] says
+//! so). `τ_down` needs the command to fall, `τ_up` to rise; `γ` needs moves to at least two
+//! levels: otherwise `τ_down = τ_up`, `γ = 0` are held and reported as not shown.
+//!
+//! A record longer than [`MAX_ROWS`] rows is fitted over the window of that many rows in which
+//! the command moves most often. A channel with more than [`MAX_READINGS`] readings is compared at every m-th of them (the
+//! rotor and the sensors still stepped over every row): a pulse experiment of 100 000 rows is
+//! fitted in seconds, its uncertainty that of the readings compared.
+//!
+//! # Weights and uncertainty
+//! Each channel's residuals are divided by its noise `σ_c`: first the readings' own (robust
+//! standard deviation of the differences of consecutive readings, `1.4826 · MAD / √2`), then,
+//! after a first fit, the larger of that and the channel's residual RMS (a channel the model
+//! fits worse than its noise — a current's electrical transient — does not outweigh the
+//! others), and the fit is run again. The covariance of all parameters (the amplitudes with
+//! them) is `s² (JᵀJ)⁻¹` of the weighted residuals ([`crate::levenberg_marquardt::covariance`]);
+//! residuals correlated over a step make it optimistic.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::{
+    delayed_at, fill_held, lag, rotor_course, CurrentLaw, Quantity, RotorLaw, SpeedMap,
+    StandParams, Supply,
+};
+use crate::levenberg_marquardt::{covariance, jacobian, minimise, LmOptions};
+use crate::segment::{self, Command, SegmentRules};
+use crate::static_map::{fit_power_law, levels};
+use crate::step_response::{step_figures, Direction};
+
+/// One measured channel of a record.
+#[derive(Debug, Clone, Copy)]
+pub struct Channel<'a> {
+    /// Its key (`rpm`, `thrust`, `torque`, `current`).
+    pub key: &'static str,
+    /// What it measures.
+    pub quantity: Quantity,
+    /// Samples (NaN: missing).
+    pub y: &'a [f64],
+    /// True where a reader interpolated between readings (empty: every finite sample is one).
+    pub interpolated: &'a [bool],
+}
+
+/// A record for the fit.
+#[derive(Debug, Clone, Copy)]
+pub struct FitInput<'a> {
+    /// Row period, s.
+    pub dt_s: f64,
+    /// The command, throttle 0..1, held over each row (NaN holds the last).
+    pub command: &'a [f64],
+    /// The supply voltage per row when measured.
+    pub voltage: Option<&'a [f64]>,
+    /// The measured channels.
+    pub channels: &'a [Channel<'a>],
+    /// The segmentation's rules at the record's rate (steps for the start values).
+    pub rules: SegmentRules,
+}
+
+/// Why a record gives no stand model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StandModelError {
+    /// The command never moves.
+    #[error("the command does not change: nothing in the record shows the stand's dynamics")]
+    NoCommandChange,
+    /// No channel of the stand has enough readings.
+    #[error("no channel of the stand (rpm, thrust, torque, current) has {0} readings")]
+    TooFewReadings(usize),
+    /// The fit found no finite point.
+    #[error("the stand model could not be evaluated on this record")]
+    NotFitted,
+}
+
+/// Fewest readings of a channel for it to take part.
+pub const MIN_READINGS: usize = 20;
+
+/// Most readings of a channel compared with the model: a longer record is compared at every
+/// m-th reading (its noise and refresh still read from all), which keeps a fit of 100 000 rows
+/// to seconds.
+pub const MAX_READINGS: usize = 8_000;
+
+/// Most rows a fit steps the stand over: a longer record is fitted over the window of this
+/// many rows in which the command moves most often ([`StandFit::window_s`]).
+pub const MAX_ROWS: usize = 30_000;
+
+/// Lower bound of a sensor's lag and of the rotor's time constants, s (a lag the rows cannot
+/// show ends there).
+pub const MIN_TAU_S: f64 = 1e-3;
+
+/// One channel as fitted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelFit {
+    /// Its key.
+    pub key: &'static str,
+    /// What it measures.
+    pub quantity: Quantity,
+    /// Whether it is the reference channel (no sensor delay or lag of its own).
+    pub reference: bool,
+    /// Readings used.
+    pub readings: usize,
+    /// Refresh interval (median spacing of the readings), s, and the spacing's spread, s.
+    pub refresh_s: (f64, f64),
+    /// Delay and its standard deviation, s (`None` for the reference).
+    pub delay_s: Option<(f64, Option<f64>)>,
+    /// Lag and its standard deviation, s (`None` for the reference).
+    pub tau_s: Option<(f64, Option<f64>)>,
+    /// The amplitudes (module doc), then offset and creep per second where fitted.
+    pub amplitudes: Vec<f64>,
+    /// The noise the residuals were divided by.
+    pub sigma: f64,
+    /// RMS of the residuals, the channel's unit.
+    pub rms: f64,
+}
+
+/// What the data can show, decided before the fit (module doc).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shows {
+    /// The command rises somewhere.
+    pub rises: bool,
+    /// The command falls somewhere.
+    pub falls: bool,
+    /// Moves end at two levels or more.
+    pub several_levels: bool,
+    /// The record has a speed channel.
+    pub speed: bool,
+    /// `e` has a channel (thrust, torque or current).
+    pub exponent: bool,
+}
+
+/// A value and its standard deviation (`None`: not given: fixed, or at a bound).
+pub type Estimate = (f64, Option<f64>);
+
+/// The fitted stand.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandFit {
+    /// The parameters in the record's units (`speed_ref` the speed channel's rev/min at
+    /// `u_ref` and `V_ref`, 1 without a speed channel; `k_t`, `k_q` per that speed unit^e).
+    pub params: StandParams,
+    /// What the data can show.
+    pub shows: Shows,
+    /// `θ`, s.
+    pub dead_time_s: Estimate,
+    /// `τ_up` at `speed_ref`, s.
+    pub tau_up_s: Estimate,
+    /// `τ_down` at `speed_ref`, s.
+    pub tau_down_s: Estimate,
+    /// `γ`.
+    pub tau_speed_exponent: Estimate,
+    /// `u₀`.
+    pub command_zero: Estimate,
+    /// `a`.
+    pub map_exponent: Estimate,
+    /// `e`.
+    pub thrust_exponent: Estimate,
+    /// `k_T` in N per (rad/s)^e (speed channel and thrust).
+    pub k_t_rad: Option<Estimate>,
+    /// `k_Q` in N·m per (rad/s)^e (speed channel and torque).
+    pub k_q_rad: Option<Estimate>,
+    /// The speed at `u_ref`, rev/min (speed channel only).
+    pub speed_ref_rpm: Option<Estimate>,
+    /// The supply's internal resistance from the measured voltage against the measured
+    /// current, Ω.
+    pub supply_resistance_ohm: Option<Estimate>,
+    /// The channels.
+    pub channels: Vec<ChannelFit>,
+    /// Jacobians computed.
+    pub iterations: usize,
+    /// The span of the record fitted, s from its start ([`MAX_ROWS`]).
+    pub window_s: (f64, f64),
+}
+
+/// A channel ready for the fit.
+#[derive(Debug, Clone)]
+struct Prepared {
+    key: &'static str,
+    quantity: Quantity,
+    y: Vec<f64>,
+    rows: Vec<usize>,
+    noise: f64,
+    sigma: f64,
+    refresh: (f64, f64),
+    reference: bool,
+}
+
+/// The nonlinear parameters (module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum P {
+    Dead,
+    TauUp,
+    TauDown,
+    Gamma,
+    Zero,
+    MapExp,
+    Exp,
+    Delay(usize),
+    Lag(usize),
+}
+
+/// Values of every nonlinear parameter (fixed or free).
+#[derive(Debug, Clone, PartialEq)]
+struct Values {
+    dead: f64,
+    tau_up: f64,
+    tau_down: Option<f64>,
+    gamma: f64,
+    zero: f64,
+    map_exp: f64,
+    exp: f64,
+    delay: Vec<f64>,
+    lag: Vec<f64>,
+}
+
+struct Problem {
+    dt: f64,
+    u: Vec<f64>,
+    voltage: Option<Vec<f64>>,
+    v_ref: f64,
+    u_ref: f64,
+    t_span: f64,
+    channels: Vec<Prepared>,
+    shows: Shows,
+    layout: Vec<P>,
+    bounds: Vec<(f64, f64)>,
+    base: Values,
+}
+
+fn median(v: &mut [f64]) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    Some(v[v.len() / 2])
+}
+
+/// The readings' noise: `1.4826 · MAD / √2` of the differences of consecutive readings.
+fn reading_noise(y: &[f64], rows: &[usize]) -> f64 {
+    let mut d: Vec<f64> = rows.windows(2).map(|w| y[w[1]] - y[w[0]]).collect();
+    let Some(m) = median(&mut d) else {
+        return 0.0;
+    };
+    let mut dev: Vec<f64> = d.iter().map(|x| (x - m).abs()).collect();
+    median(&mut dev).unwrap_or(0.0) * 1.4826 / std::f64::consts::SQRT_2
+}
+
+fn prepare(c: &Channel<'_>, missing_len: usize) -> Prepared {
+    let rows: Vec<usize> = (0..c.y.len().min(missing_len))
+        .filter(|&k| c.y[k].is_finite() && !c.interpolated.get(k).copied().unwrap_or(false))
+        .collect();
+    let mut gaps: Vec<f64> = rows.windows(2).map(|w| (w[1] - w[0]) as f64).collect();
+    let var = if gaps.is_empty() {
+        0.0
+    } else {
+        let m = gaps.iter().sum::<f64>() / gaps.len() as f64;
+        gaps.iter().map(|g| (g - m) * (g - m)).sum::<f64>() / gaps.len() as f64
+    };
+    let refresh = median(&mut gaps).unwrap_or(1.0);
+    let noise = reading_noise(c.y, &rows);
+    let (lo, hi) = rows
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &k| {
+            (a.min(c.y[k]), b.max(c.y[k]))
+        });
+    let floor = 1e-6 * (hi - lo).abs().max(1e-9);
+    // A long record is compared at every m-th reading (the rotor still stepped over every row).
+    let m = rows.len().div_ceil(MAX_READINGS).max(1);
+    let rows: Vec<usize> = rows.into_iter().step_by(m).collect();
+    Prepared {
+        key: c.key,
+        quantity: c.quantity,
+        y: c.y.to_vec(),
+        rows,
+        noise: noise.max(floor),
+        sigma: noise.max(floor),
+        refresh: (refresh, (var + 1.0 / 12.0).sqrt()),
+        reference: false,
+    }
+}
+
+/// Whether the command rises, falls, and to how many levels its moves lead (a move: a change
+/// beyond 2 % of its range from one row to the next).
+fn moves(u: &[f64]) -> (bool, bool, usize) {
+    let (lo, hi) = u
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let range = hi - lo;
+    if range.is_nan() || range <= 0.0 {
+        return (false, false, 0);
+    }
+    let (mut up, mut down) = (false, false);
+    let mut ends: Vec<i64> = Vec::new();
+    for w in u.windows(2) {
+        let d = w[1] - w[0];
+        if d.abs() > 0.02 * range {
+            up |= d > 0.0;
+            down |= d < 0.0;
+            let level = ((w[1] - lo) / (0.05 * range)).round() as i64;
+            if !ends.contains(&level) {
+                ends.push(level);
+            }
+        }
+    }
+    (up, down, ends.len())
+}
+
+impl Problem {
+    fn values(&self, z: &[f64]) -> Values {
+        let mut v = self.base.clone();
+        for (p, &x) in self.layout.iter().zip(z) {
+            match *p {
+                P::Dead => v.dead = x,
+                P::TauUp => v.tau_up = x.exp(),
+                P::TauDown => v.tau_down = Some(x.exp()),
+                P::Gamma => v.gamma = x,
+                P::Zero => v.zero = x,
+                P::MapExp => v.map_exp = x,
+                P::Exp => v.exp = x,
+                P::Delay(c) => v.delay[c] = x,
+                P::Lag(c) => v.lag[c] = x.exp(),
+            }
+        }
+        v
+    }
+
+    fn z_of(&self, v: &Values) -> Vec<f64> {
+        self.layout
+            .iter()
+            .map(|p| match *p {
+                P::Dead => v.dead,
+                P::TauUp => v.tau_up.ln(),
+                P::TauDown => v.tau_down.unwrap_or(v.tau_up).ln(),
+                P::Gamma => v.gamma,
+                P::Zero => v.zero,
+                P::MapExp => v.map_exp,
+                P::Exp => v.exp,
+                P::Delay(c) => v.delay[c],
+                P::Lag(c) => v.lag[c].max(MIN_TAU_S).ln(),
+            })
+            .collect()
+    }
+
+    /// The relative stand (`n_ref = 1`, unit amplitudes) of `v`.
+    fn relative(&self, v: &Values) -> StandParams {
+        StandParams {
+            dead_time_s: v.dead,
+            map: SpeedMap {
+                speed_ref: 1.0,
+                command_zero: v.zero,
+                command_ref: self.u_ref,
+                exponent: v.map_exp,
+                voltage_ref: self.v_ref,
+            },
+            rotor: RotorLaw {
+                tau_up_s: v.tau_up,
+                tau_down_s: v.tau_down.unwrap_or(v.tau_up),
+                tau_speed_exponent: v.gamma,
+                speed_ref: 1.0,
+            },
+            thrust_exponent: v.exp,
+            k_t: 1.0,
+            k_q: 1.0,
+            current: CurrentLaw {
+                idle_a: 0.0,
+                per_power: 1.0,
+                per_acceleration: 0.0,
+            },
+            supply: Supply {
+                open_circuit_v: self.v_ref,
+                resistance_ohm: 0.0,
+            },
+        }
+    }
+
+    /// Per channel, the design columns at its readings (module doc): the sensed bases, then
+    /// offset and creep for all but a speed.
+    fn design(&self, v: &Values) -> Option<Vec<Vec<Vec<f64>>>> {
+        let p = self.relative(v);
+        let course = rotor_course(&p, self.dt, &self.u, self.voltage.as_deref());
+        if course.speed.iter().any(|x| !x.is_finite()) {
+            return None;
+        }
+        let e = v.exp;
+        let out = self
+            .channels
+            .iter()
+            .enumerate()
+            .map(|(c, ch)| {
+                let bases: Vec<Vec<f64>> = match ch.quantity {
+                    Quantity::Speed => vec![course.speed.clone()],
+                    Quantity::Thrust | Quantity::Torque => {
+                        vec![course
+                            .speed
+                            .iter()
+                            .map(|&n| super::speed_power(n, e))
+                            .collect()]
+                    }
+                    Quantity::Current => vec![
+                        course
+                            .speed
+                            .iter()
+                            .map(|&n| super::speed_power(n, e + 1.0))
+                            .collect(),
+                        course
+                            .speed
+                            .iter()
+                            .zip(&course.rate)
+                            .map(|(&n, &r)| n.max(0.0) * r)
+                            .collect(),
+                    ],
+                };
+                let mut cols: Vec<Vec<f64>> = bases
+                    .iter()
+                    .map(|b| {
+                        let s = lag(b, self.dt, v.lag[c]);
+                        ch.rows
+                            .iter()
+                            .map(|&k| delayed_at(&s, self.dt, v.delay[c], k))
+                            .collect()
+                    })
+                    .collect();
+                if ch.quantity != Quantity::Speed {
+                    cols.push(vec![1.0; ch.rows.len()]);
+                    cols.push(
+                        ch.rows
+                            .iter()
+                            .map(|&k| k as f64 * self.dt / self.t_span)
+                            .collect(),
+                    );
+                }
+                cols
+            })
+            .collect();
+        Some(out)
+    }
+
+    /// Least squares of each channel's readings on its columns (a tiny ridge keeps a column of
+    /// zeros — a speed never above the dead band — solvable).
+    fn solve(&self, design: &[Vec<Vec<f64>>]) -> Vec<Vec<f64>> {
+        design
+            .iter()
+            .zip(&self.channels)
+            .map(|(cols, ch)| {
+                let m = cols.len();
+                let mut ata = DMatrix::<f64>::zeros(m, m);
+                let mut aty = DVector::<f64>::zeros(m);
+                for i in 0..m {
+                    aty[i] = cols[i]
+                        .iter()
+                        .zip(&ch.rows)
+                        .map(|(a, &k)| a * ch.y[k])
+                        .sum();
+                    for j in i..m {
+                        let v: f64 = cols[i].iter().zip(&cols[j]).map(|(a, b)| a * b).sum();
+                        ata[(i, j)] = v;
+                        ata[(j, i)] = v;
+                    }
+                }
+                let scale = (0..m).map(|i| ata[(i, i)]).fold(0.0, f64::max).max(1e-300);
+                for i in 0..m {
+                    ata[(i, i)] += 1e-12 * scale;
+                }
+                ata.cholesky()
+                    .map(|c| c.solve(&aty).iter().copied().collect())
+                    .unwrap_or_else(|| vec![0.0; m])
+            })
+            .collect()
+    }
+
+    /// Weighted residuals at `v` with the amplitudes `lin` (solved when `None`).
+    fn residuals(&self, v: &Values, lin: Option<&[Vec<f64>]>, r: &mut Vec<f64>) -> bool {
+        let Some(design) = self.design(v) else {
+            return false;
+        };
+        let solved;
+        let lin = match lin {
+            Some(l) => l,
+            None => {
+                solved = self.solve(&design);
+                &solved
+            }
+        };
+        r.clear();
+        for ((cols, ch), beta) in design.iter().zip(&self.channels).zip(lin) {
+            for (i, &k) in ch.rows.iter().enumerate() {
+                let fit: f64 = cols.iter().zip(beta).map(|(c, b)| c[i] * b).sum();
+                r.push((ch.y[k] - fit) / ch.sigma);
+            }
+        }
+        r.iter().all(|x| x.is_finite())
+    }
+
+    fn rms(&self, v: &Values) -> Vec<f64> {
+        let Some(design) = self.design(v) else {
+            return vec![f64::NAN; self.channels.len()];
+        };
+        let lin = self.solve(&design);
+        design
+            .iter()
+            .zip(&self.channels)
+            .zip(&lin)
+            .map(|((cols, ch), beta)| {
+                let s: f64 = ch
+                    .rows
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &k)| {
+                        let f: f64 = cols.iter().zip(beta).map(|(c, b)| c[i] * b).sum();
+                        (ch.y[k] - f).powi(2)
+                    })
+                    .sum();
+                (s / ch.rows.len().max(1) as f64).sqrt()
+            })
+            .collect()
+    }
+
+    fn run(&self, z0: &[f64], max_iter: usize) -> Option<(Vec<f64>, f64, usize)> {
+        let mut f = |z: &[f64], r: &mut Vec<f64>| self.residuals(&self.values(z), None, r);
+        let opts = LmOptions {
+            max_iter,
+            ..LmOptions::default()
+        };
+        let res = minimise(&mut f, z0, &self.bounds, &opts)?;
+        Some((res.z, res.cost, res.iterations))
+    }
+}
+
+/// The median dead time and time constant of the steps of `y` in `dir` (all steps when none
+/// is in `dir`).
+fn step_timing(
+    y: &[f64],
+    dt: f64,
+    steps: &[segment::Step],
+    dir: Direction,
+) -> (Option<f64>, Option<f64>) {
+    let figs: Vec<_> = steps.iter().map(|s| step_figures(y, dt, s)).collect();
+    let pick = |want: Option<Direction>| {
+        let mut dead: Vec<f64> = figs
+            .iter()
+            .filter(|f| want.map_or(true, |d| f.direction == d))
+            .filter_map(|f| f.dead_time_s)
+            .collect();
+        let mut tau: Vec<f64> = figs
+            .iter()
+            .filter(|f| want.map_or(true, |d| f.direction == d))
+            .filter_map(|f| f.time_constant_s.or(f.dead_time_s.map(|_| dt)))
+            .collect();
+        (median(&mut dead), median(&mut tau))
+    };
+    match pick(Some(dir)) {
+        (Some(d), t) => (Some(d), t),
+        _ => pick(None),
+    }
+}
+
+/// Fits the stand model to `input` (module doc).
+pub fn fit(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
+    let (start, end) = window(input.command);
+    let channels: Vec<Channel<'_>> = input
+        .channels
+        .iter()
+        .map(|c| Channel {
+            y: &c.y[start.min(c.y.len())..end.min(c.y.len())],
+            interpolated: &c.interpolated
+                [start.min(c.interpolated.len())..end.min(c.interpolated.len())],
+            ..*c
+        })
+        .collect();
+    let within = FitInput {
+        command: &input.command[start..end],
+        voltage: input
+            .voltage
+            .map(|v| &v[start.min(v.len())..end.min(v.len())]),
+        channels: &channels,
+        ..*input
+    };
+    let mut f = fit_rows(&within)?;
+    f.window_s = (start as f64 * input.dt_s, end as f64 * input.dt_s);
+    Ok(f)
+}
+
+/// The rows fitted: all of a record of at most [`MAX_ROWS`], else the window of [`MAX_ROWS`]
+/// rows (on a grid of a twentieth of it) in which the command moves most often.
+fn window(command: &[f64]) -> (usize, usize) {
+    let len = command.len();
+    if len <= MAX_ROWS {
+        return (0, len);
+    }
+    let u = fill_held(command, 0.0);
+    let (lo, hi) = u
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let moved: Vec<usize> = u
+        .windows(2)
+        .map(|w| usize::from((w[1] - w[0]).abs() > 0.02 * (hi - lo)))
+        .collect();
+    let mut sum = vec![0usize; moved.len() + 1];
+    for (i, m) in moved.iter().enumerate() {
+        sum[i + 1] = sum[i] + m;
+    }
+    let stride = (MAX_ROWS / 20).max(1);
+    let best = (0..=len - MAX_ROWS)
+        .step_by(stride)
+        .max_by_key(|&s| {
+            (
+                sum[(s + MAX_ROWS - 1).min(moved.len())] - sum[s],
+                usize::MAX - s,
+            )
+        })
+        .unwrap_or(0);
+    (best, best + MAX_ROWS)
+}
+
+fn fit_rows(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
+    let dt = input.dt_s;
+    let len = input.command.len();
+    let u = fill_held(input.command, 0.0);
+    let (rises, falls, n_levels) = moves(&u);
+    if !(rises || falls) {
+        return Err(StandModelError::NoCommandChange);
+    }
+    let mut channels: Vec<Prepared> = input
+        .channels
+        .iter()
+        .map(|c| prepare(c, len))
+        .filter(|c| c.rows.len() >= MIN_READINGS)
+        .collect();
+    channels.sort_by_key(|c| c.quantity);
+    if channels.is_empty() {
+        return Err(StandModelError::TooFewReadings(MIN_READINGS));
+    }
+    channels[0].reference = true;
+    let speed = channels[0].quantity == Quantity::Speed;
+    let exponent = channels.iter().any(|c| c.quantity != Quantity::Speed);
+    let shows = Shows {
+        rises,
+        falls,
+        several_levels: n_levels >= 2,
+        speed,
+        exponent,
+    };
+    let u_lo = u.iter().copied().fold(f64::INFINITY, f64::min);
+    let u_ref = u.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let range = u_ref - u_lo;
+    let voltage = input.voltage.map(|v| {
+        let mean = v.iter().filter(|x| x.is_finite()).sum::<f64>()
+            / v.iter().filter(|x| x.is_finite()).count().max(1) as f64;
+        fill_held(v, mean)
+    });
+    let v_ref = voltage
+        .as_ref()
+        .map(|v| v.iter().sum::<f64>() / v.len().max(1) as f64)
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .unwrap_or(1.0);
+    let voltage = voltage.filter(|_| v_ref != 1.0);
+
+    // Start values from the step figures and the reference channel's static map.
+    let cmd = Command::new(&u);
+    let steps = segment::steps(cmd, &input.rules);
+    let reference = &channels[0];
+    let (dead_up, tau_up) = step_timing(&reference.y, dt, &steps, Direction::Up);
+    let (_, tau_down) = step_timing(&reference.y, dt, &steps, Direction::Down);
+    let dead0 = dead_up.unwrap_or(2.0 * dt).clamp(0.0, 1.0);
+    let tau_up0 = tau_up.unwrap_or(0.05).max(dt);
+    let tau_down0 = tau_down.unwrap_or(tau_up0).max(dt);
+    let holds: Vec<segment::Run> = segment::holds(cmd, &input.rules).collect();
+    let law = fit_power_law(&levels(&reference.y, &holds));
+    let zero0 = law
+        .map(|l| l.u0)
+        .filter(|z| z.is_finite() && *z < u_ref - 0.05 * range)
+        .unwrap_or(u_lo - 0.1 * range.max(1e-3));
+    let (map0, exp0) = match (speed, law) {
+        (true, Some(l)) => (l.exponent.clamp(0.5, 2.5), 2.0),
+        (false, Some(l)) if reference.quantity != Quantity::Current => {
+            (1.0, l.exponent.clamp(1.0, 3.5))
+        }
+        _ => (1.0, 2.0),
+    };
+    let mut delay0 = vec![0.0; channels.len()];
+    let mut lag0 = vec![0.0; channels.len()];
+    for (c, ch) in channels.iter().enumerate().skip(1) {
+        let (d, t) = step_timing(&ch.y, dt, &steps, Direction::Up);
+        delay0[c] = d.map_or(0.0, |d| (d - dead0).clamp(0.0, 0.5));
+        lag0[c] = t.map_or(0.01, |t| (t - tau_up0).max(0.3 * dt).max(2.0 * MIN_TAU_S));
+    }
+    let base = Values {
+        dead: dead0,
+        tau_up: tau_up0,
+        tau_down: None,
+        gamma: 0.0,
+        zero: zero0,
+        map_exp: map0,
+        exp: exp0,
+        delay: delay0,
+        lag: lag0,
+    };
+    let mut layout = vec![P::Dead, P::TauUp];
+    let mut bounds = vec![(0.0, 1.0), (MIN_TAU_S.ln(), 5f64.ln())];
+    let mut base = base;
+    if rises && falls {
+        layout.push(P::TauDown);
+        bounds.push((MIN_TAU_S.ln(), 5f64.ln()));
+        base.tau_down = Some(tau_down0);
+    }
+    if shows.several_levels {
+        layout.push(P::Gamma);
+        bounds.push((-1.0, 3.0));
+    }
+    layout.push(P::Zero);
+    bounds.push((u_lo - range.max(0.1), u_ref - 0.05 * range));
+    if speed {
+        layout.push(P::MapExp);
+        bounds.push((0.3, 3.0));
+    }
+    if exponent {
+        layout.push(P::Exp);
+        bounds.push((0.5, 4.5));
+    }
+    for c in 1..channels.len() {
+        layout.push(P::Delay(c));
+        bounds.push((-0.5, 1.0));
+        layout.push(P::Lag(c));
+        bounds.push((MIN_TAU_S.ln(), 3f64.ln()));
+    }
+    let t_span = (len.max(2) - 1) as f64 * dt;
+    let mut problem = Problem {
+        dt,
+        u,
+        voltage,
+        v_ref,
+        u_ref,
+        t_span,
+        channels,
+        shows,
+        layout,
+        bounds,
+        base,
+    };
+    // Two passes: the readings' noise as weights, then the larger of it and the residuals'.
+    let z0 = problem.z_of(&problem.base);
+    let (z1, _, it1) = problem.run(&z0, 30).ok_or(StandModelError::NotFitted)?;
+    let rms = problem.rms(&problem.values(&z1));
+    for (ch, r) in problem.channels.iter_mut().zip(&rms) {
+        if r.is_finite() {
+            ch.sigma = ch.noise.max(*r);
+        }
+    }
+    let (z, cost, it2) = problem.run(&z1, 40).ok_or(StandModelError::NotFitted)?;
+    if !cost.is_finite() {
+        return Err(StandModelError::NotFitted);
+    }
+    Ok(summarise(&problem, &z, cost, it1 + it2))
+}
+
+/// The covariance of the nonlinear parameters and the amplitudes at `z` (module doc), the
+/// amplitudes, and which parameters sit at a bound.
+fn uncertainty(
+    problem: &Problem,
+    z: &[f64],
+    cost: f64,
+) -> (Option<DMatrix<f64>>, Vec<Vec<f64>>, Vec<bool>) {
+    let v = problem.values(z);
+    let Some(design) = problem.design(&v) else {
+        return (None, Vec::new(), Vec::new());
+    };
+    let lin = problem.solve(&design);
+    let p = z.len();
+    let n_lin: usize = lin.iter().map(Vec::len).sum();
+    let mut r = Vec::new();
+    if !problem.residuals(&v, Some(&lin), &mut r) {
+        return (None, lin, Vec::new());
+    }
+    let mut f =
+        |zz: &[f64], out: &mut Vec<f64>| problem.residuals(&problem.values(zz), Some(&lin), out);
+    let Some(jz) = jacobian(&mut f, z, &r, &problem.bounds, 1e-6) else {
+        return (None, lin, Vec::new());
+    };
+    let mut jac = DMatrix::<f64>::zeros(r.len(), p + n_lin);
+    jac.view_mut((0, 0), (r.len(), p)).copy_from(&jz);
+    let mut row = 0;
+    let mut col = p;
+    for (cols, ch) in design.iter().zip(&problem.channels) {
+        for i in 0..ch.rows.len() {
+            for (j, c) in cols.iter().enumerate() {
+                jac[(row + i, col + j)] = -c[i] / ch.sigma;
+            }
+        }
+        row += ch.rows.len();
+        col += cols.len();
+    }
+    let at_bound: Vec<bool> = z
+        .iter()
+        .zip(&problem.bounds)
+        .map(|(&x, &(lo, hi))| {
+            let tol = 1e-6 * (hi - lo);
+            x <= lo + tol || x >= hi - tol
+        })
+        .chain(std::iter::repeat(false).take(n_lin))
+        .collect();
+    (covariance(&jac, cost, &at_bound), lin, at_bound)
+}
+
+fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> StandFit {
+    let v = problem.values(z);
+    let (cov, lin, at_bound) = uncertainty(problem, z, cost);
+    let p = z.len();
+    let sd = |i: usize| -> Option<f64> {
+        let c = cov.as_ref()?;
+        (!at_bound.get(i).copied().unwrap_or(true)).then(|| c[(i, i)].max(0.0).sqrt())
+    };
+    let index = |want: P| problem.layout.iter().position(|&q| q == want);
+    let plain = |want: P, value: f64| -> Estimate { (value, index(want).and_then(sd)) };
+    // τ = e^z: sd_τ = τ · sd_z.
+    let logged =
+        |want: P, value: f64| -> Estimate { (value, index(want).and_then(sd).map(|s| s * value)) };
+    // Offsets of each channel's amplitudes in the covariance.
+    let mut lin_at = Vec::new();
+    let mut col = p;
+    for l in &lin {
+        lin_at.push(col);
+        col += l.len();
+    }
+    let rms = problem.rms(&v);
+    let speed_c = problem
+        .channels
+        .iter()
+        .position(|c| c.quantity == Quantity::Speed);
+    let amp = |c: usize| lin.get(c).and_then(|l| l.first()).copied();
+    let speed_ref = speed_c.and_then(amp).unwrap_or(1.0);
+    let var = |a: usize, b: usize| cov.as_ref().map(|c| c[(a, b)]);
+    // k in N per (rad/s)^e from K (per relative speed^e), n_ref (rev/min) and e: the delta
+    // method on (K, n_ref, e).
+    let per_rad = |c: usize| -> Option<Estimate> {
+        let s = speed_c?;
+        let k = amp(c)?;
+        let w = speed_ref * std::f64::consts::TAU / 60.0;
+        let e = v.exp;
+        let value = k / w.powf(e);
+        let (ik, is) = (lin_at[c], lin_at[s]);
+        let ie = index(P::Exp);
+        let g_k = 1.0 / w.powf(e);
+        let g_n = -e * value / speed_ref;
+        let g_e = -value * w.ln();
+        let mut idx = vec![(ik, g_k), (is, g_n)];
+        if let Some(ie) = ie.filter(|&i| !at_bound[i]) {
+            idx.push((ie, g_e));
+        }
+        let mut s2 = 0.0;
+        for &(a, ga) in &idx {
+            for &(b, gb) in &idx {
+                s2 += ga * gb * var(a, b)?;
+            }
+        }
+        Some((value, Some(s2.max(0.0).sqrt())))
+    };
+    let find = |q: Quantity| problem.channels.iter().position(|c| c.quantity == q);
+    let k_t_rad = find(Quantity::Thrust).and_then(per_rad);
+    let k_q_rad = find(Quantity::Torque).and_then(per_rad);
+    let speed_ref_rpm = speed_c.map(|c| {
+        (
+            speed_ref,
+            var(lin_at[c], lin_at[c]).map(|x| x.max(0.0).sqrt()),
+        )
+    });
+    let channels: Vec<ChannelFit> = problem
+        .channels
+        .iter()
+        .enumerate()
+        .map(|(c, ch)| {
+            let amplitudes = lin.get(c).cloned().unwrap_or_default();
+            let amplitudes = match ch.quantity {
+                Quantity::Speed => amplitudes,
+                // creep per second: the column was t / t_span.
+                _ => {
+                    let mut a = amplitudes;
+                    if let Some(last) = a.last_mut() {
+                        *last /= problem.t_span;
+                    }
+                    a
+                }
+            };
+            ChannelFit {
+                key: ch.key,
+                quantity: ch.quantity,
+                reference: ch.reference,
+                readings: ch.rows.len(),
+                refresh_s: (ch.refresh.0 * problem.dt, ch.refresh.1 * problem.dt),
+                delay_s: (!ch.reference).then(|| plain(P::Delay(c), v.delay[c])),
+                tau_s: (!ch.reference).then(|| logged(P::Lag(c), v.lag[c])),
+                amplitudes,
+                sigma: ch.sigma,
+                rms: rms[c],
+            }
+        })
+        .collect();
+    let supply_resistance_ohm = supply_resistance(problem);
+    let rel = problem.relative(&v);
+    let amp_of = |q: Quantity| find(q).and_then(amp).unwrap_or(0.0);
+    let e = v.exp;
+    let params = StandParams {
+        map: SpeedMap {
+            speed_ref,
+            ..rel.map
+        },
+        rotor: RotorLaw {
+            speed_ref,
+            ..rel.rotor
+        },
+        k_t: amp_of(Quantity::Thrust) / speed_ref.powf(e),
+        k_q: amp_of(Quantity::Torque) / speed_ref.powf(e),
+        current: match find(Quantity::Current) {
+            Some(c) => CurrentLaw {
+                idle_a: lin[c].get(2).copied().unwrap_or(0.0),
+                per_power: lin[c][0] / speed_ref.powf(e + 1.0),
+                per_acceleration: lin[c][1] / (speed_ref * speed_ref),
+            },
+            None => CurrentLaw::default(),
+        },
+        supply: Supply {
+            open_circuit_v: problem.v_ref,
+            resistance_ohm: supply_resistance_ohm.map_or(0.0, |r| r.0),
+        },
+        ..rel
+    };
+    let tau_down = v.tau_down.unwrap_or(v.tau_up);
+    StandFit {
+        params,
+        shows: problem.shows,
+        dead_time_s: plain(P::Dead, v.dead),
+        tau_up_s: logged(P::TauUp, v.tau_up),
+        tau_down_s: logged(P::TauDown, tau_down),
+        tau_speed_exponent: plain(P::Gamma, v.gamma),
+        command_zero: plain(P::Zero, v.zero),
+        map_exponent: plain(P::MapExp, v.map_exp),
+        thrust_exponent: plain(P::Exp, e),
+        k_t_rad,
+        k_q_rad,
+        speed_ref_rpm,
+        supply_resistance_ohm,
+        channels,
+        iterations,
+        window_s: (0.0, problem.t_span + problem.dt),
+    }
+}
+
+/// `V = V_oc − R I` by least squares over the rows where both the voltage and the current are
+/// read; `R` and its standard error.
+fn supply_resistance(problem: &Problem) -> Option<Estimate> {
+    let v = problem.voltage.as_ref()?;
+    let cur = problem
+        .channels
+        .iter()
+        .find(|c| c.quantity == Quantity::Current)?;
+    let pts: Vec<(f64, f64)> = cur.rows.iter().map(|&k| (cur.y[k], v[k])).collect();
+    let n = pts.len() as f64;
+    if pts.len() < 3 {
+        return None;
+    }
+    let (mi, mv) = pts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (i, v)| (a + i / n, b + v / n));
+    let sii: f64 = pts.iter().map(|(i, _)| (i - mi).powi(2)).sum();
+    if sii.is_nan() || sii <= 0.0 {
+        return None;
+    }
+    let siv: f64 = pts.iter().map(|(i, v)| (i - mi) * (v - mv)).sum();
+    let slope = siv / sii;
+    let sse: f64 = pts
+        .iter()
+        .map(|(i, v)| (v - mv - slope * (i - mi)).powi(2))
+        .sum();
+    let sd = (sse / (n - 2.0) / sii).sqrt();
+    Some((-slope, Some(sd)))
+}
