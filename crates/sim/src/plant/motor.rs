@@ -28,13 +28,13 @@
 //! sample `k + 1 + d` on.
 //!
 //! These are the equations of the stand model of the numerics layer
-//! ([`propid_numerics::stand_model`]: [`SpeedMap`], [`RotorLaw`], `T = k_T nᵉ` with `e = 2`),
+//! ([`propid_numerics::stand_model`]: `SpeedMap`, `RotorLaw`, `T = k_T nᵉ` with `e = 2`),
 //! which steps them here ([`MotorConfig::stand_params`] gives the plant as that model's
 //! parameters, the truth its fit is held against); the simulated current
 //! `I_idle + I_ref (T/T_ref)^{3/2}` is its current law `I₀ + k_I n³` at `e = 2`.
 
 use crate::delay_line::DelayLine;
-use propid_numerics::stand_model::{load, RotorLaw, SpeedMap};
+use propid_numerics::stand_model::load;
 
 use super::{MotorConfig, PlantConfig, PlantError};
 
