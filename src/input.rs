@@ -9,7 +9,9 @@ use std::io::{self, Read};
 use std::path::Path;
 
 /// The largest input read, bytes (1 GiB: a TSP/1 recording of ~3 h at 1 kHz, a CSV of ~30 M
-/// rows).
+/// rows). A CSV file's loading holds about 32 bytes a row per column read (the file's text is
+/// dropped once its columns are parsed; docs/identify.md, "Memory"): 1 GiB of a three-column
+/// log of 20-byte rows (54 M rows) takes about 5 GB, and identify's own buffers come on top.
 pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 
 /// Why an input could not be read.
@@ -19,7 +21,11 @@ pub enum ReadError {
     #[error(transparent)]
     Io(#[from] io::Error),
     /// The input is larger than the bound: exit 3.
-    #[error("larger than {limit} bytes (1 GiB), the most propid reads of one input")]
+    #[error(
+        "larger than {limit} bytes (1 GiB), the most propid reads of one input (a CSV file \
+         takes about 32 bytes of memory a row per column read, and identify its own buffers \
+         besides: docs/identify.md, Memory)"
+    )]
     TooLarge {
         /// The bound, bytes.
         limit: u64,

@@ -64,7 +64,8 @@ use propid_numerics::workspace::IdentOptions;
 pub struct Args {
     /// A TSP/1 recording (raw bytes) or a CSV file.
     pub file: PathBuf,
-    /// Model order (default: chosen from the singular values).
+    /// Model order (0 or omitted: chosen from the singular values, as `order = 0` in the
+    /// config).
     #[arg(long)]
     pub order: Option<usize>,
     /// Print exactly one JSON object instead of the summary.
@@ -140,7 +141,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     load::leave_out_start_transient(&mut loaded);
     let rules = loaded.segment_rules();
     let ident = IdentOptions {
-        order: args.order,
+        // 0 is automatic, as in the config (`identify.order = 0`).
+        order: args.order.filter(|&n| n > 0),
         svd: args.svd,
         max_pulse_width: rules.max_pulse_samples,
         ..IdentOptions::default()

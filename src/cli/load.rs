@@ -3,7 +3,7 @@
 //!
 //! The format is detected from the bytes ([`detect`]): a binary TSP/1 recording, or a TSP/1
 //! CSV stream, goes through [`read_record_with`] (channels by canonical name, device events
-//! kept), everything else through the CSV reader [`read_csv`] (exported stand logs: aliases,
+//! kept), everything else through the CSV reader [`read_csv`](propid_ingest::csv_file::read_csv) (exported stand logs: aliases,
 //! units, the command's scale decided and stated, empty cells per channel, BOM, files without a
 //! time column; a file without a header needs `--columns`; see [`propid_ingest::csv_file`]).
 //! The input is the command column (throttle) unless `--input NAME` names another, or
@@ -16,14 +16,15 @@
 //! `"source"`; diagnose: gap-filled signals) is its own step after [`load`]; finding the input
 //! from the response's steps, with `--input none`, is the shared step [`steps_from_response`].
 
+use std::borrow::Cow;
 use std::path::Path;
 
 use super::{CliError, UsageError};
 use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
-use propid_ingest::csv_file::{read_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
+use propid_ingest::csv_file::{parse_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
 use propid_ingest::steps::{find_steps, StepFinding};
 use propid_ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
-use propid_wire::protocol::csv::encoding::{decode, utf16_mark, Encoding};
+use propid_wire::protocol::csv::encoding::{decode, wide, Encoding};
 use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};
 
@@ -47,7 +48,11 @@ pub enum LoadError {
         fix: &'static str,
     },
     /// The file is larger than what propid reads of one input.
-    #[error("{file}: larger than {limit} bytes (1 GiB), the most propid reads of one input")]
+    #[error(
+        "{file}: larger than {limit} bytes (1 GiB), the most propid reads of one input (a CSV \
+         file takes about 32 bytes of memory a row per column read, and identify its own \
+         buffers besides: docs/identify.md, Memory)"
+    )]
     TooLarge {
         /// The file as given.
         file: String,
@@ -176,16 +181,22 @@ pub fn read_input(file: &Path) -> Result<Vec<u8>, CliError> {
 /// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
 pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
     let bytes = read_input(file)?;
-    load_bytes(file.display().to_string(), &bytes, req)
+    load_from(file.display().to_string(), Cow::Owned(bytes), req)
 }
 
 /// Reads the bytes of a file named `name` as `req` asks (what [`load`] does once the file is
 /// read; the fuzz harness calls it in memory).
 pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFile, CliError> {
+    load_from(name, Cow::Borrowed(bytes), req)
+}
+
+/// [`load_bytes`]; bytes it owns are dropped as soon as they are read (a CSV file's once its
+/// columns are parsed, before they are carried onto the time base).
+fn load_from(name: String, bytes: Cow<'_, [u8]>, req: &Request) -> Result<LoadedFile, CliError> {
     if bytes.is_empty() {
         return Err(LoadError::Empty { file: name }.into());
     }
-    if let Some((kind, fix)) = container(bytes) {
+    if let Some((kind, fix)) = container(&bytes) {
         return Err(LoadError::NotText {
             file: name,
             kind,
@@ -193,22 +204,25 @@ pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFil
         }
         .into());
     }
-    // A UTF-16 text (its NUL bytes would look binary) is read as the UTF-8 it decodes to;
-    // anything else is decoded once, by the reader that takes it as text.
-    let utf8;
-    let (bytes, utf16) = match utf16_mark(bytes).map(|_| decode(bytes)) {
-        Some((text, e)) if is_text(&text) => {
-            utf8 = text.into_owned().into_bytes();
-            (&utf8[..], Some(e))
+    // A UTF-16 or UTF-32 text (its NUL bytes would look binary) is read as the UTF-8 it
+    // decodes to; anything else is decoded once, by the reader that takes it as text.
+    let utf8 = wide(&bytes)
+        .map(|_| decode(&bytes))
+        .filter(|(text, _)| is_text(text))
+        .map(|(text, e)| (text.into_owned().into_bytes(), e));
+    let (bytes, wide_from) = match utf8 {
+        Some((utf8, e)) => {
+            drop(bytes);
+            (Cow::Owned(utf8), Some(e))
         }
-        _ => (bytes, None),
+        None => (bytes, None),
     };
-    match detect(bytes, true) {
-        Detection::Format(WireFormat::Binary) => load_tsp(req, name, bytes),
+    match detect(&bytes, true) {
+        Detection::Format(WireFormat::Binary) => load_tsp(req, name, &bytes),
         // A CSV stream is placed by the stream placer, as `replay` places it; any other CSV
         // file is an exported log, read by its own time column.
-        _ if req.columns.is_none() && is_csv_stream(bytes) => load_tsp(req, name, bytes),
-        _ => load_csv(req, name, bytes, utf16),
+        _ if req.columns.is_none() && is_csv_stream(&bytes) => load_tsp(req, name, &bytes),
+        _ => load_csv(req, name, bytes, wide_from),
     }
 }
 
@@ -287,15 +301,14 @@ fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
 }
 
 /// A CSV file: the columns asked for, with the optional ones the file has.
-/// `was` is the encoding the bytes were decoded from already (UTF-16), if any.
+/// `was` is the encoding the bytes were decoded from already (UTF-16, UTF-32), if any. The
+/// bytes (and their text) are dropped once the columns are parsed.
 fn load_csv(
     req: &Request,
     name: String,
-    bytes: &[u8],
+    bytes: Cow<'_, [u8]>,
     was: Option<Encoding>,
 ) -> Result<LoadedFile, CliError> {
-    let (text, encoding) = decode(bytes);
-    let encoding = was.unwrap_or(encoding);
     let pair = |v: Option<&[f64]>, bad: UsageError| match v {
         Some(&[lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Ok(Some((lo, hi))),
         Some(_) => Err(bad),
@@ -318,10 +331,17 @@ fn load_csv(
             p => p,
         },
     };
-    let mut file = read_csv(&text, &opts).map_err(|source| LoadError::Csv {
-        file: name.clone(),
-        source,
-    })?;
+    let (parsed, encoding) = {
+        let (text, encoding) = decode(&bytes);
+        (parse_csv(&text, &opts), was.unwrap_or(encoding))
+    };
+    drop(bytes);
+    let mut file = parsed
+        .and_then(|p| p.build(&opts))
+        .map_err(|source| LoadError::Csv {
+            file: name.clone(),
+            source,
+        })?;
     file.source.encoding = (encoding != Encoding::Utf8).then_some(encoding);
     Ok(LoadedFile {
         name,

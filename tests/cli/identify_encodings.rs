@@ -1,7 +1,8 @@
 //! Exports in the encodings a PC writes (`propid_wire::protocol::csv::encoding`): the Tyto
 //! Series 1585 dialect (`ESC signal (µs)`, `Torque (N·m)`) saved as Windows-1252 (Excel's
-//! "CSV", `µ` the byte `B5`) and as UTF-16 with a byte order mark (Excel's "Unicode text", tab
-//! separated) is read exactly as its UTF-8 original, and the encoding is stated.
+//! "CSV", `µ` the byte `B5`), as UTF-16 with a byte order mark (Excel's "Unicode text", tab
+//! separated) or without one, and as UTF-32 is read exactly as its UTF-8 original, and the
+//! encoding is stated.
 
 use propid_testkit::dialects::dialects;
 use serde_json::Value;
@@ -46,10 +47,21 @@ fn windows_1252_and_utf16_exports_read_as_their_utf8_original() {
         le.extend(u.to_le_bytes());
         be.extend(u.to_be_bytes());
     }
+    // Without their byte order mark (told by the NUL bytes of ASCII text), and UTF-32.
+    let (le_bare, be_bare) = (le[2..].to_vec(), be[2..].to_vec());
+    let (mut le32, mut be32) = (Vec::new(), Vec::new());
+    for c in tabbed.chars() {
+        le32.extend((c as u32).to_le_bytes());
+        be32.extend((c as u32).to_be_bytes());
+    }
     for (name, bytes, encoding) in [
         ("cp1252.csv", cp1252, "windows-1252"),
         ("utf16le.txt", le, "utf-16le"),
         ("utf16be.txt", be, "utf-16be"),
+        ("utf16le-no-bom.txt", le_bare, "utf-16le"),
+        ("utf16be-no-bom.txt", be_bare, "utf-16be"),
+        ("utf32le.txt", le32, "utf-32le"),
+        ("utf32be.txt", be32, "utf-32be"),
     ] {
         let v = identify(&file(name, bytes));
         let s = &v["source"];

@@ -18,6 +18,7 @@ mod identify_encodings;
 mod identify_gain;
 mod identify_glitched_cells;
 mod identify_held;
+mod identify_hostile_files;
 mod identify_interpolated;
 mod identify_lying_stand;
 mod identify_noisy_steps;

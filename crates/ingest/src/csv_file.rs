@@ -38,7 +38,9 @@
 //! never guessed (§6's header-less order is a property of a TSP/1 CSV *stream*, read by
 //! [`crate::tsp`]). A thrust column whose name says no unit, and a time column without
 //! a unit counting whole milliseconds or microseconds, are refused naming `--columns`: their
-//! unit is not guessed. Bad rows are counted, never fatal: a
+//! unit is not guessed; nor is which of two columns of one name is meant (the time, the input
+//! or an output: refused naming `--columns`; a column read beside them: left out, said). Bad
+//! rows are counted, never fatal: a
 //! wrong checksum, text in the time, input or an output column, a row with too few fields. An
 //! empty file, a file without data rows, or a requested column that is absent is an error naming
 //! what is missing and what is there.
@@ -67,7 +69,7 @@ use super::resample::{is_zero_usize, to_uniform, Carried, Jitter, ResampleError}
 use columns::{channel, header_columns, Column, Picks};
 pub use command_range::{command_range, CommandRange, GivenRanges, RangeError};
 use convert::{convert, Converted};
-use layout::{layout, Layout};
+use layout::{layout_of, Layout};
 use propid_wire::protocol::csv::columns::{ColumnSpec, Quantity, Scale, Unit};
 use propid_wire::protocol::csv::encoding::Encoding;
 use propid_wire::protocol::csv::line::{
@@ -169,6 +171,19 @@ pub enum CsvFileError {
         columns: String,
         /// The option that picks one.
         option: &'static str,
+    },
+    /// Two or more columns of one name, one of them needed (the time, the input or an
+    /// output): which one is meant is not guessed.
+    #[error(
+        "the file has more than one column named {column:?} (columns {positions}): which one \
+         is meant is not guessed; name the file's columns with --columns NAME,NAME,... (they \
+         replace the header's names), each its own"
+    )]
+    SameName {
+        /// The name, as written in the file.
+        column: String,
+        /// The columns of that name, counted from 1, comma separated.
+        positions: String,
     },
     /// A requested (or the default) column is absent.
     #[error("no {what} column {wanted}; columns in the file: {available}")]
@@ -364,50 +379,82 @@ struct Parsed {
     midnights: usize,
 }
 
-/// Reads CSV text (the whole file) into a record.
+/// A CSV text read into the raw values of the columns used ([`parse_csv`]), before they are
+/// converted and carried onto the time base ([`ParsedCsv::build`]): the text is no longer
+/// needed, and a loader drops it before the second step.
+pub struct ParsedCsv {
+    columns: Vec<Column>,
+    picks: Picks,
+    parsed: Parsed,
+}
+
+/// Reads CSV text (the whole file) into a record: [`parse_csv`], then [`ParsedCsv::build`].
 pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
+    parse_csv(text, opts)?.build(opts)
+}
+
+impl ParsedCsv {
+    /// Converts the parsed columns, carries them onto the time base and puts the record
+    /// together.
+    pub fn build(self, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileError> {
+        build(&self.columns, self.picks, self.parsed, opts)
+    }
+}
+
+/// Reads CSV text (the whole file) into the raw values of the columns used: the file's lines
+/// are gone through a few times (layout, the columns that read, the rows), never held.
+pub fn parse_csv(text: &str, opts: &CsvFileOptions) -> Result<ParsedCsv, CsvFileError> {
+    let data_lines = || {
+        text_lines(text).filter_map(|raw| match classify_str(raw) {
+            LineKind::Data(l) => Some(l),
+            _ => None,
+        })
+    };
     let mut skipped = SkippedRows::default();
     let mut comments = 0;
-    let mut lines = Vec::new();
+    let mut count: usize = 0;
     for raw in text_lines(text) {
         match classify_str(raw) {
             LineKind::Empty => {}
             LineKind::Comment(_) => comments += 1,
-            LineKind::Data(l) => lines.push(l),
+            LineKind::Data(_) => count += 1,
             LineKind::BadChecksum | LineKind::NotText => skipped.bad_checksum += 1,
         }
     }
-    if lines.is_empty() {
+    if count == 0 {
         return Err(CsvFileError::Empty);
     }
-    let layout = layout(&lines);
+    let layout = layout_of(data_lines);
     let (sep, mark) = (layout.sep, layout.mark);
-    let mut columns = header_columns(&lines, &layout, opts)?;
+    let first_row = data_lines().nth(layout.data_start);
+    let mut columns = header_columns(first_row, &layout, opts)?;
     // A header ending in separators (benchmark files) has empty, unnamed last columns.
     while columns.last().is_some_and(|c| c.name.is_empty()) {
         columns.pop();
     }
-    let data = &lines[layout.data_start..];
-    if data.is_empty() {
+    let data = || data_lines().skip(layout.data_start);
+    let rows_in_file = count.saturating_sub(layout.data_start);
+    if rows_in_file == 0 {
         return Err(CsvFileError::Empty);
     }
-    let picks = Picks::choose(&columns, opts, |i| column_reads(data, &layout, i))?;
+    let picks = Picks::choose(&columns, opts, |i| column_reads(data(), &layout, i))?;
     let used = picks.all();
     let required = used.len() - picks.optional.len();
-    let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(data.len()); used.len()];
+    let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(rows_in_file); used.len()];
     let mut row = Vec::new();
+    let mut parsed = Vec::with_capacity(used.len());
     let mut clock = false;
     let mut stamps = ClockColumn::default();
     // The first cell of a needed column that was no number (its text, column and line).
     let mut first_unread: Option<(String, usize, usize)> = None;
-    'rows: for (line_no, line) in data.iter().enumerate() {
+    'rows: for (line_no, line) in data().enumerate() {
         row.clear();
         row.extend(fields(line, sep));
         if used[..required].iter().any(|&i| i >= row.len()) {
             skipped.short_row += 1;
             continue;
         }
-        let mut parsed = Vec::with_capacity(used.len());
+        parsed.clear();
         for (n, &i) in used.iter().enumerate() {
             let field = row
                 .get(i)
@@ -429,7 +476,7 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
                 (None, false) => parsed.push(f64::NAN),
             }
         }
-        values.iter_mut().zip(parsed).for_each(|(c, v)| c.push(v));
+        values.iter_mut().zip(&parsed).for_each(|(c, &v)| c.push(v));
     }
     let rows = values[0].len();
     if rows < 2 {
@@ -464,7 +511,11 @@ pub fn read_csv(text: &str, opts: &CsvFileOptions) -> Result<CsvFile, CsvFileErr
         layout,
         midnights: stamps.midnights,
     };
-    build(&columns, picks, parsed, opts)
+    Ok(ParsedCsv {
+        columns,
+        picks,
+        parsed,
+    })
 }
 
 /// Converts the parsed columns, carries them onto the time base and puts the record together.
@@ -642,14 +693,19 @@ fn build(
 pub const NO_READING: &str =
     "no reading: every cell is 0 or empty (no sensor on this column), left out";
 
+/// Why a column asked for beside the outputs is left out when another column of its name reads
+/// too.
+pub const SAME_NAME: &str = "two columns of this name read: which one is meant is not guessed, \
+     left out (--columns NAME,NAME,... gives each its own name)";
+
 /// Why a column asked for beside the outputs that the file has once per motor is left out.
 pub const ONE_PER_MOTOR: &str =
     "one column per motor: which one belongs beside the output is not guessed, left out";
 
 /// Whether column `i` holds a reading, a number other than 0, in some data line (a stand's
 /// export keeps the columns of sensors it does not have, written 0 or left empty).
-fn column_reads(data: &[&str], layout: &Layout, i: usize) -> bool {
-    data.iter().any(|line| {
+fn column_reads<'a>(mut data: impl Iterator<Item = &'a str>, layout: &Layout, i: usize) -> bool {
+    data.any(|line| {
         fields(line, layout.sep)
             .nth(i)
             .and_then(|f| parse_field(&f, layout.mark))
@@ -665,4 +721,76 @@ fn parse_field(f: &str, mark: DecimalMark) -> Option<f64> {
         return Some(f64::NAN);
     }
     parse_cell(f, mark)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A step at row 50 under `header`, each row ending in `tail`.
+    fn steps(header: &str, tail: &str) -> String {
+        let mut s = format!("{header}\n");
+        for k in 0..100 {
+            let (u, y) = (
+                if k < 50 { 1300 } else { 1500 },
+                if k < 51 { 1.0 } else { 3.0 },
+            );
+            s += &format!("{},{u},{y}{tail}\n", k as f64 * 0.01);
+        }
+        s
+    }
+
+    #[test]
+    fn a_needed_column_whose_name_another_has_is_refused() {
+        let none = CsvFileOptions::default();
+        let text = steps("t_s,throttle_us,Thrust (N),Thrust (N)", ",2.0");
+        let e = read_csv(&text, &none).unwrap_err();
+        assert_eq!(
+            e,
+            CsvFileError::SameName {
+                column: "Thrust (N)".into(),
+                positions: "3, 4".into()
+            }
+        );
+        assert!(e.to_string().contains("--columns"), "{e}");
+        // The time too, by its normalised name.
+        let e = read_csv(&steps("t_s,throttle_us,thrust_N,T_S", ",9"), &none).unwrap_err();
+        assert!(matches!(e, CsvFileError::SameName { .. }), "{e}");
+        // Named apart, it reads.
+        let names = ["t_s", "throttle_us", "thrust_N", "other"];
+        let apart = CsvFileOptions {
+            columns: Some(names.map(String::from).to_vec()),
+            ..CsvFileOptions::default()
+        };
+        assert_eq!(read_csv(&text, &apart).unwrap().outputs, ["thrust_N"]);
+        // A column no one asks for may be there twice.
+        assert!(read_csv(&steps("t_s,throttle_us,thrust_N,Note,Note", ",a,b"), &none).is_ok());
+    }
+
+    #[test]
+    fn an_optional_column_twice_is_left_out_when_both_read() {
+        let current = CsvFileOptions {
+            optional: vec!["current_A".into()],
+            ..CsvFileOptions::default()
+        };
+        let header = "t_s,throttle_us,thrust_N,current_A,current_A";
+        let f = read_csv(&steps(header, ",2.0,3.0"), &current).unwrap();
+        assert!(f.optional.is_empty());
+        assert_eq!(f.source.unread.len(), 1);
+        assert_eq!(f.source.unread[0].reason, SAME_NAME);
+        // One of them 0 on every row (no sensor): the other is read.
+        let f = read_csv(&steps(header, ",0,3.0"), &current).unwrap();
+        assert_eq!(f.optional, ["current_A"]);
+        assert_eq!(f.record.channel("current_A").unwrap().data[10], 3.0);
+    }
+
+    #[test]
+    fn cr_only_crlf_and_lf_files_read_alike() {
+        let lf = steps("t_s,throttle_us,thrust_N", "");
+        let want = read_csv(&lf, &CsvFileOptions::default()).unwrap();
+        for end in ["\r", "\r\n"] {
+            let text = lf.replace('\n', end);
+            assert_eq!(read_csv(&text, &CsvFileOptions::default()).unwrap(), want);
+        }
+    }
 }

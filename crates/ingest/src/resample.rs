@@ -159,10 +159,18 @@ pub fn to_uniform(
         steady_rows: SegmentRules::for_record(dt, held.contains(&true)).samples_are_steady(),
         coarse_clock: spread.as_ref().map(|s| s.1),
     };
-    let kept: Vec<Vec<f64>> = channels
-        .iter()
-        .map(|c| keep.iter().map(|&i| c[i]).collect())
-        .collect();
+    // The channels' values on the kept rows (the channels themselves when every row is kept:
+    // no copy).
+    let copied: Vec<Vec<f64>>;
+    let kept: &[Vec<f64>] = if keep.len() == t.len() {
+        channels
+    } else {
+        copied = channels
+            .iter()
+            .map(|c| keep.iter().map(|&i| c[i]).collect())
+            .collect();
+        &copied
+    };
     let grid = if max_dev <= 0.1 * dt {
         Grid::Rows
     } else {

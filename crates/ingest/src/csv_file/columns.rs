@@ -24,8 +24,9 @@ pub(super) struct Picks {
     pub(super) optional: Vec<usize>,
     /// Optional columns the file has that are left out, with why ([`super::Unread`]): every
     /// cell 0 or empty (an RPM column of an export whose stand has no such probe) with no
-    /// other column of their name that reads ([`super::NO_READING`]), or one column per motor
-    /// ([`super::ONE_PER_MOTOR`]).
+    /// other column of their name that reads ([`super::NO_READING`]), one column per motor
+    /// ([`super::ONE_PER_MOTOR`]), or two columns of one name that both read
+    /// ([`super::SAME_NAME`]).
     pub(super) silent: Vec<(usize, &'static str)>,
 }
 
@@ -98,6 +99,11 @@ impl Picks {
         } else {
             Some(time.ok_or(CsvFileError::NeedRate)?)
         };
+        // A column needed whose name another column has too: which one is meant is not
+        // guessed (the first was taken silently).
+        for &i in time.iter().chain(&input).chain(&outputs) {
+            one_of_its_name(columns, i)?;
+        }
         let mut optional: Vec<usize> = Vec::new();
         let mut silent: Vec<(usize, &'static str)> = Vec::new();
         // A quantity already read is not read twice (a `Force (N)` beside the output `Thrust
@@ -123,8 +129,11 @@ impl Picks {
                     .iter()
                     .any(|&b| csv_columns::indexed_alike(&columns[a].name, &columns[b].name))
             });
-            match (found.iter().find(|&&i| reads(i)), found.first()) {
+            let reading: Vec<usize> = found.iter().copied().filter(|&i| reads(i)).collect();
+            let twice = |i: usize| reading.iter().any(|&j| j != i && same_name(columns, i, j));
+            match (reading.first(), found.first()) {
                 (_, Some(&i)) if per_motor => silent.push((i, super::ONE_PER_MOTOR)),
+                (Some(&i), _) if twice(i) => silent.push((i, super::SAME_NAME)),
                 (Some(&i), _) => optional.push(i),
                 (None, Some(&i)) => silent.push((i, super::NO_READING)),
                 (None, None) => {}
@@ -192,6 +201,28 @@ fn one_sensor(
     })
 }
 
+/// Whether columns `i` and `j` have one name (as written, or normalised: `Thrust (N)` and
+/// `thrust(N)`).
+fn same_name(columns: &[Column], i: usize, j: usize) -> bool {
+    let (a, b) = (&columns[i].name, &columns[j].name);
+    a == b || csv_columns::normalise(a) == csv_columns::normalise(b)
+}
+
+/// Refuses column `i` when another column has its name ([`CsvFileError::SameName`]).
+fn one_of_its_name(columns: &[Column], i: usize) -> Result<(), CsvFileError> {
+    let same: Vec<String> = (0..columns.len())
+        .filter(|&j| same_name(columns, i, j))
+        .map(|j| (j + 1).to_string())
+        .collect();
+    if same.len() < 2 {
+        return Ok(());
+    }
+    Err(CsvFileError::SameName {
+        column: columns[i].name.clone(),
+        positions: same.join(", "),
+    })
+}
+
 /// A column by its name as written, its normalised name, or its canonical channel name.
 fn find(columns: &[Column], name: &str) -> Option<usize> {
     find_all(columns, name).first().copied()
@@ -249,8 +280,9 @@ pub(super) fn key(col: &Column) -> String {
 /// The columns of the file: the names given (`--columns`, also over a header's), else the
 /// header's (with the units of a units row); a file with neither is refused
 /// ([`CsvFileError::NoHeader`]: no column order is guessed).
+/// `first_row` is the first line after the header (its width is the file's).
 pub(super) fn header_columns(
-    lines: &[&str],
+    first_row: Option<&str>,
     layout: &Layout,
     opts: &CsvFileOptions,
 ) -> Result<Vec<Column>, CsvFileError> {
@@ -258,9 +290,7 @@ pub(super) fn header_columns(
         name: name.to_string(),
         spec: csv_columns::lookup(name),
     };
-    let width = lines
-        .get(layout.data_start)
-        .map_or(0, |l| fields(l, layout.sep).count());
+    let width = first_row.map_or(0, |l| fields(l, layout.sep).count());
     match (&opts.columns, &layout.names) {
         (Some(names), _) => {
             let mut cols: Vec<Column> = names.iter().map(|n| named(n)).collect();

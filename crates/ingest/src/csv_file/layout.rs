@@ -45,7 +45,18 @@ pub(super) struct Layout {
 }
 
 /// The layout of `lines` (rules of the module documentation); `lines` is not empty.
+#[cfg(test)]
 pub(super) fn layout(lines: &[&str]) -> Layout {
+    layout_of(|| lines.iter().copied())
+}
+
+/// The layout of the lines `lines_of()` goes through (each call from the first line): the
+/// lines up to the first data row are held, the rest only gone through for the decimal mark,
+/// so that a file's lines are not held a second time.
+pub(super) fn layout_of<'a, I>(lines_of: impl Fn() -> I) -> Layout
+where
+    I: Iterator<Item = &'a str>,
+{
     // A data row: numbers, empty cells and missing markers (`-`, `N/A`: a sensor that did not
     // report), at least one number.
     let is_data = |l: &str| {
@@ -59,15 +70,19 @@ pub(super) fn layout(lines: &[&str]) -> Layout {
             })
             && fields(l, sep).any(|f| is_number(&f))
     };
-    let first_data = lines.iter().position(|l| is_data(l));
+    // The lines up to the first data row (all of them when there is none).
+    let mut lines: Vec<&str> = Vec::new();
+    let mut first_data = None;
+    for l in lines_of() {
+        lines.push(l);
+        if is_data(l) {
+            first_data = Some(lines.len() - 1);
+            break;
+        }
+    }
     let sep = separator(lines[first_data.unwrap_or(0)]);
-    let mark_from = |start: usize| {
-        DecimalMark::of_fields(
-            lines[start.min(lines.len())..]
-                .iter()
-                .flat_map(|l| fields(l, sep)),
-        )
-    };
+    let mark_from =
+        |start: usize| DecimalMark::of_fields(lines_of().skip(start).flat_map(|l| fields(l, sep)));
     if first_data == Some(0) {
         return Layout {
             sep,

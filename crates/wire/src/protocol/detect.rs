@@ -14,7 +14,7 @@
 use super::csv::columns;
 use super::csv::device::parse_comment;
 use super::csv::line::{
-    classify, fields, is_number, separator, strip_checksum_str, text_lines, LineKind,
+    byte_lines, classify, fields, is_number, separator, strip_checksum_str, text_lines, LineKind,
 };
 use super::decoder::Decoder;
 
@@ -51,7 +51,10 @@ pub fn detect(prefix: &[u8], at_end: bool) -> Detection {
         return Detection::Format(WireFormat::Binary);
     }
     let has_zero = window.contains(&0);
-    if !has_zero && window.split(|&b| b == b'\n').rev().skip(1).any(is_csv_line) {
+    // The complete lines: all but the text after the last line end.
+    let lines: Vec<&[u8]> = byte_lines(window).collect();
+    let complete = &lines[..lines.len() - 1];
+    if !has_zero && complete.iter().any(|l| is_csv_line(l)) {
         return Detection::Format(WireFormat::Csv);
     }
     if at_end || window.len() >= DETECT_WINDOW {
@@ -130,6 +133,8 @@ mod tests {
         assert_eq!(detect(b"1000,3500,1.25\n", false), CSV);
         assert_eq!(detect(b"1000,3500,1.25*1F\n", false), CSV);
         assert_eq!(detect(b"1;3500;1.25\n", false), CSV);
+        // a classic Mac text: lines end in CR alone
+        assert_eq!(detect(b"1000,3500,1.25\r", false), CSV);
         assert_eq!(detect(b"\xEF\xBB\xBFTime (s),Thrust (N)\n", false), CSV);
         assert_eq!(detect(b"# banner\n1000,35", false), Detection::Undecided);
         assert_eq!(detect(b"# banner only", true), CSV);

@@ -4,10 +4,11 @@
 //! detection and the file reader all use these.
 //!
 //! A line, in the order its rules apply:
-//! 1. It ends in `\n`; `\r` is ignored. On a stream ([`LineSplitter`]) a line longer than the
-//!    limit (255 characters by the protocol) is dropped whole; a file held in memory
-//!    ([`text_lines`]) has no limit and keeps a `\r` inside a line (only one before the `\n`
-//!    goes).
+//! 1. It ends in `\n`, `\r\n` or a lone `\r` (a classic Mac text, Excel for Mac's "CSV
+//!    (Macintosh)"): every `\r` ends a line, a `\n` right after it belongs to the same line
+//!    end. On a stream ([`LineSplitter`]) a line longer than the limit (255 characters by the
+//!    protocol) is dropped whole; a file held in memory ([`text_lines`], [`byte_lines`]) has
+//!    no limit.
 //! 2. Trailing white space is dropped; then an optional trailing `*HH` is the XOR of every byte
 //!    before the `*`, in hex (as NMEA) — a wrong one drops the line ([`strip_checksum`]).
 //! 3. What is left, without a UTF-8 byte-order mark and surrounding space, is empty (ignored),
@@ -74,6 +75,8 @@ pub struct LineSplitter {
     line: Vec<u8>,
     max_line: usize,
     overflow: bool,
+    /// The last byte pushed was a `\r` that ended a line: a `\n` next is part of its end.
+    after_cr: bool,
 }
 
 impl LineSplitter {
@@ -83,6 +86,7 @@ impl LineSplitter {
             line: Vec::with_capacity(max_line.min(1 << 16)),
             max_line,
             overflow: false,
+            after_cr: false,
         }
     }
 
@@ -91,13 +95,25 @@ impl LineSplitter {
         self.line.is_empty() && !self.overflow
     }
 
-    /// Feed bytes; `on_line` gets every line completed by a `\n`, in order.
+    /// Feed bytes; `on_line` gets every line completed by a `\n`, `\r\n` or `\r`, in order
+    /// (a `\r\n` split between two pushes is one line end).
     pub fn push(&mut self, bytes: &[u8], mut on_line: impl FnMut(Line<'_>)) {
         let mut rest = bytes;
-        while let Some(i) = rest.iter().position(|&b| b == b'\n') {
+        if self.after_cr && !rest.is_empty() {
+            rest = rest.strip_prefix(b"\n").unwrap_or(rest);
+            self.after_cr = false;
+        }
+        while let Some(i) = rest.iter().position(|&b| b == b'\n' || b == b'\r') {
             self.append(&rest[..i]);
+            let cr = rest[i] == b'\r';
             rest = &rest[i + 1..];
             self.end_line(&mut on_line);
+            if cr {
+                match rest.strip_prefix(b"\n") {
+                    Some(r) => rest = r,
+                    None => self.after_cr = rest.is_empty(),
+                }
+            }
         }
         self.append(rest);
     }
@@ -113,16 +129,11 @@ impl LineSplitter {
         if self.overflow {
             return;
         }
-        for &b in chunk {
-            if b == b'\r' {
-                continue;
-            }
-            if self.line.len() >= self.max_line {
-                self.overflow = true;
-                return;
-            }
-            self.line.push(b);
+        if self.line.len() + chunk.len() > self.max_line {
+            self.overflow = true;
+            return;
         }
+        self.line.extend_from_slice(chunk);
     }
 
     fn end_line(&mut self, on_line: &mut impl FnMut(Line<'_>)) {
@@ -136,10 +147,39 @@ impl LineSplitter {
     }
 }
 
-/// The lines of a text held in memory, by the rule of [`LineSplitter`] without a length limit
-/// (borrowed, so a `\r` is only dropped before the `\n`).
+/// The lines of a text held in memory, by the rule of [`LineSplitter`] without a length limit:
+/// ended by `\n`, `\r\n` or `\r`; the text after the last line end is a last line (empty
+/// when the text ends in a line end).
 pub fn text_lines(text: &str) -> impl Iterator<Item = &str> {
-    text.split('\n').map(|l| l.strip_suffix('\r').unwrap_or(l))
+    let mut rest = Some(text);
+    std::iter::from_fn(move || {
+        let r = rest?;
+        // Line ends are ASCII: both indices are character boundaries.
+        let (line, next) = line_end(r.as_bytes());
+        rest = next.map(|n| &r[n..]);
+        Some(&r[..line])
+    })
+}
+
+/// [`text_lines`] on bytes (a text not decoded yet: the line ends are the same bytes in UTF-8
+/// and in Windows-1252).
+pub fn byte_lines(bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
+    let mut rest = Some(bytes);
+    std::iter::from_fn(move || {
+        let r = rest?;
+        let (line, next) = line_end(r);
+        rest = next.map(|n| &r[n..]);
+        Some(&r[..line])
+    })
+}
+
+/// The length of the first line of `b`, and where the next starts (`None`: no line end).
+fn line_end(b: &[u8]) -> (usize, Option<usize>) {
+    match b.iter().position(|&c| c == b'\n' || c == b'\r') {
+        Some(i) if b[i..].starts_with(b"\r\n") => (i, Some(i + 2)),
+        Some(i) => (i, Some(i + 1)),
+        None => (b.len(), None),
+    }
 }
 
 /// The `*HH` checksum of a line: XOR of its bytes.
@@ -385,14 +425,38 @@ mod tests {
     }
 
     #[test]
-    fn lines_split_across_chunks_drop_cr_and_overlong_ones() {
+    fn lines_split_across_chunks_and_overlong_ones() {
         assert_eq!(
-            lines(5, &[b"ab\r", b"c\n12345\n123456\nx\r\ny"]),
+            lines(5, &[b"ab", b"c\n12345\n123456\nx\r\ny"]),
             ["abc", "12345", "<too long>", "x", "y"]
         );
         assert_eq!(lines(5, &[b"", b"\n"]), [""]);
         let t: Vec<&str> = text_lines("a\r\nb\rc\n\nd").collect();
-        assert_eq!(t, ["a", "b\rc", "", "d"]);
+        assert_eq!(t, ["a", "b", "c", "", "d"]);
+    }
+
+    #[test]
+    fn cr_lf_and_crlf_each_end_a_line() {
+        // Classic Mac (CR only), Unix (LF), Windows (CRLF): the same lines.
+        let want = ["t_s,thrust_N", "0.0,1.5", "0.1,1.6"];
+        for end in ["\r", "\n", "\r\n"] {
+            let text = want.join(end) + end;
+            assert_eq!(lines(255, &[text.as_bytes()]), want, "{end:?}");
+            // one byte at a time: a CRLF split between two pushes is one line end
+            let bytes: Vec<&[u8]> = text.as_bytes().chunks(1).collect();
+            assert_eq!(lines(255, &bytes), want, "{end:?}");
+            let t: Vec<&str> = text_lines(&text).collect();
+            assert_eq!(t, [&want[..], &[""]].concat(), "{end:?}");
+            let b: Vec<&[u8]> = byte_lines(text.as_bytes()).collect();
+            assert_eq!(b.len(), 4);
+            assert_eq!(b[1], b"0.0,1.5");
+        }
+        // an empty line between two CRs, and between CRLF and CR
+        assert_eq!(lines(255, &[b"a\r\rb\r\n\rc"]), ["a", "", "b", "", "c"]);
+        let t: Vec<&str> = text_lines("a\r\rb\r\n\rc").collect();
+        assert_eq!(t, ["a", "", "b", "", "c"]);
+        // a CR that ends a push, then a lone LF: the LF belongs to the CR's line end
+        assert_eq!(lines(255, &[b"a\r", b"", b"\nb\n"]), ["a", "b"]);
     }
 
     #[test]
