@@ -11,4 +11,5 @@ mod daemon_rate;
 mod daemon_replay;
 mod demo_http;
 mod host_faults;
+mod http_hostile;
 mod link_faults;
