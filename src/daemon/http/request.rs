@@ -30,7 +30,8 @@ pub struct Head {
 /// Why a connection gets no answer but a refusal (or nothing).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Failure {
-    /// The client closed, or failed, before a whole head arrived: nothing to answer.
+    /// The client closed, or failed, before a whole head arrived, or sent nothing in time:
+    /// nothing to answer.
     Gone,
     /// The whole head did not arrive in time.
     Timeout,
@@ -63,16 +64,23 @@ pub fn read_head(conn: &mut impl ReadTimeout, within: Duration) -> Result<Head, 
     let mut buf = vec![0u8; MAX_HEAD];
     let mut len = 0;
     loop {
+        // a connection opened ahead of a request that never came (a browser's preconnect)
+        // is closed without an answer that it could take for its request's
+        let late = if len == 0 {
+            Failure::Gone
+        } else {
+            Failure::Timeout
+        };
         let left = deadline.saturating_duration_since(Instant::now());
         if left.is_zero() || conn.set_timeout(left).is_err() {
-            return Err(Failure::Timeout);
+            return Err(late);
         }
         match conn.read(&mut buf[len..]) {
             Ok(0) => return Err(Failure::Gone),
             Ok(n) => len += n,
             Err(e) if e.kind() == ErrorKind::Interrupted => continue,
             Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
-                return Err(Failure::Timeout)
+                return Err(late)
             }
             Err(_) => return Err(Failure::Gone),
         }
@@ -343,6 +351,7 @@ mod tests {
             read_head(&mut Script(vec![Some(b"GET / HTTP/1.1\r\n")]), t),
             Err(Failure::Gone)
         );
+        assert_eq!(read_head(&mut Script(vec![None]), t), Err(Failure::Gone));
         let long: &'static [u8] = Box::leak(
             format!("GET / HTTP/1.1\r\nX: {}\r\n\r\n", "y".repeat(MAX_HEAD))
                 .into_bytes()
