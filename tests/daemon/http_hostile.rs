@@ -69,8 +69,9 @@ fn replay_over_http_outlives_hostile_clients_and_ends_on_the_first_sigterm() {
     let huge = format!("GET / HTTP/1.1\r\nHost: {h}\r\nContent-Length: 100000000000000\r\n\r\n");
     assert_eq!(code(send(&url, &huge)), 413);
     let _stalled = stall(&url);
-    // each of these leaked a thread for good
-    for _ in 0..1000 {
+    // each of these leaked a thread for good (300 here, 1 000 in the unit test: this test
+    // shares the machine with real-time runs of the simulated stand)
+    for _ in 0..300 {
         assert_eq!(code(send(&url, "GET / HTTP/2.0\r\n\r\n")), 505);
     }
     // a page of another site whose name resolves here (DNS rebinding)
