@@ -12,5 +12,6 @@ mod daemon_rate;
 mod daemon_replay;
 mod demo_http;
 mod host_faults;
+mod http_hostile;
 mod link_faults;
 mod mqtt_broker;
