@@ -1,6 +1,7 @@
 //! The server against hostile clients on loopback: every client here is the test's own,
 //! written by hand (not the server's parser).
 
+use super::assets::Asset;
 use super::*;
 use std::io::{BufRead, BufReader, ErrorKind, Read, Write};
 use std::net::TcpStream;
