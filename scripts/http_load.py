@@ -44,7 +44,7 @@ pulses_per_level = 3000
 def reader(host, port, got, stop):
     """An event-stream client that reads everything until the stream ends."""
     s = socket.create_connection((host, port))
-    s.sendall(b"GET /events HTTP/1.1\r\nHost: x\r\n\r\n")
+    s.sendall(f"GET /events HTTP/1.1\r\nHost: {host}:{port}\r\n\r\n".encode())
     n = 0
     while not stop.is_set():
         try:
@@ -75,7 +75,8 @@ def run(rec, mode):
                 t.start()
                 threads.append(t)
             idle = socket.create_connection((host, int(port)))
-            idle.sendall(b"GET /events HTTP/1.1\r\nHost: x\r\n\r\n")  # and never reads
+            head = f"GET /events HTTP/1.1\r\nHost: {host}:{port}\r\n\r\n"
+            idle.sendall(head.encode())  # and never reads
         elif d.get("type") == "model":
             models += 1
         elif d.get("type") == "stats":

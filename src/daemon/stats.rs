@@ -97,8 +97,8 @@ pub struct StatsLine<'a> {
     pub work: &'a WorkStats,
     /// Socket clients dropped for falling behind.
     pub dropped_clients: u64,
-    /// Socket clients refused because `publish.max_clients` were connected (only with a
-    /// socket).
+    /// Socket and web-page clients refused: `publish.max_clients` were connected, or (web
+    /// page) its connection cap was reached (only with a socket or a web page).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clients_refused: Option<u64>,
     /// The MQTT sink's counters (only with `[publish] mqtt`).

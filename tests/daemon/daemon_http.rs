@@ -20,7 +20,7 @@ pub(crate) fn same(a: f64, b: f64) -> bool {
 }
 
 /// The page's URL from the `http` event line (the first line of a run with `--http`).
-fn url_of(d: &mut Daemon) -> String {
+pub(crate) fn url_of(d: &mut Daemon) -> String {
     let l = d.wait_for(10.0, |l| l["kind"] == "http");
     l["url"].as_str().unwrap().to_string()
 }
@@ -31,12 +31,13 @@ pub(crate) fn host(url: &str) -> &str {
 }
 
 /// One request by hand (the test's client): status and body.
-fn request(url: &str, method: &str, path: &str) -> (u16, String) {
+pub(crate) fn request(url: &str, method: &str, path: &str) -> (u16, String) {
     let mut c = TcpStream::connect(host(url)).unwrap();
     c.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
     write!(
         c,
-        "{method} {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+        "{method} {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\n\r\n",
+        host(url)
     )
     .unwrap();
     let mut text = String::new();
@@ -49,7 +50,7 @@ fn request(url: &str, method: &str, path: &str) -> (u16, String) {
 /// The event stream's `data:` lines, parsed, on a channel.
 pub(crate) fn events(url: &str) -> Receiver<Value> {
     let mut c = TcpStream::connect(host(url)).unwrap();
-    write!(c, "GET /events HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+    write!(c, "GET /events HTTP/1.1\r\nHost: {}\r\n\r\n", host(url)).unwrap();
     let (tx, rx) = channel();
     std::thread::spawn(move || {
         for line in BufReader::new(c).lines() {

@@ -219,7 +219,7 @@ fn a_broker_restarted_mid_run_loses_no_model() {
 fn stream(port: u16, path: &str) -> std::sync::mpsc::Receiver<Value> {
     use std::io::{BufRead, BufReader, Write};
     let mut c = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
-    write!(c, "GET {path} HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+    write!(c, "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n").unwrap();
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         for line in BufReader::new(c).lines() {
@@ -366,7 +366,7 @@ fn get(port: u16, path: &str) -> (u16, String) {
         .unwrap();
     write!(
         c,
-        "GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n"
+        "GET {path} HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nConnection: close\r\n\r\n"
     )
     .unwrap();
     let mut text = String::new();

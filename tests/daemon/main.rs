@@ -12,6 +12,7 @@ mod daemon_rate;
 mod daemon_replay;
 mod demo_http;
 mod host_faults;
+mod http_hostile;
 mod link_faults;
 mod lying_stand;
 mod mqtt_broker;

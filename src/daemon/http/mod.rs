@@ -1,15 +1,27 @@
 //! The live web page's sink (`--http ADDR`, `[publish] http`): a read-only HTTP server of one
 //! page that updates from the published lines by server-sent events.
 //!
-//! - **Its own threads.** `tiny_http` (a small synchronous HTTP/1.1 server; no hand-written
-//!   request parser here) accepts and parses requests on its threads; one *serve* thread
-//!   answers them; each event-stream client has its own writer thread and a bounded queue.
-//!   [`HttpSink::send`] (on the worker's thread, like every sink) only does `try_send` on every
-//!   queue: a client whose queue is full is dropped and counted (`dropped_clients` in the stats
-//!   line), exactly as a slow socket client, so a browser that stops reading never blocks the
-//!   worker, and the sampler never sees the sink at all. At most `[publish] max_clients`
-//!   event streams at once; one more is answered `503` and counted (`clients_refused`).
-//!   A dropped client's writer ends; its TCP connection is closed when the browser goes.
+//! - **Its own threads, none waiting on a client.** One thread accepts; each connection has a
+//!   thread of its own that reads one request head ([`request`]: at most [`request::MAX_HEAD`]
+//!   bytes within a few seconds, parsed by `httparse`), answers it and closes the connection
+//!   (`Connection: close`, no pipelining). At most [`PAGE_CONNECTIONS`] connections
+//!   wait for or get a page answer at once; one more is answered `503` and closed at once by
+//!   the accepting thread, and counted (`clients_refused`). Every read and write on a
+//!   connection has a time limit. Closing the sink ([`HttpSink::close`], on drop) waits about
+//!   a second for the event streams to send their queued lines, then shuts every connection
+//!   down and returns at most a moment later, whatever a client does.
+//! - **Never by a client's number.** Only HTTP/1.0 and 1.1 (else `505`); a head over the
+//!   limit is `431`; a request with a body (`Content-Length` other than 0, any
+//!   `Transfer-Encoding`) is `413` and its body is never read; a `Host` that is not this
+//!   server (its port with `localhost`, a loopback address or the address bound: a DNS name
+//!   that a hostile page made resolve here is refused) is `421`.
+//! - **Event streams.** [`HttpSink::send`] (on the worker's thread, like every sink) only does
+//!   `try_send` on every stream's bounded queue: a client whose queue is full is dropped and
+//!   counted (`dropped_clients` in the stats line), exactly as a slow socket client, so a
+//!   browser that stops reading never blocks the worker, and the sampler never sees the sink
+//!   at all. At most `[publish] max_clients` event streams at once; one more is answered `503`
+//!   and counted (`clients_refused`). A stream whose browser left (its connection closed, or a
+//!   write failed) ends within a second and frees its place, lines or not.
 //! - **Read-only, embedded.** `GET` only (anything else `405`, with `Allow: GET`); the paths
 //!   are the fixed table of [`assets`] (compiled into the binary: the page works with no
 //!   network) and `/events`; anything else is `404`. No file is ever read from disk.
@@ -18,30 +30,31 @@
 //!   and warnings, the last [`RECENT_SAMPLES`] samples lines and the latest line of each state
 //!   kind (model, response, stabilization, schedule, live stats, stats), then the live lines.
 //! - **Other sites** ([`site`]): `propid fleet` serves its own file table and named event
-//!   streams (one per stand) through the same server ([`HttpSink::bind_site`]).
+//!   streams (one per stand) through the same server ([`HttpSink::bind_site`]), each stream
+//!   under the same rules as `/events`.
 
 pub mod assets;
+pub mod request;
+mod server;
 pub mod site;
 
-use crossbeam_channel::{bounded, Receiver, RecvTimeoutError, Sender, TrySendError};
-use std::collections::VecDeque;
-use std::io::Write;
-use std::net::SocketAddr;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
-use std::thread::JoinHandle;
+pub use server::PAGE_CONNECTIONS;
+
+use crossbeam_channel::{Sender, TrySendError};
+use std::collections::{HashMap, VecDeque};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Duration;
 
 use super::DaemonError;
+use site::Site;
 
 /// Event and warning lines kept for a browser that connects late.
 pub const RECENT_LINES: usize = 300;
 
 /// `samples` lines kept for a browser that connects late (about 10 s).
 pub const RECENT_SAMPLES: usize = 100;
-
-/// A comment line is sent after this long without a line, so that a vanished browser is found.
-const KEEP_ALIVE: Duration = Duration::from_secs(10);
 
 /// Which kind of line, for the history.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,85 +75,104 @@ struct History {
     samples: VecDeque<Arc<str>>,
 }
 
-/// State shared by the publisher's side and the serve thread.
-struct Shared {
-    /// Lock order: `clients`, then `history`.
-    clients: Mutex<Vec<Sender<Arc<str>>>>,
+/// One event stream (`/events`, or a named stream of [`site`]): its clients and history.
+#[derive(Default)]
+struct Stream {
+    /// The clients' queues, by connection. Lock order: `clients`, then `history`.
+    clients: Mutex<Vec<(u64, Sender<Arc<str>>)>>,
     history: Mutex<History>,
+}
+
+/// State shared by the publisher's side and the server's threads.
+struct Shared {
+    /// `/events`.
+    events: Stream,
+    /// The site's named streams, by name (created by their first line).
+    named: Mutex<Vec<(String, Arc<Stream>)>>,
     queue_lines: usize,
+    /// Clients of each stream at most.
     max_clients: usize,
     closing: AtomicBool,
     dropped_clients: AtomicU64,
     clients_refused: AtomicU64,
+    /// The address bound (for the `Host` check).
+    bound: SocketAddr,
+    /// The files and named streams served.
+    site: Site,
+    /// Connections not (yet) event streams.
+    pending: AtomicUsize,
+    /// The server's live threads (the accepting one and one per connection) ...
+    threads: Mutex<usize>,
+    /// ... signalled when one ends.
+    thread_ended: Condvar,
+    /// A handle on every open connection, to shut it down at close.
+    conns: Mutex<HashMap<u64, TcpStream>>,
+    next_id: AtomicU64,
+}
+
+/// Locks `m`, also after a thread panicked holding it (every value behind these locks stays
+/// valid between two statements).
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The HTTP sink of a [`super::Publisher`].
 pub struct HttpSink {
     addr: SocketAddr,
     shared: Arc<Shared>,
-    server: Arc<tiny_http::Server>,
-    serve: Option<JoinHandle<()>>,
-    /// The site's file table and named streams ([`site`]).
-    streams: Arc<site::Streams>,
+    closed: bool,
 }
 
-impl Shared {
-    fn new(queue_lines: usize, max_clients: usize) -> Shared {
-        Shared {
-            clients: Mutex::new(Vec::new()),
-            history: Mutex::new(History::default()),
-            queue_lines,
-            max_clients,
-            closing: AtomicBool::new(false),
-            dropped_clients: AtomicU64::new(0),
-            clients_refused: AtomicU64::new(0),
-        }
-    }
-}
+/// How long closing waits for the event streams to send their queued lines.
+const CLOSE_GRACE: Duration = Duration::from_secs(1);
+
+/// How long closing waits then for the connections it shut down.
+const CLOSE_FORCED: Duration = Duration::from_millis(200);
 
 impl HttpSink {
-    /// Binds `addr` (port 0: a free port, see [`HttpSink::addr`]) and starts serving the live
-    /// page.
+    /// Binds `addr` (port 0: a free port, see [`HttpSink::addr`]) and starts serving the
+    /// live page ([`Site::LIVE`]: the files of [`assets::get`] and `/events`).
     pub fn bind(
         addr: SocketAddr,
         queue_lines: usize,
         max_clients: usize,
     ) -> Result<HttpSink, DaemonError> {
-        HttpSink::bind_site(addr, queue_lines, max_clients, site::Site::LIVE)
+        HttpSink::bind_site(addr, queue_lines, max_clients, Site::LIVE)
     }
 
-    /// Binds `addr` and serves `site`'s files and streams ([`site`]).
+    /// [`HttpSink::bind`] serving another site: its table of embedded files and its named
+    /// streams ([`site`]); `/events` is always the event stream, `max_clients` is per stream.
     pub fn bind_site(
         addr: SocketAddr,
         queue_lines: usize,
         max_clients: usize,
-        site: site::Site,
+        site: Site,
     ) -> Result<HttpSink, DaemonError> {
-        let bind_err = |e: String| {
-            DaemonError::io(
-                format!("bind http {addr}"),
-                std::io::Error::new(std::io::ErrorKind::AddrNotAvailable, e),
-            )
-        };
-        let server = tiny_http::Server::http(addr).map_err(|e| bind_err(e.to_string()))?;
-        let bound = server
-            .server_addr()
-            .to_ip()
-            .ok_or_else(|| bind_err("not an IP address".into()))?;
-        let server = Arc::new(server);
-        let shared = Arc::new(Shared::new(queue_lines, max_clients));
-        let streams = Arc::new(site::Streams::new(site, queue_lines, max_clients));
-        let (sv, sh, st) = (server.clone(), shared.clone(), streams.clone());
-        let serve = std::thread::Builder::new()
-            .name("propid-http".into())
-            .spawn(move || serve_loop(&sv, &sh, &st))
+        let err = |e| DaemonError::io(format!("bind http {addr}"), e);
+        let listener = TcpListener::bind(addr).map_err(err)?;
+        let bound = listener.local_addr().map_err(err)?;
+        let shared = Arc::new(Shared {
+            events: Stream::default(),
+            named: Mutex::new(Vec::new()),
+            queue_lines,
+            max_clients,
+            closing: AtomicBool::new(false),
+            dropped_clients: AtomicU64::new(0),
+            clients_refused: AtomicU64::new(0),
+            bound,
+            site,
+            pending: AtomicUsize::new(0),
+            threads: Mutex::new(0),
+            thread_ended: Condvar::new(),
+            conns: Mutex::new(HashMap::new()),
+            next_id: AtomicU64::new(0),
+        });
+        server::start(listener, &shared)
             .map_err(|e| DaemonError::io("spawn the http thread", e))?;
         Ok(HttpSink {
             addr: bound,
             shared,
-            server,
-            serve: Some(serve),
-            streams,
+            closed: false,
         })
     }
 
@@ -157,7 +189,7 @@ impl HttpSink {
     /// Queues `line` to every event-stream client (never waits); a client whose queue is full
     /// is dropped and counted.
     pub fn send(&self, kind: Kind, line: &str) {
-        self.shared.send(kind, line);
+        self.shared.send(&self.shared.events, kind, line);
     }
 
     /// A handle that sends lines to this sink's clients from another owner (e.g. `propid
@@ -166,36 +198,45 @@ impl HttpSink {
         LiveSender(self.shared.clone())
     }
 
-    /// Event-stream clients dropped for falling behind.
+    /// Event-stream clients dropped for falling behind (of every stream).
     pub fn dropped_clients(&self) -> u64 {
         self.shared.dropped_clients.load(Ordering::Relaxed)
-            + self
-                .streams
-                .sum(|s| s.dropped_clients.load(Ordering::Relaxed))
     }
 
-    /// Event-stream clients refused because `max_clients` were connected.
+    /// Clients refused: event streams because `max_clients` were connected (to that stream),
+    /// connections
+    /// because [`PAGE_CONNECTIONS`] were waiting for an answer.
     pub fn clients_refused(&self) -> u64 {
         self.shared.clients_refused.load(Ordering::Relaxed)
-            + self
-                .streams
-                .sum(|s| s.clients_refused.load(Ordering::Relaxed))
     }
 
-    /// Stops serving: the event streams end after their queued lines, the server closes.
+    /// Stops serving: the event streams end after their queued lines (given about a second),
+    /// every connection is shut down; returns within [`CLOSE_GRACE`] and [`CLOSE_FORCED`]
+    /// whatever the clients do (a thread still running then ends on its own).
     pub fn close(mut self) {
         self.shutdown();
     }
 
     fn shutdown(&mut self) {
-        self.shared.closing.store(true, Ordering::Relaxed);
-        if let Ok(mut c) = self.shared.clients.lock() {
-            c.clear();
+        if std::mem::replace(&mut self.closed, true) {
+            return;
         }
-        self.streams.close();
-        self.server.unblock();
-        if let Some(t) = self.serve.take() {
-            let _ = t.join();
+        let sh = &self.shared;
+        {
+            let mut clients = lock(&sh.events.clients);
+            sh.closing.store(true, Ordering::Relaxed);
+            clients.clear();
+        }
+        // a stream subscribing now sees `closing` under its lock, or its queue is cleared here
+        for (_, s) in lock(&sh.named).iter() {
+            lock(&s.clients).clear();
+        }
+        server::wake(sh.bound);
+        // requests not yet read end at once; the streams end after their queues
+        server::shut_all(sh, std::net::Shutdown::Read);
+        if !server::wait_threads(sh, CLOSE_GRACE) {
+            server::shut_all(sh, std::net::Shutdown::Both);
+            server::wait_threads(sh, CLOSE_FORCED);
         }
     }
 }
@@ -215,21 +256,18 @@ impl LiveSender {
     /// Queues `line` to every event-stream client, as [`HttpSink::send`].
     pub fn send(&self, kind: Kind, line: &str) {
         if !self.0.closing.load(Ordering::Relaxed) {
-            self.0.send(kind, line);
+            self.0.send(&self.0.events, kind, line);
         }
     }
 }
 
 impl Shared {
-    fn send(&self, kind: Kind, line: &str) {
+    /// Queues `line` to `stream`'s clients (never waits) and keeps it in its history.
+    fn send(&self, stream: &Stream, kind: Kind, line: &str) {
         let text: Arc<str> = Arc::from(line);
-        let Ok(mut clients) = self.clients.lock() else {
-            return;
-        };
-        if let Ok(mut h) = self.history.lock() {
-            h.keep(kind, &text);
-        }
-        clients.retain(|tx| match tx.try_send(text.clone()) {
+        let mut clients = lock(&stream.clients);
+        lock(&stream.history).keep(kind, &text);
+        clients.retain(|(_, tx)| match tx.try_send(text.clone()) {
             Ok(()) => true,
             Err(TrySendError::Full(_)) => {
                 self.dropped_clients.fetch_add(1, Ordering::Relaxed);
@@ -268,130 +306,6 @@ fn ring(r: &mut VecDeque<Arc<str>>, cap: usize, text: &Arc<str>) {
         r.pop_front();
     }
     r.push_back(text.clone());
-}
-
-/// Answers requests until the sink closes.
-fn serve_loop(server: &tiny_http::Server, shared: &Arc<Shared>, streams: &site::Streams) {
-    while !shared.closing.load(Ordering::Relaxed) {
-        let request = match server.recv_timeout(Duration::from_millis(200)) {
-            Ok(Some(r)) => r,
-            Ok(None) => continue,
-            Err(_) => break,
-        };
-        answer(request, shared, streams);
-    }
-}
-
-/// One request: an asset, the event stream, or a refusal.
-fn answer(request: tiny_http::Request, shared: &Arc<Shared>, streams: &site::Streams) {
-    use tiny_http::{Method, Response};
-    if *request.method() != Method::Get {
-        let r = Response::from_string("405 method not allowed: this page is read-only\n")
-            .with_status_code(405)
-            .with_header(header("Allow", "GET"));
-        let _ = request.respond(r);
-        return;
-    }
-    let path = request.url().split('?').next().unwrap_or("").to_string();
-    if path == "/events" {
-        return subscribe(request, shared);
-    }
-    if let Some(named) = streams.find(&path) {
-        return subscribe(request, &named);
-    }
-    let response = match (streams.site.asset)(&path) {
-        Some(a) => Response::from_data(a.body)
-            .with_header(header("Content-Type", a.content_type))
-            .with_header(header("Cache-Control", "no-store"))
-            .with_header(header("X-Content-Type-Options", "nosniff")),
-        None => Response::from_string("404 not found\n").with_status_code(404),
-    };
-    let _ = request.respond(response);
-}
-
-/// A header from two constant strings (always valid).
-fn header(name: &str, value: &str) -> tiny_http::Header {
-    tiny_http::Header::from_bytes(name.as_bytes(), value.as_bytes())
-        .unwrap_or_else(|()| unreachable!("constant header {name}"))
-}
-
-/// Registers an event-stream client (with the history queued first) and starts its writer.
-fn subscribe(request: tiny_http::Request, shared: &Arc<Shared>) {
-    let rx = {
-        let Ok(mut clients) = shared.clients.lock() else {
-            return;
-        };
-        if clients.len() >= shared.max_clients {
-            drop(clients);
-            shared.clients_refused.fetch_add(1, Ordering::Relaxed);
-            let r =
-                tiny_http::Response::from_string("503 too many clients\n").with_status_code(503);
-            let _ = request.respond(r);
-            return;
-        }
-        let snapshot = match shared.history.lock() {
-            Ok(h) => h.snapshot(),
-            Err(_) => Vec::new(),
-        };
-        let (tx, rx) = bounded(shared.queue_lines + snapshot.len());
-        for line in snapshot {
-            let _ = tx.try_send(line);
-        }
-        clients.push(tx);
-        rx
-    };
-    // without a thread the receiver is gone with the closure: the place is freed at the next
-    // line, as when a browser leaves
-    let _ = std::thread::Builder::new()
-        .name("propid-http-client".into())
-        .spawn(move || stream(request.into_writer(), &rx));
-}
-
-/// Writes the response head and then every queued line as an event, until the queue closes
-/// (the client was dropped or the sink closed) or the browser goes.
-fn stream(mut w: Box<dyn Write + Send>, rx: &Receiver<Arc<str>>) {
-    // tiny_http parsed the request; the body of an event stream is open-ended, so the head
-    // says so and the connection ends with the stream
-    let head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
-                X-Content-Type-Options: nosniff\r\nConnection: close\r\n\r\n";
-    if w.write_all(head.as_bytes())
-        .and_then(|_| w.flush())
-        .is_err()
-    {
-        return;
-    }
-    let mut ev = String::new();
-    loop {
-        ev.clear();
-        match rx.recv_timeout(KEEP_ALIVE) {
-            Ok(line) => {
-                push_event(&mut ev, &line);
-                // what else is queued goes in the same write (fewer system calls when lines
-                // come fast, as in a replay)
-                while ev.len() < BATCH_BYTES {
-                    match rx.try_recv() {
-                        Ok(line) => push_event(&mut ev, &line),
-                        Err(_) => break,
-                    }
-                }
-            }
-            Err(RecvTimeoutError::Timeout) => ev.push_str(": keep-alive\n\n"),
-            Err(RecvTimeoutError::Disconnected) => return,
-        }
-        if w.write_all(ev.as_bytes()).and_then(|_| w.flush()).is_err() {
-            return;
-        }
-    }
-}
-
-/// Queued lines written at once, at most about this many bytes.
-const BATCH_BYTES: usize = 64 * 1024;
-
-/// Appends one server-sent event carrying `line` (one JSON line: no newline inside).
-fn push_event(ev: &mut String, line: &str) {
-    ev.push_str("data: ");
-    ev.push_str(line);
-    ev.push_str("\n\n");
 }
 
 #[cfg(test)]

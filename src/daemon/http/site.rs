@@ -8,10 +8,10 @@
 //! [`HttpSink::send_to`] creates at its first line; a path naming a stream not created yet is
 //! `404`.
 
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use super::assets::{self, Asset};
-use super::{HttpSink, Kind, Shared};
+use super::{lock, HttpSink, Kind, Shared, Stream};
 
 /// A server's paths: its files and its named streams.
 #[derive(Clone, Copy)]
@@ -22,7 +22,8 @@ pub struct Site {
     pub stream: fn(&str) -> Option<&str>,
 }
 
-fn no_stream(_: &str) -> Option<&str> {
+/// No named stream: only `/events`.
+pub fn no_stream(_: &str) -> Option<&str> {
     None
 }
 
@@ -34,68 +35,33 @@ impl Site {
     };
 }
 
-/// The named streams of one server.
-pub(super) struct Streams {
-    pub(super) site: Site,
-    named: Mutex<Vec<(String, Arc<Shared>)>>,
-    queue_lines: usize,
-    max_clients: usize,
-}
-
-impl Streams {
-    pub(super) fn new(site: Site, queue_lines: usize, max_clients: usize) -> Streams {
-        Streams {
-            site,
-            named: Mutex::new(Vec::new()),
-            queue_lines,
-            max_clients,
-        }
-    }
-
-    /// The stream `path` names, when it exists.
-    pub(super) fn find(&self, path: &str) -> Option<Arc<Shared>> {
+impl Shared {
+    /// The named stream `path` names, when it exists.
+    pub(super) fn find_stream(&self, path: &str) -> Option<Arc<Stream>> {
         let name = (self.site.stream)(path)?;
-        let named = self.named.lock().ok()?;
+        let named = lock(&self.named);
         named.iter().find(|s| s.0 == name).map(|s| s.1.clone())
     }
 
-    fn get_or_add(&self, name: &str) -> Option<Arc<Shared>> {
-        let mut named = self.named.lock().ok()?;
+    /// The named stream `name`, created if it is not yet.
+    fn stream_or_add(&self, name: &str) -> Arc<Stream> {
+        let mut named = lock(&self.named);
         if let Some(s) = named.iter().find(|s| s.0 == name) {
-            return Some(s.1.clone());
+            return s.1.clone();
         }
-        let s = Arc::new(Shared::new(self.queue_lines, self.max_clients));
+        let s = Arc::new(Stream::default());
         named.push((name.to_string(), s.clone()));
-        Some(s)
-    }
-
-    /// Ends every named stream's clients (the server is closing).
-    pub(super) fn close(&self) {
-        let Ok(named) = self.named.lock() else {
-            return;
-        };
-        for (_, s) in named.iter() {
-            s.closing.store(true, std::sync::atomic::Ordering::Relaxed);
-            if let Ok(mut c) = s.clients.lock() {
-                c.clear();
-            }
-        }
-    }
-
-    /// Sum of a counter over the named streams.
-    pub(super) fn sum(&self, f: impl Fn(&Shared) -> u64) -> u64 {
-        self.named
-            .lock()
-            .map_or(0, |n| n.iter().map(|s| f(&s.1)).sum())
+        s
     }
 }
 
 impl HttpSink {
     /// Queues `line` to the clients of the named stream `stream` (created at its first line),
-    /// as [`HttpSink::send`] does for `/events`.
+    /// as [`HttpSink::send`] does for `/events`; after the sink closed, nothing.
     pub fn send_to(&self, stream: &str, kind: Kind, line: &str) {
-        if let Some(s) = self.streams.get_or_add(stream) {
-            s.send(kind, line);
+        let sh = &self.shared;
+        if !sh.closing.load(std::sync::atomic::Ordering::Relaxed) {
+            sh.send(&sh.stream_or_add(stream), kind, line);
         }
     }
 }
@@ -121,7 +87,7 @@ mod tests {
     fn get(s: &HttpSink, path: &str) -> BufReader<TcpStream> {
         let mut c = TcpStream::connect(s.addr()).unwrap();
         c.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
-        write!(c, "GET {path} HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+        write!(c, "GET {path} HTTP/1.1\r\nHost: {}\r\n\r\n", s.addr()).unwrap();
         BufReader::new(c)
     }
 
