@@ -1,8 +1,8 @@
 //! The plant's configuration (the `[plant]` table of `config/sim.toml`): keys with their units,
 //! defaults, and the range checks that name the first bad key.
 
-use serde::Deserialize;
 use propid_numerics::stand_model::{CurrentLaw, RotorLaw, SpeedMap, StandParams, Supply};
+use serde::Deserialize;
 
 use crate::effects::EffectsConfig;
 
