@@ -75,15 +75,21 @@ impl Wire {
         }
     }
 
-    /// Bytes in, frames out. Returns the format when these bytes decided it.
-    pub fn push(&mut self, bytes: &[u8], on_frame: &mut impl FnMut(Frame)) -> Option<WireFormat> {
+    /// Bytes in, frames out, each with the wire it came on (a HELLO's rate of 0 means a
+    /// different thing on each: [`SampleAssembler::hello`](propid_wire::stream::SampleAssembler::hello)).
+    /// Returns the format when these bytes decided it.
+    pub fn push(
+        &mut self,
+        bytes: &[u8],
+        on_frame: &mut impl FnMut(Frame, WireFormat),
+    ) -> Option<WireFormat> {
         match self {
             Wire::Tsp(d) => {
-                d.push(bytes, &mut *on_frame);
+                d.push(bytes, |f| on_frame(f, WireFormat::Binary));
                 None
             }
             Wire::Csv(c) => {
-                c.push(bytes, on_frame);
+                c.push(bytes, &mut |f| on_frame(f, WireFormat::Csv));
                 None
             }
             Wire::Undecided { prefix, .. } => {
@@ -102,7 +108,7 @@ impl Wire {
 
     /// End of input: an undecided prefix is decided on what there is, rows the CSV link holds
     /// are handed on. Returns the format when this decided it.
-    pub fn finish(&mut self, on_frame: &mut impl FnMut(Frame)) -> Option<WireFormat> {
+    pub fn finish(&mut self, on_frame: &mut impl FnMut(Frame, WireFormat)) -> Option<WireFormat> {
         let mut decided = None;
         if let Wire::Undecided { prefix, .. } = self {
             if prefix.is_empty() {
@@ -114,12 +120,12 @@ impl Wire {
             }
         }
         if let Wire::Csv(c) = self {
-            c.finish(on_frame);
+            c.finish(&mut |f| on_frame(f, WireFormat::Csv));
         }
         decided
     }
 
-    fn decide(&mut self, format: WireFormat, on_frame: &mut impl FnMut(Frame)) {
+    fn decide(&mut self, format: WireFormat, on_frame: &mut impl FnMut(Frame, WireFormat)) {
         let Wire::Undecided { prefix, csv } = self else {
             return;
         };
@@ -205,9 +211,9 @@ mod tests {
         let mut frames = Vec::new();
         let mut decisions = 0;
         for c in bytes.chunks(chunk) {
-            decisions += wire.push(c, &mut |f| frames.push(f)).is_some() as usize;
+            decisions += wire.push(c, &mut |f, _| frames.push(f)).is_some() as usize;
         }
-        decisions += wire.finish(&mut |f| frames.push(f)).is_some() as usize;
+        decisions += wire.finish(&mut |f, _| frames.push(f)).is_some() as usize;
         (frames, decisions)
     }
 

@@ -114,6 +114,27 @@ fn a_hello_rate_that_lies_is_printed_beside_the_measured_one() {
 }
 
 #[test]
+fn a_hello_claiming_0_hz_in_a_binary_recording_is_a_lie() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = record(dir.path(), "hello_rate_hz = 0");
+    let (code, v) = identify(&f);
+    assert_eq!(code, 0, "{v}");
+    let s = &v["source"];
+    assert!(
+        (s["rate_hz"].as_f64().unwrap() - 1000.0).abs() < 1e-6,
+        "{s}"
+    );
+    assert_eq!(warning(&v, "hello_rate_mismatch").unwrap()["value"], 0.0);
+    let lines = replay(&f);
+    let w: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["kind"] == "hello_rate_mismatch")
+        .collect();
+    assert_eq!(w.len(), 1, "{lines:#?}");
+    assert_eq!(w[0]["hello_hz"], 0);
+}
+
+#[test]
 fn absurd_finite_values_are_refused_by_identify_and_never_published_by_replay() {
     let dir = tempfile::tempdir().unwrap();
     let f = record(dir.path(), "absurd_thrust_every_samples = 97");

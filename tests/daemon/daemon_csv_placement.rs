@@ -103,9 +103,9 @@ fn replayed(bytes: &[u8]) -> (Vec<(usize, f32)>, Tracker, usize) {
     let mut placed = Vec::new();
     let mut next = 0usize;
     let mut impulse_at = None;
-    let mut on_frame = |f: Frame| match f.msg {
+    let mut on_frame = |f: Frame, _| match f.msg {
         Message::Hello(h) => {
-            tracker.hello(h.boot_id, h.sample_rate_hz);
+            tracker.hello_csv(h.boot_id, h.sample_rate_hz);
         }
         Message::Sample(s) => {
             let p = tracker.sample(s.sample_index, s.t_us);

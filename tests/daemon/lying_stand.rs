@@ -1,7 +1,7 @@
 //! A stand that lies (issue 27 items 3, 4, 6, 7, 8, 9), through the real binary against the
 //! simulated stand with its misbehaviours switched on (`[faults]` of `propid_sim`): a runaway
 //! throttle, BUSY to every pulse, commands acknowledged and never executed, a HELLO that lies
-//! about the rate, clock jumps both ways, absurd finite values; and pulse levels outside 0..1
+//! about the rate (65 535 Hz, or 0: a lie on TSP/1), clock jumps both ways, absurd finite values; and pulse levels outside 0..1
 //! refused before anything is sent. Every run's commands, as the stand received them, are held
 //! against the plan: nothing outside it, and STOP last when the plan ends on a fault.
 
@@ -151,6 +151,20 @@ fn a_hello_that_lies_about_the_rate_stops_the_plan() {
     assert!((measured - 1000.0).abs() < 5.0, "{w}");
     // stopped before the first pulse (sized from the HELLO's rate) could go out
     assert!(!cmds.iter().any(|c| matches!(c.1, Message::Impulse(_))));
+    check_commands(&cmds, &plan(&[0.4], 8), true);
+}
+
+#[test]
+fn a_hello_claiming_0_hz_is_a_lie_that_stops_the_plan() {
+    let (code, lines, err, cmds) = run_against(&[0.4], 8, |c| {
+        c.faults.hello_rate_hz = Some(0);
+    });
+    assert_eq!(code, Some(8), "{err} {lines:#?}");
+    let w = one(&lines, "hello_rate_mismatch");
+    assert_eq!(w["hello_hz"], 0);
+    let measured = w["measured_hz"].as_f64().unwrap();
+    assert!((measured - 1000.0).abs() < 5.0, "{w}");
+    assert!(kind(&lines, "plan_finished").is_empty());
     check_commands(&cmds, &plan(&[0.4], 8), true);
 }
 

@@ -79,14 +79,22 @@ impl Tracker {
         }
     }
 
-    /// A HELLO arrived; returns true when its `boot_id` starts a new segment (the first HELLO
+    /// A HELLO in a TSP/1 frame arrived; returns true when its `boot_id` starts a new segment (the first HELLO
     /// before any sample, or a new boot): the segment is announced here, whether or not a
     /// sample ever follows. The first HELLO of a stream joined mid-segment, and the HELLO of a
     /// reset already inferred from the index, are adopted without a split.
     /// The HELLO's rate is the one the assembler holds clock steps and the measured rate
-    /// against (its clock-jump and rate rules).
+    /// against (its clock-jump and rate rules); 0 is a lie ([`SampleAssembler::hello`]).
     pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) -> bool {
         let starts = self.asm.hello(boot_id, sample_rate_hz).starts_segment();
+        self.announced |= starts;
+        starts
+    }
+
+    /// A CSV bench's HELLO, as [`Self::hello`]: a rate of 0 is "not measured yet"
+    /// ([`SampleAssembler::hello_csv`]).
+    pub fn hello_csv(&mut self, boot_id: u32, sample_rate_hz: u16) -> bool {
+        let starts = self.asm.hello_csv(boot_id, sample_rate_hz).starts_segment();
         self.announced |= starts;
         starts
     }

@@ -139,7 +139,9 @@ fn stream_warnings(source: &super::load::Source) -> Vec<IdentifyWarning> {
             value: jumps as f64,
         });
     }
-    if let (true, Some(n)) = (t.assemble.rate_mismatches > 0, source.nominal_rate_hz) {
+    if t.assemble.rate_mismatches > 0 {
+        // a mismatch without a nominal rate is a HELLO that claimed 0 Hz
+        let n = source.nominal_rate_hz.unwrap_or(0.0);
         w.push(IdentifyWarning {
             kind: "hello_rate_mismatch",
             message: format!(

@@ -8,6 +8,7 @@ use super::Plan;
 use crate::daemon::item::{EventItem, Item, SampleItem};
 use crate::daemon::stats::LinkStats;
 use crate::daemon::tracker::Tracker;
+use propid_wire::protocol::detect::WireFormat;
 use propid_wire::protocol::message::{msg_type, Frame, Message};
 
 /// Frame handling, separate from the decoder so both can be borrowed at once.
@@ -25,6 +26,13 @@ pub(super) struct Handler {
 }
 
 impl Handler {
+    fn hello(&mut self, boot_id: u32, rate_hz: u16, wire: WireFormat) -> bool {
+        match wire {
+            WireFormat::Binary => self.tracker.hello(boot_id, rate_hz),
+            WireFormat::Csv => self.tracker.hello_csv(boot_id, rate_hz),
+        }
+    }
+
     pub(super) fn send(&mut self, item: Item) {
         if self.lossless {
             let _ = self.tx.send(item);
@@ -42,10 +50,12 @@ impl Handler {
         }
     }
 
-    pub(super) fn on_frame(&mut self, frame: Frame) {
+    /// One frame, decoded from `wire` (a HELLO's rate of 0 is a lie on TSP/1, "not measured
+    /// yet" on CSV: the tracker's rule).
+    pub(super) fn on_frame(&mut self, frame: Frame, wire: WireFormat) {
         match &frame.msg {
             // one `segment` item per segment, as the tracker announces it (its "Announcing")
-            Message::Hello(h) if self.tracker.hello(h.boot_id, h.sample_rate_hz) => {
+            Message::Hello(h) if self.hello(h.boot_id, h.sample_rate_hz, wire) => {
                 self.send(Item::Segment { boot_id: h.boot_id });
             }
             Message::Sample(s) => {

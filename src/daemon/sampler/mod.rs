@@ -247,7 +247,7 @@ impl Sampler {
     pub fn run(mut self) -> SamplerOutcome {
         let error = self.run_loop().err();
         let handler = &mut self.handler;
-        if let Some(f) = self.wire.finish(&mut |f| handler.on_frame(f)) {
+        if let Some(f) = self.wire.finish(&mut |f, w| handler.on_frame(f, w)) {
             self.decided(f);
         }
         if let Some(r) = self.record.as_mut() {
@@ -390,7 +390,10 @@ impl Sampler {
         self.heard_since_connect = true;
         self.handler.now_us = self.now_us();
         let handler = &mut self.handler;
-        if let Some(f) = self.wire.push(&self.buf[..n], &mut |f| handler.on_frame(f)) {
+        if let Some(f) = self
+            .wire
+            .push(&self.buf[..n], &mut |f, w| handler.on_frame(f, w))
+        {
             self.decided(f);
         }
         Ok(())

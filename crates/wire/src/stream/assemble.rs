@@ -40,8 +40,9 @@
 //! - **Rate** ([`Assembled::RateMismatch`], once per segment): after [`RATE_CHECK_SAMPLES`]
 //!   index steps that agreed, the rate they measure against the HELLO's: off by more than
 //!   [`RATE_TOLERANCE`] (relative) is a HELLO that lies (the host sizes pulses from it). A
-//!   HELLO rate of 0 is no rate (a CSV bench's made-up HELLO says 0 before it measured one)
-//!   and is not checked.
+//!   HELLO rate of 0 is a lie too when the HELLO came in a TSP/1 frame ([`SampleAssembler::hello`]:
+//!   a stand must state its rate), and no rate, not checked, when it is a CSV bench's
+//!   ([`SampleAssembler::hello_csv`]: its made-up HELLO says 0 before it measured one).
 //! - `dt`: the device clock over the sample count, `Σ (t_last − t_first) / Σ (idx_last −
 //!   idx_first)` summed over segments and the spans between clock jumps (a least-squares-free
 //!   average immune to jitter and to gaps); the nominal HELLO rate only when no segment spans
@@ -257,6 +258,8 @@ pub struct SampleAssembler {
     span_t_us: u64,
     span_samples: u64,
     nominal_rate_hz: Option<u16>,
+    /// The last HELLO was a CSV bench's: a rate of 0 there means "not measured yet".
+    csv_hello: bool,
     /// The current segment began at an inferred reset after the last HELLO: the HELLO of
     /// that new boot, when it comes, must not split it again.
     reset_since_hello: bool,
@@ -312,8 +315,21 @@ impl SampleAssembler {
             .map(|r| 1.0 / r as f64)
     }
 
-    /// A HELLO: a new `boot_id` ends the current segment (see [`HelloEffect`]).
+    /// A HELLO in a TSP/1 frame: a new `boot_id` ends the current segment (see
+    /// [`HelloEffect`]); its rate is held against the measured one, 0 included (a lie).
     pub fn hello(&mut self, boot_id: u32, sample_rate_hz: u16) -> HelloEffect {
+        self.csv_hello = false;
+        self.place_hello(boot_id, sample_rate_hz)
+    }
+
+    /// A CSV bench's HELLO (its `# HELLO` line, or the one made up for a bench that never
+    /// says one): as [`Self::hello`], but a rate of 0 means "not measured yet", not checked.
+    pub fn hello_csv(&mut self, boot_id: u32, sample_rate_hz: u16) -> HelloEffect {
+        self.csv_hello = true;
+        self.place_hello(boot_id, sample_rate_hz)
+    }
+
+    fn place_hello(&mut self, boot_id: u32, sample_rate_hz: u16) -> HelloEffect {
         self.nominal_rate_hz = Some(sample_rate_hz);
         let effect = match self.boot_id {
             Some(b) if b == boot_id => HelloEffect::SameBoot,
@@ -478,9 +494,10 @@ impl SampleAssembler {
     }
 
     /// The segment's measured rate against the HELLO's, once [`RATE_CHECK_SAMPLES`] index
-    /// steps agreed: `Some((hello, measured))` when they disagree (once per segment).
+    /// steps agreed: `Some((hello, measured))` when they disagree (once per segment). A rate
+    /// of 0 disagrees with any, except in a CSV bench's HELLO (not measured yet).
     fn check_rate(&mut self) -> Option<(u16, f64)> {
-        let hello = self.nominal_rate_hz.filter(|&r| r > 0)?;
+        let hello = self.nominal_rate_hz.filter(|&r| r > 0 || !self.csv_hello)?;
         let seg = self.seg.as_mut()?;
         let (t, n) = seg.measured();
         if seg.rate_checked || n < RATE_CHECK_SAMPLES || t == 0 {

@@ -132,16 +132,17 @@ impl RecordBuilder {
                 self.push_point(s.sample_index, s.t_us, sample_values(s));
             }
             Message::Hello(h) => {
-                self.push_hello(h);
+                self.asm.hello(h.boot_id, h.sample_rate_hz);
             }
             Message::Event(e) => self.push_event(e),
             _ => {}
         }
     }
 
-    /// A HELLO met outside a frame (a CSV bench's line): a new `boot_id` ends the segment.
+    /// A HELLO met outside a frame (a CSV bench's line): a new `boot_id` ends the segment; a
+    /// rate of 0 is "not measured yet" ([`SampleAssembler::hello_csv`]).
     pub fn push_hello(&mut self, h: &Hello) {
-        self.asm.hello(h.boot_id, h.sample_rate_hz);
+        self.asm.hello_csv(h.boot_id, h.sample_rate_hz);
     }
 
     /// A device EVENT met outside a frame (a CSV bench's line): impulse edges and watchdog

@@ -473,3 +473,55 @@ fn a_hello_that_lies_about_the_rate_is_said_once_and_the_clock_is_believed() {
     assert_eq!(a.stats().clock_jumps, 1, "the first step only");
     assert!((a.dt_s().unwrap() - 1e-3).abs() < 1e-12);
 }
+
+#[test]
+fn a_hello_rate_of_0_is_a_lie_on_tsp1_and_not_measured_yet_on_csv() {
+    let mismatches = |csv: bool| {
+        let mut a = SampleAssembler::new(AssembleOptions::default());
+        if csv {
+            a.hello_csv(1, 0);
+        } else {
+            a.hello(1, 0);
+        }
+        let mut said = Vec::new();
+        for i in 0..1000u32 {
+            a.sample(i, 1000 * i, (), &mut |x| {
+                if let Assembled::RateMismatch {
+                    hello_hz,
+                    measured_hz,
+                } = x
+                {
+                    said.push((hello_hz, measured_hz));
+                }
+            });
+        }
+        (said, a.stats().rate_mismatches, a.dt_s())
+    };
+    let (said, n, dt) = mismatches(false);
+    assert_eq!((said, n), (vec![(0, 1000.0)], 1));
+    assert!((dt.unwrap() - 1e-3).abs() < 1e-12, "the clock is believed");
+    let (said, n, _) = mismatches(true);
+    assert_eq!((said, n), (vec![], 0));
+}
+
+#[test]
+fn a_binary_recording_s_rate_0_hello_is_a_lie_a_csv_bench_s_is_not() {
+    let mut h = match hello(1).msg {
+        Message::Hello(h) => h,
+        _ => unreachable!(),
+    };
+    h.sample_rate_hz = 0;
+    let frames: Vec<Frame> = std::iter::once(Frame {
+        seq: 0,
+        msg: Message::Hello(h),
+    })
+    .chain((0..300).map(|i| sample(i, 1000 * i, ALL)))
+    .collect();
+    let (_, st, _) = build(&frames);
+    assert_eq!(st.rate_mismatches, 1);
+    let mut b = RecordBuilder::new(AssembleOptions::default());
+    b.push_hello(&h);
+    frames[1..].iter().for_each(|f| b.push_frame(f));
+    let (_, st, _) = b.finish().unwrap();
+    assert_eq!(st.rate_mismatches, 0);
+}
