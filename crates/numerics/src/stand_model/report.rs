@@ -9,6 +9,11 @@ use serde::Serialize;
 use super::fit::{Estimate, StandFit, StandModelError};
 use super::Quantity;
 
+/// A figure whose standard deviation exceeds this many times its size is not reported (the
+/// fit moved it freely: a single pulse does not show a rotor's lag apart from a 2nd-order
+/// response, a thrust-only record its sensor's).
+pub const UNDETERMINED_RATIO: f64 = 10.0;
+
 /// One figure: a value with its standard deviation and the channel(s) it came from, or `null`
 /// and why.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -30,7 +35,17 @@ pub struct Figure {
 }
 
 impl Figure {
+    /// The fitted value with its standard deviation; a value whose standard deviation is over
+    /// [`UNDETERMINED_RATIO`] times its size is one the data do not determine: `null` and why.
     fn of(e: Estimate, from: impl Into<String>) -> Figure {
+        if let Some(u) = e.1 {
+            if !(u.is_finite() && u <= UNDETERMINED_RATIO * e.0.abs()) {
+                return Figure::refused(format!(
+                    "not determined by the data: {:.3e} with a standard deviation of {u:.3e}",
+                    e.0
+                ));
+            }
+        }
         Figure {
             value: Some(e.0),
             uncertainty: e.1,
