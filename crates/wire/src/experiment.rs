@@ -25,7 +25,9 @@
 //! and for one `pulse_spacing_ms`, then it is a refusal; any other refusal ends the plan with
 //! [`Notice::Refused`] and a STOP. The device's samples are held against the commands
 //! (`verify.rs`): a throttle outside what was commanded, levels or pulses acknowledged and
-//! never seen, a sample rate other than the HELLO's end the plan with a STOP too. A HELLO with a new boot id means the device reset:
+//! never seen, a sample rate other than the HELLO's end the plan with a STOP too, and so does a
+//! sample over a safety limit (`limits.rs`, [`Limits`]: never re-armed). A HELLO with a new
+//! boot id means the device reset:
 //! [`Notice::DeviceReset`], and the plan is over unless `rearm_on_reset` says to hand-shake, ARM
 //! and resume at the interrupted operating point (`recover.rs`: also what a reconnect and a
 //! stall of the link do). A watchdog trip ends it too. [`Experiment::abort`] sends STOP (re-sent until acknowledged) for shutdown.
@@ -42,11 +44,13 @@
 //! ```
 
 mod config;
+mod limits;
 mod plan;
 mod recover;
 mod verify;
 
-pub use config::{ExperimentConfig, ExperimentConfigError};
+pub use config::{Commanded, ExperimentConfig, ExperimentConfigError};
+pub use limits::{LimitGuard, LimitTrip, Limits, LimitsError, JUDGE_SAMPLES};
 pub use plan::{Experiment, Notice, Output, Phase};
 pub use verify::{
     MIN_SAMPLES_TO_JUDGE, PULSES_UNSEEN_LIMIT, THROTTLE_MISMATCH_MS, THROTTLE_TOLERANCE,

@@ -318,3 +318,43 @@ fn random_bytes_and_absurd_numbers_never_panic() {
         assert!(s.rows + s.out_of_order + s.untimed <= link.lines_ok());
     }
 }
+
+#[test]
+fn a_thrust_limit_in_newtons_holds_whatever_unit_the_bench_writes() {
+    use propid_wire::experiment::Limits;
+    let limits = Limits {
+        max_thrust_n: Some(5.0),
+        ..Limits::default()
+    };
+    // 5 N is 509.9 gf, 1.124 lbf, 0.5099 kgf: the first row of each bench is under it,
+    // the second over
+    for (header, under, over) in [
+        ("t_us,throttle,thrust_g", 500.0, 520.0),
+        ("t_us,throttle,Thrust (kgf)", 0.5, 0.52),
+        ("t_us,throttle,thrust_lbf", 1.1, 1.15),
+        ("t_us,throttle,Thrust (N)", 4.9, 5.1),
+    ] {
+        let mut link = CsvLink::new(CsvLinkOptions::default());
+        let mut text = format!("{header}\n");
+        for k in 0..10 {
+            let v = if k < 5 { under } else { over };
+            text += &format!("{},{},{v}\n", k * 2000, 3000);
+        }
+        let trips: Vec<Option<f64>> = frames(&mut link, &text)
+            .iter()
+            .filter_map(|f| match f.msg {
+                Message::Sample(s) => Some(limits.breach(&s).map(|t| t.value)),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(trips.len(), 10, "{header}");
+        assert!(
+            trips[..5].iter().all(Option::is_none),
+            "{header}: {trips:?}"
+        );
+        for t in &trips[5..] {
+            let n = t.unwrap_or_else(|| panic!("{header}: {trips:?}"));
+            assert!(n > 5.0 && n < 5.2, "{header}: {n} N");
+        }
+    }
+}

@@ -15,6 +15,17 @@ pub struct ExperimentConfigError {
     pub reason: String,
 }
 
+/// One throttle the plan commands ([`ExperimentConfig::commanded`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Commanded {
+    /// The keys that make it, e.g. `levels[1]` or `levels[1] - pulse_amplitudes[0]`.
+    pub key: String,
+    /// How it is made, e.g. `0.3 - 0.05 = 0.25`.
+    pub value: String,
+    /// The throttle, fraction.
+    pub throttle: f64,
+}
+
 /// The host-side experiment: arm, visit each operating point, fire pulses, ramp down, disarm.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -152,23 +163,50 @@ impl ExperimentConfig {
     /// [0.02]` with `−0.05` cuts the motor to 0 %), a pulse the plan never meant. The pair is
     /// refused, named (`levels[i] ± pulse_amplitudes[j]`), before anything is sent.
     fn check_pulse_levels(&self) -> Result<(), ExperimentConfigError> {
+        match self
+            .commanded()
+            .into_iter()
+            .find(|c| c.throttle > 1.0 + 1e-9 || c.throttle < -1e-9)
+        {
+            Some(c) => Err(refuse(
+                c.key,
+                c.value,
+                "every pulse level (level ± amplitude) in 0..=1: a device would clamp it",
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// The commanded envelope: every throttle the plan commands besides the ramp down to 0,
+    /// named by the keys that make it — each level (`levels[i]`), and each pulse level about it
+    /// (`levels[i] + pulse_amplitudes[j]`, and `levels[i] - pulse_amplitudes[j]` with
+    /// `alternate_sign`), in that order. The one list the plan's checks read: 0..=1 here,
+    /// `[limits] max_throttle` ([`super::Limits::refuse_plan`]).
+    pub fn commanded(&self) -> Vec<Commanded> {
+        let mut out = Vec::new();
         for (i, &l) in self.levels.iter().enumerate() {
+            out.push(Commanded {
+                key: format!("levels[{i}]"),
+                value: l.to_string(),
+                throttle: l,
+            });
             for (j, &a) in self.pulse_amplitudes.iter().enumerate() {
-                let (sign, v) = if l + a > 1.0 + 1e-9 {
-                    ('+', l + a)
-                } else if self.alternate_sign && l - a < -1e-9 {
-                    ('-', l - a)
+                let signs: &[char] = if self.alternate_sign {
+                    &['+', '-']
                 } else {
-                    continue;
+                    &['+']
                 };
-                return Err(refuse(
-                    format!("levels[{i}] {sign} pulse_amplitudes[{j}]"),
-                    format!("{l} {sign} {a} = {v}"),
-                    "every pulse level (level ± amplitude) in 0..=1: a device would clamp it",
-                ));
+                for &sign in signs {
+                    let v = if sign == '+' { l + a } else { l - a };
+                    out.push(Commanded {
+                        key: format!("levels[{i}] {sign} pulse_amplitudes[{j}]"),
+                        value: format!("{l} {sign} {a} = {v}"),
+                        throttle: v,
+                    });
+                }
             }
         }
-        Ok(())
+        out
     }
 
     /// Signed amplitude (throttle fraction) of pulse `j` at an operating point.

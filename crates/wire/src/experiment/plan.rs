@@ -108,6 +108,24 @@ pub enum Notice {
         /// The rate measured from the samples, Hz.
         measured_hz: f64,
     },
+    /// A sample breached a safety limit (`[limits]`, [`super::Limits::breach`]). The plan is
+    /// over for good (a STOP is sent; `rearm_on_reset` does not re-arm it).
+    LimitTripped {
+        /// The limit's key, e.g. `max_current_a`.
+        which: &'static str,
+        /// What the sample showed (SI units; throttle as a fraction).
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// A limit on a quantity the stand's first samples never carried: it cannot be held (said
+    /// once, after [`super::JUDGE_SAMPLES`] samples).
+    LimitUnchecked {
+        /// The limit's key.
+        which: &'static str,
+        /// Why.
+        why: &'static str,
+    },
     /// A command went unanswered after all re-sends. The plan is over.
     LinkFailed {
         /// Protocol name of the command.
@@ -221,6 +239,8 @@ pub struct Experiment {
     pub(super) busy: Option<(u32, u64)>,
     /// The device's samples checked against the commands (`verify.rs`).
     pub(super) check: super::verify::StandCheck,
+    /// The safety limits (`limits.rs`).
+    pub(super) limits: super::limits::LimitGuard,
 }
 
 impl Experiment {
@@ -249,6 +269,7 @@ impl Experiment {
             from_level: 0.0,
             busy: None,
             check: Default::default(),
+            limits: Default::default(),
         })
     }
 
@@ -359,7 +380,10 @@ impl Experiment {
                 }
             }
             Message::Ack(a) => self.on_ack(a, now_us),
-            Message::Sample(s) => self.on_sample(&s, now_us),
+            Message::Sample(s) => {
+                self.check_limits(&s, now_us);
+                self.on_sample(&s, now_us)
+            }
             Message::Event(e) if e.code == EventCode::ImpulseStart => {
                 self.check.pulse_shown = true;
                 self.on_impulse_start(e.t_us, now_us)
