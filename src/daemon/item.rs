@@ -180,6 +180,22 @@ pub enum PlanNote {
     /// The plan stopped on a sample rate other than the HELLO's (published from
     /// [`Item::RateMismatch`]).
     RateMismatch,
+    /// A sample breached a `[limits]` limit; STOP sent, the plan is over for good.
+    LimitTripped {
+        /// The limit's key.
+        which: &'static str,
+        /// What the sample showed.
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// A limit the stand's samples cannot be held against (its quantity never reported).
+    LimitUnchecked {
+        /// The limit's key.
+        which: &'static str,
+        /// Why.
+        why: &'static str,
+    },
 }
 
 /// One item on the sampler → worker queue.

@@ -215,6 +215,15 @@ pub enum Event {
         /// `http://ADDRESS:PORT/`.
         url: String,
     },
+    /// A sample breached a `[limits]` limit: STOP sent, the plan is over for good (exit 8).
+    LimitTripped {
+        /// The limit's key (`max_current_a`, …).
+        which: &'static str,
+        /// What the sample showed (A, N, rev/min, V; throttle as a fraction).
+        value: f64,
+        /// The limit.
+        limit: f64,
+    },
     /// Device event ARMED.
     Armed(DeviceEvent),
     /// Device event DISARMED.
@@ -317,6 +326,14 @@ pub enum Warning<'a> {
         /// What the index step and the period expected, µs.
         #[serde(serialize_with = "nullable::num::serialize")]
         expected_us: f64,
+    },
+    /// A `[limits]` limit on a quantity the stand has not reported: it cannot hold.
+    LimitUnchecked {
+        /// The limit's key.
+        which: &'static str,
+        /// Why (published as the message).
+        #[serde(rename = "message")]
+        why: &'static str,
     },
     /// Device event WATCHDOG_TRIP.
     WatchdogTrip(DeviceEvent),
@@ -552,6 +569,18 @@ impl Line<'_> {
             }
             // published from the tracker's item (replays too): `hello_rate_mismatch`
             PlanNote::RateMismatch => return None,
+            PlanNote::LimitTripped {
+                which,
+                value,
+                limit,
+            } => Line::Event(Event::LimitTripped {
+                which,
+                value,
+                limit,
+            }),
+            PlanNote::LimitUnchecked { which, why } => {
+                Line::Warning(Warning::LimitUnchecked { which, why })
+            }
         })
     }
 

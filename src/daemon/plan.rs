@@ -8,7 +8,9 @@
 //! operating point; after a watchdog trip or a refused command it is over, and so it is when the
 //! stand's samples contradict its ACKs (a throttle other than the commanded one, commands never
 //! executed, a sample rate other than the HELLO's: `propid_wire::experiment`'s `verify.rs`,
-//! a STOP sent; the rate measured by the tracker's assembler). A plan over on a
+//! a STOP sent; the rate measured by the tracker's assembler), and when a sample breaches a
+//! `[limits]` safety limit (`limits.rs` there: checked here, on the sampler's thread, as each
+//! SAMPLE arrives; never re-armed). A plan over on a
 //! fault ends the run with exit 8 (the sampler reads the link 500 ms more first). A failed link
 //! (a command unanswered after its re-sends) ends the run (exit 6).
 
@@ -47,6 +49,9 @@ pub fn from_experiment(ecfg: ExperimentConfig, cfg: &Config) -> Result<Box<dyn P
     let mut plan = ExperimentPlan::new(ecfg)?;
     plan.exp
         .set_stall_watchdog(cfg.device.stall_timeout.is_some());
+    plan.exp
+        .set_limits(cfg.limits)
+        .map_err(|e| DaemonError::Config(ConfigError::Limits(e)))?;
     Ok(Box::new(plan))
 }
 
@@ -94,6 +99,16 @@ fn note(n: &Notice) -> PlanNote {
             PlanNote::CommandsNotExecuted { command, level }
         }
         Notice::RateMismatch { .. } => PlanNote::RateMismatch,
+        Notice::LimitTripped {
+            which,
+            value,
+            limit,
+        } => PlanNote::LimitTripped {
+            which,
+            value,
+            limit,
+        },
+        Notice::LimitUnchecked { which, why } => PlanNote::LimitUnchecked { which, why },
     }
 }
 

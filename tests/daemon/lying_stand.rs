@@ -16,7 +16,7 @@ use serde_json::Value;
 use std::path::Path;
 
 /// The plan of [`daemon_config`] at `levels` (its keys as the test config writes them).
-fn plan(levels: &[f64], pulses: u32) -> ExperimentConfig {
+pub fn plan(levels: &[f64], pulses: u32) -> ExperimentConfig {
     ExperimentConfig {
         levels: levels.to_vec(),
         ramp_ms: 100,
@@ -31,7 +31,7 @@ fn plan(levels: &[f64], pulses: u32) -> ExperimentConfig {
 /// Every command the stand received is one the plan sends: the handshake, ARM, heartbeats,
 /// SET_THROTTLE to one of its levels or 0, IMPULSE to one of its pulse levels, STOP, DISARM;
 /// with `stop_last`, the last one is a STOP.
-fn check_commands(cmds: &[(u16, Message)], plan: &ExperimentConfig, stop_last: bool) {
+pub fn check_commands(cmds: &[(u16, Message)], plan: &ExperimentConfig, stop_last: bool) {
     assert!(!cmds.is_empty(), "no command reached the stand");
     let levels: Vec<u16> = plan.levels.iter().map(|&l| throttle_level(l)).collect();
     let pulse_levels: Vec<u16> = plan

@@ -371,3 +371,30 @@ fn a_storm_of_bad_frames_while_armed_stops_the_motor() {
         }
     }
 }
+
+#[test]
+fn a_current_limit_trips_through_the_emulated_firmware_and_the_motor_stops() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some(stand) = Stand::start(dir.path(), 60.0) else {
+        return;
+    };
+    // config/sim.toml's motor draws about 2 A at 0.3 and 8 A at 0.5 (0.4 + 8 (T/T_ref)^1.5),
+    // read by the firmware on its ADC from the harness's current sensor
+    let cfg = config(dir.path(), "[0.3, 0.5]", 8, "");
+    let mut text = std::fs::read_to_string(&cfg).unwrap();
+    text += "[limits]\nmax_current_a = 5.0\n";
+    std::fs::write(&cfg, text).unwrap();
+    let d = Daemon::run(&cfg, &stand.link.display().to_string(), None);
+    let (status, lines, err) = d.finish(60.0);
+    assert_eq!(status.code(), Some(8), "{err} {lines:#?}");
+    let trips = kind(&lines, "limit_tripped");
+    assert_eq!(trips.len(), 1, "{lines:#?}");
+    assert_eq!(trips[0]["which"], "max_current_a");
+    let value = trips[0]["value"].as_f64().unwrap();
+    assert!(value > 5.0 && value < 9.0, "{}", trips[0]);
+    assert_eq!(kind(&lines, "level_done").len(), 1, "{lines:#?}");
+    assert!(kind(&lines, "plan_finished").is_empty());
+    assert!(!kind(&lines, "disarmed").is_empty(), "{lines:#?}");
+    // the ESC is back at its minimum
+    stand.esc_until(5.0, |us| us < 1010.0);
+}

@@ -15,7 +15,7 @@ mod raw;
 
 pub use raw::{RawConfig, RawCsv, RawDaemon, RawDevice, RawIdentify, RawPublish};
 
-use propid_wire::experiment::ExperimentConfigError;
+use propid_wire::experiment::{ExperimentConfigError, Limits, LimitsError};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -41,6 +41,9 @@ pub enum ConfigError {
     /// The `[experiment]` table was refused by the experiment plan.
     #[error("config [experiment]: {0}")]
     Experiment(#[source] ExperimentConfigError),
+    /// `[limits]` was refused, or the plan leaves its `max_throttle`.
+    #[error("config [limits]: {0}")]
+    Limits(#[source] LimitsError),
     /// A value is outside its range (or not a finite number).
     #[error("config key `{key}` = {value}: {expected}")]
     OutOfRange {
@@ -179,6 +182,8 @@ pub struct Config {
     pub csv: CsvConfig,
     /// `[experiment]` table, validated by the experiment plan.
     pub experiment: toml::Table,
+    /// `[limits]` (validated; the plan holds the stand to them, [`propid_wire::experiment`]).
+    pub limits: Limits,
 }
 
 /// `[publish] http` / `--http ADDR`: a bare port (`8080`) or `:PORT` binds the loopback

@@ -142,6 +142,9 @@ pub struct RawConfig {
     /// `[experiment]`: passed through to the experiment plan, which validates it.
     #[serde(default)]
     pub experiment: Option<toml::Table>,
+    /// `[limits]`: the safety limits (`propid_wire::experiment::Limits`, its keys its own).
+    #[serde(default)]
+    pub limits: propid_wire::experiment::Limits,
 }
 
 /// Checks an integer range; names the key and the value on failure.
@@ -200,6 +203,10 @@ impl RawConfig {
             publish: self.publish.validate()?,
             csv: self.csv.validate()?,
             experiment: self.experiment.unwrap_or_default(),
+            limits: {
+                self.limits.validate().map_err(ConfigError::Limits)?;
+                self.limits
+            },
         })
     }
 }

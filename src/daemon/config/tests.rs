@@ -1,6 +1,7 @@
 //! The configuration's defaults, ranges and refusals.
 
 use super::*;
+use crate::daemon::DaemonError;
 
 fn err(text: &str) -> String {
     Config::parse(text, "test").unwrap_err().to_string()
@@ -147,4 +148,28 @@ fn http_address_is_loopback_unless_written_out() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("publish.http"), "{e}");
+}
+
+#[test]
+fn limits_are_read_refused_by_key_and_hold_the_plan() {
+    let c = Config::parse("[limits]\nmax_current_a = 12.5\nmax_throttle = 0.8\n", "t").unwrap();
+    assert_eq!(c.limits.max_current_a, Some(12.5));
+    assert_eq!(c.limits.max_rpm, None);
+    crate::daemon::plan::from_config(&c).unwrap();
+    let e = err("[limits]\nmax_curent_a = 3\n");
+    assert!(e.contains("max_curent_a"), "{e}");
+    let e = err("[limits]\nmin_voltage_v = -3.0\n");
+    assert!(e.contains("[limits]") && e.contains("min_voltage_v"), "{e}");
+    // the default plan (levels up to 0.6, pulses of 0.1) leaves a max_throttle of 0.65
+    let c = Config::parse("[limits]\nmax_throttle = 0.65\n", "t").unwrap();
+    let e = crate::daemon::plan::from_config(&c).err().unwrap();
+    let text = e.to_string();
+    assert!(
+        text.contains("levels[2] + pulse_amplitudes[1]") && text.contains("max_throttle"),
+        "{text}"
+    );
+    assert!(matches!(
+        e,
+        DaemonError::Config(ConfigError::Limits(LimitsError::PlanExceeds { .. }))
+    ));
 }

@@ -99,6 +99,15 @@ fn pinned_run() -> Vec<String> {
         PlanNote::Refused { command: "ARM" },
         PlanNote::LinkFailed { command: "PULSE" },
         PlanNote::RearmLimit { rearms: 3 },
+        PlanNote::LimitUnchecked {
+            which: "max_temperature_c",
+            why: "no SAMPLE (nor CSV row) carries a temperature",
+        },
+        PlanNote::LimitTripped {
+            which: "max_current_a",
+            value: 12.5,
+            limit: 10.0,
+        },
     ] {
         w.handle(Item::Plan(n));
     }
