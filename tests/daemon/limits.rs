@@ -31,6 +31,7 @@ fn a_current_limit_below_the_top_level_trips_stops_and_exits_8() {
     );
     assert_eq!(t["limit"], 8.0);
     let value = t["value"].as_f64().unwrap();
+    eprintln!("tripped: {t}");
     assert!(value > 8.0 && value < 12.0, "{t}");
     // the first level was done under the limit; the ramp to the second tripped it
     let pos = |k: &str| lines.iter().position(|l| l["kind"] == k);

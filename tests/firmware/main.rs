@@ -391,6 +391,7 @@ fn a_current_limit_trips_through_the_emulated_firmware_and_the_motor_stops() {
     assert_eq!(trips.len(), 1, "{lines:#?}");
     assert_eq!(trips[0]["which"], "max_current_a");
     let value = trips[0]["value"].as_f64().unwrap();
+    eprintln!("tripped: {}", trips[0]);
     assert!(value > 5.0 && value < 9.0, "{}", trips[0]);
     assert_eq!(kind(&lines, "level_done").len(), 1, "{lines:#?}");
     assert!(kind(&lines, "plan_finished").is_empty());
