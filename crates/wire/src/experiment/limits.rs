@@ -88,6 +88,16 @@ pub struct LimitTrip {
 /// ([`Notice::LimitUnchecked`]): 50 ms at 1 kHz, one second at 50 Hz.
 pub const JUDGE_SAMPLES: u32 = 50;
 
+/// A measured limit: key, limit, the SAMPLE flag of its quantity, a most (else a least), the
+/// sample's value.
+type Measured = (
+    &'static str,
+    Option<f64>,
+    SampleFlags,
+    bool,
+    fn(&Sample) -> f32,
+);
+
 /// Is `v` above (`max`) or below (`!max`) `limit`?
 fn over(v: f64, limit: f64, max: bool) -> bool {
     if max {
@@ -100,16 +110,7 @@ fn over(v: f64, limit: f64, max: bool) -> bool {
 impl Limits {
     /// The measured limits: key, limit, the SAMPLE flag of its quantity, whether it is a
     /// most (else a least), and the sample's value.
-    #[allow(clippy::type_complexity)]
-    fn measured(
-        &self,
-    ) -> [(
-        &'static str,
-        Option<f64>,
-        SampleFlags,
-        bool,
-        fn(&Sample) -> f32,
-    ); 4] {
+    fn measured(&self) -> [Measured; 4] {
         [
             (
                 "max_current_a",

@@ -36,7 +36,8 @@ fn all() -> Limits {
 fn each_limit_trips_on_its_own_quantity_and_names_itself() {
     let l = all();
     assert_eq!(l.breach(&sample(0.5)), None);
-    let cases: [(&str, fn(&mut Sample), f64, f64); 5] = [
+    type Case = (&'static str, fn(&mut Sample), f64, f64);
+    let cases: [Case; 5] = [
         ("max_current_a", |s| s.current_a = 12.5, 12.5, 10.0),
         ("max_thrust_n", |s| s.thrust_n = 8.25, 8.25, 8.0),
         ("max_rpm", |s| s.rpm = 21_000.0, 21_000.0, 20_000.0),
