@@ -2,7 +2,6 @@
 //! function; errors from every layer arrive as a [`CliError`] holding the layer's typed error,
 //! which `main` turns into a message on stderr and an exit code ([`CliError::exit_code`]).
 
-pub mod columns_read;
 pub mod demo;
 pub mod diagnose;
 pub mod fleet;
@@ -14,6 +13,7 @@ pub mod sim;
 pub mod stdout;
 pub mod walkthrough;
 
+pub use propid_report::columns_read;
 /// The one file loader, by its old name.
 pub use read as load;
 
@@ -133,6 +133,9 @@ pub enum ExitClass {
 /// A wrong command line, by option.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum UsageError {
+    /// `diagnose` with more than one `--output`.
+    #[error("diagnose takes one --output")]
+    OneOutput,
     /// `--estimation-fraction` outside 0.3..0.9.
     #[error("--estimation-fraction {0} is outside 0.3..0.9")]
     EstimationFraction(f64),
