@@ -25,10 +25,9 @@ pub mod runner;
 pub mod sampler;
 pub mod shutdown;
 pub mod source;
-pub mod wire;
 pub mod worker;
 
-pub use propid_link::{csv_link, tracker};
+pub use propid_link::{csv_link, tracker, wire};
 #[cfg(test)]
 use propid_session::fixtures;
 pub use propid_session::{item, line, live, quality, stats};
