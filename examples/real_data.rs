@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
 use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs, Quality};
+use propid::cli::read::ReadArgs;
 use propid_ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
 use propid_ingest::steps::find_steps;
 use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
@@ -353,21 +354,23 @@ closed-loop flight data it is feedback. `propid diagnose` names such effects.
 /// ([`propid::cli::identify::stand_of`], the same reader and options as the row).
 fn stand_columns(case: &Case, path: &Path) -> (String, String) {
     let args = IdentifyArgs {
-        file: path.to_path_buf(),
+        read: ReadArgs {
+            file: path.to_path_buf(),
+            input: case.input.map(str::to_string),
+            output: case.outputs.iter().map(|s| s.to_string()).collect(),
+            fs: case.fs,
+            columns: case
+                .columns
+                .map(|c| c.iter().map(|s| s.to_string()).collect()),
+            esc_us: None,
+            input_range: case.input_range.map(|(a, b)| vec![a, b]),
+            poles: None,
+        },
         order: None,
         json: true,
         report: None,
-        input: case.input.map(str::to_string),
-        output: case.outputs.iter().map(|s| s.to_string()).collect(),
-        fs: case.fs,
         svd: SvdChoice::default(),
         hankel: HankelSize::default(),
-        columns: case
-            .columns
-            .map(|c| c.iter().map(|s| s.to_string()).collect()),
-        esc_us: None,
-        input_range: case.input_range.map(|(a, b)| vec![a, b]),
-        poles: None,
     };
     match stand_of(&args) {
         Ok(f) => stand_brief(&f),

@@ -23,4 +23,4 @@
 pub mod cli;
 pub mod daemon;
 pub mod input;
-pub mod plot;
+pub use propid_report::plot;

@@ -3,13 +3,14 @@
 //! (binary or CSV dialect) or any CSV form `propid identify` reads; the supply voltage is used
 //! when the file has one.
 
-mod report;
+use propid_report::diagnose as report;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use super::columns_read::ColumnsRead;
 use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
+use super::read::ReadArgs;
 use super::{CliError, UsageError};
 use propid_diagnose::noise::FloorSource;
 use propid_diagnose::verdict::VerdictKind;
@@ -19,38 +20,16 @@ use propid_wire::record::names;
 /// Arguments of `propid diagnose`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A TSP/1 recording (raw bytes) or a CSV file.
-    pub file: PathBuf,
+    /// FILE and how to read it (the flags every command that reads a file shares; one
+    /// `--output`).
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// Print exactly one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
     /// Write a Markdown page with SVG plots into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Input column (default: the command column, throttle/ESC signal/pwm; `none`: no input,
-    /// steps are found from the response).
-    #[arg(long)]
-    pub input: Option<String>,
-    /// Output column (default: thrust).
-    #[arg(long)]
-    pub output: Option<String>,
-    /// Sample rate, Hz (needed without a time column).
-    #[arg(long)]
-    pub fs: Option<f64>,
-    /// Column names for a CSV file without a header, comma separated (for a file with one, they
-    /// replace its names: to give a column the unit its header does not say).
-    #[arg(long, value_delimiter = ',')]
-    pub columns: Option<Vec<String>>,
-    /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
-    #[arg(long, value_delimiter = ',')]
-    pub esc_us: Option<Vec<f64>>,
-    /// Raw command values at throttle 0 and 1, `MIN,MAX` (default: from the header's unit or
-    /// the values, e.g. 0..1, 0..100 %, 0..2047 DShot/raw ESC).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    pub input_range: Option<Vec<f64>>,
-    /// Motor magnet poles, for a speed column in eRPM.
-    #[arg(long)]
-    pub poles: Option<u32>,
     /// Share of the samples (from the start) used for estimation, 0.3..0.9.
     #[arg(long, default_value_t = 0.7)]
     pub estimation_fraction: f64,
@@ -169,8 +148,14 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let d = s.diagnose(&opts)?;
     if let Some(dir) = &args.report {
-        let title = args.file.display().to_string();
-        report::write(dir, &title, &s.output_name, &d)
+        let title = args.read.file.display().to_string();
+        report::render(&title, &s.output_name, &d)
+            .and_then(|files| {
+                std::fs::create_dir_all(dir)?;
+                files
+                    .iter()
+                    .try_for_each(|(name, text)| std::fs::write(dir.join(name), text))
+            })
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
     }
     if args.json {
@@ -201,7 +186,7 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
     let _ = writeln!(
         t,
         "{}: {} → {}, {} samples at {:.4} s",
-        args.file.display(),
+        args.read.file.display(),
         s.input_name,
         s.output_name,
         s.u.len(),
@@ -329,19 +314,17 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
 /// command keeps that name (a shaker's `force_N` is read as the record's force channel,
 /// `thrust_N`, but is no thrust).
 pub fn load(args: &Args) -> Result<Signals, CliError> {
-    let outputs = [args.output.clone().unwrap_or(names::THRUST.into())];
+    let read = &args.read;
+    if read.output.len() > 1 {
+        return Err(UsageError::OneOutput.into());
+    }
+    let outputs = [read.output.first().cloned().unwrap_or(names::THRUST.into())];
     let req = Request {
-        input: args.input.as_deref(),
         outputs: &outputs,
-        optional: &[names::VOLTAGE],
-        fs_hz: args.fs,
-        columns: args.columns.as_deref(),
-        esc_us: args.esc_us.as_deref(),
-        input_range: args.input_range.as_deref(),
-        poles: args.poles,
+        ..read.request(&[names::VOLTAGE])
     };
-    let mut s = signals(&shared::load(&args.file, &req)?)?;
-    if let Some(name) = args.input.as_ref().filter(|n| n.as_str() != NO_INPUT) {
+    let mut s = signals(&shared::load(&read.file, &req)?)?;
+    if let Some(name) = read.input.as_ref().filter(|n| n.as_str() != NO_INPUT) {
         if s.input_name != names::THROTTLE {
             s.input_name = name.clone();
         }
@@ -446,16 +429,13 @@ mod tests {
             .collect();
         std::fs::write(&file, format!("t_s,thrust_N\n{rows}")).unwrap();
         let args = Args {
-            file,
+            read: ReadArgs {
+                file,
+                input: Some("none".into()),
+                ..ReadArgs::default()
+            },
             json: true,
             report: None,
-            input: Some("none".into()),
-            output: None,
-            fs: None,
-            columns: None,
-            esc_us: None,
-            input_range: None,
-            poles: None,
             estimation_fraction: 0.7,
         };
         let e = load(&args).unwrap_err();

@@ -31,16 +31,16 @@
 //! explicit block counts. The size used is `model.hankel_block_rows`/`hankel_block_cols`.
 //! Large sizes take the truncated FFT + Lanczos SVD (O(N) memory; `docs/svd.md`).
 
-mod load;
 mod report;
-mod stand;
-mod summary;
 
+pub use propid_report::identify::{load, stand, summary, Physics};
 pub use stand::brief as stand_brief;
 pub use summary::Quality;
 
 use std::path::PathBuf;
 
+use super::load::NoSteps;
+use super::read::ReadArgs;
 use super::CliError;
 use propid_numerics::identify::{identify_any_with, AnyInput};
 use propid_numerics::okid::OkidOptions;
@@ -49,12 +49,8 @@ use propid_numerics::order::HankelSize;
 use propid_numerics::segment::Command;
 use propid_numerics::stabilization::StabOptions;
 use propid_numerics::stand::{
-    channel_step_timing, response_step_figures, stand_figures, steady_levels, ChannelTiming,
-    OutputChannel, StandFigures,
+    response_step_figures, stand_figures, steady_levels, OutputChannel, StandFigures,
 };
-use propid_numerics::stand_model::fit::{fit, Channel, FitInput};
-use propid_numerics::stand_model::report::{Stand, StandRefused};
-use propid_numerics::stand_model::Quantity;
 use propid_numerics::static_map::{level_slope, LevelSlope};
 use propid_numerics::svd::SvdChoice;
 use propid_numerics::workspace::IdentOptions;
@@ -62,8 +58,9 @@ use propid_numerics::workspace::IdentOptions;
 /// Arguments of `propid identify`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A TSP/1 recording (raw bytes) or a CSV file.
-    pub file: PathBuf,
+    /// FILE and how to read it (the flags every command that reads a file shares).
+    #[command(flatten)]
+    pub read: ReadArgs,
     /// Model order (0 or omitted: chosen from the singular values, as `order = 0` in the
     /// config).
     #[arg(long)]
@@ -74,36 +71,12 @@ pub struct Args {
     /// Write the stabilization diagram (stabilization.svg) and identify.md into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// Input column (default: the command column, throttle/ESC signal/pwm; `none`: no input,
-    /// steps are found from the response).
-    #[arg(long)]
-    pub input: Option<String>,
-    /// Output column, repeatable (default: thrust).
-    #[arg(long)]
-    pub output: Vec<String>,
-    /// Sample rate, Hz (needed without a time column; resamples onto this rate otherwise).
-    #[arg(long)]
-    pub fs: Option<f64>,
     /// SVD path: auto, dense or truncated.
     #[arg(long, default_value = "auto", value_parser = parse_svd)]
     pub svd: SvdChoice,
     /// Hankel size: auto (from the noise floor), square (largest near-square) or RxC blocks.
     #[arg(long, default_value = "auto", value_parser = parse_hankel)]
     pub hankel: HankelSize,
-    /// Column names for a CSV file without a header, comma separated (for a file with one, they
-    /// replace its names: to give a column the unit its header does not say).
-    #[arg(long, value_delimiter = ',')]
-    pub columns: Option<Vec<String>>,
-    /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
-    #[arg(long, value_delimiter = ',')]
-    pub esc_us: Option<Vec<f64>>,
-    /// Raw command values at throttle 0 and 1, `MIN,MAX` (default: from the header's unit or
-    /// the values, e.g. 0..1, 0..100 %, 0..2047 DShot/raw ESC).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    pub input_range: Option<Vec<f64>>,
-    /// Motor magnet poles, for a speed column in eRPM.
-    #[arg(long)]
-    pub poles: Option<u32>,
 }
 
 fn parse_svd(s: &str) -> Result<SvdChoice, String> {
@@ -136,7 +109,7 @@ fn parse_hankel(s: &str) -> Result<HankelSize, String> {
 
 /// Runs `propid identify`.
 pub fn run(args: Args) -> Result<(), CliError> {
-    let mut loaded = load::load(&args)?;
+    let mut loaded = read(&args)?;
     load::leave_out_outliers(&mut loaded);
     load::leave_out_start_transient(&mut loaded);
     let rules = loaded.segment_rules();
@@ -212,78 +185,24 @@ fn levels_slope(loaded: &load::Loaded) -> Option<LevelSlope> {
     level_slope(&steady_levels(cmd, &loaded.segment_rules(), y))
 }
 
+/// Reads FILE as the options say: the shared loader ([`crate::cli::load`]), then what identify
+/// keeps of it ([`load::load`]).
+fn read(args: &Args) -> Result<load::Loaded, CliError> {
+    let file = args.read.load(&load::OPTIONAL)?;
+    load::load(file).map_err(|e| match e.cause {
+        NoSteps::TooShort => CliError::StepsTooShort { file: e.file },
+        cause @ NoSteps::NoneFound => CliError::NoInput {
+            file: e.file,
+            cause,
+            hint: "give --input NAME, or a record with steps",
+        },
+    })
+}
+
 /// The step figures and static maps of `args.file` as `identify` computes them (they need no
 /// model): for the real-data tables.
 pub fn stand_of(args: &Args) -> Result<StandFigures, CliError> {
-    Ok(stand_for(&load::load(args)?))
-}
-
-/// The stand's physics (`"stand"`, [`propid_numerics::stand_model`]) and each step's timing
-/// on every output channel, when the input is a stand's command; `None`, `[]` otherwise.
-#[derive(Debug, Clone, Default)]
-pub struct Physics {
-    /// The stand model fitted to every channel of the stand the file has, or why not.
-    pub stand: Option<Stand>,
-    /// Per command step, its dead time and time constant on each channel.
-    pub timing: Vec<std::collections::BTreeMap<&'static str, ChannelTiming>>,
-}
-
-impl Physics {
-    fn of(loaded: &load::Loaded) -> Physics {
-        if !(loaded.commanded && loaded.input_is_a_command) {
-            return Physics::default();
-        }
-        let rules = loaded.segment_rules();
-        let cmd = Command::with_missing(&loaded.input, &loaded.missing);
-        let outputs: Vec<OutputChannel<'_>> = loaded
-            .stand
-            .iter()
-            .map(|(key, unit, y)| OutputChannel { key, unit, y })
-            .collect();
-        let timing = channel_step_timing(cmd, loaded.dt_s, &rules, &outputs);
-        let quantity = |key: &str| match key {
-            "rpm" => Some(Quantity::Speed),
-            "thrust" => Some(Quantity::Thrust),
-            "torque" => Some(Quantity::Torque),
-            "current" => Some(Quantity::Current),
-            _ => None,
-        };
-        let channels: Vec<Channel<'_>> = loaded
-            .stand
-            .iter()
-            .zip(&loaded.stand_interpolated)
-            .filter_map(|((key, _, y), flags)| {
-                Some(Channel {
-                    key,
-                    quantity: quantity(key)?,
-                    y,
-                    interpolated: flags,
-                })
-            })
-            .collect();
-        if rules.samples_are_steady() {
-            let refused = StandRefused {
-                refused: "a sample lasts longer than the response takes to settle: the record \
-                          shows no dynamics"
-                    .to_string(),
-            };
-            return Physics {
-                stand: Some(Stand::Refused(refused)),
-                timing,
-            };
-        }
-        let input = FitInput {
-            dt_s: loaded.dt_s,
-            command: &loaded.input,
-            voltage: loaded.voltage.as_deref(),
-            channels: &channels,
-            rules,
-        };
-        Physics {
-            stand: Some(Stand::of(fit(&input))),
-            timing,
-        }
-    }
+    Ok(stand_for(&read(args)?))
 }
 
 /// The step figures and static maps of a loaded file: none when its input is a column that

@@ -5,12 +5,13 @@
 //!
 //! - `tsp`: the TSP/1 `Decoder` (pushed in random chunks) — nearly every input;
 //! - `csv`: the CSV dialect's `CsvDecoder` and the command / comment / ACK parsers on each line;
-//! - `ingest`: the app's one loader, `propid::cli::load::load_bytes` (format detection, TSP/1 and
+//! - `ingest`: the one loader, `propid_ingest::load::load_bytes` (format detection, TSP/1 and
 //!   CSV-stream recordings through the wire crate's placement, exported CSV logs), with the
 //!   default request and with `--input none` / `--fs`;
-//! - `identify` and `diagnose`: the whole subcommand (`propid identify --json`, `propid
-//!   diagnose --json`) on the input written to a file, every `--identify-every` /
-//!   `--diagnose-every` inputs (they cost milliseconds to seconds each).
+//! - `identify` and `diagnose`: the engines on what the loader read (the identification core's
+//!   `identify_any_with`, as `propid identify` calls it; `propid_diagnose::diagnose_record`),
+//!   every `--identify-every` / `--diagnose-every` inputs (they cost milliseconds to seconds
+//!   each).
 //!
 //! A panic hook counts every panic, on any thread (the jackknife's helper thread too), and the
 //! input is saved in `--out` (`panic-<target>-<n>.bin`, with the message in a `.txt`). The input
@@ -28,7 +29,12 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use clap::Parser;
-use propid::cli::load::{load_bytes, Request, NO_INPUT};
+use propid_ingest::load::{load_bytes, Request, NO_INPUT};
+use propid_numerics::identify::{identify_any_with, AnyInput};
+use propid_numerics::okid::OkidOptions;
+use propid_numerics::order::HankelSize;
+use propid_numerics::stabilization::StabOptions;
+use propid_numerics::workspace::IdentOptions;
 use propid_wire::protocol::csv::{parse_ack, parse_comment, parse_csv_command};
 use propid_wire::protocol::csv::{CsvDecoder, CsvOptions};
 use propid_wire::protocol::Decoder;
@@ -52,29 +58,15 @@ struct Args {
     /// Directory for panicking inputs and `current.bin`.
     #[arg(long, default_value = "target/fuzz-out")]
     out: PathBuf,
-    /// Every N-th input also goes through `propid identify --json` (0 = never).
+    /// Every N-th input also goes through the identification core (0 = never).
     #[arg(long, default_value_t = 1000)]
     identify_every: u64,
-    /// Every N-th input also goes through `propid diagnose --json` (0 = never).
+    /// Every N-th input also goes through the diagnose engine (0 = never).
     #[arg(long, default_value_t = 20_000)]
     diagnose_every: u64,
     /// Seed files or directories (read recursively; files above 4 MiB are skipped).
     #[arg(required = true)]
     seeds: Vec<PathBuf>,
-}
-
-/// `propid identify`'s arguments, parsed as the binary parses them.
-#[derive(Debug, Parser)]
-struct IdentifyCli {
-    #[command(flatten)]
-    args: propid::cli::identify::Args,
-}
-
-/// `propid diagnose`'s arguments.
-#[derive(Debug, Parser)]
-struct DiagnoseCli {
-    #[command(flatten)]
-    args: propid::cli::diagnose::Args,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -122,7 +114,6 @@ fn main() {
             *l = info.to_string();
         }
     }));
-    let file = args.out.join("input.tmp");
     let mut rng = StdRng::seed_from_u64(args.seed);
     let mut runs = [0u64; 5];
     let mut found = [0u64; 5];
@@ -152,7 +143,7 @@ fn main() {
             let _ = std::fs::write(args.out.join("current.bin"), &input);
         }
         let before = PANICS.load(Ordering::SeqCst);
-        let r = panic::catch_unwind(AssertUnwindSafe(|| run(target, &input, chunk, &file)));
+        let r = panic::catch_unwind(AssertUnwindSafe(|| run(target, &input, chunk)));
         let t = Target::ALL.iter().position(|&x| x == target).unwrap_or(0);
         runs[t] += 1;
         if r.as_ref().is_ok_and(|&ok| ok) {
@@ -167,7 +158,6 @@ fn main() {
         }
     }
     report(args.inputs, [&runs, &oks, &found], t0);
-    let _ = std::fs::remove_file(&file);
     let _ = std::fs::remove_file(args.out.join("current.bin"));
     if found.iter().sum::<u64>() > 0 {
         std::process::exit(1);
@@ -175,7 +165,7 @@ fn main() {
 }
 
 /// One input through one target.
-fn run(target: Target, input: &[u8], chunk: usize, file: &Path) -> bool {
+fn run(target: Target, input: &[u8], chunk: usize) -> bool {
     match target {
         Target::Tsp => {
             let mut dec = Decoder::new();
@@ -217,18 +207,35 @@ fn run(target: Target, input: &[u8], chunk: usize, file: &Path) -> bool {
             ok
         }
         Target::Identify | Target::Diagnose => {
-            if std::fs::write(file, input).is_err() {
+            let Ok(f) = load_bytes("fuzz".into(), input, &Request::default()) else {
                 return false;
+            };
+            let rec = &f.record;
+            let output = f.outputs.first().map_or("", String::as_str);
+            if target == Target::Diagnose {
+                let opts = propid_diagnose::Options::default();
+                return propid_diagnose::diagnose_record(rec, output, &opts).is_ok();
             }
-            let f = file.display().to_string();
-            let argv = [target.name(), f.as_str(), "--json"];
-            if target == Target::Identify {
-                IdentifyCli::try_parse_from(argv)
-                    .is_ok_and(|c| propid::cli::identify::run(c.args).is_ok())
-            } else {
-                DiagnoseCli::try_parse_from(argv)
-                    .is_ok_and(|c| propid::cli::diagnose::run(c.args).is_ok())
-            }
+            let u = f.input.as_deref().map(|n| f.data(n)).unwrap_or_default();
+            let y = f.data(output);
+            let (u, y) = ([u.as_slice()], [y.as_slice()]);
+            let starts: Vec<usize> = rec.impulse_starts().collect();
+            let any = AnyInput {
+                dt_s: rec.dt_s,
+                u: &u,
+                y: &y,
+                missing: &rec.missing,
+                pulse_starts: (!starts.is_empty()).then_some(&starts[..]),
+            };
+            let stab = StabOptions::default();
+            identify_any_with(
+                &any,
+                &IdentOptions::default(),
+                &OkidOptions::default(),
+                HankelSize::Auto,
+                Some(&stab),
+            )
+            .is_ok()
         }
     }
 }

@@ -24,7 +24,10 @@ pub fn write(dir: &Path, out: &Output<'_>) -> io::Result<()> {
     match out.stabilization {
         Some(st) => {
             let title = format!("stabilization diagram: {}", s.file);
-            stabilization::svg(&dir.join("stabilization.svg"), &title, st)?;
+            std::fs::write(
+                dir.join("stabilization.svg"),
+                stabilization::svg(&title, st)?,
+            )?;
             md.push_str(&stabilization::markdown(
                 st,
                 m.fn_hz,

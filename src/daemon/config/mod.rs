@@ -87,16 +87,7 @@ pub struct DeviceConfig {
     pub stall_timeout: Option<Duration>,
 }
 
-/// `[device] protocol`: which wire format the daemon expects (docs/PROTOCOL.md §6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum WireProtocol {
-    /// Decide from the first bytes ([`propid_wire::protocol::detect`]).
-    Auto,
-    /// Binary TSP/1 only.
-    Tsp,
-    /// The CSV fallback (read through [`super::csv_link`]).
-    Csv,
-}
+pub use propid_link::wire::WireProtocol;
 
 /// Validated daemon settings.
 #[derive(Debug, Clone, PartialEq)]

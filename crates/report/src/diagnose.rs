@@ -7,7 +7,6 @@
 
 use std::fmt::Write as _;
 use std::io;
-use std::path::Path;
 
 use plotters::prelude::*;
 
@@ -23,16 +22,30 @@ fn to_io<E: std::fmt::Display>(e: E) -> io::Error {
     io::Error::other(e.to_string())
 }
 
-/// Draws `series` as lines (or points when `points`) into an SVG at `path`.
+/// `series` as lines (or points when `points`) in an SVG text (`None` without a finite point).
 fn plot(
-    path: &Path,
     title: &str,
     xl: &str,
     yl: &str,
     series: &[Series],
     log_y: bool,
     points: bool,
-) -> io::Result<()> {
+) -> io::Result<Option<String>> {
+    let mut text = String::new();
+    let drawn = draw(&mut text, title, xl, yl, series, log_y, points)?;
+    Ok(drawn.then_some(text))
+}
+
+/// [`plot`] into `text`; false when there is nothing to draw.
+fn draw(
+    text: &mut String,
+    title: &str,
+    xl: &str,
+    yl: &str,
+    series: &[Series],
+    log_y: bool,
+    points: bool,
+) -> io::Result<bool> {
     let pts = series
         .iter()
         .flat_map(|s| s.1.iter())
@@ -50,7 +63,7 @@ fn plot(
         y1 = y1.max(p.1);
     }
     if !(x0.is_finite() && y0.is_finite()) {
-        return Ok(());
+        return Ok(false);
     }
     if x1 <= x0 {
         x1 = x0 + 1.0;
@@ -58,7 +71,7 @@ fn plot(
     if y1 <= y0 {
         y1 = y0 + 1.0;
     }
-    let root = SVGBackend::new(path, (900, 420)).into_drawing_area();
+    let root = SVGBackend::with_string(text, (900, 420)).into_drawing_area();
     root.fill(&WHITE).map_err(to_io)?;
     let mut b = ChartBuilder::on(&root);
     b.caption(title, ("sans-serif", 18))
@@ -108,7 +121,8 @@ fn plot(
             .build_cartesian_2d(x0..x1, (y0 - pad)..(y1 + pad))
             .map_err(to_io)?);
     }
-    root.present().map_err(to_io)
+    root.present().map_err(to_io)?;
+    Ok(true)
 }
 
 fn time_series(t: &Traces, v: &[f64], range: std::ops::Range<usize>) -> Vec<(f64, f64)> {
@@ -152,9 +166,15 @@ pub fn hankel_singular_values(t: &Traces) -> Vec<f64> {
     s
 }
 
-/// Writes `index.md` and the SVG plots into `dir` (created if needed).
-pub fn write(dir: &Path, title: &str, output: &str, d: &Diagnosis) -> io::Result<()> {
-    std::fs::create_dir_all(dir)?;
+/// The report's files: the SVG plots (a plot without a finite point left out) and
+/// `index.md`, by file name, in the order they are written.
+pub fn render(title: &str, output: &str, d: &Diagnosis) -> io::Result<Vec<(&'static str, String)>> {
+    let mut files = Vec::new();
+    let mut add = |name: &'static str, svg: Option<String>| {
+        if let Some(svg) = svg {
+            files.push((name, svg));
+        }
+    };
     let t = &d.traces;
     let n = t.y.len();
     let val = d.split.validation[0]..d.split.validation[1].min(n);
@@ -168,46 +188,52 @@ pub fn write(dir: &Path, title: &str, output: &str, d: &Diagnosis) -> io::Result
         RGBColor(210, 50, 40),
         RGBColor(20, 150, 60),
     );
-    plot(
-        &dir.join("fit.svg"),
-        "validation part: measured, baseline, extended",
-        "time (s)",
-        output,
-        &[
-            ("measured", time_series(t, &t.y, val.clone()), BLACK),
-            ("baseline", time_series(t, &t.baseline, val.clone()), red),
-            (ext_name, time_series(t, &t.extended, val.clone()), blue),
-        ],
-        false,
-        false,
-    )?;
+    add(
+        "fit.svg",
+        plot(
+            "validation part: measured, baseline, extended",
+            "time (s)",
+            output,
+            &[
+                ("measured", time_series(t, &t.y, val.clone()), BLACK),
+                ("baseline", time_series(t, &t.baseline, val.clone()), red),
+                (ext_name, time_series(t, &t.extended, val.clone()), blue),
+            ],
+            false,
+            false,
+        )?,
+    );
     let res = |sim: &[f64]| -> Vec<f64> { t.y.iter().zip(sim).map(|(a, b)| a - b).collect() };
     let (rb, re) = (res(&t.baseline), res(&t.extended));
-    plot(
-        &dir.join("residuals.svg"),
-        "residuals (measured − simulated), whole record",
-        "time (s)",
-        output,
-        &[
-            ("baseline", time_series(t, &rb, 0..n), red),
-            ("extended", time_series(t, &re, 0..n), blue),
-        ],
-        false,
-        false,
-    )?;
+    add(
+        "residuals.svg",
+        plot(
+            "residuals (measured − simulated), whole record",
+            "time (s)",
+            output,
+            &[
+                ("baseline", time_series(t, &rb, 0..n), red),
+                ("extended", time_series(t, &re, 0..n), blue),
+            ],
+            false,
+            false,
+        )?,
+    );
     let spec = |r: &[f64]| {
         let (f, p) = periodogram(r, t.dt_s);
         f.into_iter().zip(p).skip(1).collect::<Vec<_>>()
     };
-    plot(
-        &dir.join("spectrum.svg"),
-        "residual spectrum (Hann periodogram)",
-        "frequency (Hz)",
-        "power",
-        &[("baseline", spec(&rb), red), ("extended", spec(&re), blue)],
-        true,
-        false,
-    )?;
+    add(
+        "spectrum.svg",
+        plot(
+            "residual spectrum (Hann periodogram)",
+            "frequency (Hz)",
+            "power",
+            &[("baseline", spec(&rb), red), ("extended", spec(&re), blue)],
+            true,
+            false,
+        )?,
+    );
     let window = ((0.3 / t.dt_s).round() as usize).max(5);
     let pulses = find_pulses(&t.u, &t.rules);
     let resp = |y: &[f64]| {
@@ -216,38 +242,42 @@ pub fn write(dir: &Path, title: &str, output: &str, d: &Diagnosis) -> io::Result
             .map(|&(k, a)| (a, pulse_response(y, k, window)))
             .collect::<Vec<_>>()
     };
-    plot(
-        &dir.join("pulses.svg"),
-        "peak response against pulse amplitude",
-        "pulse amplitude (throttle)",
-        output,
-        &[
-            ("measured", resp(&t.y), BLACK),
-            ("baseline", resp(&t.baseline), red),
-            (ext_name, resp(&t.extended), green),
-        ],
-        false,
-        true,
-    )?;
+    add(
+        "pulses.svg",
+        plot(
+            "peak response against pulse amplitude",
+            "pulse amplitude (throttle)",
+            output,
+            &[
+                ("measured", resp(&t.y), BLACK),
+                ("baseline", resp(&t.baseline), red),
+                (ext_name, resp(&t.extended), green),
+            ],
+            false,
+            true,
+        )?,
+    );
     let sv = hankel_singular_values(t);
     let svp: Vec<(f64, f64)> = sv
         .iter()
         .enumerate()
         .map(|(i, s)| ((i + 1) as f64, *s))
         .collect();
-    plot(
-        &dir.join("singular_values.svg"),
-        "Hankel singular values (OKID Markov parameters)",
-        "index",
-        "singular value",
-        &[("σ", svp, blue)],
-        true,
-        true,
-    )?;
+    add(
+        "singular_values.svg",
+        plot(
+            "Hankel singular values (OKID Markov parameters)",
+            "index",
+            "singular value",
+            &[("σ", svp, blue)],
+            true,
+            true,
+        )?,
+    );
     let mut md = markdown(title, d, pulses.len(), &sv);
     if let Some((s, fn_hz, zeta)) = &t.stabilization {
         let caption = "stabilization diagram of the identification core's ERA start";
-        stabilization::svg(&dir.join("stabilization.svg"), caption, s)?;
+        add("stabilization.svg", Some(stabilization::svg(caption, s)?));
         md.push_str("\nThe identification core's ERA start (estimation part). ");
         md.push_str(&stabilization::markdown(
             s,
@@ -256,7 +286,8 @@ pub fn write(dir: &Path, title: &str, output: &str, d: &Diagnosis) -> io::Result
             "stabilization.svg",
         ));
     }
-    std::fs::write(dir.join("index.md"), md)
+    files.push(("index.md", md));
+    Ok(files)
 }
 
 fn markdown(title: &str, d: &Diagnosis, pulses: usize, sv: &[f64]) -> String {

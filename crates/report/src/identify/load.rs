@@ -2,11 +2,9 @@
 
 use serde::Serialize;
 
-use super::Args;
-use crate::cli::columns_read::ColumnsRead;
-use crate::cli::load::{self as shared, steps_from_response, NoSteps, Origin, Request};
-use crate::cli::CliError;
+use crate::columns_read::ColumnsRead;
 use propid_ingest::csv_file::CsvSource;
+use propid_ingest::load::{steps_from_response, LoadedFile, NoSteps, Origin};
 use propid_ingest::steps::FoundStep;
 use propid_ingest::IngestStats;
 use propid_numerics::outliers::{find_outliers, isolated_outliers_of_readings, OutlierScratch};
@@ -33,7 +31,7 @@ pub struct Loaded {
     pub pulse_starts: Option<Vec<usize>>,
     /// Whether `input` is a command read from the file (not steps found from the response).
     pub commanded: bool,
-    /// Whether `input` is a stand's command ([`crate::cli::load::LoadedFile::input_is_a_command`]).
+    /// Whether `input` is a stand's command ([`LoadedFile::input_is_a_command`]).
     pub input_is_a_command: bool,
     /// The static map's channels the file has: key, unit, samples (NaN = not measured).
     pub stand: Vec<(&'static str, &'static str, Vec<f64>)>,
@@ -50,7 +48,7 @@ impl Loaded {
     /// The segmentation's rules for this record: the one set, at its rate for a stand's
     /// command ([`SegmentRules::at_rate`]: a pulse at most a third of a second long too), by
     /// the sample count alone for a signal in its own units
-    /// ([`crate::cli::load::LoadedFile::input_is_a_command`]).
+    /// ([`LoadedFile::input_is_a_command`]).
     pub fn segment_rules(&self) -> SegmentRules {
         SegmentRules::for_record(self.dt_s, self.input_is_a_command)
     }
@@ -131,7 +129,7 @@ pub const STAND_CHANNELS: [(&str, &str, &str); 4] = [
 ];
 
 /// The channels read when the file has them: the static map's, and the supply voltage.
-const OPTIONAL: [&str; 5] = [
+pub const OPTIONAL: [&str; 5] = [
     STAND_CHANNELS[0].1,
     STAND_CHANNELS[1].1,
     STAND_CHANNELS[2].1,
@@ -139,21 +137,21 @@ const OPTIONAL: [&str; 5] = [
     names::VOLTAGE,
 ];
 
-/// Reads FILE as the options say: the shared loader ([`crate::cli::load`]), then what identify
-/// keeps (the missing mask, device pulse starts, the JSON `"source"`), with the input found from
-/// the response's steps with `--input none`.
-pub fn load(args: &Args) -> Result<Loaded, CliError> {
-    let req = Request {
-        input: args.input.as_deref(),
-        outputs: &args.output,
-        optional: &OPTIONAL,
-        fs_hz: args.fs,
-        columns: args.columns.as_deref(),
-        esc_us: args.esc_us.as_deref(),
-        input_range: args.input_range.as_deref(),
-        poles: args.poles,
-    };
-    let file = shared::load(&args.file, &req)?;
+/// Why identify has no input: the file has no input column and no step was found in the
+/// response.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{file}: {cause}")]
+pub struct NoInput {
+    /// The file as given.
+    pub file: String,
+    /// Why no step was found.
+    pub cause: NoSteps,
+}
+
+/// What identify keeps of a file the shared loader read (with [`OPTIONAL`] asked for): the
+/// missing mask, device pulse starts, the JSON `"source"`, with the input found from the
+/// response's steps with `--input none`.
+pub fn load(file: LoadedFile) -> Result<Loaded, NoInput> {
     let rec = &file.record;
     let outputs: Vec<Vec<f64>> = file.outputs.iter().map(|n| file.data(n)).collect();
     let interpolated: Vec<Vec<bool>> = file
@@ -175,15 +173,9 @@ pub fn load(args: &Args) -> Result<Loaded, CliError> {
         }
         None => {
             let y = outputs.first().map_or(&[][..], Vec::as_slice);
-            let f = steps_from_response(y).map_err(|cause| match cause {
-                NoSteps::TooShort => CliError::StepsTooShort {
-                    file: file.name.clone(),
-                },
-                NoSteps::NoneFound => CliError::NoInput {
-                    file: file.name.clone(),
-                    cause,
-                    hint: "give --input NAME, or a record with steps",
-                },
+            let f = steps_from_response(y).map_err(|cause| NoInput {
+                file: file.name.clone(),
+                cause,
             })?;
             let steps = f.steps.iter().map(|s| step_out(s, rec.t0_s, rec.dt_s));
             let label = "steps found from the response".to_string();

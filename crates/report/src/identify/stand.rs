@@ -1,13 +1,30 @@
 //! The human tables of the step figures and static maps (`identify`'s summary); the JSON has
 //! the same numbers as `"steps"` and `"static_map"`.
 
+use std::collections::BTreeMap;
 use std::fmt::Write;
 
+use serde::Serialize;
+
+use propid_numerics::stand::ChannelTiming;
 use propid_numerics::stand::StandFigures;
 use propid_numerics::stand_model::report::{Figure, Stand};
 use propid_numerics::static_map::{not_repeatable, MIN_SHARE, NOISE_FACTOR};
 use propid_numerics::step_directions::by_direction;
-use propid_numerics::step_response::Direction;
+use propid_numerics::step_response::{Direction, StepFigures};
+
+/// One entry of `"steps"`: the step's figures on the identified output, and its dead time and
+/// time constant on every output channel of the stand (`"channels"`, by key; omitted when
+/// the input is no command).
+#[derive(Debug, Clone, Serialize)]
+pub struct StepOut<'a> {
+    /// The figures on the identified output.
+    #[serde(flatten)]
+    pub figures: &'a StepFigures,
+    /// Per channel key, the step's timing there.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub channels: BTreeMap<&'static str, ChannelTiming>,
+}
 
 /// A number, or `-` where the data supports none.
 fn num(v: Option<f64>, prec: usize) -> String {
@@ -279,7 +296,7 @@ pub fn write_tables(o: &mut String, f: &StandFigures) {
 
 /// Appends each step's dead time and time constant on every output channel, side by side
 /// (nothing when the steps have no timing per channel, or only one channel).
-pub fn write_channel_timing(o: &mut String, steps: &[super::summary::StepOut<'_>]) {
+pub fn write_channel_timing(o: &mut String, steps: &[StepOut<'_>]) {
     let keys: Vec<&'static str> = steps
         .first()
         .map(|s| s.channels.keys().copied().collect())

@@ -6,11 +6,21 @@
 //! TSP/1 [`Frame`]s (the CSV one through [`CsvLink`]), and commands are encoded for the wire in
 //! use, so the sampler, the experiment plan and the worker are the same for both.
 
-use super::config::WireProtocol;
 use super::csv_link::{CsvLink, CsvLinkOptions};
 use propid_wire::protocol::detect::{detect, Detection, WireFormat, DETECT_WINDOW};
 use propid_wire::protocol::message::{Frame, Message};
 use propid_wire::protocol::{encode_frame, Decoder};
+
+/// `[device] protocol`: which wire format the daemon expects (docs/PROTOCOL.md §6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WireProtocol {
+    /// Decide from the first bytes ([`propid_wire::protocol::detect`]).
+    Auto,
+    /// Binary TSP/1 only.
+    Tsp,
+    /// The CSV fallback (read through [`super::csv_link`]).
+    Csv,
+}
 
 /// The decoder of a link.
 pub enum Wire {

@@ -2,40 +2,24 @@
 
 use std::fmt::Write;
 
-use std::collections::BTreeMap;
-
 use serde::Serialize;
 
 use super::load::{Loaded, Source};
+pub use super::stand::StepOut;
 use super::Physics;
 use propid_numerics::identify::{AnyModel, PathTaken};
 use propid_numerics::operating_points::OpTable;
 use propid_numerics::quality::{judge, judge_gain, judge_sample_period, Flaw};
 use propid_numerics::report::Gain;
 use propid_numerics::stabilization::Stabilization;
-use propid_numerics::stand::ChannelTiming;
 use propid_numerics::stand::StandFigures;
 use propid_numerics::stand_model::report::Stand;
 use propid_numerics::static_map::LevelSlope;
 use propid_numerics::step_directions::{by_direction, DirectionFigures};
-use propid_numerics::step_response::StepFigures;
 use propid_numerics::ModelReport;
 
 /// Step figures' medians per direction (`"up"`, `"down"`).
 type ByDirection = std::collections::BTreeMap<&'static str, DirectionFigures>;
-
-/// One entry of `"steps"`: the step's figures on the identified output, and its dead time and
-/// time constant on every output channel of the stand (`"channels"`, by key; omitted when
-/// the input is no command).
-#[derive(Debug, Clone, Serialize)]
-pub struct StepOut<'a> {
-    /// The figures on the identified output.
-    #[serde(flatten)]
-    pub figures: &'a StepFigures,
-    /// Per channel key, the step's timing there.
-    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
-    pub channels: BTreeMap<&'static str, ChannelTiming>,
-}
 
 /// The steps of `stand` with their timing per channel from `physics`.
 fn steps_out<'a>(stand: &'a StandFigures, physics: &Physics) -> Vec<StepOut<'a>> {

@@ -1,4 +1,4 @@
-//! The stabilization diagram as SVG ([`svg`]) and in words ([`summary_line`], [`markdown`]):
+//! The stabilization diagram as an SVG text ([`svg`]) and in words ([`summary_line`], [`markdown`]):
 //! pole frequency on a log x axis, model order on the y axis, one circle per pole entry of
 //! [`Stabilization`] (filled: stable against the next order, hollow: not), the published
 //! model's row in red. Frequencies below the axis' lower end (slow real poles, `fn` ≈ 0) sit
@@ -6,7 +6,6 @@
 
 use std::fmt::Write as _;
 use std::io;
-use std::path::Path;
 
 use plotters::prelude::*;
 use propid_numerics::stabilization::Stabilization;
@@ -33,12 +32,18 @@ fn freq_range(s: &Stabilization) -> (f64, f64) {
     (lo, hi)
 }
 
-/// Writes the diagram of `s` to `path` as SVG: one `<circle>` per pole entry, nothing else
-/// drawn as a circle.
-pub fn svg(path: &Path, title: &str, s: &Stabilization) -> io::Result<()> {
+/// The diagram of `s` as an SVG text: one `<circle>` per pole entry, nothing else drawn as a
+/// circle.
+pub fn svg(title: &str, s: &Stabilization) -> io::Result<String> {
+    let mut text = String::new();
+    draw(&mut text, title, s)?;
+    Ok(text)
+}
+
+fn draw(text: &mut String, title: &str, s: &Stabilization) -> io::Result<()> {
     let (lo, hi) = freq_range(s);
     let top = s.n_max.max(1) as f64 + 0.5;
-    let root = SVGBackend::new(path, (900, 520)).into_drawing_area();
+    let root = SVGBackend::with_string(text, (900, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(to_io)?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 18))
@@ -185,15 +190,10 @@ mod tests {
 
     #[test]
     fn one_circle_per_pole_and_a_summary() {
-        let dir = std::env::temp_dir().join(format!("propid-stab-svg-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("s.svg");
         let s = diagram();
-        svg(&path, "test", &s).unwrap();
-        let text = std::fs::read_to_string(&path).unwrap();
+        let text = svg("test", &s).unwrap();
         assert!(text.trim_start().starts_with("<svg"), "{}", &text[..40]);
         assert_eq!(text.matches("<circle").count(), 4);
-        std::fs::remove_dir_all(&dir).unwrap();
         let line = summary_line(&s, 10.0, 0.2);
         assert!(
             line.starts_with("2 of 3 orders have a stable pole"),

@@ -1,0 +1,114 @@
+//! FILE → bytes → the one loader ([`propid_ingest::load`], re-exported here): the file read
+//! within [`MAX_INPUT_BYTES`] (unreadable: exit 7, too large: exit 3), then its bytes loaded
+//! as a [`Request`] asks. [`ReadArgs`] are the flags of every command that reads a file,
+//! declared once.
+
+use std::path::{Path, PathBuf};
+
+use super::CliError;
+use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
+pub use propid_ingest::load::*;
+
+/// FILE and the flags that say how to read it, shared by every command that reads a file
+/// (`identify`, `diagnose`: `#[command(flatten)]` in their `Args`); [`ReadArgs::request`] makes
+/// the loader's [`Request`].
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct ReadArgs {
+    /// A TSP/1 recording (raw bytes) or a CSV file.
+    pub file: PathBuf,
+    /// Input column (default: the command column, throttle/ESC signal/pwm; `none`: no input,
+    /// steps are found from the response).
+    #[arg(long)]
+    pub input: Option<String>,
+    /// Output column (default: thrust); repeatable where a command takes several.
+    #[arg(long)]
+    pub output: Vec<String>,
+    /// Sample rate, Hz (needed without a time column; resamples onto this rate otherwise).
+    #[arg(long)]
+    pub fs: Option<f64>,
+    /// Column names for a CSV file without a header, comma separated (for a file with one, they
+    /// replace its names: to give a column the unit its header does not say).
+    #[arg(long, value_delimiter = ',')]
+    pub columns: Option<Vec<String>>,
+    /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
+    #[arg(long, value_delimiter = ',')]
+    pub esc_us: Option<Vec<f64>>,
+    /// Raw command values at throttle 0 and 1, `MIN,MAX` (default: from the header's unit or
+    /// the values, e.g. 0..1, 0..100 %, 0..2047 DShot/raw ESC).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub input_range: Option<Vec<f64>>,
+    /// Motor magnet poles, for a speed column in eRPM.
+    #[arg(long)]
+    pub poles: Option<u32>,
+}
+
+impl ReadArgs {
+    /// The loader's request: these flags, with `optional` read too when the file has them.
+    pub fn request<'a>(&'a self, optional: &'a [&'a str]) -> Request<'a> {
+        Request {
+            input: self.input.as_deref(),
+            outputs: &self.output,
+            optional,
+            fs_hz: self.fs,
+            columns: self.columns.as_deref(),
+            esc_us: self.esc_us.as_deref(),
+            input_range: self.input_range.as_deref(),
+            poles: self.poles,
+        }
+    }
+
+    /// Reads FILE as these flags ask, with `optional` read too when the file has them.
+    pub fn load(&self, optional: &[&str]) -> Result<LoadedFile, CliError> {
+        load(&self.file, &self.request(optional))
+    }
+}
+
+/// Reads all of `file` within [`MAX_INPUT_BYTES`]: unreadable is an I/O error (exit 7), too
+/// large is bad input (exit 3).
+pub fn read_input(file: &Path) -> Result<Vec<u8>, CliError> {
+    let name = file.display().to_string();
+    read_bounded(file, MAX_INPUT_BYTES).map_err(|e| match e {
+        ReadError::Io(e) => CliError::io(format!("reading {name}"), e),
+        ReadError::TooLarge { limit } => LoadError::TooLarge { file: name, limit }.into(),
+    })
+}
+
+/// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
+pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
+    let bytes = read_input(file)?;
+    Ok(load_owned(file.display().to_string(), bytes, req)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn errors_keep_their_class() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = load(&write(dir.path(), "e.csv", ""), &Request::default()).unwrap_err();
+        assert!(matches!(&e, CliError::Load(LoadError::Empty { .. })), "{e}");
+        assert_eq!(e.exit_code(), 3);
+        let good = write(
+            dir.path(),
+            "g.csv",
+            "t_s,throttle,thrust_N\n0,0.2,1\n0.01,0.2,1\n",
+        );
+        let bad_esc = [1000.0];
+        let req = Request {
+            esc_us: Some(&bad_esc),
+            ..Request::default()
+        };
+        let e = load(&good, &req).unwrap_err();
+        assert_eq!(e.to_string(), "--esc-us takes MIN,MAX");
+        assert_eq!(e.exit_code(), 2);
+        let e = load(&dir.path().join("absent.csv"), &Request::default()).unwrap_err();
+        assert_eq!(e.exit_code(), 7, "{e}");
+    }
+}
