@@ -180,6 +180,9 @@ pub fn read_input(file: &Path) -> Result<Vec<u8>, CliError> {
 
 /// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
 pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
+    if let Some(loaded) = load_streamed(file, req)? {
+        return Ok(loaded);
+    }
     let bytes = read_input(file)?;
     load_from(file.display().to_string(), Cow::Owned(bytes), req)
 }
@@ -251,17 +254,52 @@ fn container(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
     }
 }
 
+/// A regular file whose first bytes are a binary TSP/1 recording (what [`load_from`] would
+/// take for one), decoded as it is read: memory for the record, not for the file's bytes.
+/// `None` for anything else.
+fn load_streamed(file: &Path, req: &Request) -> Result<Option<LoadedFile>, CliError> {
+    let name = file.display().to_string();
+    let mut reader = propid_ingest::BinaryReader::new(&ingest_options(req));
+    let binary = |first: &[u8], whole: bool| {
+        container(first).is_none()
+            && wide(first).is_none()
+            && detect(first, whole) == Detection::Format(WireFormat::Binary)
+    };
+    match crate::input::read_chunks(file, MAX_INPUT_BYTES, binary, |c| reader.push(c)) {
+        Ok(true) => match reader.finish() {
+            Ok((record, stats)) => from_record(req, name, record, stats).map(Some),
+            Err(source) => Err(LoadError::Recording { file: name, source }.into()),
+        },
+        Ok(false) => Ok(None),
+        Err(ReadError::Io(e)) => Err(CliError::io(format!("reading {name}"), e)),
+        Err(ReadError::TooLarge { limit }) => Err(LoadError::TooLarge { file: name, limit }.into()),
+    }
+}
+
+fn ingest_options(req: &Request) -> IngestOptions {
+    IngestOptions {
+        fs_hz: req.fs_hz,
+        ..IngestOptions::default()
+    }
+}
+
 /// A binary TSP/1 recording: every channel the device sent; the input (default throttle) and
 /// the outputs (default thrust) must be among them.
 fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, CliError> {
-    let opts = IngestOptions {
-        fs_hz: req.fs_hz,
-        ..IngestOptions::default()
-    };
-    let (record, stats) = match read_record_with(bytes, &opts) {
+    let (record, stats) = match read_record_with(bytes, &ingest_options(req)) {
         Ok(r) => r,
         Err(source) => return Err(LoadError::Recording { file: name, source }.into()),
     };
+    from_record(req, name, record, stats)
+}
+
+/// The channels `req` asks for in a decoded recording.
+fn from_record(
+    req: &Request,
+    name: String,
+    record: Record,
+    stats: IngestStats,
+) -> Result<LoadedFile, CliError> {
     let present = |want: &str| -> Result<String, CliError> {
         match record.channel(want) {
             Some(_) => Ok(want.to_string()),
