@@ -51,6 +51,49 @@ pub fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>, ReadError> {
     Ok(bytes)
 }
 
+/// Bytes read at a time by [`read_chunks`], and the most it gives its `take` for a decision.
+pub const CHUNK_BYTES: usize = 1 << 16;
+
+/// Reads a regular file of at most `limit` bytes in chunks of [`CHUNK_BYTES`]: `take` is
+/// shown the first chunk (all of a smaller file; `true` when that is the whole file) and says
+/// whether to go on (`false`: `Ok(false)`, nothing more read); every chunk, the first too,
+/// then goes to `push`. `Ok(false)` too for anything but a regular file within the bound (the
+/// caller reads it whole, with [`read_bounded`]'s checks).
+pub fn read_chunks(
+    path: &Path,
+    limit: u64,
+    take: impl FnOnce(&[u8], bool) -> bool,
+    mut push: impl FnMut(&[u8]),
+) -> Result<bool, ReadError> {
+    let mut file = std::fs::File::open(path)?;
+    let meta = file.metadata()?;
+    if !meta.is_file() || meta.len() > limit || meta.len() == 0 {
+        return Ok(false);
+    }
+    let mut buf = vec![0u8; CHUNK_BYTES];
+    let mut first = 0;
+    while first < buf.len() {
+        match file.read(&mut buf[first..]) {
+            Ok(0) => break,
+            Ok(n) => first += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+    if !take(&buf[..first], first < buf.len()) {
+        return Ok(false);
+    }
+    push(&buf[..first]);
+    loop {
+        match file.read(&mut buf) {
+            Ok(0) => return Ok(true),
+            Ok(n) => push(&buf[..n]),
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -74,5 +117,34 @@ mod tests {
             read_bounded(&dir.path().join("missing"), 10),
             Err(ReadError::Io(e)) if e.kind() == io::ErrorKind::NotFound
         ));
+    }
+
+    #[test]
+    fn a_file_is_read_in_chunks_once_its_first_is_taken() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("f");
+        let bytes: Vec<u8> = (0..=255u8).cycle().take(3 * CHUNK_BYTES / 2).collect();
+        std::fs::write(&f, &bytes).unwrap();
+        let mut got = Vec::new();
+        let taken = read_chunks(
+            &f,
+            1 << 20,
+            |first, whole| first.len() == CHUNK_BYTES && !whole,
+            |c| got.extend_from_slice(c),
+        );
+        assert!(taken.unwrap());
+        assert_eq!(got, bytes);
+        // refused by `take`, beyond the bound, or not a regular file: nothing pushed
+        let mut pushed = false;
+        assert!(!read_chunks(&f, 1 << 20, |_, _| false, |_| pushed = true).unwrap());
+        assert!(!read_chunks(&f, 100, |_, _| true, |_| pushed = true).unwrap());
+        assert!(!read_chunks(
+            Path::new("/dev/zero"),
+            1 << 20,
+            |_, _| true,
+            |_| pushed = true
+        )
+        .unwrap());
+        assert!(!pushed);
     }
 }

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use super::CliError;
-use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
+use crate::input::{read_bounded, read_chunks, ReadError, MAX_INPUT_BYTES};
 pub use propid_ingest::load::*;
 
 /// FILE and the flags that say how to read it, shared by every command that reads a file
@@ -75,6 +75,9 @@ pub fn read_input(file: &Path) -> Result<Vec<u8>, CliError> {
 
 /// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
 pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
+    if let Some(loaded) = load_streamed(file, req)? {
+        return Ok(loaded);
+    }
     let bytes = read_input(file)?;
     Ok(load_owned(file.display().to_string(), bytes, req)?)
 }
@@ -110,5 +113,21 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let e = load(&dir.path().join("absent.csv"), &Request::default()).unwrap_err();
         assert_eq!(e.exit_code(), 7, "{e}");
+    }
+}
+
+/// A regular file whose first bytes are a binary TSP/1 recording, decoded as it is read:
+/// memory for the record, not for the file's bytes. `None` for anything else.
+fn load_streamed(file: &Path, req: &Request) -> Result<Option<LoadedFile>, CliError> {
+    let name = file.display().to_string();
+    let mut reader = propid_ingest::BinaryReader::new(&ingest_options(req));
+    match read_chunks(file, MAX_INPUT_BYTES, is_binary_recording, |c| reader.push(c)) {
+        Ok(true) => match reader.finish() {
+            Ok((record, stats)) => Ok(Some(from_record(req, name, record, stats)?)),
+            Err(source) => Err(LoadError::Recording { file: name, source }.into()),
+        },
+        Ok(false) => Ok(None),
+        Err(ReadError::Io(e)) => Err(CliError::io(format!("reading {name}"), e)),
+        Err(ReadError::TooLarge { limit }) => Err(LoadError::TooLarge { file: name, limit }.into()),
     }
 }

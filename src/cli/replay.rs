@@ -2,7 +2,9 @@
 //!
 //! The same sampler (without commands) and the same worker as `propid run`, so the replay of a
 //! run's recording publishes the same model lines. Progress goes to stderr when stderr is a
-//! terminal. A FIFO as FILE is read to its end first (said on stderr; the first signal ends
+//! terminal. A regular file is read as it is replayed, chunk by chunk (memory bounded by the
+//! daemon's windows, not the file). Anything else (a FIFO, a device) is read to its end first,
+//! within [`crate::input::MAX_INPUT_BYTES`] (said on stderr for a FIFO; the first signal ends
 //! the wait for its writer).
 
 use std::io::IsTerminal;
@@ -44,22 +46,36 @@ pub fn run(args: Args) -> Result<(), CliError> {
     cfg.publish.http_hold = cfg.publish.http.is_some();
     let shutdown = Shutdown::install()?;
     let identifier = crate::daemon::identify::CoreIdentifier::new(&cfg)?;
-    // a FIFO is read to its end before the replay starts (no streamed replay yet): say so,
-    // as opening it waits for its writer (the first signal ends the wait: `Shutdown`)
-    if std::fs::metadata(&args.file).is_ok_and(|m| m.file_type().is_fifo()) {
-        eprintln!(
-            "propid replay: {} is a FIFO: reading it until its writer closes it (Ctrl-C to give up)",
-            args.file.display()
-        );
-    }
-    // unreadable: exit 7; empty, too large or (below) nothing decoded: exit 3, as identify
-    let bytes = super::load::read_input(&args.file)?;
     let file = args.file.display().to_string();
-    if bytes.is_empty() {
-        return Err(LoadError::Empty { file }.into());
-    }
-    let size = bytes.len() as u64;
-    let source = RecordingSource::from_bytes(&args.file, bytes, args.chunk as usize);
+    let chunk = args.chunk as usize;
+    let unreadable = |e| CliError::io(format!("reading {file}"), e);
+    let meta = std::fs::metadata(&args.file).map_err(unreadable)?;
+    // unreadable: exit 7; empty or (below) nothing decoded: exit 3, as identify
+    let (source, size) = if meta.is_file() {
+        if meta.len() == 0 {
+            return Err(LoadError::Empty { file }.into());
+        }
+        let source = RecordingSource::open(&args.file, chunk).map_err(|e| match e {
+            SourceError::Open { source, .. } => unreadable(source),
+            e => CliError::io(file.clone(), std::io::Error::other(e.to_string())),
+        })?;
+        (source, meta.len())
+    } else {
+        // a FIFO (or a device) is read to its end before the replay starts: say so, as
+        // opening it waits for its writer (the first signal ends the wait: `Shutdown`)
+        if meta.file_type().is_fifo() {
+            eprintln!(
+                "propid replay: {} is a FIFO: reading it until its writer closes it (Ctrl-C to give up)",
+                args.file.display()
+            );
+        }
+        let bytes = super::load::read_input(&args.file)?;
+        if bytes.is_empty() {
+            return Err(LoadError::Empty { file }.into());
+        }
+        let size = bytes.len() as u64;
+        (RecordingSource::from_bytes(&args.file, bytes, chunk), size)
+    };
     let source: Box<dyn Source> = if std::io::stderr().is_terminal() {
         Box::new(Progress::new(source))
     } else {

@@ -11,7 +11,7 @@
 //! Reads block for at most the source's timeout, so a sampler loop built on them never hangs and
 //! can send heartbeats between reads. Implementations: [`SerialSource`] (a serial port or the
 //! simulated stand's pseudo-terminal, opened by path with `serialport`, timeout always set),
-//! [`RecordingSource`] (a raw-byte recording, delivered in chunks of a chosen size) and
+//! [`RecordingSource`] (a raw-byte recording, read and delivered in chunks of a chosen size) and
 //! [`ScriptedSource`] (an in-memory fake that stalls, delivers partially and fails on cue).
 
 use std::collections::VecDeque;
@@ -178,58 +178,77 @@ impl Source for SerialSource {
     }
 }
 
-/// A raw-byte recording, delivered in chunks of at most `chunk` bytes (1 = byte at a time).
+/// A raw-byte recording, delivered in chunks of at most `chunk` bytes (1 = byte at a time):
+/// read from its file as it is delivered (memory: one chunk, whatever the file's size), or
+/// from bytes already in memory.
 pub struct RecordingSource {
     path: PathBuf,
-    bytes: Vec<u8>,
-    pos: usize,
+    reader: Box<dyn Read + Send>,
+    pos: u64,
+    total: u64,
     chunk: usize,
 }
 
 impl RecordingSource {
-    /// Reads the whole recording into memory.
+    /// Opens the recording at `path`, to be read as it is delivered.
     pub fn open(path: &Path, chunk: usize) -> Result<RecordingSource, SourceError> {
-        let bytes =
-            crate::input::read_bounded(path, crate::input::MAX_INPUT_BYTES).map_err(|e| {
-                SourceError::Open {
-                    what: path.display().to_string(),
-                    source: match e {
-                        crate::input::ReadError::Io(e) => e,
-                        e => std::io::Error::new(std::io::ErrorKind::InvalidData, e.to_string()),
-                    },
-                }
-            })?;
-        Ok(RecordingSource::from_bytes(path, bytes, chunk))
+        let open = |source| SourceError::Open {
+            what: path.display().to_string(),
+            source,
+        };
+        let file = std::fs::File::open(path).map_err(open)?;
+        let total = file.metadata().map_err(open)?.len();
+        Ok(RecordingSource {
+            path: path.to_path_buf(),
+            reader: Box::new(file),
+            pos: 0,
+            total,
+            chunk: chunk.max(1),
+        })
     }
 
     /// A recording already in memory.
     pub fn from_bytes(path: &Path, bytes: Vec<u8>, chunk: usize) -> RecordingSource {
         RecordingSource {
             path: path.to_path_buf(),
-            bytes,
+            total: bytes.len() as u64,
+            reader: Box::new(std::io::Cursor::new(bytes)),
             pos: 0,
             chunk: chunk.max(1),
         }
     }
 
-    /// Bytes delivered so far and the total, for progress.
-    pub fn progress(&self) -> (usize, usize) {
-        (self.pos, self.bytes.len())
+    /// Bytes delivered so far and the total (the file's size when it was opened), for
+    /// progress.
+    pub fn progress(&self) -> (u64, u64) {
+        (self.pos, self.total)
     }
 }
 
 impl Source for RecordingSource {
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, SourceError> {
-        let left = self.bytes.len() - self.pos;
-        if left == 0 {
-            return Err(SourceError::Finished {
-                what: self.describe(),
-            });
+        let n = self.chunk.min(buf.len());
+        loop {
+            match self.reader.read(&mut buf[..n]) {
+                Ok(0) if n > 0 => {
+                    return Err(SourceError::Finished {
+                        what: self.describe(),
+                    })
+                }
+                Ok(got) => {
+                    self.pos += got as u64;
+                    return Ok(got);
+                }
+                Err(e) if e.kind() == ErrorKind::Interrupted => continue,
+                // a file that cannot be read on: the link is gone, and `reconnect` ends it
+                Err(source) => {
+                    return Err(SourceError::Disconnected {
+                        what: self.describe(),
+                        source,
+                    })
+                }
+            }
         }
-        let n = left.min(self.chunk).min(buf.len());
-        buf[..n].copy_from_slice(&self.bytes[self.pos..self.pos + n]);
-        self.pos += n;
-        Ok(n)
     }
 
     fn write_all(&mut self, _bytes: &[u8]) -> Result<(), SourceError> {
@@ -414,6 +433,29 @@ mod tests {
             Err(SourceError::Finished { .. })
         ));
         assert!(!r.is_live());
+    }
+
+    #[test]
+    fn a_recording_file_is_read_as_it_is_delivered() {
+        let dir = tempfile::tempdir().unwrap();
+        let f = dir.path().join("r.tsp");
+        let bytes: Vec<u8> = (0..=255u8).cycle().take(1000).collect();
+        std::fs::write(&f, &bytes).unwrap();
+        let mut r = RecordingSource::open(&f, 300).unwrap();
+        assert_eq!(r.progress(), (0, 1000));
+        let (mut got, mut buf) = (Vec::new(), [0u8; 512]);
+        loop {
+            match r.read(&mut buf) {
+                Ok(n) => {
+                    assert!((1..=300).contains(&n), "{n}");
+                    got.extend_from_slice(&buf[..n]);
+                }
+                Err(SourceError::Finished { .. }) => break,
+                Err(e) => panic!("{e}"),
+            }
+        }
+        assert_eq!(got, bytes);
+        assert_eq!(r.progress(), (1000, 1000));
     }
 
     #[test]

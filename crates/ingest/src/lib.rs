@@ -25,4 +25,4 @@ pub use propid_wire::stream::{assemble, clock, IngestError};
 pub use propid_wire::stream::{
     AssembleOptions, AssembleStats, Assembled, BuildStats, RecordBuilder, SampleAssembler,
 };
-pub use tsp::{read_record, read_record_with, IngestOptions, IngestStats};
+pub use tsp::{read_record, read_record_with, BinaryReader, IngestOptions, IngestStats};

@@ -256,14 +256,37 @@ fn container(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
 /// A binary TSP/1 recording: every channel the device sent; the input (default throttle) and
 /// the outputs (default thrust) must be among them.
 fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, LoadError> {
-    let opts = IngestOptions {
+    let (record, stats) = match read_record_with(bytes, &ingest_options(req)) {
+        Ok(r) => r,
+        Err(source) => return Err(LoadError::Recording { file: name, source }),
+    };
+    from_record(req, name, record, stats)
+}
+
+/// Whether a file's first bytes (`whole`: they are the whole file) are a binary TSP/1
+/// recording, as [`load_bytes`] would take them: the test a caller streaming a file from disk
+/// makes before decoding it in chunks ([`crate::BinaryReader`], then [`from_record`]).
+pub fn is_binary_recording(first: &[u8], whole: bool) -> bool {
+    container(first).is_none()
+        && wide(first).is_none()
+        && detect(first, whole) == Detection::Format(WireFormat::Binary)
+}
+
+/// The decoder's options a request asks for.
+pub fn ingest_options(req: &Request) -> IngestOptions {
+    IngestOptions {
         fs_hz: req.fs_hz,
         ..IngestOptions::default()
-    };
-    let (record, stats) = match read_record_with(bytes, &opts) {
-        Ok(r) => r,
-        Err(source) => return Err(LoadError::Recording { file: name, source }.into()),
-    };
+    }
+}
+
+/// The channels `req` asks for in a decoded recording.
+pub fn from_record(
+    req: &Request,
+    name: String,
+    record: Record,
+    stats: IngestStats,
+) -> Result<LoadedFile, LoadError> {
     let present = |want: &str| -> Result<String, LoadError> {
         match record.channel(want) {
             Some(_) => Ok(want.to_string()),

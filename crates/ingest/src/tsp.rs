@@ -84,21 +84,49 @@ pub fn read_record_with(
 }
 
 fn read_binary(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats), IngestError> {
-    let mut dec = Decoder::new();
-    let mut b = RecordBuilder::new(o.assemble);
-    dec.push(bytes, |f| b.push_frame(&f));
-    let dt_nominal_s = b.assembler().nominal_dt_s();
-    let (record, assemble, build) = b.finish()?;
-    let stats = IngestStats {
-        format: WireFormat::Binary,
-        frames: Some(*dec.stats()),
-        csv: None,
-        assemble,
-        build,
-        dt_s: record.dt_s,
-        dt_nominal_s,
-    };
-    Ok((record, stats))
+    let mut r = BinaryReader::new(o);
+    r.push(bytes);
+    r.finish()
+}
+
+/// A binary TSP/1 recording read piece by piece (a file read in chunks: memory for the record,
+/// not for the file's bytes): the same decoder and builder as [`read_record_with`], so any
+/// split of the bytes gives the same record and counters.
+pub struct BinaryReader {
+    dec: Decoder,
+    builder: RecordBuilder,
+}
+
+impl BinaryReader {
+    /// A reader with `o`'s gap handling.
+    pub fn new(o: &IngestOptions) -> Self {
+        BinaryReader {
+            dec: Decoder::new(),
+            builder: RecordBuilder::new(o.assemble),
+        }
+    }
+
+    /// The next bytes of the recording.
+    pub fn push(&mut self, bytes: &[u8]) {
+        let b = &mut self.builder;
+        self.dec.push(bytes, |f| b.push_frame(&f));
+    }
+
+    /// The record and what reading it found.
+    pub fn finish(self) -> Result<(Record, IngestStats), IngestError> {
+        let dt_nominal_s = self.builder.assembler().nominal_dt_s();
+        let (record, assemble, build) = self.builder.finish()?;
+        let stats = IngestStats {
+            format: WireFormat::Binary,
+            frames: Some(*self.dec.stats()),
+            csv: None,
+            assemble,
+            build,
+            dt_s: record.dt_s,
+            dt_nominal_s,
+        };
+        Ok((record, stats))
+    }
 }
 
 fn read_csv(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats), IngestError> {

@@ -113,3 +113,22 @@ fn typed_errors_for_empty_and_sample_free_input() {
         IngestError::NoSamples
     );
 }
+
+#[test]
+fn a_recording_read_in_pieces_is_the_one_read_whole() {
+    let mut bytes = recording(300);
+    bytes.extend_from_slice(b"\x00garbage\x00"); // a skipped frame, counted either way
+    bytes.extend_from_slice(&recording(20)[40..]);
+    let whole = read_record(&bytes).unwrap();
+    for piece in [1, 7, 64, 4096] {
+        let mut r = BinaryReader::new(&IngestOptions::default());
+        for c in bytes.chunks(piece) {
+            r.push(c);
+        }
+        let pieces = r.finish().unwrap();
+        assert_eq!(pieces.1, whole.1, "piece {piece}");
+        // NaN (a missing sample) is no equal of itself: the records compared as printed
+        let show = |r: &Record| format!("{r:?}");
+        assert_eq!(show(&pieces.0), show(&whole.0), "piece {piece}");
+    }
+}

@@ -306,6 +306,23 @@ fn prepare(c: &Channel<'_>, missing_len: usize) -> Prepared {
     }
 }
 
+/// [`super::speed_power`] of every speed, a speed held from one row to the next computed once
+/// (the same numbers).
+fn powers(speed: &[f64], e: f64) -> Vec<f64> {
+    let mut last: Option<(u64, f64)> = None;
+    speed
+        .iter()
+        .map(|&n| match last {
+            Some((bits, x)) if bits == n.to_bits() => x,
+            _ => {
+                let x = super::speed_power(n, e);
+                last = Some((n.to_bits(), x));
+                x
+            }
+        })
+        .collect()
+}
+
 /// Whether the command rises, falls, and to how many levels its moves lead (a move: a change
 /// beyond 2 % of its range from one row to the next).
 fn moves(u: &[f64]) -> (bool, bool, usize) {
@@ -418,19 +435,9 @@ impl Problem {
             .map(|(c, ch)| {
                 let bases: Vec<Vec<f64>> = match ch.quantity {
                     Quantity::Speed => vec![course.speed.clone()],
-                    Quantity::Thrust | Quantity::Torque => {
-                        vec![course
-                            .speed
-                            .iter()
-                            .map(|&n| super::speed_power(n, e))
-                            .collect()]
-                    }
+                    Quantity::Thrust | Quantity::Torque => vec![powers(&course.speed, e)],
                     Quantity::Current => vec![
-                        course
-                            .speed
-                            .iter()
-                            .map(|&n| super::speed_power(n, e + 1.0))
-                            .collect(),
+                        powers(&course.speed, e + 1.0),
                         course
                             .speed
                             .iter()

@@ -287,31 +287,158 @@ pub fn rotor_course(
         rate: Vec::with_capacity(len),
         voltage: Vec::with_capacity(len),
     };
-    let cmd = |j: isize| held_at(&u, j, u0);
+    // The same numbers as `RotorLaw::rate`/`advance`, `SpeedMap::speed_ss` and `supply_at`,
+    // with what repeats from row to row computed once: the steady speed of a held command
+    // (`ss`), τ's speed factor at the row's speed, the supply without a resistance, and no
+    // `exp` once the speed has reached its target exactly.
+    let mut ss = SteadyCache::new(&p.map);
+    let rotor = &p.rotor;
+    let floor = rotor.speed_ref / 10.0;
+    let factor_of = |n: f64| {
+        if rotor.tau_speed_exponent == 0.0 {
+            1.0 // x^0 = 1 for every x, NaN too
+        } else {
+            (rotor.speed_ref / n.max(floor)).powf(rotor.tau_speed_exponent)
+        }
+    };
+    let tau = |up: bool, factor: f64| {
+        let base = if up { rotor.tau_up_s } else { rotor.tau_down_s };
+        base * factor
+    };
+    let rate_of = |n: f64, target: f64, factor: f64| (target - n) / tau(target >= n, factor);
+    let advance = |n: f64, target: f64, h: f64, factor: f64| {
+        let tau = tau(target >= n, factor);
+        if n == target && tau > 0.0 {
+            target + 0.0 // (n − target)·e^{−h/τ} = +0
+        } else {
+            target + (n - target) * (-h / tau).exp()
+        }
+    };
+    let c = &p.current;
+    let no_sag = p.supply.resistance_ohm == 0.0
+        && [c.idle_a, c.per_power, c.per_acceleration]
+            .iter()
+            .all(|x| x.abs() < 1e50)
+        && p.thrust_exponent.abs() < 10.0;
+    let supply = |n: f64, n_dot: f64| {
+        // V_oc − 0·I = V_oc while I is finite (bounded n, n' and coefficients)
+        if no_sag && n.abs() < 1e20 && n_dot.abs() < 1e200 {
+            p.supply.open_circuit_v
+        } else {
+            supply_at(n, n_dot)
+        }
+    };
+    // `u` is filled: `held_at` is the clamped row
+    let last = len as isize - 1;
+    let cmd = |j: isize| {
+        if len == 0 {
+            u0
+        } else {
+            u[j.clamp(0, last) as usize]
+        }
+    };
+    let mut last_factor: Option<(u64, f64)> = None;
+    let mut factor_at = |n: f64| match last_factor {
+        Some((bits, x)) if bits == n.to_bits() => x,
+        _ => {
+            let x = factor_of(n);
+            last_factor = Some((n.to_bits(), x));
+            x
+        }
+    };
+    let (mut first, mut second) = (Advanced::default(), Advanced::default());
+    // A row whose speed, commands and supply are the previous row's has its rate, supply and
+    // next speed too (a settled speed under a held command).
+    let mut last_row: Option<([u64; 4], (f64, f64, f64))> = None;
     for k in 0..len as isize {
         let (before, after) = (cmd(k - d - 1), cmd(k - d));
-        let now = if frac > 0.0 { before } else { after };
         let v_guess = match &v_meas {
             Some(v) => v[k as usize],
             None => p.supply.open_circuit_v,
         };
-        let rate0 = p.rotor.rate(n, p.map.speed_ss(now, v_guess));
-        let v = match &v_meas {
-            Some(_) => v_guess,
-            None => supply_at(n, rate0),
+        let key = [n, before, after, v_guess].map(f64::to_bits);
+        let (rate, v, next) = match last_row {
+            Some((k0, row)) if k0 == key => row,
+            _ => {
+                let now = if frac > 0.0 { before } else { after };
+                let f = factor_at(n);
+                let rate0 = rate_of(n, ss.at(now, v_guess), f);
+                let v = match &v_meas {
+                    Some(_) => v_guess,
+                    None => supply(n, rate0),
+                };
+                let rate = rate_of(n, ss.at(now, v), f);
+                let mut next = n;
+                if frac > 0.0 {
+                    let target = ss.at(before, v);
+                    next = first.get(next, target, || advance(next, target, frac * dt_s, f));
+                }
+                let f = factor_at(next);
+                let target = ss.at(after, v);
+                next = second.get(next, target, || {
+                    advance(next, target, (1.0 - frac) * dt_s, f)
+                });
+                last_row = Some((key, (rate, v, next)));
+                (rate, v, next)
+            }
         };
-        let rate = p.rotor.rate(n, p.map.speed_ss(now, v));
         out.speed.push(n);
         out.rate.push(rate);
         out.voltage.push(v);
-        if frac > 0.0 {
-            n = p.rotor.advance(n, p.map.speed_ss(before, v), frac * dt_s);
-        }
-        n = p
-            .rotor
-            .advance(n, p.map.speed_ss(after, v), (1.0 - frac) * dt_s);
+        n = next;
     }
     out
+}
+
+/// The last speed a row's part advanced to from a speed under a target (a speed that settled
+/// within a unit in the last place of its target stays there: the same `exp` is not taken
+/// again). The part's length and τ's law are the same on every row.
+#[derive(Default)]
+struct Advanced(Option<(u64, u64, f64)>);
+
+impl Advanced {
+    fn get(&mut self, n: f64, target: f64, advance: impl FnOnce() -> f64) -> f64 {
+        match self.0 {
+            Some((a, b, x)) if a == n.to_bits() && b == target.to_bits() => x,
+            _ => {
+                let x = advance();
+                self.0 = Some((n.to_bits(), target.to_bits(), x));
+                x
+            }
+        }
+    }
+}
+
+/// [`SpeedMap::speed_ss`] of the last few (command, voltage) pairs: a held command's steady
+/// speed is computed once (the same number).
+struct SteadyCache<'a> {
+    map: &'a SpeedMap,
+    keys: [Option<(u64, u64)>; 4],
+    values: [f64; 4],
+    next: usize,
+}
+
+impl<'a> SteadyCache<'a> {
+    fn new(map: &'a SpeedMap) -> Self {
+        SteadyCache {
+            map,
+            keys: [None; 4],
+            values: [f64::NAN; 4],
+            next: 0,
+        }
+    }
+
+    fn at(&mut self, u: f64, v: f64) -> f64 {
+        let key = (u.to_bits(), v.to_bits());
+        if let Some(i) = self.keys.iter().position(|&k| k == Some(key)) {
+            return self.values[i];
+        }
+        let x = self.map.speed_ss(u, v);
+        self.keys[self.next] = Some(key);
+        self.values[self.next] = x;
+        self.next = (self.next + 1) % self.keys.len();
+        x
+    }
 }
 
 /// One channel's sensor (module doc).
