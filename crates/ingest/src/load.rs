@@ -196,15 +196,14 @@ pub fn load_owned(name: String, bytes: Vec<u8>, req: &Request) -> Result<LoadedF
 
 fn load_from(name: String, bytes: Cow<'_, [u8]>, req: &Request) -> Result<LoadedFile, LoadError> {
     if bytes.is_empty() {
-        return Err(LoadError::Empty { file: name }.into());
+        return Err(LoadError::Empty { file: name });
     }
     if let Some((kind, fix)) = container(&bytes) {
         return Err(LoadError::NotText {
             file: name,
             kind,
             fix,
-        }
-        .into());
+        });
     }
     // A UTF-16 or UTF-32 text (its NUL bytes would look binary) is read as the UTF-8 it
     // decodes to; anything else is decoded once, by the reader that takes it as text.
@@ -294,8 +293,7 @@ pub fn from_record(
                 file: name.clone(),
                 want: want.to_string(),
                 have: record.channels.iter().map(|c| c.name.clone()).collect(),
-            }
-            .into()),
+            }),
         }
     };
     let input = match req.input {
