@@ -97,8 +97,8 @@ pub fn equilibrium(plant: &PlantConfig, u: f64, t_s: f64) -> Equilibrium {
     };
     for _ in 0..100 {
         let n = m.speed_ss(plant, u, v);
-        let t = m.k_t(plant) * n * n;
-        let i = plant.current_a(t);
+        let t = m.thrust_n(plant, n);
+        let i = m.current_a(plant, n, 0.0);
         let v_next = v_oc - plant.internal_resistance_ohm * i;
         out = Equilibrium {
             speed_rpm: n,
