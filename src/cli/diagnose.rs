@@ -54,6 +54,10 @@ pub struct Args {
     /// Share of the samples (from the start) used for estimation, 0.3..0.9.
     #[arg(long, default_value_t = 0.7)]
     pub estimation_fraction: f64,
+    /// Write the stand model fitted on every channel of FILE as a `propid sim` configuration
+    /// to OUT.toml (`propid sim --config OUT.toml --replay-command FILE`; docs/stand-model.md).
+    #[arg(long, value_name = "OUT.toml")]
+    pub sim_config: Option<PathBuf>,
 }
 
 /// The signals of FILE that diagnose works on.
@@ -168,18 +172,35 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ..Default::default()
     };
     let d = s.diagnose(&opts)?;
+    let written = match &args.sim_config {
+        Some(out) => {
+            let outputs: Vec<String> = args.output.iter().cloned().collect();
+            let req = Request {
+                outputs: &outputs,
+                ..request(&args)
+            };
+            Some(super::stand_log::write_config(&args.file, &req, out)?)
+        }
+        None => None,
+    };
     if let Some(dir) = &args.report {
         let title = args.file.display().to_string();
         report::write(dir, &title, &s.output_name, &d)
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
     }
     if args.json {
-        let text = json(&d, &s.file)
-            .map(|v| v.to_string())
-            .map_err(CliError::DiagnosisJson)?;
-        super::stdout::line(&text)
+        let mut v = json(&d, &s.file).map_err(CliError::DiagnosisJson)?;
+        if let (Some(w), Some(obj)) = (&written, v.as_object_mut()) {
+            let w = serde_json::to_value(w).map_err(CliError::DiagnosisJson)?;
+            obj.insert("sim_config".into(), w);
+        }
+        super::stdout::line(&v.to_string())
     } else {
-        super::stdout::write(&summary(&args, &s, &d))
+        let mut text = summary(&args, &s, &d);
+        if let Some(w) = &written {
+            let _ = writeln!(text, "{}", w.line());
+        }
+        super::stdout::write(&text)
     }
 }
 
@@ -331,14 +352,9 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
 pub fn load(args: &Args) -> Result<Signals, CliError> {
     let outputs = [args.output.clone().unwrap_or(names::THRUST.into())];
     let req = Request {
-        input: args.input.as_deref(),
         outputs: &outputs,
         optional: &[names::VOLTAGE],
-        fs_hz: args.fs,
-        columns: args.columns.as_deref(),
-        esc_us: args.esc_us.as_deref(),
-        input_range: args.input_range.as_deref(),
-        poles: args.poles,
+        ..request(args)
     };
     let mut s = signals(&shared::load(&args.file, &req)?)?;
     if let Some(name) = args.input.as_ref().filter(|n| n.as_str() != NO_INPUT) {
@@ -347,6 +363,19 @@ pub fn load(args: &Args) -> Result<Signals, CliError> {
         }
     }
     Ok(s)
+}
+
+/// The reading options of `args` (no outputs, no optional channels).
+fn request(args: &Args) -> Request<'_> {
+    Request {
+        input: args.input.as_deref(),
+        fs_hz: args.fs,
+        columns: args.columns.as_deref(),
+        esc_us: args.esc_us.as_deref(),
+        input_range: args.input_range.as_deref(),
+        poles: args.poles,
+        ..Request::default()
+    }
 }
 
 /// Diagnose's step after the shared load: the output NaN at every sample marked missing; the
@@ -457,6 +486,7 @@ mod tests {
             input_range: None,
             poles: None,
             estimation_fraction: 0.7,
+            sim_config: None,
         };
         let e = load(&args).unwrap_err();
         assert_eq!(e.exit_code(), 4, "{e}");

@@ -119,6 +119,45 @@ pub struct Request<'a> {
     pub poles: Option<u32>,
 }
 
+/// The reading options of a log on the command line (`sim --replay-command LOG`), as
+/// `identify` and `diagnose` name them.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct ReadArgs {
+    /// LOG's command column (default: the throttle / ESC signal column).
+    #[arg(long, value_name = "NAME")]
+    pub input: Option<String>,
+    /// LOG's sample rate, Hz, when it has no time column.
+    #[arg(long, value_name = "HZ")]
+    pub fs: Option<f64>,
+    /// LOG's column names (a CSV without a header, or replacing its names).
+    #[arg(long, value_delimiter = ',')]
+    pub columns: Option<Vec<String>>,
+    /// ESC pulse range of LOG's command, µs (MIN,MAX).
+    #[arg(long, value_delimiter = ',')]
+    pub esc_us: Option<Vec<f64>>,
+    /// Raw command values at throttle 0 and 1 (MIN,MAX).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub input_range: Option<Vec<f64>>,
+    /// Motor pole count, for a speed in eRPM.
+    #[arg(long)]
+    pub poles: Option<u32>,
+}
+
+impl ReadArgs {
+    /// As a [`Request`] (no outputs or optional channels).
+    pub fn request(&self) -> Request<'_> {
+        Request {
+            input: self.input.as_deref(),
+            fs_hz: self.fs,
+            columns: self.columns.as_deref(),
+            esc_us: self.esc_us.as_deref(),
+            input_range: self.input_range.as_deref(),
+            poles: self.poles,
+            ..Request::default()
+        }
+    }
+}
+
 /// The `--input` value that asks for no input column: the steps are found in the response.
 pub const NO_INPUT: &str = "none";
 
