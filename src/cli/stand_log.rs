@@ -204,8 +204,15 @@ impl StandLog {
                         }
                     })
                     .collect();
+                let (lo, hi) = y
+                    .iter()
+                    .filter(|v| v.is_finite())
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                        (a.min(v), b.max(v))
+                    });
                 let (pct, _, n) = fit_percent(&y, yhat, 0..y.len().min(yhat.len()));
-                (n > 0).then(|| (key.to_string(), (pct * 100.0).round() / 100.0))
+                // A channel that never moves has no fit percent.
+                (n > 0 && hi > lo).then(|| (key.to_string(), (pct * 100.0).round() / 100.0))
             })
             .collect()
     }

@@ -243,16 +243,25 @@ impl Plant {
         let v_oc = self.cfg.battery_v - self.cfg.discharge_v_per_s * t_s;
         let r_ohm = self.cfg.internal_resistance_ohm;
         // Input path: dead time (the motor's ESC dead time after the effect's), then the
-        // current of this sample (the motor's with its acceleration term, as the stand model's
-        // rotor course: `n'` under the open-circuit voltage) and the supply it sags.
+        // current of this sample (the motor's with its acceleration term, `n'` under the
+        // supply the current itself sags) and that supply.
         let delayed = self.effects.delay(throttle);
         let (esc, current_a) = match &mut self.core {
             Core::Motor(m) => {
                 let esc = m.delay(delayed);
+                let m = &*m;
                 let n = m.speed_rpm();
-                let u = self.effects.input_map(esc, v_oc, &self.cfg);
-                let rate = m.rate(&self.cfg, u, v_oc);
-                (esc, self.cfg.motor.current_a(&self.cfg, n, rate))
+                let (cfg, effects) = (&self.cfg, &self.effects);
+                let current = |v: f64| {
+                    let u = effects.input_map(esc, v, cfg);
+                    cfg.motor.current_a(cfg, n, m.rate(cfg, u, v))
+                };
+                // I(V) is affine in the supply (n' ∝ n_ss ∝ V): the loop V = V_oc − R I(V)
+                // solved at once, `I = I_oc − s R I_oc / (1 + R s)` with `s = dI/dV`.
+                let i_oc = current(v_oc);
+                let slope = i_oc - current(v_oc - 1.0);
+                let loop_gain = (1.0 + r_ohm * slope).max(0.1);
+                (esc, i_oc - slope * r_ohm * i_oc / loop_gain)
             }
             Core::SecondOrder { .. } => (delayed, self.cfg.current_a(thrust_true)),
         };
