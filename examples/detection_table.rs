@@ -275,6 +275,7 @@ fn real_data(dir: &Path) {
             input_range: (c.columns == Some(BLCTRL)).then(|| vec![0.0, 255.0]),
             poles: None,
             estimation_fraction: 0.7,
+            sim_config: None,
         };
         let row = load(&args).map_err(|e| e.to_string()).and_then(|s| {
             let opts = diagnose::Options::default();

@@ -225,14 +225,14 @@ impl StandLog {
             Origin::Tsp1(_) => None,
         };
         // (name, unit, raw = canonical / factor + zero) of a key, else the canonical name.
-        let column = |key: &str, canonical: &str| -> (String, String, f64, f64) {
+        let column = |key: &str, canonical: &str| -> Column {
             match units.as_ref().and_then(|(u, _)| u.get(key)) {
                 Some(u) => (u.column.clone(), u.unit.clone(), u.factor, u.zero),
                 None => (canonical.to_string(), String::new(), 1.0, 0.0),
             }
         };
         let rec = &self.file.record;
-        let mut cols: Vec<((String, String, f64, f64), Vec<f64>)> = Vec::new();
+        let mut cols: Vec<(Column, Vec<f64>)> = Vec::new();
         let time: Vec<f64> = (0..self.command.len())
             .map(|k| rec.t0_s + k as f64 * rec.dt_s)
             .collect();
@@ -265,6 +265,9 @@ impl StandLog {
         t
     }
 }
+
+/// A column of the CSV written: name, unit, factor to canonical units, raw zero.
+type Column = (String, String, f64, f64);
 
 /// Whether row `k` of `c` is a reading (finite, not interpolated).
 fn is_reading(c: &LogChannel, k: usize) -> bool {
