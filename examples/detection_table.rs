@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use propid::cli::diagnose::{load, Args};
 use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs};
-use propid::cli::read::ReadArgs;
+use propid::cli::read::{ReadArgs, ReadFlags};
 use propid_diagnose::{self as diagnose, Diagnosis};
 use propid_numerics::order::HankelSize;
 use propid_numerics::svd::SvdChoice;
@@ -249,14 +249,16 @@ fn real_data(dir: &Path) {
         }
         let read = ReadArgs {
             file: path,
-            input: c.input.map(str::to_string),
             output: c.output.map(str::to_string).into_iter().collect(),
-            fs: c.fs,
-            columns: c.columns.map(|v| v.iter().map(|s| s.to_string()).collect()),
-            esc_us: None,
-            // The BL-Ctrl takes an 8-bit command (PROVENANCE.md): 10..250 of 0..255.
-            input_range: (c.columns == Some(BLCTRL)).then(|| vec![0.0, 255.0]),
-            poles: None,
+            how: ReadFlags {
+                input: c.input.map(str::to_string),
+                fs: c.fs,
+                columns: c.columns.map(|v| v.iter().map(|s| s.to_string()).collect()),
+                esc_us: None,
+                // The BL-Ctrl takes an 8-bit command (PROVENANCE.md): 10..250 of 0..255.
+                input_range: (c.columns == Some(BLCTRL)).then(|| vec![0.0, 255.0]),
+                poles: None,
+            },
         };
         let (map, steps) = stand_of(&IdentifyArgs {
             read: read.clone(),
@@ -272,6 +274,7 @@ fn real_data(dir: &Path) {
             json: false,
             report: None,
             estimation_fraction: 0.7,
+            sim_config: None,
         };
         let row = load(&args).map_err(|e| e.to_string()).and_then(|s| {
             let opts = diagnose::Options::default();

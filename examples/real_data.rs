@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
 use propid::cli::identify::{stand_brief, stand_of, Args as IdentifyArgs, Quality};
-use propid::cli::read::ReadArgs;
+use propid::cli::read::{ReadArgs, ReadFlags};
 use propid_ingest::csv_file::{read_csv, CsvFileOptions, InputChoice};
 use propid_ingest::steps::find_steps;
 use propid_numerics::identify::{identify_any, AnyInput, PathTaken};
@@ -356,15 +356,17 @@ fn stand_columns(case: &Case, path: &Path) -> (String, String) {
     let args = IdentifyArgs {
         read: ReadArgs {
             file: path.to_path_buf(),
-            input: case.input.map(str::to_string),
             output: case.outputs.iter().map(|s| s.to_string()).collect(),
-            fs: case.fs,
-            columns: case
-                .columns
-                .map(|c| c.iter().map(|s| s.to_string()).collect()),
-            esc_us: None,
-            input_range: case.input_range.map(|(a, b)| vec![a, b]),
-            poles: None,
+            how: ReadFlags {
+                input: case.input.map(str::to_string),
+                fs: case.fs,
+                columns: case
+                    .columns
+                    .map(|c| c.iter().map(|s| s.to_string()).collect()),
+                esc_us: None,
+                input_range: case.input_range.map(|(a, b)| vec![a, b]),
+                poles: None,
+            },
         },
         order: None,
         json: true,

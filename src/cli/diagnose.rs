@@ -11,6 +11,8 @@ use std::path::PathBuf;
 use super::columns_read::ColumnsRead;
 use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
 use super::read::ReadArgs;
+#[cfg(test)]
+use super::read::ReadFlags;
 use super::{CliError, UsageError};
 use propid_diagnose::noise::FloorSource;
 use propid_diagnose::verdict::VerdictKind;
@@ -33,6 +35,10 @@ pub struct Args {
     /// Share of the samples (from the start) used for estimation, 0.3..0.9.
     #[arg(long, default_value_t = 0.7)]
     pub estimation_fraction: f64,
+    /// Write the stand model fitted on every channel of FILE as a `propid sim` configuration
+    /// to OUT.toml (`propid sim --config OUT.toml --replay-command FILE`; docs/stand-model.md).
+    #[arg(long, value_name = "OUT.toml")]
+    pub sim_config: Option<PathBuf>,
 }
 
 /// The signals of FILE that diagnose works on.
@@ -147,6 +153,13 @@ pub fn run(args: Args) -> Result<(), CliError> {
         ..Default::default()
     };
     let d = s.diagnose(&opts)?;
+    let written = match &args.sim_config {
+        Some(out) => {
+            let req = args.read.how.request(&args.read.output, &[]);
+            Some(super::stand_log::write_config(&args.read.file, &req, out)?)
+        }
+        None => None,
+    };
     if let Some(dir) = &args.report {
         let title = args.read.file.display().to_string();
         report::render(&title, &s.output_name, &d)
@@ -159,12 +172,18 @@ pub fn run(args: Args) -> Result<(), CliError> {
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;
     }
     if args.json {
-        let text = json(&d, &s.file)
-            .map(|v| v.to_string())
-            .map_err(CliError::DiagnosisJson)?;
-        super::stdout::line(&text)
+        let mut v = json(&d, &s.file).map_err(CliError::DiagnosisJson)?;
+        if let (Some(w), Some(obj)) = (&written, v.as_object_mut()) {
+            let w = serde_json::to_value(w).map_err(CliError::DiagnosisJson)?;
+            obj.insert("sim_config".into(), w);
+        }
+        super::stdout::line(&v.to_string())
     } else {
-        super::stdout::write(&summary(&args, &s, &d))
+        let mut text = summary(&args, &s, &d);
+        if let Some(w) = &written {
+            let _ = writeln!(text, "{}", w.line());
+        }
+        super::stdout::write(&text)
     }
 }
 
@@ -332,6 +351,7 @@ pub fn load(args: &Args) -> Result<Signals, CliError> {
     Ok(s)
 }
 
+/// The reading options of `args` (no outputs, no optional channels).
 /// Diagnose's step after the shared load: the output NaN at every sample marked missing; the
 /// input (without an input column: the level sequence of the steps found in the response) and
 /// the voltage held across gaps ([`fill_gaps`]); the voltage dropped when it has no finite
@@ -431,12 +451,16 @@ mod tests {
         let args = Args {
             read: ReadArgs {
                 file,
-                input: Some("none".into()),
+                how: ReadFlags {
+                    input: Some("none".into()),
+                    ..ReadFlags::default()
+                },
                 ..ReadArgs::default()
             },
             json: true,
             report: None,
             estimation_fraction: 0.7,
+            sim_config: None,
         };
         let e = load(&args).unwrap_err();
         assert_eq!(e.exit_code(), 4, "{e}");

@@ -10,6 +10,7 @@ pub mod read;
 pub mod replay;
 pub mod run;
 pub mod sim;
+pub mod stand_log;
 pub mod stdout;
 pub mod walkthrough;
 
@@ -76,6 +77,9 @@ pub enum CliError {
     /// The diagnosis refused the data (bad input, or no identification).
     #[error(transparent)]
     Diagnose(#[from] DiagnoseError),
+    /// The stand model could not be fitted on a log (`diagnose --sim-config`).
+    #[error("stand model: {0}")]
+    StandModel(#[from] propid_numerics::stand_model::fit::StandModelError),
     /// The walkthrough could not be derived or drawn.
     #[error(transparent)]
     Walkthrough(#[from] WalkthroughError),
@@ -168,6 +172,7 @@ impl CliError {
             | CliError::ModelRejected { .. }
             | CliError::NoInput { .. }
             | CliError::Diagnose(_)
+            | CliError::StandModel(_)
             | CliError::Walkthrough(_) => ExitClass::Identification,
             CliError::Config(_) | CliError::SimConfig(_) => ExitClass::Config,
             CliError::Sim(e) => match e {

@@ -11,18 +11,27 @@ pub use propid_ingest::load::*;
 
 /// FILE and the flags that say how to read it, shared by every command that reads a file
 /// (`identify`, `diagnose`: `#[command(flatten)]` in their `Args`); [`ReadArgs::request`] makes
-/// the loader's [`Request`].
+/// the loader's [`Request`]. The flags that say how any log is read are [`ReadFlags`] (reached
+/// through `Deref`), which `sim --replay-command LOG` flattens too.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct ReadArgs {
     /// A TSP/1 recording (raw bytes) or a CSV file.
     pub file: PathBuf,
+    /// Output column (default: thrust); repeatable where a command takes several.
+    #[arg(long)]
+    pub output: Vec<String>,
+    /// How the file is read.
+    #[command(flatten)]
+    pub how: ReadFlags,
+}
+
+/// How a log is read: its command column, its rate, its names and its units.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct ReadFlags {
     /// Input column (default: the command column, throttle/ESC signal/pwm; `none`: no input,
     /// steps are found from the response).
     #[arg(long)]
     pub input: Option<String>,
-    /// Output column (default: thrust); repeatable where a command takes several.
-    #[arg(long)]
-    pub output: Vec<String>,
     /// Sample rate, Hz (needed without a time column; resamples onto this rate otherwise).
     #[arg(long)]
     pub fs: Option<f64>,
@@ -42,12 +51,12 @@ pub struct ReadArgs {
     pub poles: Option<u32>,
 }
 
-impl ReadArgs {
-    /// The loader's request: these flags, with `optional` read too when the file has them.
-    pub fn request<'a>(&'a self, optional: &'a [&'a str]) -> Request<'a> {
+impl ReadFlags {
+    /// The loader's request for `outputs`, with `optional` read too when the file has them.
+    pub fn request<'a>(&'a self, outputs: &'a [String], optional: &'a [&'a str]) -> Request<'a> {
         Request {
             input: self.input.as_deref(),
-            outputs: &self.output,
+            outputs,
             optional,
             fs_hz: self.fs,
             columns: self.columns.as_deref(),
@@ -55,6 +64,20 @@ impl ReadArgs {
             input_range: self.input_range.as_deref(),
             poles: self.poles,
         }
+    }
+}
+
+impl std::ops::Deref for ReadArgs {
+    type Target = ReadFlags;
+    fn deref(&self) -> &ReadFlags {
+        &self.how
+    }
+}
+
+impl ReadArgs {
+    /// The loader's request: these flags, with `optional` read too when the file has them.
+    pub fn request<'a>(&'a self, optional: &'a [&'a str]) -> Request<'a> {
+        self.how.request(&self.output, optional)
     }
 
     /// Reads FILE as these flags ask, with `optional` read too when the file has them.

@@ -42,6 +42,18 @@ pub struct Args {
     /// 1 ms step each; no pty, no firmware.
     #[arg(long, conflicts_with_all = ["record", "link"])]
     pub plant_pipe: bool,
+    /// Replay LOG's command through the configured plant at LOG's rows (without the thrust's
+    /// noise) and write what the stand measures to --out, in LOG's columns and units; stdout
+    /// gets one JSON line with each channel's fit against LOG (docs/stand-model.md).
+    #[arg(long, value_name = "LOG", requires = "out",
+          conflicts_with_all = ["record", "link", "plant_pipe"])]
+    pub replay_command: Option<PathBuf>,
+    /// The CSV file `--replay-command` writes.
+    #[arg(long, value_name = "SIM.csv", requires = "replay_command")]
+    pub out: Option<PathBuf>,
+    /// How LOG is read (`identify`'s options).
+    #[command(flatten)]
+    pub read: Box<super::read::ReadFlags>,
     /// Overrides of config keys (boxed: keeps the binary's command enum small).
     #[command(flatten)]
     pub set: Box<Overrides>,
@@ -120,6 +132,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if args.plant_pipe {
         return run_plant_pipe(&cfg);
     }
+    if let (Some(log), Some(out)) = (&args.replay_command, &args.out) {
+        return run_replay(&cfg, log, out, &args.read);
+    }
     match &args.record {
         Some(file) => run_record(&cfg, file, &args),
         None => run_pty(&cfg, &args),
@@ -182,6 +197,26 @@ fn run_record(cfg: &SimConfig, file: &Path, args: &Args) -> Result<(), CliError>
     {
         obj.extend(s);
     }
+    super::stdout::line(&line.to_string())
+}
+
+fn run_replay(
+    cfg: &SimConfig,
+    log: &Path,
+    out: &Path,
+    read: &super::read::ReadFlags,
+) -> Result<(), CliError> {
+    let log_file = super::stand_log::read(log, &read.request(&[], &[]))?;
+    let (sim, voltage) = log_file.replay(&cfg.plant)?;
+    std::fs::write(out, log_file.csv(&sim, &voltage))
+        .map_err(|e| CliError::io(format!("writing {}", out.display()), e))?;
+    let line = serde_json::json!({
+        "type": "sim_replay",
+        "file": out.display().to_string(),
+        "log": log.display().to_string(),
+        "rows": log_file.command.len(),
+        "fit_percent": log_file.score(&sim),
+    });
     super::stdout::line(&line.to_string())
 }
 

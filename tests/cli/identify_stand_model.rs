@@ -61,7 +61,7 @@ fn wiggle(k: usize, seed: f64) -> f64 {
 
 /// The export: `Time (s),ESC signal (µs),Thrust (gf),Voltage (V),Current (A),Motor Electrical
 /// Speed (RPM)`, the thrust's last reading repeated between its 7 Hz readings.
-fn write_export(path: &Path) {
+pub(crate) fn write_export(path: &Path) {
     let levels_us = [
         1100.0, 1300.0, 1200.0, 1500.0, 1850.0, 1400.0, 1650.0, 1150.0, 1750.0,
     ];

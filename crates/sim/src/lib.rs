@@ -24,6 +24,7 @@
 //! last 8 commands, [`pace`] the monotonic clock, and the command semantics live in `execute`.
 //! The [`plant`] and its [`effects`] are the diagnose part's model of the motor + propeller.
 
+pub mod calibrate;
 pub mod config;
 pub mod csv;
 pub mod dedup;

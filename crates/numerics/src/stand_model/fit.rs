@@ -263,7 +263,7 @@ fn median(v: &mut [f64]) -> Option<f64> {
 }
 
 /// The readings' noise: `1.4826 · MAD / √2` of the differences of consecutive readings.
-fn reading_noise(y: &[f64], rows: &[usize]) -> f64 {
+pub fn reading_noise(y: &[f64], rows: &[usize]) -> f64 {
     let mut d: Vec<f64> = rows.windows(2).map(|w| y[w[1]] - y[w[0]]).collect();
     let Some(m) = median(&mut d) else {
         return 0.0;

@@ -1,9 +1,12 @@
 //! The plant's configuration (the `[plant]` table of `config/sim.toml`): keys with their units,
 //! defaults, and the range checks that name the first bad key.
 
-use propid_numerics::stand_model::{CurrentLaw, RotorLaw, SpeedMap, StandParams, Supply};
+use propid_numerics::stand_model::{
+    load, speed_power, CurrentLaw, RotorLaw, SpeedMap, StandParams, Supply,
+};
 use serde::Deserialize;
 
+use super::sensors::SensorsConfig;
 use crate::effects::EffectsConfig;
 
 /// A plant parameter that cannot be simulated.
@@ -85,6 +88,9 @@ pub struct PlantConfig {
     pub discharge_v_per_s: f64,
     /// Effects switched on (`[plant.effects.*]`); all off by default.
     pub effects: EffectsConfig,
+    /// A sensor per channel (`[plant.sensors.*]`: delay, lag, refresh, offset, creep); none
+    /// by default ([`super::sensors`]).
+    pub sensors: SensorsConfig,
 }
 
 impl Default for PlantConfig {
@@ -107,6 +113,7 @@ impl Default for PlantConfig {
             internal_resistance_ohm: 0.05,
             discharge_v_per_s: 0.002,
             effects: EffectsConfig::default(),
+            sensors: SensorsConfig::default(),
         }
     }
 }
@@ -175,6 +182,16 @@ impl PlantConfig {
             check(v.is_finite() && v >= 0.0, key, v, "must be >= 0")?;
         }
         self.motor.validate()?;
+        if self.kind == PlantKind::Motor {
+            let z = self.motor.command_zero;
+            check(
+                z < self.reference_throttle,
+                "plant.motor.command_zero",
+                z,
+                "must be below plant.reference_throttle",
+            )?;
+        }
+        self.sensors.validate()?;
         self.effects.validate(dt_s)?;
         self.effects_fit_the_kind()
     }
@@ -239,6 +256,16 @@ pub struct MotorConfig {
     pub tau_speed_exponent: f64,
     /// ESC dead time, seconds (0..=1; rounded to whole samples).
     pub dead_time_s: f64,
+    /// The ESC's dead band `u₀`: no speed at or below this throttle (-1 ..< reference_throttle).
+    pub command_zero: f64,
+    /// Exponent `a` of the speed map `((u − u₀)/(u_ref − u₀))^a` (0.3..=3).
+    pub speed_map_exponent: f64,
+    /// Exponent `e` of thrust and torque in the speed, `T ∝ nᵉ` (0.5..=4.5; the current's
+    /// mechanical power `∝ n^{e+1}`).
+    pub thrust_exponent: f64,
+    /// `k_J` of the current's acceleration term `k_J n n'`, A per (rev/min · rev/min per s)
+    /// (finite, either sign).
+    pub current_per_acceleration: f64,
 }
 
 impl Default for MotorConfig {
@@ -249,6 +276,10 @@ impl Default for MotorConfig {
             tau_down_s: 0.040,
             tau_speed_exponent: 0.0,
             dead_time_s: 0.008,
+            command_zero: 0.0,
+            speed_map_exponent: 1.0,
+            thrust_exponent: 2.0,
+            current_per_acceleration: 0.0,
         }
     }
 }
@@ -270,19 +301,60 @@ impl MotorConfig {
         let g = self.tau_speed_exponent;
         let key = "plant.motor.tau_speed_exponent";
         check(
-            g.is_finite() && (0.0..=2.0).contains(&g),
+            g.is_finite() && (-1.0..=3.0).contains(&g),
             key,
             g,
-            "must be in [0, 2]",
+            "must be in [-1, 3]",
         )?;
         let d = self.dead_time_s;
         let ok = d.is_finite() && (0.0..=1.0).contains(&d);
-        check(ok, "plant.motor.dead_time_s", d, "must be in [0, 1] s")
+        check(ok, "plant.motor.dead_time_s", d, "must be in [0, 1] s")?;
+        let z = self.command_zero;
+        let ok = z.is_finite() && (-1.0..1.0).contains(&z);
+        check(ok, "plant.motor.command_zero", z, "must be in [-1, 1)")?;
+        let a = self.speed_map_exponent;
+        let ok = a.is_finite() && (0.3..=3.0).contains(&a);
+        check(
+            ok,
+            "plant.motor.speed_map_exponent",
+            a,
+            "must be in [0.3, 3]",
+        )?;
+        let e = self.thrust_exponent;
+        let ok = e.is_finite() && (0.5..=4.5).contains(&e);
+        check(
+            ok,
+            "plant.motor.thrust_exponent",
+            e,
+            "must be in [0.5, 4.5]",
+        )?;
+        let j = self.current_per_acceleration;
+        check(
+            j.is_finite(),
+            "plant.motor.current_per_acceleration",
+            j,
+            "must be finite",
+        )
     }
 
-    /// The thrust coefficient `k_T = T_ref / n_ref²`, N per (rev/min)².
+    /// The thrust coefficient `k_T = T_ref / n_refᵉ`, N per (rev/min)ᵉ.
     pub fn k_t(&self, plant: &PlantConfig) -> f64 {
-        self.thrust_at_reference_n / (plant.rpm_at_reference * plant.rpm_at_reference)
+        self.thrust_at_reference_n / speed_power(plant.rpm_at_reference, self.thrust_exponent)
+    }
+
+    /// Thrust `k_T nᵉ` at speed `n` (rev/min), newtons.
+    pub fn thrust_n(&self, plant: &PlantConfig, n: f64) -> f64 {
+        load(self.k_t(plant), n, self.thrust_exponent)
+    }
+
+    /// Supply current at speed `n` (rev/min) and `n'` (rev/min per s), amperes: the stand
+    /// model's current law `I₀ + I_ref (n/n_ref)^{e+1} + k_J n n'` (at `e = 2` and `k_J = 0`
+    /// the plant's `idle_current_a + current_at_reference_a · (T / T_ref)^{3/2}`).
+    pub fn current_a(&self, plant: &PlantConfig, n: f64, n_dot: f64) -> f64 {
+        let r = n.max(0.0) / plant.rpm_at_reference;
+        plant.idle_current_a
+            + plant.current_at_reference_a * speed_power(r, self.thrust_exponent + 1.0)
+            + self.current_per_acceleration * n.max(0.0) * n_dot
     }
 
     /// Dead time in whole samples of `dt_s`.
@@ -290,13 +362,14 @@ impl MotorConfig {
         (self.dead_time_s / dt_s).round() as usize
     }
 
-    /// The speed map of the stand model: `n_ref · (u / u_ref) · (V / V₀)`, no dead band.
+    /// The speed map of the stand model: `n_ref · ((u − u₀)/(u_ref − u₀))^a · (V / V₀)`
+    /// (`u₀ = 0`, `a = 1` by default).
     pub fn speed_map(&self, plant: &PlantConfig) -> SpeedMap {
         SpeedMap {
             speed_ref: plant.rpm_at_reference,
-            command_zero: 0.0,
+            command_zero: self.command_zero,
             command_ref: plant.reference_throttle,
-            exponent: 1.0,
+            exponent: self.speed_map_exponent,
             voltage_ref: plant.battery_v,
         }
     }
@@ -320,13 +393,14 @@ impl MotorConfig {
             dead_time_s: self.dead_time_samples(dt_s) as f64 * dt_s,
             map: self.speed_map(plant),
             rotor: self.rotor_law(plant),
-            thrust_exponent: 2.0,
+            thrust_exponent: self.thrust_exponent,
             k_t: self.k_t(plant),
             k_q: plant.torque_m * self.k_t(plant),
             current: CurrentLaw {
                 idle_a: plant.idle_current_a,
-                per_power: plant.current_at_reference_a / (n_ref * n_ref * n_ref),
-                per_acceleration: 0.0,
+                per_power: plant.current_at_reference_a
+                    / speed_power(n_ref, self.thrust_exponent + 1.0),
+                per_acceleration: self.current_per_acceleration,
             },
             supply: Supply {
                 open_circuit_v: plant.battery_v,

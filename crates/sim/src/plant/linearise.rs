@@ -19,6 +19,8 @@
 //!
 //! ```text
 //!   gain  g = dT/du = 2 T₀ / (u₀ (1 + ε))            N per unit throttle (grows ∝ u₀)
+//!         (with [plant.motor]'s dead band u_z, map exponent a and thrust exponent e:
+//!          g = e a T₀ / ((u₀ − u_z)(1 + ε)), ε = (e + 1) R (I₀ − I_idle) / V₀')
 //!   τ_lin = τ(n₀, dir) / (1 + ε)                       one per direction: τ_up, τ_down
 //!   θ     = round(dead_time_s / dt) · dt
 //!   G(s)  = g e^{−sθ} / (τ_lin s + 1)
@@ -97,8 +99,8 @@ pub fn equilibrium(plant: &PlantConfig, u: f64, t_s: f64) -> Equilibrium {
     };
     for _ in 0..100 {
         let n = m.speed_ss(plant, u, v);
-        let t = m.k_t(plant) * n * n;
-        let i = plant.current_a(t);
+        let t = m.thrust_n(plant, n);
+        let i = m.current_a(plant, n, 0.0);
         let v_next = v_oc - plant.internal_resistance_ohm * i;
         out = Equilibrium {
             speed_rpm: n,
@@ -125,7 +127,14 @@ impl PlantConfig {
         let m = &self.motor;
         let eq = equilibrium(self, u0, t_s);
         let load_a = eq.current_a - self.idle_current_a;
-        let sag = 3.0 * self.internal_resistance_ohm * load_a / eq.voltage_v;
+        let e = m.thrust_exponent;
+        let sag = (e + 1.0) * self.internal_resistance_ohm * load_a / eq.voltage_v;
+        // ∂ln n_ss/∂u of the map `((u − u₀)/(u_ref − u₀))^a`.
+        let above = u0 - m.command_zero;
+        if above <= 0.0 {
+            return None;
+        }
+        let map_slope = m.speed_map_exponent / above;
         let tau_up = m.tau_s(self, eq.speed_rpm, true);
         let tau_down = m.tau_s(self, eq.speed_rpm, false);
         let (a_up, a_down) = ((-dt_s / tau_up).exp(), (-dt_s / tau_down).exp());
@@ -135,7 +144,7 @@ impl PlantConfig {
             operating_point: u0,
             equilibrium: eq,
             sag,
-            gain_n_per_throttle: 2.0 * eq.thrust_n / (u0 * (1.0 + sag)),
+            gain_n_per_throttle: e * eq.thrust_n * map_slope / (1.0 + sag),
             tau_up_s: tau_up / (1.0 + sag),
             tau_down_s: tau_down / (1.0 + sag),
             dead_time_s: d as f64 * dt_s,

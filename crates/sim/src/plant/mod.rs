@@ -46,6 +46,7 @@ mod config;
 mod linearise;
 mod model;
 pub mod motor;
+pub mod sensors;
 
 #[cfg(test)]
 mod motor_tests;
@@ -56,3 +57,4 @@ pub(crate) use config::check;
 pub use config::{MotorConfig, PlantConfig, PlantError, PlantKind};
 pub use linearise::{equilibrium, Equilibrium, MotorLinear};
 pub use model::{Measurement, Plant};
+pub use sensors::{SensorConfig, SensorsConfig};

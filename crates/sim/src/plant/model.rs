@@ -10,6 +10,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
 use super::motor::Motor;
+use super::sensors::{SensorConfig, SensorState, SensorsConfig};
 use super::{PlantConfig, PlantError, PlantKind};
 use crate::effects::EffectState;
 
@@ -60,6 +61,40 @@ pub struct Plant {
     rng: StdRng,
     effects: EffectState,
     last_current_a: f64,
+    /// The sensors of thrust, torque, rpm and current (`[plant.sensors]`).
+    sensors: Sensors,
+}
+
+/// The plant's sensors ([`super::sensors`]), `None` where a channel reads its quantity as it is.
+#[derive(Debug, Clone)]
+struct Sensors {
+    thrust: Option<SensorState>,
+    torque: Option<SensorState>,
+    rpm: Option<SensorState>,
+    current: Option<SensorState>,
+}
+
+impl Sensors {
+    fn new(cfg: &SensorsConfig, dt_s: f64) -> Sensors {
+        let make = |c: &Option<SensorConfig>| c.as_ref().map(|c| SensorState::new(c, dt_s));
+        Sensors {
+            thrust: make(&cfg.thrust),
+            torque: make(&cfg.torque),
+            rpm: make(&cfg.rpm),
+            current: make(&cfg.current),
+        }
+    }
+}
+
+/// `x` through sensor `s` (lag, delay, offset, creep, then held) at sample `k`.
+fn read(s: &mut Option<SensorState>, x: f64, k: u64) -> f64 {
+    match s {
+        Some(s) => {
+            let y = s.shape(x, k);
+            s.hold(y, k)
+        }
+        None => x,
+    }
 }
 
 impl Plant {
@@ -112,6 +147,7 @@ impl Plant {
             rng: StdRng::seed_from_u64(seed),
             effects,
             last_current_a: cfg.idle_current_a,
+            sensors: Sensors::new(&cfg.sensors, dt_s),
         })
     }
 
@@ -166,7 +202,30 @@ impl Plant {
         }
         let thrust = self.thrust_true();
         self.effects.settle(throttle, thrust);
-        self.last_current_a = self.cfg.current_a(thrust);
+        let (rpm, current) = match &self.core {
+            Core::Motor(m) => {
+                let n = m.speed_rpm();
+                (n, self.cfg.motor.current_a(&self.cfg, n, 0.0))
+            }
+            Core::SecondOrder { .. } => (
+                self.cfg.rpm_at_reference
+                    * (thrust.max(0.0) / self.cfg.reference_thrust_n()).sqrt(),
+                self.cfg.current_a(thrust),
+            ),
+        };
+        self.last_current_a = current;
+        let s = &mut self.sensors;
+        let torque = self.cfg.torque_m * thrust.max(0.0);
+        for (sensor, x) in [
+            (&mut s.thrust, thrust),
+            (&mut s.torque, torque),
+            (&mut s.rpm, rpm),
+            (&mut s.current, current),
+        ] {
+            if let Some(sensor) = sensor {
+                sensor.settle(x);
+            }
+        }
     }
 
     /// Advances one sample with `throttle` (0..1; NaN counts as 0, out-of-range values are
@@ -179,13 +238,41 @@ impl Plant {
             0.0
         };
         let t_s = self.time_s();
+        let k = self.k;
         let thrust_true = self.thrust_true();
-        let current_a = self.cfg.current_a(thrust_true);
-        let voltage_v = self.cfg.battery_v
-            - self.cfg.discharge_v_per_s * t_s
-            - self.cfg.internal_resistance_ohm * current_a;
-        // Measured thrust: the load-cell path (extra mode), additive terms, noise, clip, quantum.
-        let mut thrust = self.effects.sensor_path(thrust_true);
+        let v_oc = self.cfg.battery_v - self.cfg.discharge_v_per_s * t_s;
+        let r_ohm = self.cfg.internal_resistance_ohm;
+        // Input path: dead time (the motor's ESC dead time after the effect's), then the
+        // current of this sample (the motor's with its acceleration term, `n'` under the
+        // supply the current itself sags) and that supply.
+        let delayed = self.effects.delay(throttle);
+        let (esc, current_a) = match &mut self.core {
+            Core::Motor(m) => {
+                let esc = m.delay(delayed);
+                let m = &*m;
+                let n = m.speed_rpm();
+                let (cfg, effects) = (&self.cfg, &self.effects);
+                let current = |v: f64| {
+                    let u = effects.input_map(esc, v, cfg);
+                    cfg.motor.current_a(cfg, n, m.rate(cfg, u, v))
+                };
+                // I(V) is affine in the supply (n' ∝ n_ss ∝ V): the loop V = V_oc − R I(V)
+                // solved at once, `I = I_oc − s R I_oc / (1 + R s)` with `s = dI/dV`.
+                let i_oc = current(v_oc);
+                let slope = i_oc - current(v_oc - 1.0);
+                let loop_gain = (1.0 + r_ohm * slope).max(0.1);
+                (esc, i_oc - slope * r_ohm * i_oc / loop_gain)
+            }
+            Core::SecondOrder { .. } => (delayed, self.cfg.current_a(thrust_true)),
+        };
+        let voltage_v = v_oc - r_ohm * current_a;
+        // Measured thrust: the sensor, the load-cell path (extra mode), additive terms, noise,
+        // clip, quantum, then held over the sensor's refresh interval.
+        let (thrust_read, refreshed) = match &mut self.sensors.thrust {
+            Some(s) => (s.shape(thrust_true, k), true),
+            None => (thrust_true, false),
+        };
+        let mut thrust = self.effects.sensor_path(thrust_read);
         thrust += self.effects.additive(t_s);
         if let Some(n) = self.noise {
             thrust += n.sample(&mut self.rng);
@@ -195,13 +282,13 @@ impl Plant {
         if thrust.abs() >= fs {
             saturated = true;
         }
-        let thrust = quantise(thrust.clamp(-fs, fs), self.cfg.quantum_n);
-        // Input path: dead time, then the static map and supply sag, then the core (the motor
-        // delays the throttle by its ESC's dead time first).
-        let delayed = self.effects.delay(throttle);
+        let mut thrust = quantise(thrust.clamp(-fs, fs), self.cfg.quantum_n);
+        if let (true, Some(s)) = (refreshed, &mut self.sensors.thrust) {
+            thrust = s.hold(thrust, k);
+        }
         let rpm = match &mut self.core {
             Core::SecondOrder { a, b, x, nonlinear } => {
-                let u = self.effects.input_map(delayed, voltage_v, &self.cfg);
+                let u = self.effects.input_map(esc, voltage_v, &self.cfg);
                 *x = match nonlinear {
                     Some(core) => core.step(*x, u),
                     None => *a * *x + *b * u,
@@ -211,7 +298,6 @@ impl Plant {
             }
             Core::Motor(m) => {
                 let rpm = m.speed_rpm();
-                let esc = m.delay(delayed);
                 let u = self.effects.input_map(esc, voltage_v, &self.cfg);
                 m.advance(&self.cfg, u, voltage_v);
                 rpm
@@ -220,12 +306,13 @@ impl Plant {
         self.k += 1;
         self.last_current_a = current_a;
         let t_pos = thrust_true.max(0.0);
+        let s = &mut self.sensors;
         Measurement {
             thrust_n: thrust,
-            torque_nm: self.cfg.torque_m * t_pos,
-            rpm,
+            torque_nm: read(&mut s.torque, self.cfg.torque_m * t_pos, k),
+            rpm: read(&mut s.rpm, rpm, k),
             voltage_v,
-            current_a,
+            current_a: read(&mut s.current, current_a, k),
             adc_saturated: saturated,
         }
     }

@@ -34,7 +34,6 @@
 //! `I_idle + I_ref (T/T_ref)^{3/2}` is its current law `I₀ + k_I n³` at `e = 2`.
 
 use crate::delay_line::DelayLine;
-use propid_numerics::stand_model::load;
 
 use super::{MotorConfig, PlantConfig, PlantError};
 
@@ -66,9 +65,15 @@ impl Motor {
         self.n
     }
 
-    /// Thrust `k_T n²`, newtons ([`load`]).
+    /// Thrust `k_T nᵉ`, newtons ([`MotorConfig::thrust_n`]).
     pub(crate) fn thrust_n(&self, plant: &PlantConfig) -> f64 {
-        load(self.cfg.k_t(plant), self.n, 2.0)
+        self.cfg.thrust_n(plant, self.n)
+    }
+
+    /// `n'` under the (delayed, mapped) throttle `u` and supply `voltage_v`, rev/min per s.
+    pub(crate) fn rate(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
+        let target = self.cfg.speed_ss(plant, u, voltage_v);
+        self.cfg.rotor_law(plant).rate(self.n, target)
     }
 
     /// The ESC's delay line: pushes `u`, returns the throttle of `d` samples ago (0 before the
