@@ -13,6 +13,7 @@ mod daemon_replay;
 mod demo_http;
 mod host_faults;
 mod http_hostile;
+mod kinds;
 mod link_faults;
 mod lying_stand;
 mod mqtt_broker;

@@ -27,6 +27,7 @@ use propid_wire::experiment::{ExperimentConfig, Kind};
 use serde::Serialize;
 
 mod hysteresis;
+pub mod report;
 pub use hysteresis::{hysteresis, Hysteresis};
 
 /// A throttle change between two samples (fraction) taken for a new step of a staircase.
