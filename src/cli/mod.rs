@@ -8,12 +8,15 @@ pub mod diagnose;
 pub mod fleet;
 pub mod identify;
 pub mod kinds_report;
-pub mod load;
+pub mod read;
 pub mod replay;
 pub mod run;
 pub mod sim;
 pub mod stdout;
 pub mod walkthrough;
+
+/// The one file loader, by its old name.
+pub use read as load;
 
 use crate::daemon::source::SourceError;
 use crate::daemon::{ConfigError, DaemonError};
@@ -146,22 +149,13 @@ pub enum UsageError {
     /// `--record-max-bytes` neither 0 nor in range.
     #[error("--record-max-bytes {0}: 0 (no limit) or 65536..=1125899906842624 bytes")]
     RecordMaxBytes(u64),
-    /// `--esc-us` without exactly two finite values, `MIN < MAX`.
-    #[error("--esc-us takes MIN,MAX")]
-    EscUs,
-    /// `--input-range` without exactly two finite values, `MIN < MAX`.
-    #[error("--input-range takes MIN,MAX (the raw command values at throttle 0 and 1)")]
-    InputRange,
-    /// `--poles` zero or odd.
-    #[error("--poles {0}: a motor has an even number of magnet poles > 0")]
-    Poles(u32),
 }
 
 impl CliError {
     /// The class of the cause.
     pub fn class(&self) -> ExitClass {
         match self {
-            CliError::Usage(_) => ExitClass::Usage,
+            CliError::Usage(_) | CliError::Load(load::LoadError::Option(_)) => ExitClass::Usage,
             CliError::Load(_)
             | CliError::Recording(_)
             | CliError::Json(_)

@@ -15,28 +15,31 @@
 //! run and the replay of its recording publish the same model lines.
 
 pub mod config;
-#[cfg(test)]
-mod fixtures;
 pub mod http;
 pub mod identify;
-pub mod item;
-pub mod line;
-pub mod live;
 pub mod mqtt;
 pub mod plan;
 pub mod publish;
-pub mod quality;
 pub mod recorder;
 pub mod runner;
 pub mod sampler;
 pub mod shutdown;
 pub mod source;
-pub mod stats;
-pub mod window;
 pub mod wire;
 pub mod worker;
 
 pub use propid_link::{csv_link, tracker};
+#[cfg(test)]
+use propid_session::fixtures;
+pub use propid_session::{item, line, live, quality, stats};
+
+/// The worker's window ([`propid_session::window`]) and its size from the configuration.
+pub mod window {
+    mod sizing;
+
+    pub use propid_session::window::*;
+    pub use sizing::{plan_samples, window_capacity, PLAN_MAX_SAMPLES, PLAN_RATE_HZ};
+}
 
 pub use config::{Config, ConfigError};
 pub use publish::Publisher;

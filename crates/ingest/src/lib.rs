@@ -5,6 +5,8 @@
 //! - [`assemble`]: the streaming part the daemon reuses: sample-index gaps, the device clock,
 //!   segments and events ([`SampleAssembler`]), and the growing record ([`RecordBuilder`]).
 //! - [`clock`]: unwrapping the 32-bit device counters.
+//! - [`load`]: the one loader of `identify` and `diagnose`: a file's bytes into the channels
+//!   asked for, the format detected (a TSP/1 recording or stream, any other CSV file).
 //! - [`csv_file`]: CSV files (exported stand logs, benchmark archives) with column choice,
 //!   [`held`] for a slow sensor written on every row as its last reading, [`interpolated`] for
 //!   one the exporter interpolated onto every row, [`resample`] for
@@ -14,6 +16,7 @@ pub mod coarse_clock;
 pub mod csv_file;
 pub mod held;
 pub mod interpolated;
+pub mod load;
 pub mod resample;
 pub mod steps;
 pub mod tsp;

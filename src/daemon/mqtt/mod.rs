@@ -25,7 +25,7 @@
 
 pub mod fleet;
 pub mod options;
-pub mod topics;
+pub use propid_session::topics;
 
 use crossbeam_channel::{bounded, Receiver};
 use rumqttc::{Client, Event, Incoming, LastWill, Outgoing, QoS};

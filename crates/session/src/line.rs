@@ -648,7 +648,7 @@ fn display<T: Display, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::daemon::fixtures::report;
+    use crate::fixtures::report;
     use serde_json::json;
 
     #[test]

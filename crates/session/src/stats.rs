@@ -172,7 +172,7 @@ pub fn quantile(sorted: &[f64], q: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::daemon::line::Line;
+    use crate::line::Line;
 
     #[test]
     fn stats_line_has_the_public_fields() {

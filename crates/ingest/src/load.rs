@@ -17,13 +17,10 @@
 //! from the response's steps, with `--input none`, is the shared step [`steps_from_response`].
 
 use std::borrow::Cow;
-use std::path::Path;
 
-use super::{CliError, UsageError};
-use crate::input::{read_bounded, ReadError, MAX_INPUT_BYTES};
-use propid_ingest::csv_file::{parse_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
-use propid_ingest::steps::{find_steps, StepFinding};
-use propid_ingest::{read_record_with, IngestError, IngestOptions, IngestStats};
+use crate::csv_file::{parse_csv, CsvFileError, CsvFileOptions, CsvSource, InputChoice};
+use crate::steps::{find_steps, StepFinding};
+use crate::{read_record_with, IngestError, IngestOptions, IngestStats};
 use propid_wire::protocol::csv::encoding::{decode, wide, Encoding};
 use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};
@@ -93,6 +90,24 @@ pub enum LoadError {
         /// The CSV reader's error.
         source: CsvFileError,
     },
+    /// A read option that makes no sense (a usage error, exit 2).
+    #[error(transparent)]
+    Option(#[from] OptionError),
+}
+
+/// A malformed read option (`--esc-us`, `--input-range`, `--poles`), found when a CSV file
+/// needs it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OptionError {
+    /// `--esc-us` without exactly two finite values, `MIN < MAX`.
+    #[error("--esc-us takes MIN,MAX")]
+    EscUs,
+    /// `--input-range` without exactly two finite values, `MIN < MAX`.
+    #[error("--input-range takes MIN,MAX (the raw command values at throttle 0 and 1)")]
+    InputRange,
+    /// `--poles` zero or odd.
+    #[error("--poles {0}: a motor has an even number of magnet poles > 0")]
+    Poles(u32),
 }
 
 /// What to read from a file (the options `identify` and `diagnose` share).
@@ -168,31 +183,18 @@ impl LoadedFile {
     }
 }
 
-/// Reads all of `file` within [`MAX_INPUT_BYTES`]: unreadable is an I/O error (exit 7), too
-/// large is bad input (exit 3).
-pub fn read_input(file: &Path) -> Result<Vec<u8>, CliError> {
-    let name = file.display().to_string();
-    read_bounded(file, MAX_INPUT_BYTES).map_err(|e| match e {
-        ReadError::Io(e) => CliError::io(format!("reading {name}"), e),
-        ReadError::TooLarge { limit } => LoadError::TooLarge { file: name, limit }.into(),
-    })
-}
-
-/// Reads `file` as `req` asks: TSP/1 binary recordings by channel name, everything else as CSV.
-pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
-    let bytes = read_input(file)?;
-    load_from(file.display().to_string(), Cow::Owned(bytes), req)
-}
-
-/// Reads the bytes of a file named `name` as `req` asks (what [`load`] does once the file is
-/// read; the fuzz harness calls it in memory).
-pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFile, CliError> {
+/// Reads the bytes of a file named `name` as `req` asks (the fuzz harness calls it in memory).
+pub fn load_bytes(name: String, bytes: &[u8], req: &Request) -> Result<LoadedFile, LoadError> {
     load_from(name, Cow::Borrowed(bytes), req)
 }
 
-/// [`load_bytes`]; bytes it owns are dropped as soon as they are read (a CSV file's once its
+/// [`load_bytes`] of bytes it owns, dropped as soon as they are read (a CSV file's once its
 /// columns are parsed, before they are carried onto the time base).
-fn load_from(name: String, bytes: Cow<'_, [u8]>, req: &Request) -> Result<LoadedFile, CliError> {
+pub fn load_owned(name: String, bytes: Vec<u8>, req: &Request) -> Result<LoadedFile, LoadError> {
+    load_from(name, Cow::Owned(bytes), req)
+}
+
+fn load_from(name: String, bytes: Cow<'_, [u8]>, req: &Request) -> Result<LoadedFile, LoadError> {
     if bytes.is_empty() {
         return Err(LoadError::Empty { file: name }.into());
     }
@@ -253,7 +255,7 @@ fn container(bytes: &[u8]) -> Option<(&'static str, &'static str)> {
 
 /// A binary TSP/1 recording: every channel the device sent; the input (default throttle) and
 /// the outputs (default thrust) must be among them.
-fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, CliError> {
+fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, LoadError> {
     let opts = IngestOptions {
         fs_hz: req.fs_hz,
         ..IngestOptions::default()
@@ -262,7 +264,7 @@ fn load_tsp(req: &Request, name: String, bytes: &[u8]) -> Result<LoadedFile, Cli
         Ok(r) => r,
         Err(source) => return Err(LoadError::Recording { file: name, source }.into()),
     };
-    let present = |want: &str| -> Result<String, CliError> {
+    let present = |want: &str| -> Result<String, LoadError> {
         match record.channel(want) {
             Some(_) => Ok(want.to_string()),
             None => Err(LoadError::NoChannel {
@@ -308,8 +310,8 @@ fn load_csv(
     name: String,
     bytes: Cow<'_, [u8]>,
     was: Option<Encoding>,
-) -> Result<LoadedFile, CliError> {
-    let pair = |v: Option<&[f64]>, bad: UsageError| match v {
+) -> Result<LoadedFile, LoadError> {
+    let pair = |v: Option<&[f64]>, bad: OptionError| match v {
         Some(&[lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => Ok(Some((lo, hi))),
         Some(_) => Err(bad),
         None => Ok(None),
@@ -324,10 +326,10 @@ fn load_csv(
         optional: req.optional.iter().map(|s| s.to_string()).collect(),
         fs_hz: req.fs_hz,
         columns: req.columns.map(<[String]>::to_vec),
-        esc_us: pair(req.esc_us, UsageError::EscUs)?,
-        input_range: pair(req.input_range, UsageError::InputRange)?,
+        esc_us: pair(req.esc_us, OptionError::EscUs)?,
+        input_range: pair(req.input_range, OptionError::InputRange)?,
         motor_poles: match req.poles {
-            Some(p) if p == 0 || p % 2 == 1 => return Err(UsageError::Poles(p).into()),
+            Some(p) if p == 0 || p % 2 == 1 => return Err(OptionError::Poles(p).into()),
             p => p,
         },
     };
@@ -386,12 +388,6 @@ pub fn steps_from_response(y: &[f64]) -> Result<StepFinding, NoSteps> {
 mod tests {
     use super::*;
 
-    fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
-        let p = dir.join(name);
-        std::fs::write(&p, text).unwrap();
-        p
-    }
-
     /// `t_s,throttle,thrust_N,voltage_V` (with the voltage when `volt`), a step at sample 50.
     fn csv(volt: bool) -> String {
         let mut s = String::from(if volt {
@@ -413,33 +409,29 @@ mod tests {
 
     #[test]
     fn csv_reads_the_optional_channel_when_present_and_not_otherwise() {
-        let dir = tempfile::tempdir().unwrap();
         let req = Request {
             optional: &[names::VOLTAGE],
             ..Request::default()
         };
-        let with = load(&write(dir.path(), "v.csv", &csv(true)), &req).unwrap();
+        let with = load_bytes("v.csv".into(), csv(true).as_bytes(), &req).unwrap();
         assert_eq!(with.input.as_deref(), Some(names::THROTTLE));
         assert_eq!(with.outputs, [names::THRUST]);
         assert_eq!(with.optional, vec![names::VOLTAGE.to_string()]);
         assert_eq!(with.data(names::VOLTAGE).len(), 100);
-        let without = load(&write(dir.path(), "n.csv", &csv(false)), &req).unwrap();
+        let without = load_bytes("n.csv".into(), csv(false).as_bytes(), &req).unwrap();
         assert_eq!(without.outputs, [names::THRUST]);
         assert!(without.optional.is_empty());
         assert!(matches!(without.origin, Origin::Csv(_)));
     }
 
     #[test]
-    fn errors_keep_their_class_and_name_the_file() {
-        let dir = tempfile::tempdir().unwrap();
-        let empty = write(dir.path(), "e.csv", "");
-        let e = load(&empty, &Request::default()).unwrap_err();
+    fn errors_keep_their_kind_and_name_the_file() {
+        let e = load_bytes("e.csv".into(), b"", &Request::default()).unwrap_err();
         assert!(
-            matches!(&e, CliError::Load(LoadError::Empty { file }) if file.ends_with("e.csv")),
+            matches!(&e, LoadError::Empty { file } if file.ends_with("e.csv")),
             "{e}"
         );
         assert!(e.to_string().ends_with("e.csv: the file is empty"), "{e}");
-        assert_eq!(e.exit_code(), 3);
         // A workbook saved where its CSV export was expected, a compressed log.
         for (bytes, says) in [
             (&b"PK\x03\x04\x14\x00rest"[..], "export the sheet as CSV"),
@@ -451,29 +443,26 @@ mod tests {
         ] {
             let e = load_bytes("log".into(), bytes, &Request::default()).unwrap_err();
             assert!(e.to_string().contains(says), "{e}");
-            assert_eq!(e.exit_code(), 3);
+            assert!(matches!(e, LoadError::NotText { .. }), "{e}");
         }
-        let good = write(dir.path(), "g.csv", &csv(false));
+        let good = csv(false);
+        let good = good.as_bytes();
         let bad_esc = [1000.0];
         let req = Request {
             esc_us: Some(&bad_esc),
             ..Request::default()
         };
-        let e = load(&good, &req).unwrap_err();
-        assert!(matches!(e, CliError::Usage(UsageError::EscUs)), "{e}");
-        assert_eq!(e.exit_code(), 2);
+        let e = load_bytes("g.csv".into(), good, &req).unwrap_err();
+        assert!(matches!(e, LoadError::Option(OptionError::EscUs)), "{e}");
         let outputs = ["rpm".to_string()];
         let req = Request {
             outputs: &outputs,
             ..Request::default()
         };
-        let e = load(&good, &req).unwrap_err();
-        assert!(matches!(&e, CliError::Load(LoadError::Csv { .. })), "{e}");
+        let e = load_bytes("g.csv".into(), good, &req).unwrap_err();
+        assert!(matches!(&e, LoadError::Csv { .. }), "{e}");
         let m = e.to_string();
         assert!(m.contains("g.csv") && m.contains("rpm"), "{m}");
-        assert_eq!(e.exit_code(), 3);
-        let e = load(&dir.path().join("absent.csv"), &Request::default()).unwrap_err();
-        assert_eq!(e.exit_code(), 7, "{e}");
     }
 
     #[test]

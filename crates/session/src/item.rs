@@ -223,5 +223,5 @@ pub enum Item {
     /// An experiment-plan fact.
     Plan(PlanNote),
     /// A recording fact (a file opened, a write failure): rare, the one item that holds heap.
-    Record(super::recorder::RecordNote),
+    Record(super::record_note::RecordNote),
 }

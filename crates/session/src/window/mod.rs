@@ -1,6 +1,6 @@
 //! The worker's fixed-size window of samples at one operating point, and when to identify.
 //!
-//! All buffers are allocated once ([`Window::new`]) with the capacity [`window_capacity`] (the
+//! All buffers are allocated once ([`Window::new`]) with the capacity `window_capacity` (the
 //! plan's windows at the fastest rate, or `max_window_samples` when larger);
 //! pushing, gaps and restarts never allocate (restarts move the kept tail with `copy_within`).
 //!
@@ -37,10 +37,8 @@
 //!   with holes still counts, nothing is interpolated) and the model says how many samples
 //!   were missing (`missing_samples`).
 
-mod sizing;
 mod view;
 
-pub use sizing::{plan_samples, window_capacity, PLAN_MAX_SAMPLES, PLAN_RATE_HZ};
 pub use view::{Outcome, OutputChannel, Reason, WindowView};
 
 use std::time::Instant;
