@@ -422,7 +422,10 @@ fn each_experiment_kind_on_the_emulated_firmware_publishes_its_lines_and_disarms
                 }
                 let want = propid_sim::plant::equilibrium(&sim.plant, u, 5.0).thrust_n;
                 let mean = l["mean"].as_f64().unwrap();
-                assert!((mean / want - 1.0).abs() < 0.1, "at {u}: {mean} N, truth {want} N");
+                assert!(
+                    (mean / want - 1.0).abs() < 0.1,
+                    "at {u}: {mean} N, truth {want} N"
+                );
             }
         }
         stand.esc_until(5.0, |us| us < 1010.0);

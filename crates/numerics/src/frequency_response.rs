@@ -342,7 +342,7 @@ mod tests {
         noise: f64,
     ) -> (Vec<f64>, Vec<f64>) {
         let dt = 1e-3;
-        let (f0, f1, t_end) = (0.5, 30.0, 40.0);
+        let (f0, f1, t_end): (f64, f64, f64) = (0.5, 30.0, 40.0);
         let n = (t_end / dt) as usize;
         let r = (f1 / f0).ln();
         let wn = std::f64::consts::TAU * fn_hz;
