@@ -378,7 +378,7 @@ fn a_storm_of_bad_frames_while_armed_stops_the_motor() {
 #[test]
 fn each_experiment_kind_on_the_emulated_firmware_publishes_its_lines_and_disarms() {
     let sim = propid_sim::SimConfig::load(&repo().join("config/sim.toml")).unwrap();
-    for (kind, keys, wants) in [
+    for (name, keys, wants) in [
         (
             "staircase",
             "kind = \"staircase\"\nlevels = [0.3, 0.5]\nhold_ms = 1500\n",
@@ -408,12 +408,12 @@ fn each_experiment_kind_on_the_emulated_firmware_publishes_its_lines_and_disarms
         std::fs::write(&p, text).unwrap();
         let d = Daemon::run(&p, &stand.link.display().to_string(), None);
         let (status, lines, err) = d.finish(40.0);
-        assert!(status.success(), "{kind}: {status:?} {err}");
-        assert_eq!(kind(&lines, "plan_finished").len(), 1, "{kind}: {lines:#?}");
-        assert!(!kind(&lines, "disarmed").is_empty(), "{kind}: {lines:#?}");
+        assert!(status.success(), "{name}: {status:?} {err}");
+        assert_eq!(kind(&lines, "plan_finished").len(), 1, "{name}: {lines:#?}");
+        assert!(!kind(&lines, "disarmed").is_empty(), "{name}: {lines:#?}");
         let got = of_type(&lines, wants);
-        assert!(!got.is_empty(), "{kind}: {lines:#?}");
-        if kind == "staircase" {
+        assert!(!got.is_empty(), "{name}: {lines:#?}");
+        if name == "staircase" {
             let map = got.iter().find(|m| m["output"] == "thrust").unwrap();
             for l in map["levels"].as_array().unwrap() {
                 let u = l["throttle"].as_f64().unwrap();
