@@ -117,7 +117,7 @@ pub fn frequency_response(
     f_hi: f64,
 ) -> Option<FrequencyResponse> {
     let n = u.len().min(y.len());
-    if n < 2 * MIN_SEGMENT || !(dt_s > 0.0) || u[..n].iter().chain(&y[..n]).any(|v| !v.is_finite())
+    if n < 2 * MIN_SEGMENT || dt_s.is_nan() || dt_s <= 0.0 || u[..n].iter().chain(&y[..n]).any(|v| !v.is_finite())
     {
         return None;
     }
@@ -314,7 +314,7 @@ pub fn fit_second_order(r: &FrequencyResponse) -> Option<SecondOrder> {
         let Some(fit) = minimise(&mut residuals, &z0, &bounds, &LmOptions::default()) else {
             continue;
         };
-        if best.as_ref().is_none_or(|b| fit.cost < b.0) {
+        if best.as_ref().map_or(true, |b| fit.cost < b.0) {
             best = Some((fit.cost, fit.z));
         }
     }
