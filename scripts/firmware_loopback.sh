@@ -4,8 +4,8 @@
 # rpm pins are wired to the simulated motor (`propid sim --plant-pipe`), and runs `propid run`
 # against it. stdout: the daemon's JSON lines; the harness's log goes to stderr at the end.
 #   scripts/firmware_loopback.sh [--kind K] [--seconds S]
-# --kind: the experiment plan's kind (default "pulses", the daemon's plan today; another kind is
-# written as [experiment] kind = "K"). --seconds: the run's limit (daemon max_run_s, default 25).
+# --kind: the experiment plan's kind: pulses (the default), staircase, ramp or chirp, each with
+# keys that finish within 25 s. --seconds: the run's limit (daemon max_run_s, default 25).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kind=pulses
@@ -29,8 +29,14 @@ cleanup() {
     rm -rf "$dir"
 }
 trap cleanup EXIT
-kind_line=""
-[ "$kind" = pulses ] || kind_line="kind = \"$kind\""
+# each kind's keys, sized to finish within the default 25 s (docs/experiment-kinds.md)
+case "$kind" in
+    pulses) kind_keys='levels = [0.3, 0.45, 0.6]' ;;
+    staircase) kind_keys=$'kind = "staircase"\nlevels = [0.3, 0.45, 0.6]\nhold_ms = 2000' ;;
+    ramp) kind_keys=$'kind = "ramp"\nlevels = [0.3, 0.6]\nramp_rate_per_s = 0.05\nhold_ms = 1000' ;;
+    chirp) kind_keys=$'kind = "chirp"\nlevels = [0.45]\nchirp_f0_hz = 1.0\nchirp_f1_hz = 15.0\nchirp_amplitude = 0.05\nchirp_s = 12.0' ;;
+    *) echo "firmware_loopback: --kind is one of pulses, staircase, ramp, chirp" >&2; exit 2 ;;
+esac
 cat >"$dir/propid.toml" <<TOML
 [device]
 baud = 250000
@@ -41,8 +47,7 @@ max_run_s = $seconds
 [identify]
 pulses_per_model = 4
 [experiment]
-$kind_line
-levels = [0.3, 0.45, 0.6]
+$kind_keys
 ramp_ms = 300
 settle_ms = 500
 pulse_amplitudes = [0.1, 0.15]

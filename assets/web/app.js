@@ -411,8 +411,59 @@ function onWarning(w) {
     setPhase("halted: " + w.kind.replace(/_/g, " "));
 }
 
+// the experiment kinds' lines (staircase, ramp, chirp)
+function showKinds(kind) {
+  $("kinds").hidden = false;
+  $("kinds-kind").textContent = "(" + kind + ")";
+}
+const ms = (v) => (v == null ? "—" : (v * 1e3).toFixed(1));
+const fx = (v, d) => (v == null ? "—" : v.toFixed(d));
+function onStep(s) {
+  showKinds(s.kind);
+  const r = $("steps").tBodies[0].insertRow();
+  for (const v of [s.index, fx(s.t_s, 2), fx(s.from, 3), fx(s.to, 3), s.direction,
+    ms(s.dead_time_s), ms(s.time_constant_s), ms(s.rise_10_90_s), ms(s.settling_90_s),
+    fx(s.overshoot_pct, 1)]) r.insertCell().textContent = v;
+}
+function onStaticMap(m) {
+  showKinds(m.kind);
+  const tb = $("static-map").tBodies[0];
+  for (const l of m.levels) {
+    const r = tb.insertRow();
+    for (const v of [m.output + " (" + m.unit + ")", m.leg || "", fx(l.throttle, 3),
+      fx(l.mean, 4), fx(l.std, 4), l.samples]) r.insertCell().textContent = v;
+  }
+  const parts = [];
+  if (m.expo) parts.push(m.output + ": expo a " + fx(m.expo.a, 3) + ", t_max " + fx(m.expo.t_max, 3));
+  if (m.power) parts.push("power law k " + fx(m.power.k, 3) + ", u0 " + fx(m.power.u0, 3) +
+    ", e " + fx(m.power.exponent, 2));
+  if (m.hysteresis) parts.push("hysteresis " + fx(m.hysteresis.max_pct, 1) + " % at " +
+    fx(m.hysteresis.at_throttle, 3));
+  if (parts.length) $("map-fit").textContent += parts.join("; ") + ". ";
+}
+let cBode = null;
+function onFrequencyResponse(f) {
+  showKinds(f.kind);
+  const m = f.model;
+  $("freq-figures").textContent = "peak " + fx(f.peak_hz, 2) + " Hz, bandwidth " +
+    fx(f.bandwidth_hz, 2) + " Hz, phase delay " + ms(f.phase_delay_s) + " ms" +
+    (m ? "; model fn " + fx(m.natural_hz, 2) + " Hz, ζ " + fx(m.damping, 3) + ", K " +
+      fx(m.gain, 3) + ", T " + ms(m.dead_time_s) + " ms" : "");
+  const x = f.bins.map((b) => b.f_hz);
+  const data = [x, f.bins.map((b) => 20 * Math.log10(b.gain)), f.bins.map((b) => b.coherence)];
+  if (!cBode) {
+    cBode = new uPlot({ width: 800, height: 260, scales: { x: { distr: 3 } },
+      series: [{ label: "Hz" }, { label: "gain dB", stroke: "#1e5ac8" },
+        { label: "coherence", stroke: "#888", scale: "c" }],
+      axes: [{}, {}, { scale: "c", side: 1 }] }, data, $("chart-bode"));
+  } else cBode.setData(data);
+}
+
 function handle(l) {
   switch (l.type) {
+    case "step": onStep(l); break;
+    case "static_map": onStaticMap(l); break;
+    case "frequency_response": onFrequencyResponse(l); break;
     case "samples": onSamples(l); break;
     case "model": onModel(l); break;
     case "response": onResponse(l); break;

@@ -6,6 +6,7 @@ pub mod demo;
 pub mod diagnose;
 pub mod fleet;
 pub mod identify;
+pub mod kinds_report;
 pub mod read;
 pub mod replay;
 pub mod run;

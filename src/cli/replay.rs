@@ -35,6 +35,9 @@ pub struct Args {
     /// up after the replay, with its final state, until Ctrl-C.
     #[arg(long, value_name = "ADDR", value_parser = super::http_arg)]
     pub http: Option<std::net::SocketAddr>,
+    /// Write the run report (as `propid run --report`) into DIR at the end.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 }
 
 /// Runs `propid replay`.
@@ -93,6 +96,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let summary = runner::run(&cfg, parts)?;
     if summary.link.frames_ok == 0 {
         return Err(LoadError::Undecodable { file, bytes: size }.into());
+    }
+    if let Some(dir) = &args.report {
+        super::kinds_report::write_for(dir, &cfg, &summary.kinds)?;
     }
     Ok(())
 }

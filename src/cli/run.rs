@@ -37,6 +37,10 @@ pub struct Args {
     /// only when its address is given, e.g. `0.0.0.0:8080`; port 0: any free port, printed).
     #[arg(long, value_name = "ADDR", value_parser = super::http_arg)]
     pub http: Option<std::net::SocketAddr>,
+    /// Write the run report (Markdown and SVG: the static map, the steps, the frequency
+    /// response of `[experiment] kind`) into DIR at the end.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
 }
 
 /// Loads the configuration (defaults without a file).
@@ -86,6 +90,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         record,
         shutdown,
     };
-    runner::run(&cfg, parts)?;
+    let summary = runner::run(&cfg, parts)?;
+    if let Some(dir) = &args.report {
+        super::kinds_report::write_for(dir, &cfg, &summary.kinds)?;
+    }
     Ok(())
 }

@@ -320,7 +320,10 @@ fn http_kind(line: &Line<'_>) -> Kind {
         Line::Stabilization(_) => Kind::State("stabilization"),
         Line::Event(Event::Http { .. }) => Kind::State("http"),
         Line::Samples(_) => Kind::Samples,
-        Line::Event(_) | Line::Warning(_) => Kind::Log,
+        Line::Kind(propid_kinds::Published::FrequencyResponse(_)) => {
+            Kind::State("frequency_response")
+        }
+        Line::Event(_) | Line::Warning(_) | Line::Kind(_) => Kind::Log,
     }
 }
 

@@ -30,6 +30,8 @@ pub struct RunSummary {
     pub latencies_s: Vec<f64>,
     /// Wall-clock duration, s.
     pub elapsed_s: f64,
+    /// What an experiment kind's analysis published (`--report`).
+    pub kinds: Vec<propid_kinds::Published>,
 }
 
 impl RunSummary {
@@ -53,6 +55,24 @@ pub fn csv_options(cfg: &Config) -> CsvLinkOptions {
         level_tolerance: cfg.identify.level_tolerance,
         max_pulse_samples: cfg.csv.max_pulse_samples,
     }
+}
+
+/// The analysis of `[experiment] kind` when it is not pulses (run and replay alike: the
+/// samples and this configuration are all it reads).
+fn kinds_analysis(cfg: &Config) -> Result<Option<propid_kinds::Analysis>, DaemonError> {
+    let ecfg: propid_wire::experiment::ExperimentConfig =
+        cfg.experiment.clone().try_into().map_err(|source| {
+            DaemonError::Config(super::config::ConfigError::Parse {
+                origin: "[experiment]".into(),
+                source,
+            })
+        })?;
+    if ecfg.kind == propid_wire::experiment::Kind::Pulses {
+        return Ok(None);
+    }
+    ecfg.validate()
+        .map_err(|e| DaemonError::Config(super::config::ConfigError::Experiment(e)))?;
+    Ok(propid_kinds::Analysis::new(&ecfg))
 }
 
 /// Everything a run needs besides the configuration.
@@ -105,7 +125,8 @@ pub fn run<I: Identifier + 'static>(
     let live_link = publisher
         .is_live()
         .then(|| std::sync::Arc::new(std::sync::Mutex::new(LinkStats::default())));
-    let mut worker = Worker::new(window, parts.identifier, publisher);
+    let mut worker =
+        Worker::new(window, parts.identifier, publisher).with_kinds(kinds_analysis(cfg)?);
     if let Some(link) = &live_link {
         worker = worker.with_live(link.clone());
     }
@@ -179,6 +200,7 @@ pub fn run<I: Identifier + 'static>(
         work: worked.stats,
         latencies_s: worked.latencies_s,
         elapsed_s,
+        kinds: worked.kinds,
     })
 }
 

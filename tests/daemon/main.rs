@@ -14,6 +14,7 @@ mod demo_http;
 mod host_faults;
 mod http_hostile;
 mod limits;
+mod kinds;
 mod link_faults;
 mod lying_stand;
 mod mqtt_broker;

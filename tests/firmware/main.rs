@@ -398,4 +398,62 @@ fn a_current_limit_trips_through_the_emulated_firmware_and_the_motor_stops() {
     assert!(!kind(&lines, "disarmed").is_empty(), "{lines:#?}");
     // the ESC is back at its minimum
     stand.esc_until(5.0, |us| us < 1010.0);
+/// A staircase, a ramp and a chirp (`[experiment] kind`, the keys `scripts/firmware_loopback.sh`
+/// uses, shortened) on the emulated firmware: each plan finishes and disarms, and publishes its
+/// lines; the staircase's map follows the motor's steady thrust.
+#[test]
+fn each_experiment_kind_on_the_emulated_firmware_publishes_its_lines_and_disarms() {
+    let sim = propid_sim::SimConfig::load(&repo().join("config/sim.toml")).unwrap();
+    for (name, keys, wants) in [
+        (
+            "staircase",
+            "kind = \"staircase\"\nlevels = [0.3, 0.5]\nhold_ms = 1500\n",
+            "static_map",
+        ),
+        (
+            "ramp",
+            "kind = \"ramp\"\nlevels = [0.3, 0.5]\nramp_rate_per_s = 0.1\nhold_ms = 500\n",
+            "static_map",
+        ),
+        (
+            "chirp",
+            "kind = \"chirp\"\nlevels = [0.4]\nchirp_f0_hz = 1.0\nchirp_f1_hz = 10.0\n\
+             chirp_amplitude = 0.05\nchirp_s = 6.0\n",
+            "frequency_response",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let Some(stand) = Stand::start(dir.path(), 40.0) else {
+            return;
+        };
+        let p = dir.path().join("propid.toml");
+        let text = format!(
+            "[device]\nbaud = 250000\nreconnect_initial_ms = 50\nreconnect_max_ms = 500\n\
+             [experiment]\nramp_ms = 300\nsettle_ms = 500\n{keys}"
+        );
+        std::fs::write(&p, text).unwrap();
+        let d = Daemon::run(&p, &stand.link.display().to_string(), None);
+        let (status, lines, err) = d.finish(40.0);
+        assert!(status.success(), "{name}: {status:?} {err}");
+        assert_eq!(kind(&lines, "plan_finished").len(), 1, "{name}: {lines:#?}");
+        assert!(!kind(&lines, "disarmed").is_empty(), "{name}: {lines:#?}");
+        let got = of_type(&lines, wants);
+        assert!(!got.is_empty(), "{name}: {lines:#?}");
+        if name == "staircase" {
+            let map = got.iter().find(|m| m["output"] == "thrust").unwrap();
+            for l in map["levels"].as_array().unwrap() {
+                let u = l["throttle"].as_f64().unwrap();
+                if u < 0.1 {
+                    continue;
+                }
+                let want = propid_sim::plant::equilibrium(&sim.plant, u, 5.0).thrust_n;
+                let mean = l["mean"].as_f64().unwrap();
+                assert!(
+                    (mean / want - 1.0).abs() < 0.1,
+                    "at {u}: {mean} N, truth {want} N"
+                );
+            }
+        }
+        stand.esc_until(5.0, |us| us < 1010.0);
+    }
 }

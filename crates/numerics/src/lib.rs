@@ -40,6 +40,7 @@ pub mod effect_name;
 pub mod eig;
 pub mod era;
 pub mod error;
+pub mod frequency_response;
 pub mod grouped;
 pub mod hankel;
 pub mod identify;

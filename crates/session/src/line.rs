@@ -10,6 +10,11 @@
 //! - At the end `{"type":"schedule", "models":[...]}` ([`ScheduleRow`]): the last model per
 //!   operating point (the gain schedule a flight controller needs), ordered by operating point;
 //!   then `{"type":"stats", ...}` ([`StatsLine`]).
+//! - With `[experiment] kind` other than pulses (`propid_kinds`, docs/experiment-kinds.md):
+//!   `{"type":"step", "kind", "index", "output", <step figures>}` as each staircase step's
+//!   hold ends, `{"type":"static_map", "kind", "output", ["leg"], "unit", "levels", ...}`
+//!   and `{"type":"frequency_response", "kind", "output", "level", "bins", "peak_hz",
+//!   "bandwidth_hz", "phase_delay_s", "model", ...}` at the end, before the schedule.
 //! - With `--http` only: `{"type":"event","kind":"http","url"}` first, and the lines only the
 //!   web page's clients get ([`super::live`]: `samples`, `response`, `stabilization`,
 //!   `live_stats`, and a `schedule` after every model).
@@ -496,6 +501,8 @@ pub enum Line<'a> {
     Stabilization(&'a StabilizationLine),
     /// `"live_stats"`: the counters so far (the web page's only).
     LiveStats(&'a StatsLine<'a>),
+    /// `"step"`, `"static_map"`, `"frequency_response"`: an experiment kind's results.
+    Kind(&'a propid_kinds::Published),
 }
 
 impl Line<'_> {
@@ -635,6 +642,9 @@ impl Serialize for Line<'_> {
             Response(&'l ResponseLine),
             Stabilization(&'l StabilizationLine),
             LiveStats(&'l StatsLine<'l>),
+            Step(&'l propid_kinds::StepLine),
+            StaticMap(&'l propid_kinds::StaticMapLine),
+            FrequencyResponse(&'l propid_kinds::FrequencyResponseLine),
         }
         match self {
             Line::Model(m) => Shape::Model(m),
@@ -649,6 +659,11 @@ impl Serialize for Line<'_> {
             Line::Response(l) => Shape::Response(l),
             Line::Stabilization(l) => Shape::Stabilization(l),
             Line::LiveStats(st) => Shape::LiveStats(st),
+            Line::Kind(propid_kinds::Published::Step(l)) => Shape::Step(l),
+            Line::Kind(propid_kinds::Published::StaticMap(l)) => Shape::StaticMap(l),
+            Line::Kind(propid_kinds::Published::FrequencyResponse(l)) => {
+                Shape::FrequencyResponse(l)
+            }
         }
         .serialize(s)
     }

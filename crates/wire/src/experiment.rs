@@ -14,6 +14,10 @@
 //!    spacing after the last, [`Notice::LevelDone`] — the moment to identify;
 //! 4. SET_THROTTLE 0 with the ramp, wait, DISARM ([`Notice::Finished`]).
 //!
+//! That is `kind = "pulses"`; the other kinds (`staircase`, `ramp`, `chirp`) replace step 3 by
+//! a timed set-point program ([`program`]): each SET_THROTTLE at its time from the ARM's ACK
+//! (a hold announced by [`Notice::LevelReached`] at its ACK), then step 4.
+//!
 //! Reliability: one acknowledged command is in flight at a time; without its ACK after
 //! `retry_ms` it is re-sent with the **same seq** (the device answers a repeat as a DUPLICATE and
 //! does not execute it twice — but only for one second and its last 8 commands, heartbeats
@@ -46,10 +50,11 @@
 mod config;
 mod limits;
 mod plan;
+pub mod program;
 mod recover;
 mod verify;
 
-pub use config::{Commanded, ExperimentConfig, ExperimentConfigError};
+pub use config::{Commanded, ExperimentConfig, ExperimentConfigError, Kind};
 pub use limits::{LimitGuard, LimitTrip, Limits, LimitsError, JUDGE_SAMPLES};
 pub use plan::{Experiment, Notice, Output, Phase};
 pub use verify::{

@@ -162,7 +162,8 @@ impl MqttSink {
                     }
                 }
             }
-            Line::Event(_) | Line::Warning(_) => {
+            // an experiment kind's results go with the events (no topic of their own yet)
+            Line::Event(_) | Line::Warning(_) | Line::Kind(_) => {
                 self.offer(&self.topics.event, QoS::AtLeastOnce, false, text)
             }
             Line::Stats(_) => {

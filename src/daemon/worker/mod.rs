@@ -40,6 +40,8 @@ pub struct WorkerOutcome {
     pub latencies_s: Vec<f64>,
     /// The first publishing error, if any (publishing continued on the other sinks).
     pub error: Option<DaemonError>,
+    /// What an experiment kind's analysis published (the run report's material).
+    pub kinds: Vec<propid_kinds::Published>,
 }
 
 /// The worker's state.
@@ -54,6 +56,8 @@ pub struct Worker<I: Identifier> {
     error: Option<DaemonError>,
     /// The web page's lines ([`super::live`]), with an HTTP sink only.
     live: Option<Live>,
+    /// The analysis of an experiment kind other than pulses (on the decoded samples).
+    kinds: Option<propid_kinds::Analysis>,
 }
 
 /// What the worker keeps for the web page's lines.
@@ -89,7 +93,14 @@ impl<I: Identifier> Worker<I> {
             latencies_s: Vec::with_capacity(LATENCY_CAP),
             error: None,
             live: None,
+            kinds: None,
         }
+    }
+
+    /// Also runs the analysis of an experiment kind on every sample (`propid_kinds`).
+    pub fn with_kinds(mut self, analysis: Option<propid_kinds::Analysis>) -> Worker<I> {
+        self.kinds = analysis;
+        self
     }
 
     /// Also publishes the web page's lines ([`super::live`]) when the publisher serves it;
@@ -237,6 +248,15 @@ impl<I: Identifier> Worker<I> {
             self.emit_live(&Line::Samples(&line));
         }
         self.flush_live_window();
+        let kinds = match self.kinds.take() {
+            Some(mut a) => {
+                for p in a.finish() {
+                    self.emit(&Line::Kind(&p));
+                }
+                a.published().to_vec()
+            }
+            None => Vec::new(),
+        };
         self.publish_schedule();
         self.latencies_s.sort_by(f64::total_cmp);
         WorkerOutcome {
@@ -244,6 +264,7 @@ impl<I: Identifier> Worker<I> {
             stats: self.stats,
             latencies_s: self.latencies_s,
             error: self.error,
+            kinds,
         }
     }
 
@@ -272,6 +293,19 @@ impl<I: Identifier> Worker<I> {
         }
         if live {
             self.on_live_sample(s, outcome.pulse);
+        }
+        if let Some(a) = self.kinds.as_mut() {
+            let done = a.push(propid_kinds::Sample {
+                index: s.index,
+                t_us: s.t_us,
+                throttle: s.throttle(),
+                thrust: f64::from(s.thrust_n),
+                rpm: f64::from(s.rpm),
+                current: f64::from(s.current_a),
+            });
+            for p in done {
+                self.emit(&Line::Kind(&p));
+            }
         }
         if outcome.unannounced_lost > 0 {
             // Only the sampler's full queue drops samples without a gap notice.

@@ -1,7 +1,38 @@
 //! The experiment plan's configuration (`[experiment]` in `config/sim.toml` and the daemon's
-//! config): operating points, pulse train, timing. Units are in the names.
+//! config): the kind of experiment, operating points, pulse train, holds, ramp rate, chirp,
+//! timing. Units are in the names.
 
 use serde::Deserialize;
+
+/// What the plan does at the stand (`[experiment] kind`); `docs/experiment-kinds.md`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// Pulses about each operating point (the default): the ERA models per level.
+    #[default]
+    Pulses,
+    /// Steps through the levels up, then down, each held `hold_ms`: the static map and each
+    /// step's figures per direction.
+    Staircase,
+    /// From the lowest level to the highest and back at `ramp_rate_per_s`: the static map of
+    /// each leg and their hysteresis.
+    Ramp,
+    /// A logarithmic sweep about the one level from `chirp_f0_hz` to `chirp_f1_hz`: the
+    /// frequency response.
+    Chirp,
+}
+
+impl Kind {
+    /// The name as configured.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Pulses => "pulses",
+            Kind::Staircase => "staircase",
+            Kind::Ramp => "ramp",
+            Kind::Chirp => "chirp",
+        }
+    }
+}
 
 /// A refused experiment configuration: key (relative to the `[experiment]` table), value, reason.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -30,6 +61,8 @@ pub struct Commanded {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ExperimentConfig {
+    /// The kind of experiment (`"pulses"`, `"staircase"`, `"ramp"`, `"chirp"`).
+    pub kind: Kind,
     /// Operating points, throttle fraction, each in 0.0..=1.0, 1..=32 of them.
     pub levels: Vec<f64>,
     /// Duration of the ramp from one operating point to the next (and down at the end), ms,
@@ -69,11 +102,25 @@ pub struct ExperimentConfig {
     /// once more after this many re-arms ends the plan ([`super::Notice::RearmLimit`]; the
     /// daemon exits 8), so a stand that keeps resetting is not re-armed for ever.
     pub max_rearms: u32,
+    /// `staircase`: how long each level is held, ms, 100..=600000 (settled and averaged over
+    /// its last half); `ramp`: the hold at each end.
+    pub hold_ms: u32,
+    /// `ramp`: throttle fraction per second of both legs, 0.001..=1.
+    pub ramp_rate_per_s: f64,
+    /// `chirp`: start frequency, Hz, 0.01..=50.
+    pub chirp_f0_hz: f64,
+    /// `chirp`: end frequency, Hz, above `chirp_f0_hz`, at most [`super::program::CHIRP_MAX_HZ`].
+    pub chirp_f1_hz: f64,
+    /// `chirp`: amplitude about the level, throttle fraction, 0.001..=0.5.
+    pub chirp_amplitude: f64,
+    /// `chirp`: sweep duration, s, 1..=600.
+    pub chirp_s: f64,
 }
 
 impl Default for ExperimentConfig {
     fn default() -> Self {
         ExperimentConfig {
+            kind: Kind::Pulses,
             levels: vec![0.3, 0.45, 0.6],
             ramp_ms: 500,
             settle_ms: 500,
@@ -88,6 +135,12 @@ impl Default for ExperimentConfig {
             max_retries: 3,
             rearm_on_reset: false,
             max_rearms: 3,
+            hold_ms: 2000,
+            ramp_rate_per_s: 0.05,
+            chirp_f0_hz: 0.5,
+            chirp_f1_hz: 20.0,
+            chirp_amplitude: 0.05,
+            chirp_s: 30.0,
         }
     }
 }
@@ -154,7 +207,65 @@ impl ExperimentConfig {
         check_i("retry_ms", self.retry_ms as u64, 10, 1000)?;
         check_i("max_retries", self.max_retries as u64, 0, 10)?;
         check_i("max_rearms", self.max_rearms as u64, 0, 100)?;
-        self.check_pulse_levels()
+        check_i("hold_ms", self.hold_ms as u64, 100, 600_000)?;
+        check_f("ramp_rate_per_s".into(), self.ramp_rate_per_s, 0.001, 1.0)?;
+        check_f("chirp_f0_hz".into(), self.chirp_f0_hz, 0.01, 50.0)?;
+        check_f(
+            "chirp_f1_hz".into(),
+            self.chirp_f1_hz,
+            0.01,
+            super::program::CHIRP_MAX_HZ,
+        )?;
+        if self.chirp_f1_hz <= self.chirp_f0_hz {
+            return Err(refuse("chirp_f1_hz", self.chirp_f1_hz, "above chirp_f0_hz"));
+        }
+        check_f("chirp_amplitude".into(), self.chirp_amplitude, 0.001, 0.5)?;
+        check_f("chirp_s".into(), self.chirp_s, 1.0, 600.0)?;
+        match self.kind {
+            Kind::Pulses => self.check_pulse_levels(),
+            Kind::Staircase => Ok(()),
+            Kind::Ramp => {
+                let (lo, hi) = self.envelope();
+                if hi - lo < 0.01 {
+                    return Err(refuse(
+                        "levels",
+                        format!("{:?}", self.levels),
+                        "a ramp runs from the lowest level to the highest: at least 0.01 apart",
+                    ));
+                }
+                Ok(())
+            }
+            Kind::Chirp => self.check_chirp(),
+        }
+    }
+
+    /// A chirp sweeps about one level, and `level ± chirp_amplitude` must lie in 0..=1.
+    fn check_chirp(&self) -> Result<(), ExperimentConfigError> {
+        if self.levels.len() != 1 {
+            return Err(refuse(
+                "levels",
+                format!("{:?}", self.levels),
+                "kind = \"chirp\" sweeps about one level: levels = [one level]",
+            ));
+        }
+        let (l, a) = (self.levels[0], self.chirp_amplitude);
+        if l - a < -1e-9 || l + a > 1.0 + 1e-9 {
+            return Err(refuse(
+                "levels[0] ± chirp_amplitude",
+                format!("{l} ± {a}"),
+                "the sweep (level ± amplitude) in 0..=1: a device would clamp it",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The lowest and highest throttle the plan commands: the bounds of [`Self::commanded`].
+    pub fn envelope(&self) -> (f64, f64) {
+        self.commanded()
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+                (lo.min(c.throttle), hi.max(c.throttle))
+            })
     }
 
     /// Every pulse level `level + delta` (each level with each signed amplitude the train
@@ -180,7 +291,9 @@ impl ExperimentConfig {
     /// The commanded envelope: every throttle the plan commands besides the ramp down to 0,
     /// named by the keys that make it — each level (`levels[i]`), and each pulse level about it
     /// (`levels[i] + pulse_amplitudes[j]`, and `levels[i] - pulse_amplitudes[j]` with
-    /// `alternate_sign`), in that order. The one list the plan's checks read: 0..=1 here,
+    /// `alternate_sign`), in that order; a `staircase` or `ramp` commands its levels (a ramp's
+    /// ends), a `chirp` each level and `levels[i] ± chirp_amplitude`. The one list the plan's
+    /// checks read: 0..=1 here,
     /// `[limits] max_throttle` ([`super::Limits::refuse_plan`]).
     pub fn commanded(&self) -> Vec<Commanded> {
         let mut out = Vec::new();
@@ -190,6 +303,18 @@ impl ExperimentConfig {
                 value: l.to_string(),
                 throttle: l,
             });
+            if self.kind == Kind::Chirp {
+                for (sign, v) in [('+', l + self.chirp_amplitude), ('-', l - self.chirp_amplitude)] {
+                    out.push(Commanded {
+                        key: format!("levels[{i}] {sign} chirp_amplitude"),
+                        value: format!("{l} {sign} {} = {v}", self.chirp_amplitude),
+                        throttle: v,
+                    });
+                }
+            }
+            if self.kind != Kind::Pulses {
+                continue;
+            }
             for (j, &a) in self.pulse_amplitudes.iter().enumerate() {
                 let signs: &[char] = if self.alternate_sign {
                     &['+', '-']
@@ -281,6 +406,64 @@ mod tests {
             ..ExperimentConfig::default()
         };
         c.validate().unwrap();
+    }
+
+    #[test]
+    fn envelope_of_each_kind() {
+        let c = ExperimentConfig::default();
+        let (lo, hi) = c.envelope();
+        assert!(
+            (lo - 0.2).abs() < 1e-12 && (hi - 0.7).abs() < 1e-12,
+            "{lo} {hi}"
+        );
+        for kind in [Kind::Staircase, Kind::Ramp] {
+            let c = ExperimentConfig {
+                kind,
+                ..ExperimentConfig::default()
+            };
+            assert_eq!(c.envelope(), (0.3, 0.6));
+        }
+        let c = ExperimentConfig {
+            kind: Kind::Chirp,
+            levels: vec![0.5],
+            chirp_amplitude: 0.1,
+            ..ExperimentConfig::default()
+        };
+        c.validate().unwrap();
+        assert_eq!(c.envelope(), (0.4, 0.6));
+    }
+
+    #[test]
+    fn a_chirp_needs_one_level_and_room_for_its_amplitude() {
+        let c = ExperimentConfig {
+            kind: Kind::Chirp,
+            ..ExperimentConfig::default()
+        };
+        assert_eq!(c.validate().unwrap_err().key, "levels");
+        let c = ExperimentConfig {
+            kind: Kind::Chirp,
+            levels: vec![0.05],
+            chirp_amplitude: 0.1,
+            ..ExperimentConfig::default()
+        };
+        assert_eq!(c.validate().unwrap_err().key, "levels[0] ± chirp_amplitude");
+        let c = ExperimentConfig {
+            kind: Kind::Chirp,
+            levels: vec![0.5],
+            chirp_f0_hz: 5.0,
+            chirp_f1_hz: 2.0,
+            ..ExperimentConfig::default()
+        };
+        assert_eq!(c.validate().unwrap_err().key, "chirp_f1_hz");
+    }
+
+    #[test]
+    fn kinds_parse_by_name() {
+        for k in [Kind::Pulses, Kind::Staircase, Kind::Ramp, Kind::Chirp] {
+            let parsed: Kind = serde_json::from_str(&format!("\"{}\"", k.name())).unwrap();
+            assert_eq!(parsed, k);
+        }
+        assert!(serde_json::from_str::<Kind>("\"sweep\"").is_err());
     }
 
     #[test]

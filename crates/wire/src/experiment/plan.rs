@@ -2,7 +2,8 @@
 
 use std::collections::VecDeque;
 
-use super::config::{ExperimentConfig, ExperimentConfigError};
+use super::config::{ExperimentConfig, ExperimentConfigError, Kind};
+use super::program::{program, Setpoint};
 use crate::protocol::message::throttle_level;
 use crate::protocol::{Ack, AckResult, Arm, EventCode, Frame, Impulse, Message, SetThrottle};
 
@@ -164,6 +165,8 @@ pub enum Phase {
     Settling,
     /// Firing pulses and waiting between them.
     Pulsing,
+    /// Sending the set-point program of a `staircase`, `ramp` or `chirp` (`program.rs`).
+    Program,
     /// Ramping down at the end.
     RampDown,
     /// DISARM sent.
@@ -186,6 +189,7 @@ impl Phase {
                 | Phase::Ramping
                 | Phase::Settling
                 | Phase::Pulsing
+                | Phase::Program
                 | Phase::RampDown
                 | Phase::Disarming
         )
@@ -241,13 +245,22 @@ pub struct Experiment {
     pub(super) check: super::verify::StandCheck,
     /// The safety limits (`limits.rs`).
     pub(super) limits: super::limits::LimitGuard,
+    /// The set-point program (kinds other than pulses) and its end, ms from its start.
+    pub(super) program: Vec<Setpoint>,
+    program_end_ms: u64,
+    /// Host time the program started (a resumed one: as if it had run from there).
+    program_t0_us: u64,
 }
 
 impl Experiment {
     /// A plan with `cfg` (validated here), starting with sequence number `first_seq`.
     pub fn new(cfg: ExperimentConfig, first_seq: u16) -> Result<Self, ExperimentConfigError> {
         cfg.validate()?;
+        let (program, program_end_ms) = program(&cfg);
         Ok(Experiment {
+            program,
+            program_end_ms,
+            program_t0_us: 0,
             cfg,
             phase: Phase::Idle,
             seq: first_seq,
@@ -308,6 +321,10 @@ impl Experiment {
         match self.phase {
             Phase::Ramping | Phase::Settling | Phase::Pulsing => {
                 Some((self.level_idx, self.cfg.levels[self.level_idx]))
+            }
+            Phase::Program => {
+                let i = self.level_idx.min(self.program.len()).checked_sub(1)?;
+                Some((i, self.program[i].level))
             }
             _ => None,
         }
@@ -437,7 +454,11 @@ impl Experiment {
                 self.notice(Notice::Armed);
                 let p = self.cfg.heartbeat_ms as u64 * 1000;
                 self.next_heartbeat_us = Some(now_us + p);
-                self.go_to_level(self.resume_level, now_us);
+                if self.cfg.kind == Kind::Pulses {
+                    self.go_to_level(self.resume_level, now_us);
+                } else {
+                    self.start_program(self.resume_level, now_us);
+                }
             }
             Phase::Ramping => {
                 self.phase = Phase::Settling;
@@ -445,6 +466,7 @@ impl Experiment {
                 self.wait_until_us = Some(now_us + wait);
             }
             Phase::Pulsing => self.pulse_fired(a.t_us, now_us),
+            Phase::Program => self.setpoint_acked(now_us),
             Phase::RampDown => {
                 // Wait for the ramp (and one heartbeat period) before disarming.
                 let wait = self.cfg.ramp_ms as u64 * 1000 + self.cfg.heartbeat_ms as u64 * 1000;
@@ -526,20 +548,65 @@ impl Experiment {
                 if self.level_idx + 1 < self.cfg.levels.len() {
                     self.go_to_level(self.level_idx + 1, now_us);
                 } else {
-                    self.phase = Phase::RampDown;
-                    let msg = Message::SetThrottle(SetThrottle {
-                        level: 0,
-                        ramp_ms: self.cfg.ramp_ms,
-                    });
-                    self.send(msg, now_us);
+                    self.ramp_down(now_us);
                 }
             }
+            Phase::Program if self.level_idx < self.program.len() => {
+                let s = self.program[self.level_idx];
+                let msg = Message::SetThrottle(SetThrottle {
+                    level: throttle_level(s.level),
+                    ramp_ms: s.ramp_ms,
+                });
+                self.send(msg, now_us);
+            }
+            Phase::Program => self.ramp_down(now_us),
             Phase::RampDown => {
                 self.phase = Phase::Disarming;
                 self.send(Message::Disarm, now_us);
             }
             _ => {}
         }
+    }
+
+    /// The program from set-point `from` on (0, or the interrupted one on a re-arm), timed as
+    /// if it had started `at_ms` of that set-point ago.
+    fn start_program(&mut self, from: usize, now_us: u64) {
+        self.check.new_level();
+        self.phase = Phase::Program;
+        let from = from.min(self.program.len().saturating_sub(1));
+        self.level_idx = from;
+        self.program_t0_us = now_us.saturating_sub(self.program[from].at_ms * 1000);
+        self.wait_until_us = Some(now_us);
+        self.poll(now_us);
+    }
+
+    /// The ACK of set-point `level_idx`: announced if a hold, then the next one's time (or
+    /// the program's end).
+    fn setpoint_acked(&mut self, now_us: u64) {
+        let s = self.program[self.level_idx];
+        if s.announce {
+            self.notice(Notice::LevelReached {
+                index: self.level_idx,
+                level: s.level,
+            });
+        }
+        self.level_idx += 1;
+        let at_ms = match self.program.get(self.level_idx) {
+            Some(next) => next.at_ms,
+            None => self.program_end_ms,
+        };
+        self.wait_until_us = Some((self.program_t0_us + at_ms * 1000).max(now_us));
+    }
+
+    /// The last operating point or set-point is over: SET_THROTTLE 0 with the ramp, then
+    /// DISARM.
+    fn ramp_down(&mut self, now_us: u64) {
+        self.phase = Phase::RampDown;
+        let msg = Message::SetThrottle(SetThrottle {
+            level: 0,
+            ramp_ms: self.cfg.ramp_ms,
+        });
+        self.send(msg, now_us);
     }
 
     pub(super) fn connected(&mut self, now_us: u64) {

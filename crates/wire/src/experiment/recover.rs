@@ -45,14 +45,19 @@ impl Experiment {
         let armed = self.phase.mid_plan();
         let resumable = matches!(
             self.phase,
-            Phase::Handshake | Phase::Arming | Phase::Ramping | Phase::Settling | Phase::Pulsing
+            Phase::Handshake
+                | Phase::Arming
+                | Phase::Ramping
+                | Phase::Settling
+                | Phase::Pulsing
+                | Phase::Program
         );
         if !armed && !resumable {
             return;
         }
         if matches!(
             self.phase,
-            Phase::Ramping | Phase::Settling | Phase::Pulsing
+            Phase::Ramping | Phase::Settling | Phase::Pulsing | Phase::Program
         ) {
             self.resume_level = self.level_idx;
         }
@@ -117,6 +122,7 @@ impl Experiment {
                     | Phase::Ramping
                     | Phase::Settling
                     | Phase::Pulsing
+                    | Phase::Program
             );
         let wanted = self.cfg.rearm_on_reset && working;
         let rearm = wanted && self.may_rearm();
@@ -137,7 +143,7 @@ impl Experiment {
         self.notice(n);
         if matches!(
             self.phase,
-            Phase::Ramping | Phase::Settling | Phase::Pulsing
+            Phase::Ramping | Phase::Settling | Phase::Pulsing | Phase::Program
         ) {
             self.resume_level = self.level_idx;
         }

@@ -78,6 +78,13 @@ impl StandCheck {
 impl Experiment {
     /// The throttle range (fractions) the plan may have the motor at now, if it commands one.
     fn envelope(&self) -> Option<(f64, f64)> {
+        if self.phase == Phase::Program {
+            return Some(self.program_envelope());
+        }
+        if self.phase == Phase::RampDown && self.cfg.kind != super::Kind::Pulses {
+            let hi = self.program.iter().map(|s| s.level).fold(0.0, f64::max);
+            return Some((0.0, hi));
+        }
         let level = self.cfg.levels.get(self.level_idx).copied()?;
         let span = |a: f64, b: f64| (a.min(b), a.max(b));
         match self.phase {
@@ -102,6 +109,35 @@ impl Experiment {
         }
     }
 
+    /// While a set-point program runs: a chirp's whole band (`level ± chirp_amplitude`, and
+    /// the ramp to the level from 0), else anything between the set-point before the last one
+    /// sent and the one in flight or next (the device ramps from where it was).
+    fn program_envelope(&self) -> (f64, f64) {
+        if self.cfg.kind == super::Kind::Chirp {
+            let (lo, hi) = self.cfg.envelope();
+            return if self.check.level_seen {
+                (lo, hi)
+            } else {
+                (0.0f64.min(lo), hi)
+            };
+        }
+        let i = self.level_idx.min(self.program.len() - 1);
+        let first = i.saturating_sub(2);
+        let mut lo = self.program[first..=i]
+            .iter()
+            .map(|s| s.level)
+            .fold(f64::INFINITY, f64::min);
+        let mut hi = self.program[first..=i]
+            .iter()
+            .map(|s| s.level)
+            .fold(0.0, f64::max);
+        if i < 2 {
+            lo = lo.min(0.0); // from the motor at rest
+        }
+        hi = hi.max(lo);
+        (lo, hi)
+    }
+
     /// A SAMPLE at `now_us`: the applied throttle against the envelope, the level and pulse
     /// seen.
     pub(super) fn on_sample(&mut self, s: &Sample, now_us: u64) {
@@ -114,6 +150,12 @@ impl Experiment {
         };
         let applied = s.throttle_fraction();
         let in_pulse = s.flags.contains(SampleFlags::IMPULSE_ACTIVE);
+        if self.phase == Phase::Program && self.cfg.kind == super::Kind::Chirp {
+            let (lo, hi) = self.cfg.envelope();
+            if applied >= lo - THROTTLE_TOLERANCE && applied <= hi + THROTTLE_TOLERANCE {
+                self.check.level_seen = true;
+            }
+        }
         if matches!(self.phase, Phase::Settling | Phase::Pulsing) {
             let level = self.cfg.levels[self.level_idx];
             if !in_pulse && (applied - level).abs() <= THROTTLE_TOLERANCE {
