@@ -398,6 +398,8 @@ fn a_current_limit_trips_through_the_emulated_firmware_and_the_motor_stops() {
     assert!(!kind(&lines, "disarmed").is_empty(), "{lines:#?}");
     // the ESC is back at its minimum
     stand.esc_until(5.0, |us| us < 1010.0);
+}
+
 /// A staircase, a ramp and a chirp (`[experiment] kind`, the keys `scripts/firmware_loopback.sh`
 /// uses, shortened) on the emulated firmware: each plan finishes and disarms, and publishes its
 /// lines; the staircase's map follows the motor's steady thrust.
