@@ -257,8 +257,17 @@ pub fn diagnose(
             core: era.as_ref().err().cloned(),
         }
     })?;
-    let floor = noise::noise_floor(u, y, interpolated, &rules);
-    let mut d = assemble::assemble(&ctx, &folds, searched, era.as_ref().ok(), floor);
+    let floor = noise::measure(u, y, interpolated, &rules);
+    let mut d = assemble::assemble(
+        &ctx,
+        &folds,
+        searched,
+        era.as_ref().ok(),
+        floor.clone().ok(),
+    );
+    if let Err(why) = floor {
+        d.verdict.reason = format!("{}: {why}", d.verdict.reason);
+    }
     d.source = source;
     Ok(d)
 }
