@@ -4,8 +4,9 @@
 //! is named, how often with its parameter within the tolerance of `docs/detection.md`, how
 //! often another effect is named; and the false alarms on as many clean stands per kind.
 //!
-//! Run: `cargo run --release -p propid-diagnose --example stand_table [CASES]` (per effect and
-//! record kind; default 7, 21 cases per effect and 21 clean stands in all). Prints Markdown;
+//! Run: `cargo run --release -p propid-diagnose --example stand_table [CASES] [THREADS]` (per
+//! effect and record kind; default 7, 21 cases per effect and 21 clean stands in all; 2
+//! threads). Prints Markdown;
 //! `scripts/stand_table.sh` puts it into `docs/detection.md`.
 
 use propid_diagnose::{self as diagnose, Diagnosis};
@@ -72,17 +73,31 @@ fn diagnose_case(kind: RecordKind, name: Option<EffectName>, i: u64) -> Option<O
     })
 }
 
-/// `f` over `jobs` on two threads, results in order.
-fn two_threads<J: Sync, T: Send>(jobs: &[J], f: impl Fn(&J) -> T + Sync) -> Vec<T> {
-    let (a, b) = jobs.split_at(jobs.len() / 2);
-    std::thread::scope(|s| {
-        let f = &f;
-        let ha = s.spawn(move || a.iter().map(f).collect::<Vec<_>>());
-        let hb = s.spawn(move || b.iter().map(f).collect::<Vec<_>>());
-        let mut v = ha.join().expect("first half");
-        v.extend(hb.join().expect("second half"));
-        v
-    })
+/// `f` over `jobs` on `threads` threads, results in order.
+fn on_threads<J: Sync, T: Send>(jobs: &[J], threads: usize, f: impl Fn(&J) -> T + Sync) -> Vec<T> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<(usize, T)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads.max(1))
+            .map(|_| {
+                s.spawn(|| {
+                    let mut out = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(j) = jobs.get(i) else {
+                            return out;
+                        };
+                        out.push((i, f(j)));
+                    }
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a worker"))
+            .collect()
+    });
+    done.sort_by_key(|d| d.0);
+    done.into_iter().map(|d| d.1).collect()
 }
 
 fn pct(k: usize, n: usize) -> String {
@@ -102,7 +117,11 @@ fn main() {
             }
         }
     }
-    let outcomes = two_threads(&jobs, |&(k, n, i)| {
+    let threads: usize = std::env::args()
+        .nth(2)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(2);
+    let outcomes = on_threads(&jobs, threads, |&(k, n, i)| {
         let o = diagnose_case(k, n, i);
         let name = n.map_or("clean", EffectName::as_str);
         eprintln!("done: {} {name} #{i}", k.as_str());
