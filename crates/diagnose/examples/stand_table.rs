@@ -110,9 +110,10 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(7);
     let mut jobs: Vec<(RecordKind, Option<EffectName>, u64)> = Vec::new();
-    for kind in RecordKind::ALL {
-        for name in std::iter::once(None).chain(diagnose::effects::names().map(Some)) {
-            for i in 0..cases {
+    // Case-major: a run cut short has every effect and kind in it.
+    for i in 0..cases {
+        for kind in RecordKind::ALL {
+            for name in std::iter::once(None).chain(diagnose::effects::names().map(Some)) {
                 jobs.push((kind, name, i));
             }
         }
@@ -124,7 +125,16 @@ fn main() {
     let outcomes = on_threads(&jobs, threads, |&(k, n, i)| {
         let o = diagnose_case(k, n, i);
         let name = n.map_or("clean", EffectName::as_str);
-        eprintln!("done: {} {name} #{i}", k.as_str());
+        match &o {
+            Some(o) => eprintln!(
+                "case: {} {name} {i} named={} within={} others={}",
+                k.as_str(),
+                o.named,
+                o.within,
+                o.others.len()
+            ),
+            None => eprintln!("case: {} {name} {i} failed", k.as_str()),
+        }
         o
     });
     let of = |kind: RecordKind, name: Option<EffectName>| -> Vec<&Outcome> {

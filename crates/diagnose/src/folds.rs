@@ -237,12 +237,13 @@ pub struct HeldOutGain {
 impl HeldOutGain {
     /// The gain of `after` over `before` (module doc of [`HeldOutGain`]).
     pub fn of(before: &Scores, after: &Scores) -> HeldOutGain {
-        let d: Vec<f64> = before
-            .blocks
-            .iter()
-            .zip(&after.blocks)
-            .map(|(f, g)| g - f)
-            .collect();
+        HeldOutGain::paired(&before.blocks, &after.blocks, after.mean - before.mean)
+    }
+
+    /// The gain `gain_pp` of a model whose blocks' figures are `after` over one whose are
+    /// `before` (the same blocks, in order), with its scatter.
+    pub fn paired(before: &[f64], after: &[f64], gain_pp: f64) -> HeldOutGain {
+        let d: Vec<f64> = before.iter().zip(after).map(|(f, g)| g - f).collect();
         let k = d.len();
         let se_pp = if k >= 2 {
             let m = d.iter().sum::<f64>() / k as f64;
@@ -252,7 +253,7 @@ impl HeldOutGain {
             f64::NAN
         };
         HeldOutGain {
-            gain_pp: after.mean - before.mean,
+            gain_pp,
             se_pp,
             blocks: k,
         }

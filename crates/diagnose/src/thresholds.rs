@@ -45,6 +45,11 @@ pub const CONFOUNDING_SHIFT: usize = 2;
 /// speed follows the voltage (`ω ∝ K_v V`, thrust ∝ ω²).
 pub const EXPONENT_MAX: f64 = 2.0;
 
+/// Most effects named on a stand baseline ([`crate::stand`]): its catalogue frees one part of
+/// the stand at a time, and a real stand shows several at once (a dead time, a load cell's
+/// lag, the thrust curve, the supply).
+pub const STAND_MAX_EFFECTS: usize = 6;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -163,6 +163,8 @@ pub fn truth(name: EffectName, cfg: &PlantConfig, v_mean: f64) -> Option<Truth> 
             0.15,
             true,
         ),
+        // Effects of the stand baseline only: never hidden in this plant.
+        EffectName::SensorLag | EffectName::SpeedDependentTau => return None,
     })
 }
 
