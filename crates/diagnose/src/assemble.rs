@@ -60,6 +60,7 @@ pub fn assemble(
         era_start::summary(&q, e.path, fit)
     });
     let baseline = Stage {
+        choice: Default::default(),
         model: ModelSummary::from_fit(&base, dt, core),
         fit_percent: fit_b,
         core_model,
@@ -145,6 +146,8 @@ pub fn assemble(
         verdict,
         warnings,
         rejected,
+        stand: None,
+        stand_model: None,
         traces: Traces {
             dt_s: dt,
             rules: ctx.rules,

@@ -12,6 +12,7 @@ use super::ctx::Ctx;
 use super::fit::{levenberg_marquardt, Fit};
 use super::model::simulate;
 use super::signals::Signals;
+use crate::thresholds::{gain_t, MIN_CV_GAIN_PP};
 
 /// Fewest levels for blocked cross-validation (fewer: the hold-out tail).
 pub const MIN_FOLDS: usize = 3;
@@ -21,6 +22,8 @@ pub const MAX_FOLDS: usize = 10;
 pub const MIN_FOLD_SAMPLES: usize = 20;
 /// Levenberg–Marquardt steps of each fold's refit (from the fit on all samples).
 pub const FOLD_ITERS: usize = 20;
+/// Blocks the hold-out tail is cut into for the scatter of its fit ([`Scores::blocks`]).
+pub const HOLDOUT_BLOCKS: usize = 5;
 
 /// How the held-out figure is measured.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -106,6 +109,10 @@ pub struct Scores {
     pub fits: Vec<f64>,
     /// Their mean: the held-out figure.
     pub mean: f64,
+    /// The fit percent of each block the acceptance test pairs ([`HeldOutGain`]): the folds'
+    /// under [`Method::BlockedCv`], the tail cut into [`HOLDOUT_BLOCKS`] consecutive blocks
+    /// (each scored about the tail's mean) under [`Method::Holdout`].
+    pub blocks: Vec<f64>,
     /// RMS of the held-out residuals of every fold together.
     pub rms: f64,
     /// The held-out prediction of every sample of a fold (NaN outside the folds).
@@ -146,6 +153,7 @@ pub fn cross_validate(ctx: &Ctx, folds: &Folds, f: &Fit) -> Scores {
     let mut prediction = vec![f64::NAN; n];
     let mut sim = vec![0.0; n];
     let mut fits = Vec::with_capacity(folds.folds.len());
+    let mut blocks = Vec::new();
     let (mut e2, mut m) = (0.0, 0usize);
     let held = folds
         .folds
@@ -171,6 +179,13 @@ pub fn cross_validate(ctx: &Ctx, folds: &Folds, f: &Fit) -> Scores {
         prediction[fold.clone()].copy_from_slice(&sim[fold.clone()]);
         let (fit, s, c) = fit_percent_about(ctx.sig.y, &sim, fold.clone(), mean_y);
         fits.push(fit);
+        match folds.method {
+            Method::BlockedCv => blocks.push(fit),
+            Method::Holdout => blocks.extend(
+                sub_blocks(fold.clone(), HOLDOUT_BLOCKS)
+                    .map(|b| fit_percent_about(ctx.sig.y, &sim, b, mean_y).0),
+            ),
+        }
         e2 += s;
         m += c;
     }
@@ -178,8 +193,102 @@ pub fn cross_validate(ctx: &Ctx, folds: &Folds, f: &Fit) -> Scores {
     Scores {
         fits,
         mean,
+        blocks,
         rms: (e2 / m.max(1) as f64).sqrt(),
         prediction,
+    }
+}
+
+/// `r` cut into `k` consecutive blocks of (nearly) equal length (fewer when `r` is shorter).
+fn sub_blocks(r: Range<usize>, k: usize) -> impl Iterator<Item = Range<usize>> {
+    let (start, len) = (r.start, r.len());
+    let k = k.clamp(1, len.max(1));
+    (0..k).map(move |b| start + b * len / k..start + (b + 1) * len / k)
+}
+
+/// The held-out gain of a model over another, judged against the scatter of the folds' own
+/// fits (issue 29 item 4): the acceptance test of every effect the search takes
+/// ([`crate::search`], [`crate::pair`], [`crate::revise`]).
+///
+/// With `f_b` and `g_b` the two models' fit percent on block `b` ([`Scores::blocks`]: the
+/// folds, or the hold-out tail cut into [`HOLDOUT_BLOCKS`]) the paired differences are
+/// `d_b = g_b − f_b`, `b = 1..k`. The gain is the difference of the held-out figures
+/// (`mean(d)` under blocked cross-validation), its standard error `s_d / √k` with `s_d` the
+/// sample standard deviation of the `d_b`. The gain is accepted when
+///
+/// `gain > MIN_CV_GAIN_PP` and `gain > t_{0.95, k−1} · s_d / √k`,
+///
+/// a one-sided paired t-test at 5 % ([`crate::thresholds::gain_t`]): a gain that the folds
+/// themselves scatter by more than that could be the refits' noise (a sinusoid or a clip fitted
+/// to a misfit). Fewer than two blocks carry no scatter: never accepted. The folds are not
+/// independent samples (neighbouring levels, refits from one start), so the 5 % is nominal;
+/// the false-alarm rate of the whole search is measured on clean simulated stands
+/// (`docs/detection.md`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldOutGain {
+    /// Held-out figure of the larger model minus the smaller's, percentage points.
+    pub gain_pp: f64,
+    /// Standard error of the gain from the blocks' paired differences, percentage points.
+    pub se_pp: f64,
+    /// Blocks paired.
+    pub blocks: usize,
+}
+
+impl HeldOutGain {
+    /// The gain of `after` over `before` (module doc of [`HeldOutGain`]).
+    pub fn of(before: &Scores, after: &Scores) -> HeldOutGain {
+        HeldOutGain::paired(&before.blocks, &after.blocks, after.mean - before.mean)
+    }
+
+    /// The gain `gain_pp` of a model whose blocks' figures are `after` over one whose are
+    /// `before` (the same blocks, in order), with its scatter.
+    pub fn paired(before: &[f64], after: &[f64], gain_pp: f64) -> HeldOutGain {
+        let d: Vec<f64> = before.iter().zip(after).map(|(f, g)| g - f).collect();
+        let k = d.len();
+        let se_pp = if k >= 2 {
+            let m = d.iter().sum::<f64>() / k as f64;
+            let var = d.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (k - 1) as f64;
+            (var / k as f64).sqrt()
+        } else {
+            f64::NAN
+        };
+        HeldOutGain {
+            gain_pp,
+            se_pp,
+            blocks: k,
+        }
+    }
+
+    /// The gain in standard errors (`t`; infinite for a gain with no scatter).
+    pub fn t(&self) -> f64 {
+        if self.se_pp > 0.0 {
+            self.gain_pp / self.se_pp
+        } else if self.gain_pp > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        }
+    }
+
+    /// Whether the gain passes the acceptance test (see the type's doc).
+    pub fn passes(&self) -> bool {
+        self.blocks >= 2
+            && self.gain_pp.is_finite()
+            && self.se_pp.is_finite()
+            && self.gain_pp > MIN_CV_GAIN_PP
+            && self.gain_pp > gain_t(self.blocks) * self.se_pp
+    }
+
+    /// The test in words: "+0.13 pp, 0.4 standard errors of the folds' scatter (needs 1.83)".
+    pub fn describe(&self) -> String {
+        format!(
+            "{:+.2} pp held out, {:.1} standard errors of the {} folds' paired scatter (the \
+             test needs more than {:.2})",
+            self.gain_pp,
+            self.t(),
+            self.blocks,
+            gain_t(self.blocks)
+        )
     }
 }
 
@@ -262,6 +371,44 @@ mod tests {
             f.folds,
             vec![0..50, 50..100, 100..150, 150..200, 200..250, 250..400]
         );
+    }
+
+    fn scores(blocks: &[f64]) -> Scores {
+        Scores {
+            fits: blocks.to_vec(),
+            mean: blocks.iter().sum::<f64>() / blocks.len() as f64,
+            blocks: blocks.to_vec(),
+            rms: 0.0,
+            prediction: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_gain_inside_the_folds_scatter_fails_and_a_consistent_one_passes() {
+        let before = scores(&[60.0, 70.0, 80.0, 65.0, 75.0]);
+        // +0.12 pp on average, the folds going both ways by ±0.5: t ≈ 0.6 < 2.13.
+        let scattered = scores(&[60.5, 69.5, 80.6, 64.6, 75.4]);
+        let g = HeldOutGain::of(&before, &scattered);
+        assert!((g.gain_pp - 0.12).abs() < 1e-9, "{g:?}");
+        assert!(!g.passes() && g.t() < 1.0, "{g:?}");
+        assert!(g.describe().contains("5 folds"), "{}", g.describe());
+        // +0.5 pp in every fold, ±0.05: passes.
+        let consistent = scores(&[60.5, 70.45, 80.55, 65.5, 75.5]);
+        assert!(HeldOutGain::of(&before, &consistent).passes());
+        // No gain, a loss, or a single block (no scatter) never pass.
+        assert!(!HeldOutGain::of(&before, &before).passes());
+        assert!(!HeldOutGain::of(&consistent, &before).passes());
+        assert!(!HeldOutGain::of(&scores(&[50.0]), &scores(&[60.0])).passes());
+        // The same gain in every block has no scatter: it passes.
+        let shifted = scores(&[61.0, 71.0, 81.0, 66.0, 76.0]);
+        assert!(HeldOutGain::of(&before, &shifted).passes());
+    }
+
+    #[test]
+    fn a_hold_out_tail_is_cut_into_blocks_for_its_scatter() {
+        let b: Vec<Range<usize>> = sub_blocks(700..1000, HOLDOUT_BLOCKS).collect();
+        assert_eq!(b, vec![700..760, 760..820, 820..880, 880..940, 940..1000]);
+        assert_eq!(sub_blocks(0..3, 5).count(), 3);
     }
 
     #[test]

@@ -42,6 +42,7 @@ pub mod revise;
 pub mod search;
 pub mod signals;
 pub mod spectrum;
+pub mod stand;
 pub mod summary;
 pub mod term;
 pub mod thresholds;
@@ -162,6 +163,25 @@ pub fn diagnose(
     voltage: Option<&[f64]>,
     opts: &Options,
 ) -> Result<Diagnosis, DiagnoseError> {
+    diagnose_with(dt_s, u, y, interpolated, voltage, None, opts)
+}
+
+/// [`diagnose`] with the record's stand channels (`stand`, [`stand::StandInput`]): the
+/// baseline is the stand model when the data call for it ([`stand::choose`]; `baseline.kind`
+/// and `baseline.why` say which and why), the generic 2nd-order model otherwise. On a stand
+/// baseline the findings, the held-out figures, the residual and the verdict are the stand
+/// search's ([`stand::search`]) on the diagnosed output, `"stand"` has every channel's
+/// figures and departures, and the 2nd-order `baseline.model` is still fitted and published
+/// (the model the daemon publishes; `extended.model` repeats it).
+pub fn diagnose_with(
+    dt_s: f64,
+    u: &[f64],
+    y: &[f64],
+    interpolated: &[bool],
+    voltage: Option<&[f64]>,
+    stand: Option<&stand::StandInput<'_>>,
+    opts: &Options,
+) -> Result<Diagnosis, DiagnoseError> {
     if !(dt_s.is_finite() && dt_s > 0.0 && dt_s <= MAX_SAMPLE_PERIOD_S) {
         return Err(DiagnoseError::BadSamplePeriod(dt_s));
     }
@@ -250,17 +270,123 @@ pub fn diagnose(
         val,
         rules,
     };
+    let mut choice = stand::choose(opts.input_is_a_command, stand, &rules);
+    let on_stand = match (&choice.kind, stand) {
+        (stand::BaselineKind::Stand, Some(s)) => {
+            let output = s.output.unwrap_or("thrust");
+            match stand::search(dt_s, u, voltage.map(|v| &v[..n]), s, output, &folds, rules) {
+                Ok(run) => Some(run),
+                Err(e) => {
+                    choice = stand::BaselineChoice::generic(format!(
+                        "the stand model could not be fitted ({e}): the generic baseline"
+                    ));
+                    None
+                }
+            }
+        }
+        _ => None,
+    };
     let era = era_start::era_start(&ctx);
     let starts: Vec<Core> = era.iter().map(|e| e.core).collect();
-    let searched = search::search(&ctx, &folds, &starts, opts.max_effects).ok_or_else(|| {
+    // On a stand baseline the generic model is fitted for its published 2nd-order model only.
+    let max_effects = if on_stand.is_some() {
+        0
+    } else {
+        opts.max_effects
+    };
+    let searched = search::search(&ctx, &folds, &starts, max_effects).ok_or_else(|| {
         DiagnoseError::FitFailed {
             core: era.as_ref().err().cloned(),
         }
     })?;
-    let floor = noise::noise_floor(u, y, interpolated, &rules);
-    let mut d = assemble::assemble(&ctx, &folds, searched, era.as_ref().ok(), floor);
+    let floor = noise::measure(u, y, interpolated, &rules);
+    let mut d = assemble::assemble(
+        &ctx,
+        &folds,
+        searched,
+        era.as_ref().ok(),
+        floor.clone().ok(),
+    );
     d.source = source;
+    d.baseline.choice = choice;
+    if let Some(run) = on_stand {
+        stand_overlay(&mut d, &folds, run);
+    }
+    // When no floor was measured the verdict says why (`noise::measure`).
+    if let Err(why) = floor {
+        d.verdict.reason = format!("{}: {why}", d.verdict.reason);
+    }
     Ok(d)
+}
+
+/// The stand search's results in the diagnosis (see [`diagnose_with`]): the output's
+/// held-out figures fold by fold, the findings and the rejected candidates, the residual and
+/// the verdict on them.
+fn stand_overlay(d: &mut Diagnosis, folds: &folds::Folds, run: stand::StandRun) {
+    let out = run.report.output;
+    let fold_fits = |cv: &stand::Cv| cv.folds.get(out).cloned().unwrap_or_default();
+    let (bf, ef) = (fold_fits(&run.base_cv), fold_fits(&run.cv));
+    let (b, e) = (
+        run.base_cv.channel.get(out).copied().unwrap_or(f64::NAN),
+        run.cv.channel.get(out).copied().unwrap_or(f64::NAN),
+    );
+    let rms = |cv: &stand::Cv| {
+        let (Some(p), y) = (cv.prediction.get(out), &d.traces.y) else {
+            return f64::NAN;
+        };
+        let (s, n) = y
+            .iter()
+            .zip(p)
+            .filter(|(y, p)| y.is_finite() && p.is_finite())
+            .fold((0.0, 0usize), |(s, n), (y, p)| (s + (y - p).powi(2), n + 1));
+        (s / n.max(1) as f64).sqrt()
+    };
+    let (rms_b, rms_e) = (rms(&run.base_cv), rms(&run.cv));
+    d.baseline.fit_percent = b;
+    d.validation.baseline_mean_fit_percent = b;
+    d.validation.mean_fit_percent = e;
+    if bf.len() == folds.folds.len() && ef.len() == folds.folds.len() {
+        for (i, f) in d.validation.folds.iter_mut().enumerate() {
+            f.baseline_fit_percent = bf[i];
+            f.fit_percent = ef[i];
+        }
+    }
+    let found = !run.findings.is_empty();
+    d.extended = found.then(|| Extended {
+        effects: run.report.effects.clone(),
+        model: d.baseline.model.clone(),
+        fit_percent: e,
+    });
+    d.gain = found.then(|| Gain {
+        fit_percent_points: e - b,
+        rms_ratio: rms_e / rms_b.max(1e-300),
+    });
+    d.residual = verdict::Residual {
+        baseline_rms: rms_b,
+        extended_rms: found.then_some(rms_e),
+    };
+    d.verdict = verdict::verdict(d.noise_floor.as_ref(), &d.residual, found);
+    d.findings = run.findings;
+    d.rejected = run.rejected;
+    let fill = |p: Option<&Vec<f64>>, into: &mut Vec<f64>| {
+        if let Some(p) = p {
+            for (t, v) in into.iter_mut().zip(p) {
+                if v.is_finite() {
+                    *t = *v;
+                }
+            }
+        }
+    };
+    let pred = |f: &propid_numerics::stand_model::fit::StructuredFit| {
+        f.prediction
+            .iter()
+            .find(|(k, _)| *k == out)
+            .map(|(_, p)| p.clone())
+    };
+    fill(pred(&run.stand.baseline).as_ref(), &mut d.traces.baseline);
+    fill(pred(&run.stand.extended).as_ref(), &mut d.traces.extended);
+    d.stand = Some(run.report);
+    d.stand_model = Some(run.stand);
 }
 
 fn check_varies(x: &[f64], what: &'static str) -> Result<(), DiagnoseError> {
@@ -336,7 +462,7 @@ mod tests {
                      uncertainty fn_hz zeta dc_gain pulses pulses_skipped missing_samples noise_rms \
                      mass_spring_damper m d k hankel_block_rows hankel_block_cols svd terms";
         let want = format!(
-            "source samples missing outliers start_up_transient baseline model {model} gain offset fit_percent \
+            "source samples missing outliers start_up_transient baseline kind why model {model} gain offset fit_percent \
              core_model path fn_hz zeta dc_gain fit_percent \
              findings effect score cv_gain_pp evidence delay_s delay_samples \
              extended effects model {model} delay_s delay_samples gain offset fit_percent \

@@ -40,14 +40,40 @@ pub struct NoiseFloor {
 
 /// The noise floor of output `y` (`NaN` = missing) driven by `u`; `interpolated[k]` marks a
 /// sample the reader interpolated between the output's readings (empty: every sample a
-/// reading); `rules` are the segmentation's at the record's rate (its holds).
+/// reading: a sparse channel, refreshed on fewer rows than the record has, is measured on its
+/// own readings); `rules` are the segmentation's at the record's rate (its holds).
 pub fn noise_floor(
     u: &[f64],
     y: &[f64],
     interpolated: &[bool],
     rules: &SegmentRules,
 ) -> Option<NoiseFloor> {
-    from_holds(u, y, interpolated, rules).or_else(|| from_arx(u, y, interpolated))
+    measure(u, y, interpolated, rules).ok()
+}
+
+/// [`noise_floor`], or why none could be measured: the holds' reason and the high-order
+/// fit's, in words (what the verdict says instead of a ratio).
+pub fn measure(
+    u: &[f64],
+    y: &[f64],
+    interpolated: &[bool],
+    rules: &SegmentRules,
+) -> Result<NoiseFloor, String> {
+    let holds_why = match hold_differences(u, y, interpolated, rules) {
+        Ok(d) => match floor_of(d) {
+            Ok(f) => return Ok(f),
+            Err(why) => why,
+        },
+        Err(why) => why,
+    };
+    from_arx(u, y, interpolated)
+        .filter(|f| f.rms > 0.0)
+        .ok_or_else(|| {
+            format!(
+                "{holds_why}; and the order-{ARX_ORDER} fit of the output's readings found no \
+             usable one-step residual (too few complete rows, or none left over)"
+            )
+        })
 }
 
 /// The steady-hold estimate (see the module doc), `None` below [`MIN_HOLD_SAMPLES`].
@@ -57,9 +83,47 @@ pub fn from_holds(
     interpolated: &[bool],
     rules: &SegmentRules,
 ) -> Option<NoiseFloor> {
+    floor_of(hold_differences(u, y, interpolated, rules).ok()?).ok()
+}
+
+/// The floor from the pooled absolute second differences `d` of the holds' readings, or why
+/// there is none.
+fn floor_of(mut d: Vec<f64>) -> Result<NoiseFloor, String> {
+    d.sort_by(f64::total_cmp);
+    let m = d.len();
+    let median = if m % 2 == 1 {
+        d[m / 2]
+    } else {
+        0.5 * (d[m / 2 - 1] + d[m / 2])
+    };
+    // A quantised output that rests on one code in most holds has median 0: no estimate.
+    if median > 0.0 {
+        Ok(NoiseFloor {
+            rms: median / (MAD_NORMAL * 6f64.sqrt()),
+            from: FloorSource::SteadyHolds,
+            samples: m,
+        })
+    } else {
+        Err(format!(
+            "the output rests on one value in most of its {m} steady readings in the holds \
+             (its noise is below its resolution)"
+        ))
+    }
+}
+
+/// The absolute second differences of consecutive readings of `y` inside the command's holds
+/// (at least [`MIN_HOLD_SAMPLES`]), or why there are too few.
+fn hold_differences(
+    u: &[f64],
+    y: &[f64],
+    interpolated: &[bool],
+    rules: &SegmentRules,
+) -> Result<Vec<f64>, String> {
     let n = u.len().min(y.len());
     let mut d: Vec<f64> = Vec::new();
+    let mut runs = 0usize;
     for run in holds(Command::new(&u[..n]), rules) {
+        runs += 1;
         // Consecutive readings of the hold, a missing sample breaking the chain.
         let mut chain = [f64::NAN; 3];
         let mut len = 0usize;
@@ -75,22 +139,17 @@ pub fn from_holds(
             }
         }
     }
-    if d.len() < MIN_HOLD_SAMPLES {
-        return None;
+    if runs == 0 {
+        return Err("the command holds no level long enough to read the noise in".into());
     }
-    d.sort_by(f64::total_cmp);
-    let m = d.len();
-    let median = if m % 2 == 1 {
-        d[m / 2]
-    } else {
-        0.5 * (d[m / 2 - 1] + d[m / 2])
-    };
-    // A quantised output that rests on one code in most holds has median 0: no estimate.
-    (median > 0.0).then_some(NoiseFloor {
-        rms: median / (MAD_NORMAL * 6f64.sqrt()),
-        from: FloorSource::SteadyHolds,
-        samples: m,
-    })
+    if d.len() < MIN_HOLD_SAMPLES {
+        return Err(format!(
+            "the command's {runs} holds give {} second differences of the output's readings \
+             (fewer than {MIN_HOLD_SAMPLES})",
+            d.len()
+        ));
+    }
+    Ok(d)
 }
 
 /// The high-order-fit estimate (see the module doc), over the output's readings and the input
@@ -218,6 +277,20 @@ mod tests {
         let f = from_holds(&u, &y, &[], &SegmentRules::DEFAULT).unwrap();
         assert_eq!(f.samples, 2998, "every sample counts: {f:?}");
         assert!((f.rms / 0.02 - 1.0).abs() < 0.1, "{f:?}");
+    }
+
+    #[test]
+    fn when_no_floor_can_be_measured_the_reason_is_given() {
+        // A ramp (no hold) with too few samples for the high-order fit.
+        let u: Vec<f64> = (0..40).map(|k| k as f64 * 0.01).collect();
+        let why = measure(&u, &u, &[], &SegmentRules::DEFAULT).unwrap_err();
+        assert!(why.contains("holds no level"), "{why}");
+        assert!(why.contains("order-8 fit"), "{why}");
+        // An output resting on one code in its holds.
+        let u = vec![0.5; 400];
+        let y = vec![1.0; 400];
+        let why = measure(&u, &y, &[], &SegmentRules::DEFAULT).unwrap_err();
+        assert!(why.contains("rests on one value"), "{why}");
     }
 
     #[test]

@@ -42,7 +42,8 @@ pub fn joint_evidence(sse_cur: f64, sse_pair: f64, n: usize) -> Option<f64> {
 }
 
 /// The pair rule (module doc): every pair of [`pairs`] over `scores` is fitted by `fit`
-/// (`None`: the pair fails an in-sample test); of those whose held-out figure exceeds
+/// (`None`: the pair fails an in-sample test, or its held-out gain the acceptance test of
+/// [`crate::folds::HeldOutGain`]); of those whose held-out figure exceeds
 /// `current` by more than [`MIN_CV_GAIN_PP`], the highest figure is returned (ties: the
 /// first tried) with what `fit` gave.
 pub fn select_pair<S>(
@@ -75,7 +76,7 @@ mod tests {
         let alone = [("sag", 300.0, 30.0), ("map", 200.0, 45.0)];
         let singles: Vec<(f64, (&str, f64))> = alone.iter().map(|&(n, s, f)| (s, (n, f))).collect();
         for rule in [Selection::BestFigure, Selection::FirstByScore] {
-            let none = select(rule, singles.clone(), 50.0, |&(_, f)| (f, ()));
+            let none = select(rule, singles.clone(), 50.0, |&(_, f)| (f, true, ()));
             assert!(none.is_none());
         }
         // Together they give 62: the pair is taken, the stronger first.

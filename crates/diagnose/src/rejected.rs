@@ -12,6 +12,7 @@
 
 use serde::Serialize;
 
+use crate::folds::HeldOutGain;
 use propid_numerics::EffectName;
 
 /// One candidate tried and not taken (`"rejected"`).
@@ -51,6 +52,21 @@ impl Rejected {
             score,
             cv_gain_pp: Some(cv_gain_pp),
             reason: format!("fits in-sample but {change}: not taken"),
+        }
+    }
+
+    /// A candidate that raised the held-out figure, by no more than the folds' own scatter
+    /// allows a refit's noise to ([`crate::folds::HeldOutGain`]).
+    pub fn within_scatter(effect: EffectName, score: f64, gain: &HeldOutGain) -> Rejected {
+        Rejected {
+            effect,
+            score,
+            cv_gain_pp: Some(gain.gain_pp),
+            reason: format!(
+                "fits in-sample and raises the held-out fit, but only within the folds' own \
+                 scatter ({}): not taken",
+                gain.describe()
+            ),
         }
     }
 

@@ -10,6 +10,9 @@ use super::summary::ModelSummary;
 /// A model with its validation fit.
 #[derive(Debug, Clone, Serialize)]
 pub struct Stage {
+    /// Which baseline the record got and why (`kind`: `stand` or `generic`, `why`).
+    #[serde(flatten)]
+    pub choice: super::stand::BaselineChoice,
     /// The model.
     pub model: ModelSummary,
     /// The held-out figure: the mean over the validation folds of
@@ -183,9 +186,25 @@ pub struct Diagnosis {
     /// The candidates that fitted in-sample and were not taken, each with its score, held-out
     /// change and reason ([`super::rejected`]); empty when none.
     pub rejected: Vec<super::rejected::Rejected>,
+    /// On a stand baseline: every channel's held-out figures and departures and the stand's
+    /// figures ([`super::stand`]); absent on the generic baseline.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stand: Option<super::stand::StandDiagnosis>,
+    /// On a stand baseline, the calibrated stand ([`Diagnosis::stand_baseline`]).
+    #[serde(skip)]
+    pub stand_model: Option<super::stand::StandBaseline>,
     /// Fitted models and predictions, for reports (not serialised).
     #[serde(skip)]
     pub traces: Traces,
+}
+
+impl Diagnosis {
+    /// The calibrated stand (the stand baseline fitted on the estimation part and the model
+    /// with every effect found, with the parts of the stand it frees); `None` on the generic
+    /// baseline. For a simulated stand's configuration.
+    pub fn stand_baseline(&self) -> Option<&super::stand::StandBaseline> {
+        self.stand_model.as_ref()
+    }
 }
 
 /// The input's lead ([`super::lead`]): each input sample acts this long before its row.

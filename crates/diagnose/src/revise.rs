@@ -7,10 +7,10 @@ use super::ctx::Ctx;
 use super::effect::Effect;
 use super::effects::REGISTRY;
 use super::fit::Fit;
-use super::folds::{cross_validate, Folds, Scores};
+use super::folds::{cross_validate, Folds, HeldOutGain, Scores};
 use super::model::Model;
 use super::spectrum::band_level;
-use crate::thresholds::{MIN_CV_GAIN_PP, MIN_RMS_DROP, SCORE_THRESHOLD};
+use crate::thresholds::{MIN_RMS_DROP, SCORE_THRESHOLD};
 use propid_numerics::EffectName;
 
 /// Parameters of a term: its free ones, and one for a term without any (a delay or a clip
@@ -264,10 +264,14 @@ pub fn revise(
             Change::Remove { fit, .. } | Change::Swap { fit, .. } | Change::Add { fit, .. } => fit,
         };
         let f_cv = cv(fit);
+        // An addition is kept when its held-out gain passes the acceptance test
+        // (`HeldOutGain`), a removal when the effect's gain over the model without it does
+        // not (or it is implausible), a swap when the figure does not fall.
         let kept = match change {
-            Change::Add { .. } => f_cv.mean > cur_cv.mean + MIN_CV_GAIN_PP,
+            Change::Add { .. } => HeldOutGain::of(cur_cv, &f_cv).passes(),
             Change::Remove { out, .. } if implausible.contains(&out) => true,
-            _ => f_cv.mean >= cur_cv.mean,
+            Change::Remove { .. } => !HeldOutGain::of(&f_cv, cur_cv).passes(),
+            Change::Swap { .. } => f_cv.mean >= cur_cv.mean,
         };
         if kept {
             let base_cv = match &change {

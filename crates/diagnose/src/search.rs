@@ -10,7 +10,7 @@ use super::ctx::Ctx;
 use super::effect::Effect;
 use super::effects::REGISTRY;
 use super::fit::Fit;
-use super::folds::{cross_validate, Folds, Method, Scores};
+use super::folds::{cross_validate, Folds, HeldOutGain, Method, Scores};
 use super::lead;
 use super::model::Model;
 use super::pair::{joint_evidence, select_pair};
@@ -93,9 +93,15 @@ fn search_from(
         if let Some(d) = e.detect(ctx) {
             let evidence = d.term.evidence(&template.core, ctx, "");
             let params = d.term.finding_params(ctx.sig.dt_s);
-            template = template.with_boxed(d.term);
-            let f = baseline(ctx, &template, era_starts);
+            let with = template.clone().with_boxed(d.term);
+            let f = baseline(ctx, &with, era_starts);
             let f_cv = cv(&f);
+            // Read off the data, yet taken only when its held-out gain passes the acceptance
+            // test like any other (`HeldOutGain`); else the forward search may try it again.
+            if !HeldOutGain::of(&cur_cv, &f_cv).passes() {
+                continue;
+            }
+            template = with;
             findings.push(Finding {
                 effect: e.name(),
                 score: d.score,
@@ -182,7 +188,7 @@ impl Growth {
                     ctx,
                     &self.findings,
                     &self.cur,
-                    (self.cur_cv.mean, rule),
+                    (&self.cur_cv, rule),
                     cv,
                     &mut self.ledger,
                     room,
@@ -244,7 +250,7 @@ fn forward(
     ctx: &Ctx,
     findings: &[Finding],
     cur: &Fit,
-    (cur_figure, rule): (f64, Selection),
+    (cur_cv, rule): (&Scores, Selection),
     cv: &impl Fn(&Fit) -> Scores,
     ledger: &mut Ledger,
     room: usize,
@@ -274,16 +280,18 @@ fn forward(
         .map(|(s, (e, _))| (e.name(), *s))
         .collect();
     let pool = candidates.clone();
-    let mut tried: Vec<(EffectName, f64)> = Vec::new();
+    let cur_figure = cur_cv.mean;
+    let mut tried: Vec<(EffectName, HeldOutGain)> = Vec::new();
     let taken = select(rule, candidates, cur_figure, |(e, f)| {
         let s = cv(f);
-        tried.push((e.name(), s.mean));
-        (s.mean, s)
+        let gain = HeldOutGain::of(cur_cv, &s);
+        tried.push((e.name(), gain));
+        (s.mean, gain.passes(), s)
     });
     let taken_gain = taken
         .as_ref()
         .map(|(_, (e, _), s)| (e.name(), s.mean - cur_figure));
-    for &(name, figure) in tried
+    for &(name, held) in tried
         .iter()
         .filter(|t| Some(t.0) != taken_gain.map(|t| t.0))
     {
@@ -291,8 +299,12 @@ fn forward(
             .iter()
             .find(|s| s.0 == name)
             .map_or(f64::NAN, |s| s.1);
-        let gain = figure - cur_figure;
+        let gain = held.gain_pp;
         ledger.note(match taken_gain {
+            // Raised the figure within the folds' scatter: not shown by the data.
+            _ if gain > MIN_CV_GAIN_PP && !held.passes() => {
+                Rejected::within_scatter(name, score, &held)
+            }
             // Raised the figure, less than the one taken (`Selection::BestFigure`).
             Some((by, by_gain)) if gain > MIN_CV_GAIN_PP => {
                 Rejected::outranked(name, score, gain, by, by_gain)
@@ -318,6 +330,8 @@ fn forward(
         assess(ctx, fb, &both, ea.name()).ok()?;
         joint_evidence(cur.sse, both.sse, both.n)?;
         let s = cv(&both);
+        // The pair's gain must pass the acceptance test too (`HeldOutGain`).
+        HeldOutGain::of(cur_cv, &s).passes().then_some(())?;
         Some((s.mean, (score_b, both, s)))
     })?;
     let (ea, eb) = (pool[a].1 .0, pool[b].1 .0);
@@ -423,8 +437,9 @@ impl Selection {
 
 /// The selection rule (module doc): the `candidates` (score, item) that passed the score and
 /// RMS tests, in order of decreasing score (ties: the first listed), get their held-out figure
-/// (`figure` gives it and what comes with it); of those whose figure exceeds `current` by more
-/// than [`MIN_CV_GAIN_PP`], `rule` takes the highest figure (equal figures: the earlier in that
+/// (`figure` gives it, whether its gain passes the acceptance test of
+/// [`HeldOutGain`], and what comes with it); of those that pass it and whose figure exceeds
+/// `current` by more than [`MIN_CV_GAIN_PP`], `rule` takes the highest figure (equal figures: the earlier in that
 /// order) or the first, with its score and what `figure` gave. `None`: no addition improves
 /// the held-out figure. Under [`Selection::FirstByScore`] `figure` runs only until one is
 /// taken.
@@ -432,13 +447,13 @@ pub fn select<T, S>(
     rule: Selection,
     mut candidates: Vec<(f64, T)>,
     current: f64,
-    mut figure: impl FnMut(&T) -> (f64, S),
+    mut figure: impl FnMut(&T) -> (f64, bool, S),
 ) -> Option<(f64, T, S)> {
     candidates.sort_by(|a, b| b.0.total_cmp(&a.0));
     let mut best: Option<(f64, f64, T, S)> = None;
     for (score, item) in candidates {
-        let (fig, extra) = figure(&item);
-        if fig - current > MIN_CV_GAIN_PP && best.as_ref().map_or(true, |b| fig > b.1) {
+        let (fig, accepted, extra) = figure(&item);
+        if accepted && fig - current > MIN_CV_GAIN_PP && best.as_ref().map_or(true, |b| fig > b.1) {
             best = Some((score, fig, item, extra));
             if rule == Selection::FirstByScore {
                 break;
@@ -514,7 +529,7 @@ mod tests {
         let mut tried = Vec::new();
         let got = select(Selection::BestFigure, four(), 50.0, |&(name, fig)| {
             tried.push(name);
-            (fig, name)
+            (fig, true, name)
         });
         assert_eq!(got.map(|g| (g.0, g.2)), Some((150.0, "d")));
         assert_eq!(
@@ -529,7 +544,7 @@ mod tests {
         let mut tried = Vec::new();
         let got = select(Selection::FirstByScore, four(), 50.0, |&(name, fig)| {
             tried.push(name);
-            (fig, name)
+            (fig, true, name)
         });
         assert_eq!(got.map(|g| (g.0, g.2)), Some((200.0, "c")));
         assert_eq!(
@@ -552,10 +567,22 @@ mod tests {
         for rule in [Selection::BestFigure, Selection::FirstByScore] {
             let c = vec![(500.0, 50.0), (90.0, 49.9)];
             assert!(
-                select(rule, c, 50.0, |&fig| (fig, ())).is_none(),
+                select(rule, c, 50.0, |&fig| (fig, true, ())).is_none(),
                 "equal is not better"
             );
-            assert!(select(rule, Vec::<(f64, f64)>::new(), 0.0, |&f| (f, ())).is_none());
+            assert!(select(rule, Vec::<(f64, f64)>::new(), 0.0, |&f| (f, true, ())).is_none());
+        }
+    }
+
+    #[test]
+    fn a_gain_inside_the_folds_scatter_is_not_taken() {
+        for rule in [Selection::BestFigure, Selection::FirstByScore] {
+            // "b" raises the figure most but fails the acceptance test: "c" is taken.
+            let c = vec![(300.0, ("b", 58.0, false)), (200.0, ("c", 55.0, true))];
+            let got = select(rule, c, 50.0, |&(n, fig, ok)| (fig, ok, n)).map(|g| g.2);
+            assert_eq!(got, Some("c"));
+            let c = vec![(300.0, ("b", 58.0, false))];
+            assert!(select(rule, c, 50.0, |&(n, fig, ok)| (fig, ok, n)).is_none());
         }
     }
 
@@ -563,10 +590,10 @@ mod tests {
     fn ties_go_to_the_higher_score_then_the_first_listed() {
         for rule in [Selection::BestFigure, Selection::FirstByScore] {
             let c = vec![(10.0, "first"), (10.0, "second")];
-            let got = select(rule, c, 0.0, |_| (1.0, ())).map(|g| g.1);
+            let got = select(rule, c, 0.0, |_| (1.0, true, ())).map(|g| g.1);
             assert_eq!(got, Some("first"));
             let c = vec![(10.0, "weaker"), (20.0, "stronger")];
-            let got = select(rule, c, 0.0, |_| (1.0, ())).map(|g| g.1);
+            let got = select(rule, c, 0.0, |_| (1.0, true, ())).map(|g| g.1);
             assert_eq!(got, Some("stronger"));
         }
     }

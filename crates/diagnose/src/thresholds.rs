@@ -12,6 +12,23 @@ pub const MIN_RMS_DROP: f64 = 0.01;
 /// Smallest held-out gain of an addition, percentage points (the figure must rise).
 pub const MIN_CV_GAIN_PP: f64 = 0.0;
 
+/// One-sided 95 % quantiles of Student's t for 1..=12 degrees of freedom.
+const T_95: [f64; 12] = [
+    6.314, 2.920, 2.353, 2.132, 2.015, 1.943, 1.895, 1.860, 1.833, 1.812, 1.796, 1.782,
+];
+
+/// The acceptance test's `t` for a held-out gain paired over `blocks` blocks
+/// ([`crate::folds::HeldOutGain`]): the one-sided 95 % quantile of Student's t with
+/// `blocks − 1` degrees of freedom (1.645, the normal's, beyond 12; infinite below 2 blocks:
+/// no scatter, no test passed).
+pub fn gain_t(blocks: usize) -> f64 {
+    match blocks {
+        0 | 1 => f64::INFINITY,
+        b if b - 1 <= T_95.len() => T_95[b - 2],
+        _ => 1.645,
+    }
+}
+
 /// Most revisions (changes kept) in one search.
 pub const MAX_REVISIONS: usize = 4;
 
@@ -27,3 +44,23 @@ pub const CONFOUNDING_SHIFT: usize = 2;
 /// Exponent `n` of the strongest plausible supply dependence, thrust ∝ V^n: a propeller whose
 /// speed follows the voltage (`ω ∝ K_v V`, thrust ∝ ω²).
 pub const EXPONENT_MAX: f64 = 2.0;
+
+/// Most effects named on a stand baseline ([`crate::stand`]): its catalogue frees one part of
+/// the stand at a time, and a real stand shows several at once (a dead time, a load cell's
+/// lag, the thrust curve, the supply).
+pub const STAND_MAX_EFFECTS: usize = 6;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_acceptance_t_is_students_one_sided_95_percent_quantile() {
+        assert_eq!(gain_t(1), f64::INFINITY);
+        assert_eq!(gain_t(2), 6.314);
+        assert_eq!(gain_t(5), 2.132);
+        assert_eq!(gain_t(10), 1.833);
+        assert_eq!(gain_t(13), 1.782);
+        assert_eq!(gain_t(100), 1.645);
+    }
+}

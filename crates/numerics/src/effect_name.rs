@@ -27,11 +27,16 @@ pub enum EffectName {
     AsymmetricDynamics,
     /// A cubic stiffness in the core.
     StiffnessNonlinearity,
+    /// One channel's sensor reads late and through a lag of its own (a load cell's filter),
+    /// relative to the others (stand baseline only).
+    SensorLag,
+    /// The rotor's time constant changes with its speed (stand baseline only).
+    SpeedDependentTau,
 }
 
 impl EffectName {
     /// Every effect, in catalogue order.
-    pub const ALL: [EffectName; 9] = [
+    pub const ALL: [EffectName; 11] = [
         EffectName::DeadTime,
         EffectName::StaticNonlinearity,
         EffectName::ExtraMode,
@@ -41,6 +46,8 @@ impl EffectName {
         EffectName::Saturation,
         EffectName::AsymmetricDynamics,
         EffectName::StiffnessNonlinearity,
+        EffectName::SensorLag,
+        EffectName::SpeedDependentTau,
     ];
 
     /// The published name (`"dead_time"`, ...).
@@ -55,7 +62,15 @@ impl EffectName {
             EffectName::Saturation => "saturation",
             EffectName::AsymmetricDynamics => "asymmetric_dynamics",
             EffectName::StiffnessNonlinearity => "stiffness_nonlinearity",
+            EffectName::SensorLag => "sensor_lag",
+            EffectName::SpeedDependentTau => "speed_dependent_tau",
         }
+    }
+
+    /// Whether the effect extends only a stand baseline (`propid diagnose` on a motor stand's
+    /// channels), never the generic 2nd-order model.
+    pub const fn stand_only(self) -> bool {
+        matches!(self, EffectName::SensorLag | EffectName::SpeedDependentTau)
     }
 
     /// The effect published as `name`; `None` for a name no effect has.

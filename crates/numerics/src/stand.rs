@@ -142,16 +142,7 @@ pub fn stand_figures(
             ..StandFigures::default()
         };
     };
-    let step_figs = steps
-        .iter()
-        .map(|s| {
-            let mut f = step_figures(step_output, dt_s, s);
-            if rules.samples_are_steady() {
-                f = f.unsupported(SAMPLES_ARE_STEADY);
-            }
-            f
-        })
-        .collect();
+    let step_figs = figures_at(&steps, step_output, dt_s, rules);
     let mut maps: BTreeMap<&'static str, StaticMap> = outputs
         .iter()
         .map(|o| {
@@ -195,6 +186,40 @@ pub fn stand_figures(
         steps: step_figs,
         static_map: maps,
     }
+}
+
+/// The step table `identify` prints (`steps` of `identify --json`): the figures of `y` at every
+/// clean step of `cmd` ([`segment::steps`], [`step_figures`]), unsupported when a sample lasts
+/// longer than the response takes to settle ([`SAMPLES_ARE_STEADY`]). The one place a step is
+/// timed: `diagnose` reads from it whether a dead time can be seen, so that the two commands
+/// cannot disagree on it.
+pub fn step_table(
+    cmd: Command<'_>,
+    dt_s: f64,
+    rules: &SegmentRules,
+    y: &[f64],
+) -> Vec<StepFigures> {
+    figures_at(&segment::steps(cmd, rules), y, dt_s, rules)
+}
+
+/// The figures of `y` at `steps` ([`step_table`]).
+fn figures_at(
+    steps: &[segment::Step],
+    y: &[f64],
+    dt_s: f64,
+    rules: &SegmentRules,
+) -> Vec<StepFigures> {
+    steps
+        .iter()
+        .map(|s| {
+            let f = step_figures(y, dt_s, s);
+            if rules.samples_are_steady() {
+                f.unsupported(SAMPLES_ARE_STEADY)
+            } else {
+                f
+            }
+        })
+        .collect()
 }
 
 /// One step's timing on one channel: its dead time and time constant (the figures of

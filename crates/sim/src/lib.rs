@@ -40,6 +40,7 @@ pub mod plant_pipe;
 pub mod pty;
 pub mod record;
 pub mod rx;
+pub mod stand_cases;
 pub mod synth;
 pub mod truth;
 pub mod walkthrough;

@@ -168,6 +168,9 @@ pub fn hide_effect(cfg: &mut PlantConfig, name: EffectName, rng: &mut StdRng) {
                 k3_per_k1: s / (t_ref * t_ref),
             });
         }
+        // Effects of the stand baseline only: this 2nd-order plant has no sensor per channel
+        // nor a rotor whose lag follows its speed; nothing is hidden.
+        EffectName::SensorLag | EffectName::SpeedDependentTau => {}
     }
     cfg.effects = e;
 }

@@ -4,8 +4,8 @@
 //! Method and reasoning: `docs/engine-notes.md`, `crates/diagnose/src/effects/dead_time.rs`.
 
 use crate::thresholds::{CONFOUNDING_SHIFT, UNIDENTIFIABLE_R2};
-use propid_numerics::segment::{self, Command, SegmentRules};
-use propid_numerics::step_response::step_figures;
+use propid_numerics::segment::{Command, SegmentRules};
+use propid_numerics::stand::step_table;
 use serde::Serialize;
 use serde_json::{json, Map, Value};
 
@@ -49,13 +49,12 @@ pub fn delay_search_samples(dt_s: f64, est_len: usize, steps_delay: Option<f64>)
 }
 
 /// The dead time the command's clean steps show, samples: the median of the steps'
-/// first-order-plus-dead-time delays ([`propid_numerics::step_response`], found with the one
-/// segmentation); `None` without a step that has one.
+/// first-order-plus-dead-time delays in `identify`'s step table ([`step_table`]); `None`
+/// without a step that has one.
 pub fn steps_delay_samples(sig: &Signals, rules: &SegmentRules) -> Option<f64> {
-    let steps = segment::steps(Command::new(sig.u), rules);
-    let mut d: Vec<f64> = steps
+    let mut d: Vec<f64> = step_table(Command::new(sig.u), sig.dt_s, rules, sig.y)
         .iter()
-        .filter_map(|s| step_figures(sig.y, sig.dt_s, s).dead_time_s)
+        .filter_map(|f| f.dead_time_s)
         .map(|t| t / sig.dt_s)
         .filter(|d| d.is_finite())
         .collect();
@@ -87,15 +86,39 @@ pub fn confounding(ctx: &Ctx) -> f64 {
     affine_r2(&ks, |k| u[k - d], |k| u[k])
 }
 
+/// How many of the command's clean steps `identify` times with a dead time on the output
+/// (its step table, [`step_table`]: a delay measured, or bounded below a sample).
+pub fn timed_steps(ctx: &Ctx) -> usize {
+    let sig = &ctx.sig;
+    step_table(Command::new(sig.u), sig.dt_s, &ctx.rules, sig.y)
+        .iter()
+        .filter(|f| f.dead_time_s.is_some() || f.dead_time_below_sample)
+        .count()
+}
+
+/// Whether a dead time can be seen in the record, decided once (issue 29 item 4): yes when
+/// `identify` times a step of it with a dead time ([`timed_steps`]: the same steps, so that
+/// `diagnose` never calls a dead time unidentifiable in a log whose steps `identify` timed);
+/// else, for a command without such steps, yes unless it is smooth against the sample period
+/// ([`confounding`] below [`UNIDENTIFIABLE_R2`]: noise and multisines show a delay without a
+/// step). The `dead_time_unidentifiable` warning when it cannot.
+pub fn identifiability_warning(ctx: &Ctx) -> Option<Warning> {
+    if timed_steps(ctx) > 0 {
+        return None;
+    }
+    dead_time_warning(confounding(ctx))
+}
+
 /// The `dead_time_unidentifiable` warning when `r2` (the share of the command delayed by
 /// [`CONFOUNDING_SHIFT`] samples that an affine function of the command explains) reaches
-/// [`UNIDENTIFIABLE_R2`] ([`confounding`]).
+/// [`UNIDENTIFIABLE_R2`] ([`confounding`]), for a command with no step `identify` times.
 fn dead_time_warning(r2: f64) -> Option<Warning> {
     (r2 >= UNIDENTIFIABLE_R2).then(|| Warning {
         kind: WarningKind::DeadTimeUnidentifiable,
         message: format!(
-            "dead time not identifiable: the command is smooth against the sample period (delayed \
-             by {CONFOUNDING_SHIFT} samples it is an affine function of itself to R² = {r2:.5}), \
+            "dead time not identifiable: the command has no clean step that `identify` times \
+             with a dead time, and it is smooth against the sample period (delayed by \
+             {CONFOUNDING_SHIFT} samples it is an affine function of itself to R² = {r2:.5}), \
              so a delay of the output cannot be told from a shift of the thrust curve or a lag; \
              steps or holds would show it"
         ),
@@ -257,7 +280,7 @@ impl Effect for DeadTime {
         _found: bool,
         _model: &'static str,
     ) -> Option<Warning> {
-        dead_time_warning(confounding(ctx))
+        identifiability_warning(ctx)
     }
 }
 
@@ -447,6 +470,42 @@ mod tests {
         assert!(r2(&stairs) < unidentifiable, "{}", r2(&stairs));
         assert!(r2(&noise) < 0.5, "{}", r2(&noise));
         assert_eq!(r2(&[0.4; 600]), 0.0);
+    }
+
+    #[test]
+    fn a_delay_is_identifiable_where_identify_times_the_steps() {
+        // A Tyto-style staircase: 20 steps of 0.04, each held 4 s at 143 Hz; the thrust
+        // follows 4 samples late as a first order with τ = 5 samples. Delayed by 2 samples
+        // the command is an affine function of itself to R² > 0.999 (so the smoothness test
+        // alone called the delay unidentifiable), yet `identify` times every step.
+        let per = 572;
+        let u: Vec<f64> = (0..20 * per)
+            .map(|k| 0.1 + 0.04 * (k / per) as f64)
+            .collect();
+        let mut y = vec![u[0]; u.len()];
+        for k in 1..u.len() {
+            let target = u[k.saturating_sub(4)];
+            y[k] = y[k - 1] + (target - y[k - 1]) * (1.0 - (-1.0f64 / 5.0).exp());
+        }
+        let dt = 1.0 / 143.0;
+        let ctx = Ctx::whole(dt, &u, &y);
+        let ctx = Ctx {
+            rules: SegmentRules::for_record(dt, true),
+            ..ctx
+        };
+        assert!(
+            confounding(&ctx) >= UNIDENTIFIABLE_R2,
+            "{}",
+            confounding(&ctx)
+        );
+        assert!(timed_steps(&ctx) >= 15, "{}", timed_steps(&ctx));
+        assert!(identifiability_warning(&ctx).is_none());
+        // A one-way ramp has no step to time: the smoothness test decides, and says so.
+        let ramp: Vec<f64> = (0..2000).map(|k| 0.1 + 0.8 * k as f64 / 2000.0).collect();
+        let ctx = Ctx::whole(0.02, &ramp, &ramp);
+        assert_eq!(timed_steps(&ctx), 0);
+        let w = identifiability_warning(&ctx).expect("a ramp hides a delay");
+        assert!(w.message.contains("no clean step"), "{}", w.message);
     }
 
     #[test]

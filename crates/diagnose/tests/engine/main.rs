@@ -4,4 +4,5 @@
 mod detection;
 mod record;
 mod staircase;
+mod stand_cases;
 mod verdict;

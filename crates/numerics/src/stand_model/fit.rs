@@ -134,7 +134,8 @@ pub struct ChannelFit {
     pub delay_s: Option<(f64, Option<f64>)>,
     /// Lag and its standard deviation, s (`None` for the reference).
     pub tau_s: Option<(f64, Option<f64>)>,
-    /// The amplitudes (module doc), then offset and creep per second where fitted.
+    /// The amplitudes (module doc), then offset and creep per second where fitted (then a
+    /// sinusoid's sine and cosine amplitudes, [`Structure::sinusoid_hz`]).
     pub amplitudes: Vec<f64>,
     /// The noise the residuals were divided by.
     pub sigma: f64,
@@ -224,6 +225,10 @@ enum P {
     Exp,
     Delay(usize),
     Lag(usize),
+    Limit,
+    Freq,
+    ModeFn,
+    ModeZeta,
 }
 
 /// Values of every nonlinear parameter (fixed or free).
@@ -238,6 +243,12 @@ struct Values {
     exp: f64,
     delay: Vec<f64>,
     lag: Vec<f64>,
+    /// The command's upper clip ([`Structure::command_limit`]).
+    limit: Option<f64>,
+    /// A sinusoid's frequency, Hz ([`Structure::sinusoid_hz`]).
+    freq: Option<f64>,
+    /// A stand resonance's frequency, Hz, and damping ratio ([`Structure::mode`]).
+    mode: Option<(f64, f64)>,
 }
 
 struct Problem {
@@ -252,6 +263,8 @@ struct Problem {
     layout: Vec<P>,
     bounds: Vec<(f64, f64)>,
     base: Values,
+    /// Each load and current channel has a creep column.
+    creep: bool,
 }
 
 fn median(v: &mut [f64]) -> Option<f64> {
@@ -365,6 +378,10 @@ impl Problem {
                 P::Exp => v.exp = x,
                 P::Delay(c) => v.delay[c] = x,
                 P::Lag(c) => v.lag[c] = x.exp(),
+                P::Limit => v.limit = Some(x),
+                P::Freq => v.freq = Some(x),
+                P::ModeFn => v.mode = v.mode.map(|(_, z)| (x.exp(), z)),
+                P::ModeZeta => v.mode = v.mode.map(|(f, _)| (f, x.exp())),
             }
         }
         v
@@ -383,6 +400,10 @@ impl Problem {
                 P::Exp => v.exp,
                 P::Delay(c) => v.delay[c],
                 P::Lag(c) => v.lag[c].max(MIN_TAU_S).ln(),
+                P::Limit => v.limit.unwrap_or(self.u_ref),
+                P::Freq => v.freq.unwrap_or(1.0),
+                P::ModeFn => v.mode.map_or(1.0, |m| m.0).ln(),
+                P::ModeZeta => v.mode.map_or(0.1, |m| m.1).ln(),
             })
             .collect()
     }
@@ -423,7 +444,15 @@ impl Problem {
     /// offset and creep for all but a speed.
     fn design(&self, v: &Values) -> Option<Vec<Vec<Vec<f64>>>> {
         let p = self.relative(v);
-        let course = rotor_course(&p, self.dt, &self.u, self.voltage.as_deref());
+        let clipped: Vec<f64>;
+        let command = match v.limit {
+            Some(l) => {
+                clipped = self.u.iter().map(|&x| x.min(l)).collect();
+                &clipped
+            }
+            None => &self.u,
+        };
+        let course = rotor_course(&p, self.dt, command, self.voltage.as_deref());
         if course.speed.iter().any(|x| !x.is_finite()) {
             return None;
         }
@@ -435,7 +464,13 @@ impl Problem {
             .map(|(c, ch)| {
                 let bases: Vec<Vec<f64>> = match ch.quantity {
                     Quantity::Speed => vec![course.speed.clone()],
-                    Quantity::Thrust | Quantity::Torque => vec![powers(&course.speed, e)],
+                    Quantity::Thrust | Quantity::Torque => {
+                        let load = powers(&course.speed, e);
+                        vec![match v.mode {
+                            Some((fn_hz, zeta)) => resonance(&load, self.dt, fn_hz, zeta),
+                            None => load,
+                        }]
+                    }
                     Quantity::Current => vec![
                         powers(&course.speed, e + 1.0),
                         course
@@ -458,12 +493,19 @@ impl Problem {
                     .collect();
                 if ch.quantity != Quantity::Speed {
                     cols.push(vec![1.0; ch.rows.len()]);
-                    cols.push(
-                        ch.rows
-                            .iter()
-                            .map(|&k| k as f64 * self.dt / self.t_span)
-                            .collect(),
-                    );
+                    if self.creep {
+                        cols.push(
+                            ch.rows
+                                .iter()
+                                .map(|&k| k as f64 * self.dt / self.t_span)
+                                .collect(),
+                        );
+                    }
+                    if let Some(f) = v.freq {
+                        let w = std::f64::consts::TAU * f * self.dt;
+                        cols.push(ch.rows.iter().map(|&k| (w * k as f64).sin()).collect());
+                        cols.push(ch.rows.iter().map(|&k| (w * k as f64).cos()).collect());
+                    }
                 }
                 cols
             })
@@ -592,6 +634,16 @@ fn step_timing(
 
 /// Fits the stand model to `input` (module doc).
 pub fn fit(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
+    windowed(input, |within| {
+        fit_rows(within, &Structure::full(), None).map(|(f, _, _)| f)
+    })
+}
+
+/// `f` on the rows of `input` the fit steps over ([`window`]), its [`StandFit::window_s`] set.
+fn windowed<T: WithWindow>(
+    input: &FitInput<'_>,
+    f: impl FnOnce(&FitInput<'_>) -> Result<T, StandModelError>,
+) -> Result<T, StandModelError> {
     let (start, end) = window(input.command);
     let channels: Vec<Channel<'_>> = input
         .channels
@@ -611,9 +663,20 @@ pub fn fit(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
         channels: &channels,
         ..*input
     };
-    let mut f = fit_rows(&within)?;
-    f.window_s = (start as f64 * input.dt_s, end as f64 * input.dt_s);
+    let mut f = f(&within)?;
+    f.set_window(start, end, input.dt_s, input.command.len());
     Ok(f)
+}
+
+/// A fit's result that records the rows it was fitted over.
+trait WithWindow {
+    fn set_window(&mut self, start: usize, end: usize, dt_s: f64, len: usize);
+}
+
+impl WithWindow for StandFit {
+    fn set_window(&mut self, start: usize, end: usize, dt_s: f64, _len: usize) {
+        self.window_s = (start as f64 * dt_s, end as f64 * dt_s);
+    }
 }
 
 /// The rows fitted: all of a record of at most [`MAX_ROWS`], else the window of [`MAX_ROWS`]
@@ -650,7 +713,11 @@ fn window(command: &[f64]) -> (usize, usize) {
     (best, best + MAX_ROWS)
 }
 
-fn fit_rows(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
+fn fit_rows(
+    input: &FitInput<'_>,
+    st: &Structure,
+    warm: Option<&Warm>,
+) -> Result<(StandFit, Problem, Vec<f64>), StandModelError> {
     let dt = input.dt_s;
     let len = input.command.len();
     let u = fill_held(input.command, 0.0);
@@ -691,7 +758,7 @@ fn fit_rows(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
         .map(|v| v.iter().sum::<f64>() / v.len().max(1) as f64)
         .filter(|m| m.is_finite() && *m > 0.0)
         .unwrap_or(1.0);
-    let voltage = voltage.filter(|_| v_ref != 1.0);
+    let voltage = voltage.filter(|_| v_ref != 1.0 && st.voltage);
 
     // Start values from the step figures and the reference channel's static map.
     let cmd = Command::new(&u);
@@ -732,34 +799,76 @@ fn fit_rows(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
         exp: exp0,
         delay: delay0,
         lag: lag0,
+        limit: None,
+        freq: None,
+        mode: None,
     };
-    let mut layout = vec![P::Dead, P::TauUp];
-    let mut bounds = vec![(0.0, 1.0), (MIN_TAU_S.ln(), 5f64.ln())];
+    let mut layout = vec![];
+    let mut bounds = vec![];
     let mut base = base;
-    if rises && falls {
+    if st.dead_time {
+        layout.push(P::Dead);
+        bounds.push((0.0, 1.0));
+    } else {
+        base.dead = 0.0;
+    }
+    layout.push(P::TauUp);
+    bounds.push((MIN_TAU_S.ln(), 5f64.ln()));
+    if rises && falls && st.asymmetric {
         layout.push(P::TauDown);
         bounds.push((MIN_TAU_S.ln(), 5f64.ln()));
         base.tau_down = Some(tau_down0);
     }
-    if shows.several_levels {
+    if shows.several_levels && st.speed_dependent_tau {
         layout.push(P::Gamma);
         bounds.push((-1.0, 3.0));
     }
     layout.push(P::Zero);
     bounds.push((u_lo - range.max(0.1), u_ref - 0.05 * range));
-    if speed {
+    if speed && st.static_map {
         layout.push(P::MapExp);
         bounds.push((0.3, 3.0));
+    } else if speed {
+        base.map_exp = 1.0;
     }
-    if exponent {
+    if exponent && st.static_map {
         layout.push(P::Exp);
         bounds.push((0.5, 4.5));
+    } else if exponent {
+        base.exp = 2.0;
     }
     for c in 1..channels.len() {
+        if !st.lags(channels[c].key) {
+            base.delay[c] = 0.0;
+            base.lag[c] = 0.0;
+            continue;
+        }
         layout.push(P::Delay(c));
         bounds.push((-0.5, 1.0));
         layout.push(P::Lag(c));
         bounds.push((MIN_TAU_S.ln(), 3f64.ln()));
+    }
+    if st.command_limit && range > 0.0 {
+        layout.push(P::Limit);
+        bounds.push((u_lo + 0.3 * range, u_ref));
+        base.limit = Some(u_ref - 0.1 * range);
+    }
+    if let Some(f0) = st.sinusoid_hz.filter(|f| f.is_finite() && *f > 0.0) {
+        layout.push(P::Freq);
+        bounds.push((0.97 * f0, 1.03 * f0));
+        base.freq = Some(f0);
+    }
+    if let Some((f0, z0)) = st.mode.filter(|m| m.0.is_finite() && m.0 > 0.0) {
+        let top = 0.45 / dt;
+        let f0 = f0.min(0.9 * top);
+        layout.push(P::ModeFn);
+        bounds.push(((0.6 * f0).ln(), (1.5 * f0).min(top).ln()));
+        layout.push(P::ModeZeta);
+        bounds.push((0.01f64.ln(), 1f64.ln()));
+        base.mode = Some((f0, z0.clamp(0.011, 0.99)));
+    }
+    if let Some(w) = warm {
+        w.overlay(&mut base, &channels);
     }
     let t_span = (len.max(2) - 1) as f64 * dt;
     let mut problem = Problem {
@@ -774,21 +883,40 @@ fn fit_rows(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
         layout,
         bounds,
         base,
+        creep: st.creep,
     };
-    // Two passes: the readings' noise as weights, then the larger of it and the residuals'.
     let z0 = problem.z_of(&problem.base);
-    let (z1, _, it1) = problem.run(&z0, 30).ok_or(StandModelError::NotFitted)?;
-    let rms = problem.rms(&problem.values(&z1));
-    for (ch, r) in problem.channels.iter_mut().zip(&rms) {
-        if r.is_finite() {
-            ch.sigma = ch.noise.max(*r);
+    let (z, cost, iterations) = match warm.and_then(|w| w.sigma.as_ref().map(|s| (w, s))) {
+        // Given weights (a diagnosis compares its models on the baseline's): one pass.
+        Some((w, sigma)) => {
+            for ch in problem.channels.iter_mut() {
+                if let Some(&(_, s)) = sigma.iter().find(|(k, _)| *k == ch.key) {
+                    ch.sigma = s;
+                }
+            }
+            problem
+                .run(&z0, w.max_iter)
+                .ok_or(StandModelError::NotFitted)?
         }
-    }
-    let (z, cost, it2) = problem.run(&z1, 40).ok_or(StandModelError::NotFitted)?;
+        // Two passes: the readings' noise as weights, then the larger of it and the
+        // residuals'.
+        None => {
+            let (z1, _, it1) = problem.run(&z0, 30).ok_or(StandModelError::NotFitted)?;
+            let rms = problem.rms(&problem.values(&z1));
+            for (ch, r) in problem.channels.iter_mut().zip(&rms) {
+                if r.is_finite() {
+                    ch.sigma = ch.noise.max(*r);
+                }
+            }
+            let (z, cost, it2) = problem.run(&z1, 40).ok_or(StandModelError::NotFitted)?;
+            (z, cost, it1 + it2)
+        }
+    };
     if !cost.is_finite() {
         return Err(StandModelError::NotFitted);
     }
-    Ok(summarise(&problem, &z, cost, it1 + it2))
+    let f = summarise(&problem, &z, cost, iterations);
+    Ok((f, problem, z))
 }
 
 /// The covariance of the nonlinear parameters and the amplitudes at `z` (module doc), the
@@ -909,11 +1037,13 @@ fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> Stan
             let amplitudes = lin.get(c).cloned().unwrap_or_default();
             let amplitudes = match ch.quantity {
                 Quantity::Speed => amplitudes,
-                // creep per second: the column was t / t_span.
-                _ => {
+                // creep per second: the column was t / t_span (after the bases and the
+                // offset; a sinusoid's pair follows it).
+                q => {
                     let mut a = amplitudes;
-                    if let Some(last) = a.last_mut() {
-                        *last /= problem.t_span;
+                    let at = if q == Quantity::Current { 3 } else { 2 };
+                    if let Some(creep) = a.get_mut(at).filter(|_| problem.creep) {
+                        *creep /= problem.t_span;
                     }
                     a
                 }
@@ -1010,4 +1140,237 @@ fn supply_resistance(problem: &Problem) -> Option<Estimate> {
         .sum();
     let sd = (sse / (n - 2.0) / sii).sqrt();
     Some((-slope, Some(sd)))
+}
+
+/// Which parts of the stand a fit frees ([`fit_structured`]). [`Structure::full`] is what
+/// [`fit`] fits: every part the data can show. `propid diagnose` starts from
+/// [`Structure::default`] — the ESC's dead band, one rotor time constant, `a = 1`, `e = 2`, the
+/// amplitudes and offsets, no dead time, no sensor delay or lag, no creep, the supply taken
+/// constant — and names what each part it frees gains on held-out data.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Structure {
+    /// The ESC's dead time `θ` is fitted (else 0).
+    pub dead_time: bool,
+    /// `τ_down` is fitted apart from `τ_up` (else equal).
+    pub asymmetric: bool,
+    /// `γ` is fitted (else 0).
+    pub speed_dependent_tau: bool,
+    /// The map's exponent `a` and the load's exponent `e` are fitted (else 1 and 2).
+    pub static_map: bool,
+    /// Every non-reference channel's sensor delay and lag are fitted.
+    pub lag_all: bool,
+    /// These channels' sensor delay and lag are fitted (by key).
+    pub lagged: Vec<&'static str>,
+    /// Load and current channels have a creep.
+    pub creep: bool,
+    /// The measured supply voltage drives the speed map (else the supply is constant).
+    pub voltage: bool,
+    /// The command is clipped at a fitted level `L` (`u → min(u, L)`: the top of the ESC's
+    /// range, a power limit).
+    pub command_limit: bool,
+    /// Every load and current channel has a sinusoid `a sin 2πft + b cos 2πft` (`a`, `b`
+    /// amplitudes per channel, `f` fitted within 3 % of this start, Hz).
+    pub sinusoid_hz: Option<f64>,
+    /// Thrust and torque reach their sensor through a resonance of the stand, unit gain at
+    /// rest: `ωm² / (s² + 2ζm ωm s + ωm²)`, fitted from this start `(fn Hz, ζ)`.
+    pub mode: Option<(f64, f64)>,
+}
+
+impl Structure {
+    /// The whole stand model ([`fit`]).
+    pub fn full() -> Structure {
+        Structure {
+            dead_time: true,
+            asymmetric: true,
+            speed_dependent_tau: true,
+            static_map: true,
+            lag_all: true,
+            creep: true,
+            voltage: true,
+            ..Structure::default()
+        }
+    }
+
+    fn lags(&self, key: &str) -> bool {
+        self.lag_all || self.lagged.contains(&key)
+    }
+}
+
+/// A fit's parameters as a start for another fit of the same record ([`fit_structured`]):
+/// the values of its free parameters, and, when given, the channels' weights (one pass of
+/// `max_iter` Jacobians with them, instead of the two passes that set them).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Warm {
+    values: Values,
+    free: Vec<P>,
+    keys: Vec<&'static str>,
+    /// The weights (channel key, noise) to keep; `None`: the fit sets its own.
+    pub sigma: Option<Vec<(&'static str, f64)>>,
+    /// Most Jacobians of the one pass with given weights.
+    pub max_iter: usize,
+}
+
+impl Warm {
+    /// This start with the weights `sigma` (channel key, noise) kept and at most `max_iter`
+    /// Jacobians.
+    pub fn with_weights(&self, sigma: Vec<(&'static str, f64)>, max_iter: usize) -> Warm {
+        Warm {
+            sigma: Some(sigma),
+            max_iter,
+            ..self.clone()
+        }
+    }
+
+    /// Sets `base`'s values of the parameters this start had free (channels matched by key).
+    fn overlay(&self, base: &mut Values, channels: &[Prepared]) {
+        let chan = |c: usize| {
+            let key = self.keys.get(c)?;
+            channels.iter().position(|ch| ch.key == *key)
+        };
+        for p in &self.free {
+            match *p {
+                P::Dead => base.dead = self.values.dead,
+                P::TauUp => base.tau_up = self.values.tau_up,
+                P::TauDown => base.tau_down = self.values.tau_down.or(base.tau_down),
+                P::Gamma => base.gamma = self.values.gamma,
+                P::Zero => base.zero = self.values.zero,
+                P::MapExp => base.map_exp = self.values.map_exp,
+                P::Exp => base.exp = self.values.exp,
+                P::Delay(c) => {
+                    if let Some(to) = chan(c).filter(|&t| t < base.delay.len()) {
+                        base.delay[to] = self.values.delay[c];
+                    }
+                }
+                P::Lag(c) => {
+                    if let Some(to) = chan(c).filter(|&t| t < base.lag.len()) {
+                        base.lag[to] = self.values.lag[c];
+                    }
+                }
+                P::Limit => base.limit = base.limit.and(self.values.limit),
+                P::Freq => base.freq = base.freq.and(self.values.freq),
+                P::ModeFn | P::ModeZeta => base.mode = base.mode.and(self.values.mode),
+            }
+        }
+    }
+}
+
+/// A fit of a [`Structure`] ([`fit_structured`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StructuredFit {
+    /// The fitted stand (figures the structure holds fixed are reported at their fixed value
+    /// with no uncertainty).
+    pub fit: StandFit,
+    /// Its parameters as a start for another fit of the record.
+    pub warm: Warm,
+    /// Per channel (key): the model on every row of the record (NaN outside the rows fitted,
+    /// [`MAX_ROWS`]), not held over the refresh interval (compared at the readings).
+    pub prediction: Vec<(&'static str, Vec<f64>)>,
+    /// The command's clip level ([`Structure::command_limit`]).
+    pub command_limit: Option<f64>,
+    /// The sinusoid's frequency, Hz ([`Structure::sinusoid_hz`]).
+    pub sinusoid_hz: Option<f64>,
+    /// The resonance's frequency, Hz, and damping ratio ([`Structure::mode`]).
+    pub mode: Option<(f64, f64)>,
+}
+
+impl WithWindow for StructuredFit {
+    fn set_window(&mut self, start: usize, end: usize, dt_s: f64, len: usize) {
+        self.fit.set_window(start, end, dt_s, len);
+        for (_, p) in self.prediction.iter_mut() {
+            let mut full = vec![f64::NAN; len];
+            for (k, v) in p.iter().enumerate() {
+                if start + k < len {
+                    full[start + k] = *v;
+                }
+            }
+            *p = full;
+        }
+    }
+}
+
+/// Fits the parts of the stand `st` frees to `input` (as [`fit`] does the whole model),
+/// from `warm` when given.
+pub fn fit_structured(
+    input: &FitInput<'_>,
+    st: &Structure,
+    warm: Option<&Warm>,
+) -> Result<StructuredFit, StandModelError> {
+    windowed(input, |within| {
+        let (fit, problem, z) = fit_rows(within, st, warm)?;
+        let v = problem.values(&z);
+        let prediction = problem.predict(&v);
+        Ok(StructuredFit {
+            fit,
+            warm: Warm {
+                values: v.clone(),
+                free: problem.layout.clone(),
+                keys: problem.channels.iter().map(|c| c.key).collect(),
+                sigma: Some(problem.channels.iter().map(|c| (c.key, c.sigma)).collect()),
+                max_iter: 20,
+            },
+            prediction,
+            command_limit: v.limit,
+            sinusoid_hz: v.freq,
+            mode: v.mode,
+        })
+    })
+}
+
+impl Problem {
+    /// Per channel, the model at every row (the amplitudes solved at the readings).
+    fn predict(&self, v: &Values) -> Vec<(&'static str, Vec<f64>)> {
+        let Some(design) = self.design(v) else {
+            return Vec::new();
+        };
+        let lin = self.solve(&design);
+        let mut all = Problem {
+            dt: self.dt,
+            u: self.u.clone(),
+            voltage: self.voltage.clone(),
+            v_ref: self.v_ref,
+            u_ref: self.u_ref,
+            t_span: self.t_span,
+            channels: self.channels.clone(),
+            shows: self.shows,
+            layout: Vec::new(),
+            bounds: Vec::new(),
+            base: v.clone(),
+            creep: self.creep,
+        };
+        let len = self.u.len();
+        for ch in all.channels.iter_mut() {
+            ch.rows = (0..len).collect();
+        }
+        let Some(full) = all.design(v) else {
+            return Vec::new();
+        };
+        full.iter()
+            .zip(&self.channels)
+            .zip(&lin)
+            .map(|((cols, ch), beta)| {
+                let y = (0..len)
+                    .map(|i| cols.iter().zip(beta).map(|(c, b)| c[i] * b).sum())
+                    .collect();
+                (ch.key, y)
+            })
+            .collect()
+    }
+}
+
+/// `x` through a resonance of unit gain at rest, `ωm² / (s² + 2ζm ωm s + ωm²)`, exactly
+/// discretised with `x` held over each row ([`crate::discretise::discretise_second_order`]),
+/// from rest at `x_0`.
+pub fn resonance(x: &[f64], dt_s: f64, fn_hz: f64, zeta: f64) -> Vec<f64> {
+    let (a, b) = crate::discretise::discretise_second_order(fn_hz, zeta, 1.0, dt_s);
+    let Some(&first) = x.first() else {
+        return Vec::new();
+    };
+    let mut s = nalgebra::Vector2::new(first, 0.0);
+    x.iter()
+        .map(|&u| {
+            let out = s[0];
+            s = a * s + b * u;
+            out
+        })
+        .collect()
 }

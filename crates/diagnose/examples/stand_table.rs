@@ -1,0 +1,211 @@
+//! The simulated-stand table of `propid diagnose` (issue 29 items 4 and 6): every effect of the
+//! catalogue hidden in `CASES` seeded stands (even cases underdamped, odd overdamped) under
+//! each kind of record (pulses, steps, a staircase; `propid_sim::stand_cases`), how often it
+//! is named, how often with its parameter within the tolerance of `docs/detection.md`, how
+//! often another effect is named; and the false alarms on as many clean stands per kind.
+//!
+//! Run: `cargo run --release -p propid-diagnose --example stand_table [CASES] [THREADS]` (per
+//! effect and record kind; default 7, 21 cases per effect and 21 clean stands in all; 2
+//! threads). Prints Markdown;
+//! `scripts/stand_table.sh` puts it into `docs/detection.md`.
+
+use propid_diagnose::{self as diagnose, Diagnosis};
+use propid_numerics::EffectName;
+use propid_sim::stand_cases::{case, truth, RecordKind};
+use propid_sim::synth;
+
+/// One case's outcome.
+struct Outcome {
+    named: bool,
+    /// The main parameter's error when named (`None`: not named or no such parameter).
+    error: Option<f64>,
+    within: bool,
+    others: Vec<EffectName>,
+}
+
+fn diagnose_case(kind: RecordKind, name: Option<EffectName>, i: u64) -> Option<Outcome> {
+    let (cfg, m) = case(kind, name, i).ok()?;
+    let d: Diagnosis = diagnose::diagnose(
+        synth::DT_S,
+        &m.u,
+        &m.y,
+        &[],
+        Some(&m.voltage),
+        &diagnose::Options::default(),
+    )
+    .ok()?;
+    let others: Vec<EffectName> = d
+        .findings
+        .iter()
+        .map(|f| f.effect)
+        .filter(|&e| Some(e) != name)
+        .collect();
+    let Some(name) = name else {
+        return Some(Outcome {
+            named: false,
+            error: None,
+            within: false,
+            others,
+        });
+    };
+    let v_mean = m.voltage.iter().sum::<f64>() / m.voltage.len().max(1) as f64;
+    let t = truth(name, &cfg, v_mean)?;
+    let found = d.findings.iter().find(|f| f.effect == name);
+    let est = found.and_then(|f| f.params.get(t.key)?.as_f64());
+    if found.is_none() {
+        let found: Vec<String> = d
+            .findings
+            .iter()
+            .map(|f| format!("{} {:+.2} pp", f.effect, f.cv_gain_pp))
+            .collect();
+        eprintln!(
+            "{} {name} #{i}: missed (fn {:.1} Hz, ζ {:.2}; named {found:?})",
+            kind.as_str(),
+            cfg.fn_hz,
+            cfg.zeta
+        );
+    }
+    Some(Outcome {
+        named: found.is_some(),
+        error: est.map(|e| t.error(e)),
+        within: est.is_some_and(|e| t.holds(e)),
+        others,
+    })
+}
+
+/// `f` over `jobs` on `threads` threads, results in order.
+fn on_threads<J: Sync, T: Send>(jobs: &[J], threads: usize, f: impl Fn(&J) -> T + Sync) -> Vec<T> {
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<(usize, T)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads.max(1))
+            .map(|_| {
+                s.spawn(|| {
+                    let mut out = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(j) = jobs.get(i) else {
+                            return out;
+                        };
+                        out.push((i, f(j)));
+                    }
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().expect("a worker"))
+            .collect()
+    });
+    done.sort_by_key(|d| d.0);
+    done.into_iter().map(|d| d.1).collect()
+}
+
+fn pct(k: usize, n: usize) -> String {
+    format!("{k} ({:.0} %)", 100.0 * k as f64 / n.max(1) as f64)
+}
+
+fn main() {
+    let cases: u64 = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(7);
+    let mut jobs: Vec<(RecordKind, Option<EffectName>, u64)> = Vec::new();
+    // Case-major: a run cut short has every effect and kind in it.
+    for i in 0..cases {
+        for kind in RecordKind::ALL {
+            for name in std::iter::once(None).chain(diagnose::effects::names().map(Some)) {
+                jobs.push((kind, name, i));
+            }
+        }
+    }
+    let threads: usize = std::env::args()
+        .nth(2)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(2);
+    let outcomes = on_threads(&jobs, threads, |&(k, n, i)| {
+        let o = diagnose_case(k, n, i);
+        let name = n.map_or("clean", EffectName::as_str);
+        match &o {
+            Some(o) => eprintln!(
+                "case: {} {name} {i} named={} within={} others={}",
+                k.as_str(),
+                o.named,
+                o.within,
+                o.others.len()
+            ),
+            None => eprintln!("case: {} {name} {i} failed", k.as_str()),
+        }
+        o
+    });
+    let of = |kind: RecordKind, name: Option<EffectName>| -> Vec<&Outcome> {
+        jobs.iter()
+            .zip(&outcomes)
+            .filter(|((k, n, _), _)| *k == kind && *n == name)
+            .filter_map(|(_, o)| o.as_ref())
+            .collect()
+    };
+    println!(
+        "### Simulated stands ({cases} cases per effect and record kind, {} per effect, seeded)\n",
+        cases as usize * RecordKind::ALL.len()
+    );
+    println!("| record | effect | cases | named | named, parameter within tolerance | other effect named | parameter error, median (max) |");
+    println!("|---|---|---|---|---|---|---|");
+    let (mut all_n, mut all_within) = (0, 0);
+    for kind in RecordKind::ALL {
+        for name in diagnose::effects::names() {
+            let o = of(kind, Some(name));
+            let n = o.len();
+            let named = o.iter().filter(|o| o.named).count();
+            let within = o.iter().filter(|o| o.within).count();
+            let other = o.iter().filter(|o| !o.others.is_empty()).count();
+            let mut errs: Vec<f64> = o.iter().filter_map(|o| o.error).collect();
+            errs.sort_by(f64::total_cmp);
+            let err = errs.get(errs.len() / 2).map_or("–".to_string(), |m| {
+                format!("{m:.3} ({:.3})", errs.last().copied().unwrap_or(*m))
+            });
+            all_n += n;
+            all_within += within;
+            println!(
+                "| {} | `{name}` | {n} | {} | {} | {other} | {err} |",
+                kind.as_str(),
+                pct(named, n),
+                pct(within, n)
+            );
+        }
+    }
+    println!(
+        "\nAll effects and kinds: {} of {all_n} found with the parameter within tolerance.\n",
+        pct(all_within, all_n)
+    );
+    println!("### Clean simulated stands\n");
+    println!("| record | cases | false alarms | effects named |");
+    println!("|---|---|---|---|");
+    let (mut clean_n, mut clean_alarms) = (0, 0);
+    for kind in RecordKind::ALL {
+        let o = of(kind, None);
+        let alarms: Vec<&&Outcome> = o.iter().filter(|o| !o.others.is_empty()).collect();
+        let mut named: Vec<&str> = alarms
+            .iter()
+            .flat_map(|o| o.others.iter().map(|e| e.as_str()))
+            .collect();
+        named.sort_unstable();
+        named.dedup();
+        clean_n += o.len();
+        clean_alarms += alarms.len();
+        println!(
+            "| {} | {} | {} | {} |",
+            kind.as_str(),
+            o.len(),
+            pct(alarms.len(), o.len()),
+            if named.is_empty() {
+                "–".to_string()
+            } else {
+                named.join(", ")
+            }
+        );
+    }
+    println!(
+        "\nClean stands in all: {clean_n}, false alarms {}.",
+        pct(clean_alarms, clean_n)
+    );
+}
