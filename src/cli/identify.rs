@@ -31,7 +31,7 @@
 //! explicit block counts. The size used is `model.hankel_block_rows`/`hankel_block_cols`.
 //! Large sizes take the truncated FFT + Lanczos SVD (O(N) memory; `docs/svd.md`).
 
-mod load;
+pub(crate) mod load;
 mod report;
 mod stand;
 mod summary;

@@ -583,3 +583,6 @@ pub fn quantity(key: &str) -> Option<Quantity> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests;
