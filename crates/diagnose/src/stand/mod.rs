@@ -90,7 +90,9 @@ impl BaselineChoice {
 
 impl Default for BaselineChoice {
     fn default() -> Self {
-        BaselineChoice::generic("no stand channels were given")
+        BaselineChoice::generic(
+            "no rpm, thrust, torque or current channel came with the output: no stand to model",
+        )
     }
 }
 
