@@ -400,6 +400,8 @@ fn param_error(name: EffectName, cfg: &PlantConfig, d: &Diagnosis, v_mean: f64) 
             }
             rel(get("k3_per_k1")?, truth)
         }
+        // Stand-only effects: never hidden in this 2nd-order plant.
+        EffectName::SensorLag | EffectName::SpeedDependentTau => return None,
     })
 }
 

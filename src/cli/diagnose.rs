@@ -9,14 +9,17 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use super::columns_read::ColumnsRead;
+use super::identify::load::STAND_CHANNELS;
 use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
 use super::read::ReadArgs;
 #[cfg(test)]
 use super::read::ReadFlags;
 use super::{CliError, UsageError};
 use propid_diagnose::noise::FloorSource;
+use propid_diagnose::stand::StandInput;
 use propid_diagnose::verdict::VerdictKind;
 use propid_diagnose::{self as diagnose, DiagnoseError, Diagnosis};
+use propid_numerics::stand_model::fit::Channel as StandChannel;
 use propid_wire::record::names;
 
 /// Arguments of `propid diagnose`.
@@ -59,8 +62,15 @@ pub struct Signals {
     pub input_name: String,
     /// What the output is.
     pub output_name: String,
-    /// Whether the input is a stand's command ([`LoadedFile::input_is_a_command`]).
+    /// Whether the input is a stand's command ([`LoadedFile::input_is_a_command`]) read from
+    /// the file (not steps found from the response).
     pub input_is_a_command: bool,
+    /// The stand's channels the file has (`rpm`, `thrust`, `torque`, `current`: key, samples
+    /// with NaN where missing, the samples interpolated between readings), for the stand
+    /// baseline; empty without a command.
+    pub stand: Vec<(&'static str, Vec<f64>, Vec<bool>)>,
+    /// The key of the output among `stand` (`None`: the output is none of them).
+    pub stand_output: Option<&'static str>,
     /// What the file's columns were read as ([`FileSource`]).
     pub file: FileSource,
 }
@@ -131,12 +141,28 @@ impl Signals {
             input_is_a_command: self.input_is_a_command,
             ..*opts
         };
-        diagnose::diagnose(
+        let stand = StandInput {
+            channels: self
+                .stand
+                .iter()
+                .filter_map(|(key, y, flags)| {
+                    Some(StandChannel {
+                        key,
+                        quantity: diagnose::stand::quantity(key)?,
+                        y,
+                        interpolated: flags,
+                    })
+                })
+                .collect(),
+            output: self.stand_output,
+        };
+        diagnose::diagnose_with(
             self.dt_s,
             &self.u,
             &self.y,
             &self.interpolated,
             self.voltage.as_deref(),
+            (!stand.channels.is_empty()).then_some(&stand),
             &opts,
         )
     }
@@ -234,14 +260,40 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
         );
     }
     let _ = writeln!(t, "{}", d.validation.describe(&d.split));
+    let scored = match b.choice.kind {
+        diagnose::stand::BaselineKind::Generic => "validation fit",
+        diagnose::stand::BaselineKind::Stand => "the stand baseline's validation fit",
+    };
     let _ = writeln!(
         t,
-        "baseline 2nd order: fn {:.3} Hz, zeta {:.3}, dc gain {:.4}; validation fit {:.2} %",
+        "baseline 2nd order: fn {:.3} Hz, zeta {:.3}, dc gain {:.4}; {scored} {:.2} %",
         b.model.report.fn_hz,
         b.model.report.zeta,
         b.model.report.dc_gain.get(0),
         b.fit_percent
     );
+    let kind = match b.choice.kind {
+        diagnose::stand::BaselineKind::Stand => "stand model",
+        diagnose::stand::BaselineKind::Generic => "generic 2nd order",
+    };
+    let _ = writeln!(t, "baseline: {kind}: {}", b.choice.why);
+    if let Some(st) = &d.stand {
+        let _ = writeln!(
+            t,
+            "stand model: held-out fit {:.2} % (mean over its channels; reference channel {}), \
+             {:.2} % with the effects found",
+            st.baseline_mean_fit_percent, st.reference_channel, st.mean_fit_percent
+        );
+        for (key, c) in &st.channels {
+            let _ = writeln!(
+                t,
+                "  {key}: held-out fit {:.2} → {:.2} %; where the stand simulation departs: {}",
+                c.baseline_fit_percent,
+                c.fit_percent,
+                c.departures.line()
+            );
+        }
+    }
     if let Some(l) = &d.input_lead {
         let _ = writeln!(
             t,
@@ -340,7 +392,13 @@ pub fn load(args: &Args) -> Result<Signals, CliError> {
     let outputs = [read.output.first().cloned().unwrap_or(names::THRUST.into())];
     let req = Request {
         outputs: &outputs,
-        ..read.request(&[names::VOLTAGE])
+        ..read.request(&[
+            names::VOLTAGE,
+            STAND_CHANNELS[0].1,
+            STAND_CHANNELS[1].1,
+            STAND_CHANNELS[2].1,
+            STAND_CHANNELS[3].1,
+        ])
     };
     let mut s = signals(&shared::load(&read.file, &req)?)?;
     if let Some(name) = read.input.as_ref().filter(|n| n.as_str() != NO_INPUT) {
@@ -367,9 +425,26 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
         .unwrap_or_default();
     let voltage = file
         .optional
-        .first()
+        .iter()
+        .find(|n| n.as_str() == names::VOLTAGE)
         .map(|n| fill_gaps(file.data(n)))
         .filter(|v| v.iter().all(|x| x.is_finite()));
+    // The stand's channels, when the input is a command read from the file.
+    let commanded = file.input.is_some() && file.input_is_a_command();
+    let stand: Vec<(&'static str, Vec<f64>, Vec<bool>)> = STAND_CHANNELS
+        .iter()
+        .filter(|_| commanded)
+        .filter_map(|&(key, channel, _)| {
+            let c = rec.channel(channel)?;
+            let mut y = c.data.clone();
+            mark_missing(&mut y, &rec.missing);
+            Some((key, y, c.interpolated.clone()))
+        })
+        .collect();
+    let stand_output = STAND_CHANNELS
+        .iter()
+        .find(|c| c.1 == output_name && stand.iter().any(|s| s.0 == c.0))
+        .map(|c| c.0);
     let (u, input_name) = match &file.input {
         Some(n) => (file.data(n), n.clone()),
         None => {
@@ -391,6 +466,8 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
         input_name,
         output_name,
         input_is_a_command: file.input_is_a_command(),
+        stand,
+        stand_output,
     })
 }
 

@@ -13,6 +13,11 @@
 //! | `Periodic { freq_hz, amplitude, phase }` | `+ A sin(2π f t_k + φ)` | `periodic_disturbance` |
 //! | `Drift { rate_per_s }` | `+ r t_k` | `baseline_drift`, `rate_per_s` |
 //! | `SupplySag { gain_per_volt, .. }` | `· (1 + g (V_k − V̄))` | `supply_sag`, `gain_per_volt` |
+//! | `SensorLag { delay_s, tau_s, .. }` | a load cell's lag: `s' = (y − s)/τ`, then delayed by `δ` | `sensor_lag` on that channel, `delay_s`, `tau_s` |
+//!
+//! The sensor lag acts on one column of a stand's log (the thrust: [`lag_column`]), the
+//! others kept: it is found against them ([`STAND_EFFECTS`], the stand baseline of
+//! `propid diagnose`).
 //!
 //! The supply sag uses the log's own voltage when it has one; otherwise a battery discharging
 //! linearly from `v_start` to `v_end` is written as the voltage column. Scaling the output is
@@ -161,6 +166,16 @@ pub enum Injection {
         /// Rate, output units per second.
         rate_per_s: f64,
     },
+    /// One channel read through a load cell's filter: a first-order lag `tau_s`, then a delay
+    /// `delay_s` ([`lag_column`]).
+    SensorLag {
+        /// Delay, s.
+        delay_s: f64,
+        /// First-order lag, s.
+        tau_s: f64,
+        /// The log's row period, s (the delay's tolerance is one row).
+        dt_s: f64,
+    },
     /// The output scaled by the supply voltage.
     SupplySag {
         /// Relative gain change per volt, 1/V.
@@ -180,10 +195,14 @@ pub const EFFECTS: [EffectName; 4] = [
     EffectName::SupplySag,
 ];
 
+/// The effects injected into one channel of a stand's log, found against its other channels.
+pub const STAND_EFFECTS: [EffectName; 1] = [EffectName::SensorLag];
+
 impl Injection {
     /// The published name of the effect it should be found as.
     pub fn effect(&self) -> EffectName {
         match self {
+            Injection::SensorLag { .. } => STAND_EFFECTS[0],
             Injection::DeadTime { .. } => EFFECTS[0],
             Injection::Periodic { .. } => EFFECTS[1],
             Injection::Drift { .. } => EFFECTS[2],
@@ -221,6 +240,13 @@ impl Injection {
                     rate_per_s: sign * rng.gen_range(0.3..1.0) * sigma / span,
                 }
             }
+            // A load cell's lag against the rotor: a delay of 1–4 rows and a lag of 2–8 rows
+            // (log-uniform), neither a whole number of rows.
+            EffectName::SensorLag => Injection::SensorLag {
+                delay_s: rng.gen_range(1.0..4.0) * s.dt_s,
+                tau_s: rng.gen_range(2f64.ln()..8f64.ln()).exp() * s.dt_s,
+                dt_s: s.dt_s,
+            },
             EffectName::SupplySag => {
                 let v_start = 16.8;
                 let v_end = v_start - rng.gen_range(2.0..3.5);
@@ -297,6 +323,9 @@ pub fn inject(s: &Samples, inj: &Injection) -> Samples {
                 out.y[k] = s.y[k.saturating_sub(samples)];
             }
         }
+        Injection::SensorLag { delay_s, tau_s, .. } => {
+            out.y = lag_column(&s.y, s.dt_s, delay_s, tau_s);
+        }
         Injection::Periodic {
             freq_hz,
             amplitude,
@@ -334,6 +363,52 @@ pub fn inject(s: &Samples, inj: &Injection) -> Samples {
     out
 }
 
+/// Column `y` (every `dt_s`; NaN: missing, kept missing) read through a load cell's filter:
+/// a first-order lag `s' = (y − s)/τ` with `y` linear between samples (exact:
+/// `s⁺ = a s + (1 − a) y_k + (1 − τ(1 − a)/dt)(y_{k+1} − y_k)`, `a = e^{−dt/τ}`, from the
+/// steady state of the first sample), then delayed by `delay_s` (linear interpolation between
+/// samples, the first sample held before the start). Gaps are bridged by the last value
+/// while filtering.
+pub fn lag_column(y: &[f64], dt_s: f64, delay_s: f64, tau_s: f64) -> Vec<f64> {
+    let Some(first) = y.iter().copied().find(|v| v.is_finite()) else {
+        return y.to_vec();
+    };
+    let mut last = first;
+    let x: Vec<f64> = y
+        .iter()
+        .map(|&v| {
+            if v.is_finite() {
+                last = v;
+            }
+            last
+        })
+        .collect();
+    let a = (-dt_s / tau_s).exp();
+    let ramp = 1.0 - tau_s * (1.0 - a) / dt_s;
+    let mut lagged = Vec::with_capacity(x.len());
+    let mut s = x[0];
+    lagged.push(s);
+    for w in x.windows(2) {
+        s = a * s + (1.0 - a) * w[0] + ramp * (w[1] - w[0]);
+        lagged.push(s);
+    }
+    let d = delay_s / dt_s;
+    (0..x.len())
+        .map(|k| {
+            if !y[k].is_finite() {
+                return f64::NAN;
+            }
+            let t = (k as f64 - d).max(0.0);
+            let i = t.floor() as usize;
+            let f = t - i as f64;
+            match lagged.get(i + 1) {
+                Some(next) => lagged[i] + f * (next - lagged[i]),
+                None => lagged[i.min(lagged.len() - 1)],
+            }
+        })
+        .collect()
+}
+
 /// What `diagnose` made of one injection.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Outcome {
@@ -359,6 +434,7 @@ impl Outcome {
 ///   the log's own coloured residual near `f` adds to the fitted amplitude;
 /// - drift 25 %: the log's own slow dynamics and offset trade against a line over a finite
 ///   record;
+/// - sensor lag 25 % on `τ`, its delay within one row (issue 29, item 6);
 /// - supply sag 30 %: the log's own supply dependence adds to the injected one where the clean
 ///   log does not name it (dantonio's ramp: median 26 %, at most 41 % high), and a log's own
 ///   dependence on the drive beside an injected one on the output is no single term
@@ -369,6 +445,7 @@ pub fn tolerance(inj: &Injection) -> f64 {
         Injection::Periodic { .. } => 0.25,
         Injection::Drift { .. } => 0.25,
         Injection::SupplySag { .. } => 0.30,
+        Injection::SensorLag { .. } => 0.25,
     }
 }
 
@@ -404,6 +481,32 @@ pub fn judge(inj: &Injection, clean: &[Value], injected: &[Value]) -> Outcome {
         Injection::Drift { rate_per_s } => {
             let before = param(clean, "rate_per_s").unwrap_or(0.0);
             param(injected, "rate_per_s").map(|r| rel(r - before, rate_per_s))
+        }
+        Injection::SensorLag {
+            delay_s,
+            tau_s,
+            dt_s,
+        } => {
+            // Delays and lags in series add (the lags to first order): the injected ones on
+            // top of what the clean log's thrust already had.
+            let lag = |fs: &[Value], key: &str| {
+                fs.iter()
+                    .find(|f| f["effect"] == name.as_str() && f["channel"] == "thrust")
+                    .and_then(|f| f[key].as_f64())
+            };
+            let (d0, t0) = (
+                lag(clean, "delay_s").unwrap_or(0.0),
+                lag(clean, "tau_s").unwrap_or(0.0),
+            );
+            lag(injected, "delay_s")
+                .zip(lag(injected, "tau_s"))
+                .map(|(d, t)| {
+                    if (d - d0 - delay_s).abs() <= dt_s {
+                        rel(t - t0, tau_s)
+                    } else {
+                        f64::INFINITY
+                    }
+                })
         }
         Injection::SupplySag { gain_per_volt, .. } => {
             // Gains multiply: (1 + g₀ ΔV)(1 + g ΔV) has the relative slope g₀ + g at the mean.

@@ -90,7 +90,9 @@ impl BaselineChoice {
 
 impl Default for BaselineChoice {
     fn default() -> Self {
-        BaselineChoice::generic("no stand channels were given")
+        BaselineChoice::generic(
+            "no rpm, thrust, torque or current channel came with the output: no stand to model",
+        )
     }
 }
 
@@ -602,3 +604,6 @@ pub fn quantity(key: &str) -> Option<Quantity> {
         _ => None,
     }
 }
+
+#[cfg(test)]
+mod tests;
