@@ -33,6 +33,7 @@
 
 mod load;
 mod report;
+mod save;
 mod stand;
 mod summary;
 
@@ -104,6 +105,9 @@ pub struct Args {
     /// Motor magnet poles, for a speed column in eRPM.
     #[arg(long)]
     pub poles: Option<u32>,
+    /// Write the model to this file (docs/model_file.md).
+    #[arg(long)]
+    pub save: Option<PathBuf>,
 }
 
 fn parse_svd(s: &str) -> Result<SvdChoice, String> {
@@ -184,7 +188,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let ops = operating_points(&input, &ident, &op_opts);
     let levels = levels_slope(&loaded);
-    let out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref(), &physics);
+    let mut out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref(), &physics);
+    let saved = save::model_file(&args, &loaded, &model.report, &out)?;
+    out.params = save::params(&saved);
+    if let Some(path) = &args.save {
+        super::model_file::save(&saved, path)?;
+    }
     if let Some(dir) = &args.report {
         report::write(dir, &out)
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;

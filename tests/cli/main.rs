@@ -32,6 +32,7 @@ mod identify_stabilization;
 mod identify_stand_model;
 mod identify_units;
 mod identify_zero_offset;
+mod model_file_cli;
 mod sim_cli;
 mod support;
 mod walkthrough_cli;

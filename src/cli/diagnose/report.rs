@@ -17,14 +17,14 @@ use propid_diagnose::spectrum::periodogram;
 use propid_numerics::okid::{okid, OkidOptions};
 use propid_numerics::segment::{self, Command, SegmentRules};
 
-type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
+pub(crate) type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
 
 fn to_io<E: std::fmt::Display>(e: E) -> io::Error {
     io::Error::other(e.to_string())
 }
 
 /// Draws `series` as lines (or points when `points`) into an SVG at `path`.
-fn plot(
+pub(crate) fn plot(
     path: &Path,
     title: &str,
     xl: &str,
