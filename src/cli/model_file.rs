@@ -377,8 +377,8 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         t.push_str(&format!(",{}", o.name));
     }
     t.push('\n');
-    for k in 0..d.u.len() {
-        t.push_str(&format!("{},{}", k as f64 * d.dt_s, d.u[k]));
+    for (k, u) in d.u.iter().enumerate() {
+        t.push_str(&format!("{},{u}", k as f64 * d.dt_s));
         for s in &sim {
             t.push_str(&format!(",{}", s[k]));
         }
@@ -468,7 +468,7 @@ pub fn options(m: Option<&ModelFile>, a: Option<&ParamsArgs>) -> Options {
 
 /// Runs `propid params`.
 pub fn params(args: ParamsArgs) -> Result<(), CliError> {
-    if !(args.pwm_max > args.pwm_min) {
+    if args.pwm_max.is_nan() || args.pwm_min.is_nan() || args.pwm_max <= args.pwm_min {
         return Err(CliError::Model(ModelError::Invalid(format!(
             "--pwm-min {} must be below --pwm-max {}",
             args.pwm_min, args.pwm_max

@@ -267,7 +267,7 @@ fn expo_between(
     top_name: &str,
 ) -> Result<(f64, f64, usize), String> {
     let top = thrust.last().map_or(f64::NAN, |l| sc.actuator(l.throttle));
-    if !(top >= hi - REACH_TOLERANCE) {
+    if top.is_nan() || top < hi - REACH_TOLERANCE {
         return Err(format!(
             "the record's highest steady command is actuator {top:.3}, below {top_name} {hi:.3}: \
              the thrust there is not measured"
@@ -275,7 +275,7 @@ fn expo_between(
     }
     let t_top = interpolate(thrust, sc.throttle(hi).min(thrust.last().unwrap().throttle))
         .unwrap_or(thrust.last().unwrap().mean);
-    if !(t_top > 0.0) {
+    if t_top.is_nan() || t_top <= 0.0 {
         return Err("no thrust at the top of the range".into());
     }
     let points: Vec<(f64, f64)> = thrust

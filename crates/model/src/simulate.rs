@@ -144,6 +144,7 @@ fn free_response_pair(m: &ModelFile, which: Which) -> (DMatrix<f64>, DMatrix<f64
 /// The model `which` of `m` simulated on input `u` (and `voltage`), its initial state
 /// corrected from the first `init_samples` of the measured outputs `y` (one vector per output,
 /// NaN where missing; module doc). One vector per output.
+#[allow(clippy::needless_range_loop)] // samples and outputs indexed together
 pub fn free_run(
     m: &ModelFile,
     which: Which,
