@@ -29,6 +29,12 @@ enum Command {
     Diagnose(cli::diagnose::Args),
     /// Serve one page of every stand publishing to an MQTT broker.
     Fleet(cli::fleet::Args),
+    /// Score a saved model on another record: free-run simulation, RMS and fit per output.
+    Compare(cli::model_file::CompareArgs),
+    /// Simulate a saved model on a file's input (CSV out).
+    Simulate(cli::model_file::SimulateArgs),
+    /// The parameters a flight controller or simulator takes, from a saved model.
+    Params(cli::model_file::ParamsArgs),
 }
 
 fn main() {
@@ -42,6 +48,9 @@ fn main() {
         Command::Replay(a) => cli::replay::run(a),
         Command::Diagnose(a) => cli::diagnose::run(a),
         Command::Fleet(a) => cli::fleet::run(a),
+        Command::Compare(a) => cli::model_file::compare(a),
+        Command::Simulate(a) => cli::model_file::simulate(a),
+        Command::Params(a) => cli::model_file::params(a),
     };
     if let Err(e) = result {
         if e.is_closed_pipe() {

@@ -42,6 +42,9 @@ pub struct Args {
     /// to OUT.toml (`propid sim --config OUT.toml --replay-command FILE`; docs/stand-model.md).
     #[arg(long, value_name = "OUT.toml")]
     pub sim_config: Option<PathBuf>,
+    /// Write the final model to this file (docs/model_file.md).
+    #[arg(long)]
+    pub save: Option<PathBuf>,
 }
 
 /// The signals of FILE that diagnose works on.
@@ -186,6 +189,9 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         None => None,
     };
+    if let Some(path) = &args.save {
+        super::model_file::save(&model_file(&args, &s, &d)?, path)?;
+    }
     if let Some(dir) = &args.report {
         let title = args.read.file.display().to_string();
         report::render(&title, &s.output_name, &d)
@@ -211,6 +217,64 @@ pub fn run(args: Args) -> Result<(), CliError> {
         }
         super::stdout::write(&text)
     }
+}
+
+/// The model file of a diagnosis: its final model (extended, else the baseline) exactly, and
+/// its linear part about the reference throttle.
+fn model_file(
+    args: &Args,
+    s: &Signals,
+    d: &Diagnosis,
+) -> Result<propid_model::ModelFile, CliError> {
+    use super::model_file::{self as mf, channel, unit_of};
+    let model = &d.traces.model;
+    let extended =
+        propid_model::terms::extended_of(model, d.traces.refs).map_err(CliError::Model)?;
+    let summary = d.extended.as_ref().map_or(&d.baseline.model, |e| &e.model);
+    let u0 = d.traces.refs[0];
+    let op = propid_model::file::OperatingPoint {
+        input: u0,
+        outputs: vec![model.core.offset + model.core.gain * u0],
+    };
+    let options = serde_json::json!({
+        "estimation_fraction": args.estimation_fraction,
+        "fs": args.fs,
+        "columns": args.columns,
+        "esc_us": args.esc_us,
+        "input_range": s.file.read.input_range,
+        "input_range_from": s.file.read.input_range_from,
+        "poles": args.poles,
+        "split": d.split,
+    });
+    let raw = |col: &str| {
+        s.file
+            .read
+            .units
+            .as_ref()
+            .and_then(|u| u.values().find(|c| c.column == col))
+            .map_or(String::new(), |c| c.unit.clone())
+    };
+    Ok(propid_model::ModelFile {
+        schema: propid_model::SCHEMA.into(),
+        checksum: String::new(),
+        provenance: mf::provenance("diagnose", &args.file, s.u.len(), options),
+        dt_s: s.dt_s,
+        input: channel(
+            &s.input_name,
+            &s.file.input,
+            &unit_of(&s.input_name, &raw(&s.file.input)),
+        ),
+        outputs: vec![channel(
+            &s.output_name,
+            &s.file.output,
+            &unit_of(&s.output_name, &raw(&s.file.output)),
+        )],
+        linear: Some(mf::linear(&summary.report, op)),
+        extended: Some(extended),
+        stand: None,
+        static_map: serde_json::Value::Object(Default::default()),
+        supply: mf::supply(s.voltage.as_deref()),
+    })
 }
 
 /// Whether a diagnosis error is the input's fault (exit 3) rather than the data not supporting
@@ -472,7 +536,7 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
 }
 
 /// NaN at every sample marked missing.
-fn mark_missing(y: &mut [f64], missing: &[bool]) {
+pub(crate) fn mark_missing(y: &mut [f64], missing: &[bool]) {
     for (v, m) in y.iter_mut().zip(missing) {
         if *m {
             *v = f64::NAN;
@@ -481,7 +545,7 @@ fn mark_missing(y: &mut [f64], missing: &[bool]) {
 }
 
 /// Holds the last finite value across gaps (leading gaps take the first finite value).
-fn fill_gaps(mut x: Vec<f64>) -> Vec<f64> {
+pub(crate) fn fill_gaps(mut x: Vec<f64>) -> Vec<f64> {
     let first = x
         .iter()
         .copied()
@@ -538,6 +602,7 @@ mod tests {
             report: None,
             estimation_fraction: 0.7,
             sim_config: None,
+            save: None,
         };
         let e = load(&args).unwrap_err();
         assert_eq!(e.exit_code(), 4, "{e}");

@@ -32,6 +32,7 @@
 //! Large sizes take the truncated FFT + Lanczos SVD (O(N) memory; `docs/svd.md`).
 
 mod report;
+mod save;
 
 pub use propid_report::identify::{load, stand, summary, Physics};
 pub use stand::brief as stand_brief;
@@ -77,6 +78,9 @@ pub struct Args {
     /// Hankel size: auto (from the noise floor), square (largest near-square) or RxC blocks.
     #[arg(long, default_value = "auto", value_parser = parse_hankel)]
     pub hankel: HankelSize,
+    /// Write the model to this file (docs/model_file.md).
+    #[arg(long)]
+    pub save: Option<PathBuf>,
 }
 
 fn parse_svd(s: &str) -> Result<SvdChoice, String> {
@@ -157,7 +161,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     };
     let ops = operating_points(&input, &ident, &op_opts);
     let levels = levels_slope(&loaded);
-    let out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref(), &physics);
+    let mut out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref(), &physics);
+    let saved = save::model_file(&args, &loaded, &model.report, &out)?;
+    out.params = save::params(&saved);
+    if let Some(path) = &args.save {
+        super::model_file::save(&saved, path)?;
+    }
     if let Some(dir) = &args.report {
         report::write(dir, &out)
             .map_err(|e| CliError::io(format!("writing the report into {}", dir.display()), e))?;

@@ -8,6 +8,7 @@ pub mod fleet;
 pub mod identify;
 pub mod kinds_report;
 pub mod read;
+pub mod model_file;
 pub mod replay;
 pub mod run;
 pub mod sim;
@@ -105,6 +106,17 @@ pub enum CliError {
     /// Writing to stdout failed (a closed pipe: [`CliError::is_closed_pipe`], the quiet end).
     #[error("write error: {0}")]
     Stdout(#[source] std::io::Error),
+    /// A model file is refused: another schema, changed after it was written, or invalid.
+    #[error("model file refused: {0}")]
+    Model(#[source] propid_model::ModelError),
+    /// DATA lacks a channel the model needs (its input, an output, the supply voltage).
+    #[error("{file}: lacks what the model needs: {detail}")]
+    ModelData {
+        /// The data file as given.
+        file: String,
+        /// What is missing.
+        detail: String,
+    },
     /// Reading or writing a file failed.
     #[error("{context}: {source}")]
     Io {
@@ -133,6 +145,10 @@ pub enum ExitClass {
     /// The experiment plan ended on a fault (device reset, watchdog trip, refused command):
     /// the daemon stopped by itself (exit 8).
     PlanFault = 8,
+    /// A model file is refused: another schema, tampered with, or invalid (exit 9).
+    ModelFile = 9,
+    /// The data lack a channel the model needs, or are sampled at another rate (exit 10).
+    ModelData = 10,
 }
 
 /// A wrong command line, by option.
@@ -196,6 +212,8 @@ impl CliError {
                 | DaemonError::ThreadPanicked { .. } => ExitClass::Io,
             },
             CliError::Io { .. } | CliError::Stdout(_) => ExitClass::Io,
+            CliError::Model(_) => ExitClass::ModelFile,
+            CliError::ModelData { .. } => ExitClass::ModelData,
         }
     }
 

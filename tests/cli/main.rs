@@ -33,6 +33,7 @@ mod identify_stand_model;
 mod identify_units;
 mod identify_zero_offset;
 mod sim_calibrated;
+mod model_file_cli;
 mod sim_cli;
 mod support;
 mod walkthrough_cli;

@@ -159,6 +159,8 @@ pub fn assemble(
                 let s = e.stabilization.clone()?;
                 Some((s, e.report.fn_hz, e.report.zeta))
             }),
+            model: cur.model.clone(),
+            refs: [ctx.sig.u_ref, ctx.sig.v_ref],
         },
     }
 }

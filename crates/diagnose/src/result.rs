@@ -234,4 +234,9 @@ pub struct Traces {
     /// Stabilization diagram of the identification core's ERA start (when it gave one) and
     /// that model's fn and ζ.
     pub stabilization: Option<(propid_numerics::stabilization::Stabilization, f64, f64)>,
+    /// The final model (the extended one, else the baseline) as fitted, for a model file.
+    pub model: super::model::Model,
+    /// The reference throttle and voltage its terms were fitted about
+    /// ([`super::signals::Signals::u_ref`], [`super::signals::Signals::v_ref`]).
+    pub refs: [f64; 2],
 }

@@ -74,8 +74,21 @@ pub enum Scale {
     Log,
 }
 
+/// A term as [`std::any::Any`], so that a reader outside the crate (the model file,
+/// `propid-model`) can tell each effect's parameter struct from the others.
+pub trait AsAny {
+    /// `self` as `Any`.
+    fn as_any(&self) -> &dyn std::any::Any;
+}
+
+impl<T: std::any::Any> AsAny for T {
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+}
+
 /// The fitted parameters of one effect inside a model .
-pub trait Term: std::fmt::Debug + Send + Sync {
+pub trait Term: AsAny + std::fmt::Debug + Send + Sync {
     /// The effect's published name (the same as its [`Effect::name`]).
     fn name(&self) -> EffectName;
 

@@ -16,14 +16,14 @@ use propid_diagnose::spectrum::periodogram;
 use propid_numerics::okid::{okid, OkidOptions};
 use propid_numerics::segment::{self, Command, SegmentRules};
 
-type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
+pub type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
 
 fn to_io<E: std::fmt::Display>(e: E) -> io::Error {
     io::Error::other(e.to_string())
 }
 
 /// `series` as lines (or points when `points`) in an SVG text (`None` without a finite point).
-fn plot(
+pub fn plot(
     title: &str,
     xl: &str,
     yl: &str,

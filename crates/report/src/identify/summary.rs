@@ -65,6 +65,9 @@ pub struct Output<'a> {
     /// command held twice gave two thrusts apart beyond the noise; `thrust_zero_offset`: the
     /// thrust reads beyond zero at zero command, taken out of its curves); empty when none.
     pub warnings: Vec<IdentifyWarning>,
+    /// The parameters of every flight controller and simulator `propid params` knows, by
+    /// target ([`propid_model::params`]; docs/params.md).
+    pub params: serde_json::Map<String, serde_json::Value>,
 }
 
 /// One entry of `"warnings"`: the shape of `diagnose`'s (`kind`, `message`, `value`).
@@ -332,6 +335,7 @@ impl<'a> Output<'a> {
                     stand.static_map.get("thrust"),
                 ))
                 .collect(),
+            params: serde_json::Map::new(),
         }
     }
 
