@@ -264,6 +264,7 @@ fn real_data(dir: &Path) {
             read: read.clone(),
             order: None,
             json: true,
+            save: None,
             report: None,
             svd: SvdChoice::default(),
             hankel: HankelSize::default(),
@@ -275,6 +276,7 @@ fn real_data(dir: &Path) {
             report: None,
             estimation_fraction: 0.7,
             sim_config: None,
+            save: None,
         };
         let row = load(&args).map_err(|e| e.to_string()).and_then(|s| {
             let opts = diagnose::Options::default();

@@ -370,6 +370,7 @@ fn stand_columns(case: &Case, path: &Path) -> (String, String) {
         },
         order: None,
         json: true,
+        save: None,
         report: None,
         svd: SvdChoice::default(),
         hankel: HankelSize::default(),

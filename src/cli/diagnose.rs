@@ -238,12 +238,12 @@ fn model_file(
     };
     let options = serde_json::json!({
         "estimation_fraction": args.estimation_fraction,
-        "fs": args.fs,
-        "columns": args.columns,
-        "esc_us": args.esc_us,
+        "fs": args.read.fs,
+        "columns": args.read.columns,
+        "esc_us": args.read.esc_us,
         "input_range": s.file.read.input_range,
         "input_range_from": s.file.read.input_range_from,
-        "poles": args.poles,
+        "poles": args.read.poles,
         "split": d.split,
     });
     let raw = |col: &str| {
@@ -257,7 +257,7 @@ fn model_file(
     Ok(propid_model::ModelFile {
         schema: propid_model::SCHEMA.into(),
         checksum: String::new(),
-        provenance: mf::provenance("diagnose", &args.file, s.u.len(), options),
+        provenance: mf::provenance("diagnose", &args.read.file, s.u.len(), options),
         dt_s: s.dt_s,
         input: channel(
             &s.input_name,

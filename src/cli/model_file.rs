@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use serde_json::{json, Value};
 
 use super::load::{self as shared, LoadedFile, Request};
+use super::read::ReadFlags;
 use super::CliError;
 use propid_model::file::{Channel, Linear, OperatingPoint, Provenance, Supply};
 use propid_model::params::{self, Options, Record, Target};
@@ -104,32 +105,6 @@ pub fn read(path: &Path) -> Result<ModelFile, CliError> {
     })
 }
 
-/// How DATA is read (the options of `identify`).
-#[derive(Debug, Clone, clap::Args)]
-pub struct ReadArgs {
-    /// Input column (default: the model's input).
-    #[arg(long)]
-    pub input: Option<String>,
-    /// Output column, repeatable (default: the model's outputs).
-    #[arg(long)]
-    pub output: Vec<String>,
-    /// Sample rate, Hz (needed without a time column).
-    #[arg(long)]
-    pub fs: Option<f64>,
-    /// Column names for a CSV file without a header, comma separated.
-    #[arg(long, value_delimiter = ',')]
-    pub columns: Option<Vec<String>>,
-    /// ESC pulse range for throttle columns in µs, `MIN,MAX` (default 1000,2000).
-    #[arg(long, value_delimiter = ',')]
-    pub esc_us: Option<Vec<f64>>,
-    /// Raw command values at throttle 0 and 1, `MIN,MAX`.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
-    pub input_range: Option<Vec<f64>>,
-    /// Motor magnet poles, for a speed column in eRPM.
-    #[arg(long)]
-    pub poles: Option<u32>,
-}
-
 /// DATA as the model needs it: its input (gaps held), its outputs (NaN where missing) and the
 /// supply voltage when the model reads one.
 struct Data {
@@ -154,13 +129,19 @@ fn lacks_channel(e: &CliError) -> bool {
 
 /// Reads DATA with the model's input and outputs (or those given); a DATA without them is
 /// [`CliError::ModelData`].
-fn read_data(m: &ModelFile, file: &Path, r: &ReadArgs, outputs: bool) -> Result<Data, CliError> {
+fn read_data(
+    m: &ModelFile,
+    file: &Path,
+    r: &ReadFlags,
+    output: &[String],
+    outputs: bool,
+) -> Result<Data, CliError> {
     let input = r
         .input
         .clone()
         .or_else(|| (m.input.name != names::THROTTLE).then(|| m.input.column.clone()));
-    let outs: Vec<String> = if !r.output.is_empty() || !outputs {
-        r.output.clone()
+    let outs: Vec<String> = if !output.is_empty() || !outputs {
+        output.to_vec()
     } else if m.outputs.len() == 1 && m.outputs[0].name == names::THRUST {
         Vec::new()
     } else {
@@ -173,13 +154,7 @@ fn read_data(m: &ModelFile, file: &Path, r: &ReadArgs, outputs: bool) -> Result<
     };
     let req = Request {
         input: input.as_deref(),
-        outputs: &outs,
-        optional: &optional,
-        fs_hz: r.fs,
-        columns: r.columns.as_deref(),
-        esc_us: r.esc_us.as_deref(),
-        input_range: r.input_range.as_deref(),
-        poles: r.poles,
+        ..r.request(&outs, &optional)
     };
     let lacking = |detail: String| CliError::ModelData {
         file: file.display().to_string(),
@@ -244,15 +219,18 @@ pub struct CompareArgs {
     /// Write compare.svg (measured and simulated outputs) into this directory.
     #[arg(long)]
     pub report: Option<PathBuf>,
-    /// How DATA is read.
+    /// Output column, repeatable (default: the model's outputs).
+    #[arg(long)]
+    pub output: Vec<String>,
+    /// How DATA is read (`identify`'s flags; `--input` defaults to the model's input).
     #[command(flatten)]
-    pub read: ReadArgs,
+    pub read: ReadFlags,
 }
 
 /// Runs `propid compare`.
 pub fn compare(args: CompareArgs) -> Result<(), CliError> {
     let m = read(&args.model)?;
-    let d = read_data(&m, &args.data, &args.read, true)?;
+    let d = read_data(&m, &args.data, &args.read, &args.output, true)?;
     let which = Which::default_for(&m);
     let sim = free_run(
         &m,
@@ -361,16 +339,15 @@ pub struct SimulateArgs {
 /// Runs `propid simulate`: `t_s`, the input and each simulated output as CSV.
 pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
     let m = read(&args.model)?;
-    let r = ReadArgs {
+    let r = ReadFlags {
         input: None,
-        output: Vec::new(),
         fs: args.fs,
         columns: args.columns.clone(),
         esc_us: args.esc_us.clone(),
         input_range: args.input_range.clone(),
         poles: None,
     };
-    let d = read_data(&m, &args.data, &r, false)?;
+    let d = read_data(&m, &args.data, &r, &[], false)?;
     let which = Which::default_for(&m);
     let sim = free_run(&m, which, &d.u, d.voltage.as_deref(), &[], 0).map_err(CliError::Model)?;
     let mut t = format!("t_s,{}", m.input.name);

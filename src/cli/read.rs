@@ -144,7 +144,9 @@ mod tests {
 fn load_streamed(file: &Path, req: &Request) -> Result<Option<LoadedFile>, CliError> {
     let name = file.display().to_string();
     let mut reader = propid_ingest::BinaryReader::new(&ingest_options(req));
-    match read_chunks(file, MAX_INPUT_BYTES, is_binary_recording, |c| reader.push(c)) {
+    match read_chunks(file, MAX_INPUT_BYTES, is_binary_recording, |c| {
+        reader.push(c)
+    }) {
         Ok(true) => match reader.finish() {
             Ok((record, stats)) => Ok(Some(from_record(req, name, record, stats)?)),
             Err(source) => Err(LoadError::Recording { file: name, source }.into()),

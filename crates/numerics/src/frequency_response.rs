@@ -117,7 +117,10 @@ pub fn frequency_response(
     f_hi: f64,
 ) -> Option<FrequencyResponse> {
     let n = u.len().min(y.len());
-    if n < 2 * MIN_SEGMENT || dt_s.is_nan() || dt_s <= 0.0 || u[..n].iter().chain(&y[..n]).any(|v| !v.is_finite())
+    if n < 2 * MIN_SEGMENT
+        || dt_s.is_nan()
+        || dt_s <= 0.0
+        || u[..n].iter().chain(&y[..n]).any(|v| !v.is_finite())
     {
         return None;
     }

@@ -30,6 +30,7 @@ pub fn model_file(
         unit_of(key, raw)
     };
     let input_key = args
+        .read
         .input
         .clone()
         .unwrap_or_else(|| names::THROTTLE.to_string());
@@ -39,6 +40,7 @@ pub fn model_file(
         .enumerate()
         .map(|(i, col)| {
             let key = args
+                .read
                 .output
                 .get(i)
                 .cloned()
@@ -58,18 +60,18 @@ pub fn model_file(
         "order": args.order,
         "svd": format!("{:?}", args.svd).to_lowercase(),
         "hankel": format!("{:?}", args.hankel),
-        "fs": args.fs,
-        "columns": args.columns,
-        "esc_us": args.esc_us,
+        "fs": args.read.fs,
+        "columns": args.read.columns,
+        "esc_us": args.read.esc_us,
         "input_range": s.read.input_range,
         "input_range_from": s.read.input_range_from,
-        "poles": args.poles,
+        "poles": args.read.poles,
     });
     let to_value = |v: Result<Value, serde_json::Error>| v.map_err(CliError::Json);
     Ok(ModelFile {
         schema: SCHEMA.into(),
         checksum: String::new(),
-        provenance: mf::provenance("identify", &args.file, s.samples, options),
+        provenance: mf::provenance("identify", &args.read.file, s.samples, options),
         dt_s: model.dt_s,
         input: channel(&input_key, &s.input, &unit(&input_key, &s.input)),
         outputs,

@@ -304,7 +304,10 @@ impl ExperimentConfig {
                 throttle: l,
             });
             if self.kind == Kind::Chirp {
-                for (sign, v) in [('+', l + self.chirp_amplitude), ('-', l - self.chirp_amplitude)] {
+                for (sign, v) in [
+                    ('+', l + self.chirp_amplitude),
+                    ('-', l - self.chirp_amplitude),
+                ] {
                     out.push(Commanded {
                         key: format!("levels[{i}] {sign} chirp_amplitude"),
                         value: format!("{l} {sign} {} = {v}", self.chirp_amplitude),
