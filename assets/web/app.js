@@ -416,13 +416,13 @@ function showKinds(kind) {
   $("kinds").hidden = false;
   $("kinds-kind").textContent = "(" + kind + ")";
 }
-const ms = (v) => (v == null ? "—" : (v * 1e3).toFixed(1));
+const kms = (v) => (v == null ? "—" : (v * 1e3).toFixed(1));
 const fx = (v, d) => (v == null ? "—" : v.toFixed(d));
 function onStep(s) {
   showKinds(s.kind);
   const r = $("steps").tBodies[0].insertRow();
   for (const v of [s.index, fx(s.t_s, 2), fx(s.from, 3), fx(s.to, 3), s.direction,
-    ms(s.dead_time_s), ms(s.time_constant_s), ms(s.rise_10_90_s), ms(s.settling_90_s),
+    kms(s.dead_time_s), kms(s.time_constant_s), kms(s.rise_10_90_s), kms(s.settling_90_s),
     fx(s.overshoot_pct, 1)]) r.insertCell().textContent = v;
 }
 function onStaticMap(m) {
@@ -446,9 +446,9 @@ function onFrequencyResponse(f) {
   showKinds(f.kind);
   const m = f.model;
   $("freq-figures").textContent = "peak " + fx(f.peak_hz, 2) + " Hz, bandwidth " +
-    fx(f.bandwidth_hz, 2) + " Hz, phase delay " + ms(f.phase_delay_s) + " ms" +
+    fx(f.bandwidth_hz, 2) + " Hz, phase delay " + kms(f.phase_delay_s) + " ms" +
     (m ? "; model fn " + fx(m.natural_hz, 2) + " Hz, ζ " + fx(m.damping, 3) + ", K " +
-      fx(m.gain, 3) + ", T " + ms(m.dead_time_s) + " ms" : "");
+      fx(m.gain, 3) + ", T " + kms(m.dead_time_s) + " ms" : "");
   const x = f.bins.map((b) => b.f_hz);
   const data = [x, f.bins.map((b) => 20 * Math.log10(b.gain)), f.bins.map((b) => b.coherence)];
   if (!cBode) {

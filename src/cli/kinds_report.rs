@@ -1,14 +1,9 @@
 //! `--report DIR` of `propid run` and `propid replay` for an experiment kind other than
-//! pulses: the Markdown of `propid_kinds::report` and its figures (thrust curve, τ against
-//! throttle, Bode plot), drawn with `crate::plot::xy`.
+//! pulses: the files `propid_report::kinds` renders, written into DIR.
 
-use std::io;
 use std::path::Path;
 
-use propid_kinds::report::{self, BODE_SVG, MARKDOWN, TAU_SVG, THRUST_SVG};
 use propid_kinds::Published;
-
-use crate::plot::xy::{svg, Panel, Series};
 
 /// Writes the report of a run with `cfg` that published `published` into `dir` (created when
 /// missing), as the command's error.
@@ -22,173 +17,12 @@ pub fn write_for(
         .get("kind")
         .and_then(|k| k.as_str())
         .unwrap_or("pulses");
-    write(dir, kind, published)
-        .map_err(|e| super::CliError::io(format!("writing the report into {}", dir.display()), e))
-}
-
-/// Writes the report of a run of `kind` into `dir` (created when missing).
-pub fn write(dir: &Path, kind: &str, published: &[Published]) -> io::Result<()> {
-    std::fs::create_dir_all(dir)?;
-    std::fs::write(dir.join(MARKDOWN), report::markdown(kind, published))?;
-    let figs = report::figures(published);
-    if figs.thrust {
-        thrust(&dir.join(THRUST_SVG), published)?;
-    }
-    if figs.tau {
-        tau(&dir.join(TAU_SVG), published)?;
-    }
-    if figs.bode {
-        bode(&dir.join(BODE_SVG), published)?;
-    }
-    Ok(())
-}
-
-fn thrust(path: &Path, published: &[Published]) -> io::Result<()> {
-    let mut series = Vec::new();
-    for p in published {
-        let Published::StaticMap(m) = p else { continue };
-        if m.output != "thrust" {
-            continue;
-        }
-        let label = m.leg.unwrap_or("levels");
-        series.push(Series {
-            label,
-            points: m.map.levels.iter().map(|l| (l.throttle, l.mean)).collect(),
-            line: false,
-        });
-        if let (Some(pw), None | Some("up")) = (&m.map.power, m.leg) {
-            let offset = m.map.zero_offset.map_or(0.0, |z| z.value);
-            let pts = (0..=100)
-                .map(|k| k as f64 / 100.0)
-                .filter(|&u| u >= pw.u0)
-                .map(|u| (u, pw.predict(u) + offset))
-                .collect();
-            series.push(Series {
-                label: "power law",
-                points: pts,
-                line: true,
-            });
-        }
-    }
-    let panel = Panel {
-        title: "thrust against throttle",
-        x_desc: "throttle",
-        y_desc: "thrust (N)",
-        log_x: false,
-        series,
-    };
-    svg(path, &[panel])
-}
-
-fn tau(path: &Path, published: &[Published]) -> io::Result<()> {
-    let pts = |dir: propid_numerics::step_response::Direction| {
-        published
-            .iter()
-            .filter_map(|p| match p {
-                Published::Step(s) if s.figures.direction == dir => {
-                    s.figures.time_constant_s.map(|t| (s.figures.to, t * 1e3))
-                }
-                _ => None,
-            })
-            .collect()
-    };
-    use propid_numerics::step_response::Direction;
-    let panel = Panel {
-        title: "time constant against throttle (the step's end level)",
-        x_desc: "throttle",
-        y_desc: "τ (ms)",
-        log_x: false,
-        series: vec![
-            Series {
-                label: "steps up",
-                points: pts(Direction::Up),
-                line: false,
-            },
-            Series {
-                label: "steps down",
-                points: pts(Direction::Down),
-                line: false,
-            },
-        ],
-    };
-    svg(path, &[panel])
-}
-
-fn bode(path: &Path, published: &[Published]) -> io::Result<()> {
-    let Some(fr) = published.iter().find_map(|p| match p {
-        Published::FrequencyResponse(f) => Some(f),
-        _ => None,
-    }) else {
-        return Ok(());
-    };
-    let r = &fr.response;
-    let db = |g: f64| 20.0 * g.max(1e-300).log10();
-    let bins = &r.bins;
-    let mut gain = vec![Series {
-        label: "H1",
-        points: bins.iter().map(|b| (b.f_hz, db(b.gain))).collect(),
-        line: true,
-    }];
-    let mut phase = vec![Series {
-        label: "H1",
-        points: bins.iter().map(|b| (b.f_hz, b.phase_deg)).collect(),
-        line: true,
-    }];
-    if let Some(m) = &r.model {
-        gain.push(Series {
-            label: "fitted model",
-            points: bins
+    propid_report::kinds::render(kind, published)
+        .and_then(|files| {
+            std::fs::create_dir_all(dir)?;
+            files
                 .iter()
-                .map(|b| (b.f_hz, db(m.at(b.f_hz).norm())))
-                .collect(),
-            line: true,
-        });
-        // the model's phase unwrapped like the measurement's: continued bin to bin
-        let mut last: Option<f64> = None;
-        let pts = bins
-            .iter()
-            .map(|b| {
-                let mut ph = m.at(b.f_hz).arg().to_degrees();
-                if let Some(prev) = last {
-                    ph += 360.0 * ((prev - ph) / 360.0).round();
-                }
-                last = Some(ph);
-                (b.f_hz, ph)
-            })
-            .collect();
-        phase.push(Series {
-            label: "fitted model",
-            points: pts,
-            line: true,
-        });
-    }
-    let coherence = vec![Series {
-        label: "coherence",
-        points: bins.iter().map(|b| (b.f_hz, b.coherence)).collect(),
-        line: true,
-    }];
-    let panels = [
-        Panel {
-            title: "gain",
-            x_desc: "frequency (Hz)",
-            y_desc: "dB (N per unit throttle)",
-            log_x: true,
-            series: gain,
-        },
-        Panel {
-            title: "phase",
-            x_desc: "frequency (Hz)",
-            y_desc: "degrees",
-            log_x: true,
-            series: phase,
-        },
-        Panel {
-            title: "coherence",
-            x_desc: "frequency (Hz)",
-            y_desc: "γ²",
-            log_x: true,
-            series: coherence,
-        },
-    ];
-    svg(path, &panels)
+                .try_for_each(|(name, text)| std::fs::write(dir.join(name), text))
+        })
+        .map_err(|e| super::CliError::io(format!("writing the report into {}", dir.display()), e))
 }

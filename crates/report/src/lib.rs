@@ -10,4 +10,5 @@
 pub mod columns_read;
 pub mod diagnose;
 pub mod identify;
+pub mod kinds;
 pub mod plot;

@@ -2,7 +2,6 @@
 //! experiment kinds' run report: thrust curve, τ against throttle, Bode plot).
 
 use std::io;
-use std::path::Path;
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -115,14 +114,18 @@ fn draw(area: &DrawingArea<SVGBackend<'_>, Shift>, p: &Panel<'_>) -> io::Result<
     Ok(())
 }
 
-/// Writes `panels` stacked one above the other to `path` as SVG.
-pub fn svg(path: &Path, panels: &[Panel<'_>]) -> io::Result<()> {
+/// `panels` stacked one above the other, as SVG text.
+pub fn svg(panels: &[Panel<'_>]) -> io::Result<String> {
     let h = 420 * panels.len().max(1) as u32;
-    let root = SVGBackend::new(path, (900, h)).into_drawing_area();
-    root.fill(&WHITE).map_err(to_io)?;
-    let areas = root.split_evenly((panels.len().max(1), 1));
-    for (a, p) in areas.iter().zip(panels) {
-        draw(a, p)?;
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, (900, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(to_io)?;
+        let areas = root.split_evenly((panels.len().max(1), 1));
+        for (a, p) in areas.iter().zip(panels) {
+            draw(a, p)?;
+        }
+        root.present().map_err(to_io)?;
     }
-    root.present().map_err(to_io)
+    Ok(text)
 }
