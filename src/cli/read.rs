@@ -105,6 +105,24 @@ pub fn load(file: &Path, req: &Request) -> Result<LoadedFile, CliError> {
     Ok(load_owned(file.display().to_string(), bytes, req)?)
 }
 
+/// A regular file whose first bytes are a binary TSP/1 recording, decoded as it is read:
+/// memory for the record, not for the file's bytes. `None` for anything else.
+fn load_streamed(file: &Path, req: &Request) -> Result<Option<LoadedFile>, CliError> {
+    let name = file.display().to_string();
+    let mut reader = propid_ingest::BinaryReader::new(&ingest_options(req));
+    match read_chunks(file, MAX_INPUT_BYTES, is_binary_recording, |c| {
+        reader.push(c)
+    }) {
+        Ok(true) => match reader.finish() {
+            Ok((record, stats)) => Ok(Some(from_record(req, name, record, stats)?)),
+            Err(source) => Err(LoadError::Recording { file: name, source }.into()),
+        },
+        Ok(false) => Ok(None),
+        Err(ReadError::Io(e)) => Err(CliError::io(format!("reading {name}"), e)),
+        Err(ReadError::TooLarge { limit }) => Err(LoadError::TooLarge { file: name, limit }.into()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -136,23 +154,5 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let e = load(&dir.path().join("absent.csv"), &Request::default()).unwrap_err();
         assert_eq!(e.exit_code(), 7, "{e}");
-    }
-}
-
-/// A regular file whose first bytes are a binary TSP/1 recording, decoded as it is read:
-/// memory for the record, not for the file's bytes. `None` for anything else.
-fn load_streamed(file: &Path, req: &Request) -> Result<Option<LoadedFile>, CliError> {
-    let name = file.display().to_string();
-    let mut reader = propid_ingest::BinaryReader::new(&ingest_options(req));
-    match read_chunks(file, MAX_INPUT_BYTES, is_binary_recording, |c| {
-        reader.push(c)
-    }) {
-        Ok(true) => match reader.finish() {
-            Ok((record, stats)) => Ok(Some(from_record(req, name, record, stats)?)),
-            Err(source) => Err(LoadError::Recording { file: name, source }.into()),
-        },
-        Ok(false) => Ok(None),
-        Err(ReadError::Io(e)) => Err(CliError::io(format!("reading {name}"), e)),
-        Err(ReadError::TooLarge { limit }) => Err(LoadError::TooLarge { file: name, limit }.into()),
     }
 }
