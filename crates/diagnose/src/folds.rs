@@ -271,11 +271,9 @@ impl HeldOutGain {
     }
 
     /// Whether the gain is taken: a held-out figure that rises ([`MIN_CV_GAIN_PP`]). The
-    /// paired test against the folds' scatter ([`Self::significant`]) is reported with every
-    /// rejection and finding but does not decide yet: at the one-sided 95 % quantile it
-    /// rejected effects hidden in real logs that the injection tests require (seven of them,
-    /// `tests/cli/diagnose_injected.rs` and friends), so its power on 3–5 folds is too low to
-    /// be the gate (docs/diagnose_effects.md).
+    /// paired test against the folds' scatter ([`Self::significant`]) is said with every
+    /// rejection but does not decide: its power on 3–5 folds is too low for the effects the
+    /// injection tests hide (docs/diagnose_effects.md).
     pub fn passes(&self) -> bool {
         self.gain_pp.is_finite() && self.gain_pp > MIN_CV_GAIN_PP
     }
