@@ -97,8 +97,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if summary.link.frames_ok == 0 {
         return Err(LoadError::Undecodable { file, bytes: size }.into());
     }
-    if let Some(dir) = &args.report {
-        super::kinds_report::write_for(dir, &cfg, &summary.kinds)?;
+    if let (Some(dir), Some(material)) = (&args.report, &summary.kinds) {
+        super::kinds_report::write_for(dir, material)?;
     }
     Ok(())
 }

@@ -91,8 +91,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         shutdown,
     };
     let summary = runner::run(&cfg, parts)?;
-    if let Some(dir) = &args.report {
-        super::kinds_report::write_for(dir, &cfg, &summary.kinds)?;
+    if let (Some(dir), Some(material)) = (&args.report, &summary.kinds) {
+        super::kinds_report::write_for(dir, material)?;
     }
     Ok(())
 }

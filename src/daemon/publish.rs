@@ -312,7 +312,7 @@ impl Publisher {
 /// How the web page's history keeps a line.
 fn http_kind(line: &Line<'_>) -> Kind {
     match line {
-        Line::Model(_) => Kind::State("model"),
+        Line::Model(_) | Line::Kind(propid_kinds::Published::Model(_)) => Kind::State("model"),
         Line::Schedule(_) => Kind::State("schedule"),
         Line::Stats(_) => Kind::State("stats"),
         Line::LiveStats(_) => Kind::State("live_stats"),

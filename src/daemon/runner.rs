@@ -30,8 +30,8 @@ pub struct RunSummary {
     pub latencies_s: Vec<f64>,
     /// Wall-clock duration, s.
     pub elapsed_s: f64,
-    /// What an experiment kind's analysis published (`--report`).
-    pub kinds: Vec<propid_kinds::Published>,
+    /// The run report's material (`--report`).
+    pub kinds: Option<propid_kinds::Material>,
 }
 
 impl RunSummary {
@@ -57,8 +57,8 @@ pub fn csv_options(cfg: &Config) -> CsvLinkOptions {
     }
 }
 
-/// The analysis of `[experiment] kind` when it is not pulses (run and replay alike: the
-/// samples and this configuration are all it reads).
+/// The analysis of `[experiment] kind` (run and replay alike: the samples and this
+/// configuration are all it reads).
 fn kinds_analysis(cfg: &Config) -> Result<Option<propid_kinds::Analysis>, DaemonError> {
     let ecfg: propid_wire::experiment::ExperimentConfig =
         cfg.experiment.clone().try_into().map_err(|source| {
@@ -67,12 +67,11 @@ fn kinds_analysis(cfg: &Config) -> Result<Option<propid_kinds::Analysis>, Daemon
                 source,
             })
         })?;
-    if ecfg.kind == propid_wire::experiment::Kind::Pulses {
-        return Ok(None);
+    if ecfg.kind != propid_wire::experiment::Kind::Pulses {
+        ecfg.validate()
+            .map_err(|e| DaemonError::Config(super::config::ConfigError::Experiment(e)))?;
     }
-    ecfg.validate()
-        .map_err(|e| DaemonError::Config(super::config::ConfigError::Experiment(e)))?;
-    Ok(propid_kinds::Analysis::new(&ecfg))
+    Ok(Some(propid_kinds::Analysis::new(&ecfg)))
 }
 
 /// Everything a run needs besides the configuration.

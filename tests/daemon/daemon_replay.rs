@@ -75,8 +75,20 @@ fn pulse_starts(bytes: &[u8]) -> Vec<u32> {
 #[test]
 fn clean_stream_publishes_models_schedule_and_stats() {
     let (bytes, sum) = record_stand(&stand());
-    let (lines, status, err) = replay(&bytes, &[]);
+    let report = tempfile::tempdir().unwrap();
+    let (lines, status, err) = replay(&bytes, &["--report", report.path().to_str().unwrap()]);
     assert!(status.success(), "{err}");
+    // the pulses run report: its thrust curve over the operating points, the models
+    let md = std::fs::read_to_string(report.path().join("report.md")).unwrap();
+    assert!(md.starts_with("# propid run report: pulses"), "{md}");
+    assert!(
+        md.contains("## Static map") && md.contains("MOT_THST_EXPO"),
+        "{md}"
+    );
+    assert_eq!(md.matches("| 4 |\n").count(), 6, "a row per model: {md}");
+    for svg in ["thrust_curve.svg", "models.svg"] {
+        assert!(report.path().join(svg).exists(), "{svg}");
+    }
     let models = of_type(&lines, "model");
     assert_eq!(models.len(), 6); // 8 pulses per level, K = 4, three levels
     for m in &models {

@@ -3,6 +3,8 @@
 //! lines each kind publishes, their figures against the stand's, the replay of the recording
 //! publishing the same lines, and the run report.
 
+use crate::browser;
+use crate::daemon_http::url_of;
 use crate::daemon_proc;
 
 use daemon_proc::{of_type, replay, sim_stand, Daemon};
@@ -24,7 +26,8 @@ fn kind_lines(lines: &[Value]) -> Vec<Value> {
     lines
         .iter()
         .filter(|l| {
-            ["step", "static_map", "frequency_response"].contains(&l["type"].as_str().unwrap_or(""))
+            ["step", "static_map", "frequency_response", "model"]
+                .contains(&l["type"].as_str().unwrap_or(""))
         })
         .cloned()
         .collect()
@@ -122,10 +125,84 @@ fn a_staircase_maps_the_stands_steady_thrust_and_replays_the_same_lines() {
         md.contains("## Steps") && md.contains("## Static map"),
         "{md}"
     );
+    // the flight controllers' numbers from the map, with their normalisation
+    assert!(
+        md.contains("### Flight-controller numbers") && md.contains("`MOT_THST_EXPO`"),
+        "{md}"
+    );
     for svg in ["thrust_curve.svg", "tau.svg"] {
         let s = std::fs::read_to_string(dir.path().join("report").join(svg)).unwrap();
         assert!(s.starts_with("<svg") || s.contains("<svg"), "{svg}");
     }
+    the_page_shows_the_lines(dir.path(), &steps, &maps);
+}
+
+/// The rows of the table `id` in a DOM: each row's cells' text.
+fn rows(dom: &str, id: &str) -> Vec<Vec<String>> {
+    let Some(at) = dom.find(&format!("<table id=\"{id}\"")) else {
+        return Vec::new();
+    };
+    let table = &dom[at..at + dom[at..].find("</table>").unwrap()];
+    let Some(body) = table.split("<tbody>").nth(1) else {
+        return Vec::new();
+    };
+    body.split("<tr>")
+        .skip(1)
+        .map(|tr| {
+            tr.split("<td>")
+                .skip(1)
+                .map(|td| td.split("</td>").next().unwrap().to_string())
+                .collect()
+        })
+        .collect()
+}
+
+/// The replay of the run's recording served over HTTP: in Chromium, the page's "Experiment
+/// kind" section shows a row per `step` line and per level of each `static_map` line, with
+/// their numbers.
+fn the_page_shows_the_lines(dir: &std::path::Path, steps: &[&Value], maps: &[&Value]) {
+    browser::chromium();
+    let (rec, cfg) = (dir.join("run.tsp"), dir.join("propid.toml"));
+    let mut d = Daemon::start(&[
+        "replay",
+        rec.to_str().unwrap(),
+        "--config",
+        cfg.to_str().unwrap(),
+        "--http",
+        "127.0.0.1:0",
+    ]);
+    let url = url_of(&mut d);
+    d.wait_for(30.0, |l| l["type"] == "stats");
+    let levels: usize = maps
+        .iter()
+        .map(|m| m["levels"].as_array().unwrap().len())
+        .sum();
+    let dom = browser::dom_when(&url, |dom| rows(dom, "static-map").len() == levels);
+    assert!(dom.contains("id=\"kinds-kind\">(staircase)"), "{dom}");
+    let shown = rows(&dom, "steps");
+    assert_eq!(shown.len(), steps.len(), "{dom}");
+    for (row, s) in shown.iter().zip(steps) {
+        assert_eq!(row[0], s["index"].to_string());
+        assert_eq!(row[4], s["direction"].as_str().unwrap());
+        let tau_ms = s["time_constant_s"].as_f64().unwrap() * 1e3;
+        assert_eq!(row[6], format!("{tau_ms:.1}"), "{row:?} {s}");
+    }
+    let want: Vec<(String, String)> = maps
+        .iter()
+        .flat_map(|m| m["levels"].as_array().unwrap().iter())
+        .map(|l| {
+            let f = |k: &str, d: usize| format!("{:.d$}", l[k].as_f64().unwrap());
+            (f("throttle", 3), f("mean", 4))
+        })
+        .collect();
+    let got: Vec<(String, String)> = rows(&dom, "static-map")
+        .into_iter()
+        .map(|r| (r[2].clone(), r[3].clone()))
+        .collect();
+    assert_eq!(got, want, "{dom}");
+    d.signal(libc::SIGINT);
+    let (status, _, err) = d.finish(10.0);
+    assert!(status.success(), "{err}");
 }
 
 #[test]
@@ -148,6 +225,12 @@ fn a_chirp_finds_the_stands_resonance_and_replays_the_same_lines() {
     let model = &fr[0]["model"];
     let f = model["natural_hz"].as_f64().unwrap();
     assert!((f - fn_hz).abs() < 0.1 * fn_hz, "{model}");
+    // the fit is published as a model line too, the pulse model's fields
+    let models = of_type(&lines, "model");
+    assert_eq!(models.len(), 1, "{lines:#?}");
+    assert_eq!(models[0]["path"], "frequency_response");
+    assert_eq!(models[0]["fn_hz"], model["natural_hz"]);
+    assert_eq!(models[0]["operating_point"], 0.5);
     assert!(fr[0]["bins"].as_array().unwrap().len() > 10);
     assert!(fr[0]["bandwidth_hz"].as_f64().is_some(), "{}", fr[0]);
     assert!(fr[0]["phase_delay_s"].as_f64().is_some());

@@ -3,17 +3,7 @@
 
 use propid_numerics::discretise::discretise_second_order;
 
-/// Poles of `s² + 2ζωn s + ωn²`, `[re, im]`, rad/s.
-pub fn second_order_poles(fn_hz: f64, zeta: f64) -> [[f64; 2]; 2] {
-    let wn = 2.0 * std::f64::consts::PI * fn_hz;
-    if zeta < 1.0 {
-        let wd = wn * (1.0 - zeta * zeta).sqrt();
-        [[-zeta * wn, wd], [-zeta * wn, -wd]]
-    } else {
-        let r = wn * (zeta * zeta - 1.0).sqrt();
-        [[-zeta * wn + r, 0.0], [-zeta * wn - r, 0.0]]
-    }
-}
+pub use propid_numerics::modal::second_order_poles;
 
 /// The linear part of a model as published: the discrete `x_{k+1} = A x_k + B u_k`,
 /// `y_k = C x_k` (rows of `A`, `B`, `C`) and the continuous poles, built from the core and

@@ -1,11 +1,13 @@
 //! The run report of an experiment kind in Markdown (`propid run --report DIR`, `propid
-//! replay --report DIR`): the thrust curve with the flight-controller numbers, the step
-//! table, τ against throttle, the ramp's hysteresis, the frequency response. The figures it
-//! names ([`THRUST_SVG`], [`TAU_SVG`], [`BODE_SVG`]) are drawn by the caller.
+//! replay --report DIR`): the thrust curve with the flight-controller numbers (given by the
+//! caller), the step table, τ against throttle, the ramp's hysteresis, the frequency
+//! response, the models (a pulses run's per operating point: fn, ζ, τ against throttle). The
+//! figures it names ([`THRUST_SVG`], [`TAU_SVG`], [`BODE_SVG`], [`MODELS_SVG`]) are drawn by
+//! the caller.
 
 use std::fmt::Write as _;
 
-use crate::{Published, StaticMapLine};
+use crate::{Material, Published, StaticMapLine};
 
 /// The report's file.
 pub const MARKDOWN: &str = "report.md";
@@ -15,6 +17,8 @@ pub const THRUST_SVG: &str = "thrust_curve.svg";
 pub const TAU_SVG: &str = "tau.svg";
 /// The Bode plot.
 pub const BODE_SVG: &str = "bode.svg";
+/// fn, ζ and τ of the models against their operating points.
+pub const MODELS_SVG: &str = "models.svg";
 
 fn ms(v: Option<f64>) -> String {
     v.map_or("–".into(), |v| format!("{:.1}", v * 1e3))
@@ -33,12 +37,17 @@ pub struct Figures {
     pub tau: bool,
     /// A frequency response is there.
     pub bode: bool,
+    /// Models are there.
+    pub models: bool,
 }
 
-/// The figures `published` supports.
-pub fn figures(published: &[Published]) -> Figures {
-    let mut f = Figures::default();
-    for p in published {
+/// The figures `m` supports.
+pub fn figures(m: &Material) -> Figures {
+    let mut f = Figures {
+        models: !m.models.is_empty(),
+        ..Figures::default()
+    };
+    for p in &m.published {
         match p {
             Published::StaticMap(m) if m.output == "thrust" => f.thrust = true,
             Published::Step(s) if s.figures.time_constant_s.is_some() => f.tau = true,
@@ -106,10 +115,12 @@ fn map_section(out: &mut String, m: &StaticMapLine) {
     }
 }
 
-/// The report of a run of `kind` (its name) that published `published`.
-pub fn markdown(kind: &str, published: &[Published]) -> String {
-    let figs = figures(published);
-    let mut out = format!("# propid run report: {kind}\n");
+/// The report of a run (`material`); `flight_controller`: the section on the flight
+/// controllers' numbers from the thrust map, placed after the maps.
+pub fn markdown(material: &Material, flight_controller: Option<&str>) -> String {
+    let published = &material.published[..];
+    let figs = figures(material);
+    let mut out = format!("# propid run report: {}\n", material.kind.name());
     let maps: Vec<&StaticMapLine> = published
         .iter()
         .filter_map(|p| match p {
@@ -122,9 +133,43 @@ pub fn markdown(kind: &str, published: &[Published]) -> String {
         if figs.thrust {
             let _ = writeln!(out, "\n![thrust curve]({THRUST_SVG})");
         }
+        if material.kind == crate::Kind::Pulses {
+            out.push_str(
+                "\nThe steady output at each operating point, between its pulses (after \
+                 `settle_ms`).\n",
+            );
+        }
         for m in maps {
             map_section(&mut out, m);
         }
+        if let Some(fc) = flight_controller {
+            out.push_str(fc);
+        }
+    }
+    if !material.models.is_empty() {
+        out.push_str("\n## Models\n\n");
+        out.push_str(
+            "| t (s) | operating point | fn (Hz) | ζ | τ (ms) | DC gain | pulses |\n\
+             |---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        let fin = |v: f64, d: usize| num(v.is_finite().then_some(v), d);
+        for r in &material.models {
+            let _ = writeln!(
+                out,
+                "| {:.2} | {:.3} | {} | {} | {} | {} | {} |",
+                r.t_s,
+                r.operating_point,
+                fin(r.fn_hz, 2),
+                fin(r.zeta, 3),
+                ms(r.tau_s),
+                fin(r.dc_gain, 4),
+                r.pulses
+            );
+        }
+        let _ = writeln!(
+            out,
+            "\n![fn, ζ and τ against the operating point]({MODELS_SVG})"
+        );
     }
     let steps: Vec<_> = published
         .iter()
@@ -196,7 +241,7 @@ pub fn markdown(kind: &str, published: &[Published]) -> String {
         }
         let _ = writeln!(out, "\n![Bode plot]({BODE_SVG})");
     }
-    if published.is_empty() {
+    if published.is_empty() && material.models.is_empty() {
         out.push_str("\nNothing was published: the run ended before any result.\n");
     }
     out

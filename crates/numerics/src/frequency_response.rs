@@ -35,7 +35,10 @@ use realfft::num_complex::Complex;
 use realfft::RealFftPlanner;
 use serde::Serialize;
 
+use crate::discretise::discretise_second_order;
 use crate::levenberg_marquardt::{minimise, LmOptions};
+use crate::modal::{mass_spring_damper, second_order_poles};
+use crate::report::{Gain, MassSpringDamper, ModeIndicators, ModelReport, Uncertainty};
 
 /// Bins below this coherence are not used for the figures nor the fit.
 pub const MIN_COHERENCE: f64 = 0.6;
@@ -71,6 +74,68 @@ pub struct SecondOrder {
 }
 
 impl SecondOrder {
+    /// The model as the identification core reports one (`propid identify --json`'s fields):
+    /// order 2, the exact zero-order-hold discretisation at `dt_s`
+    /// ([`crate::discretise::discretise_second_order`], state `[T, T']`, `C = [1, 0]`), its
+    /// poles, DC gain `K`, the mass–spring–damper equivalent. The dead time has no place in
+    /// `A, B, C, D` (the caller publishes it beside); nothing the fit does not give (mode
+    /// indicators, jackknife spreads, singular values) is reported: NaN, empty, 0.
+    pub fn to_report(&self, dt_s: f64) -> ModelReport {
+        let (a, b) = discretise_second_order(self.natural_hz, self.damping, self.gain, dt_s);
+        let poles_s = second_order_poles(self.natural_hz, self.damping).to_vec();
+        let poles_z: Vec<[f64; 2]> = poles_s
+            .iter()
+            .map(|s| {
+                let m = (s[0] * dt_s).exp();
+                [m * (s[1] * dt_s).cos(), m * (s[1] * dt_s).sin()]
+            })
+            .collect();
+        let mut time_constants_s: Vec<f64> = poles_s
+            .iter()
+            .filter(|s| s[1] == 0.0 && s[0] < 0.0)
+            .map(|s| -1.0 / s[0])
+            .collect();
+        time_constants_s.sort_by(|a, b| b.total_cmp(a));
+        let (m, d, k) = mass_spring_damper(self.natural_hz, self.damping, self.gain);
+        let none = ModeIndicators {
+            msv: f64::NAN,
+            mac: f64::NAN,
+            emac: f64::NAN,
+            mpc: f64::NAN,
+            cmi: f64::NAN,
+        };
+        ModelReport {
+            order: 2,
+            dt_s,
+            fn_hz: self.natural_hz,
+            zeta: self.damping,
+            dc_gain: Gain::Scalar(self.gain),
+            time_constants_s,
+            poles_s,
+            poles_z,
+            a: vec![vec![a[(0, 0)], a[(0, 1)]], vec![a[(1, 0)], a[(1, 1)]]],
+            b: vec![vec![b[0]], vec![b[1]]],
+            c: vec![vec![1.0, 0.0]],
+            d: vec![vec![0.0]],
+            singular_values: Vec::new(),
+            indicators: vec![none; 2],
+            uncertainty: Uncertainty {
+                fn_hz: f64::NAN,
+                zeta: f64::NAN,
+                dc_gain: Gain::Scalar(f64::NAN),
+            },
+            pulses: 0,
+            pulses_skipped: 0,
+            missing_samples: 0,
+            noise_rms: f64::NAN,
+            mass_spring_damper: MassSpringDamper { m, d, k },
+            hankel_block_rows: 0,
+            hankel_block_cols: 0,
+            svd: "none".into(),
+            order_stepped_down_from: None,
+        }
+    }
+
     /// The model's response at `f_hz`.
     pub fn at(&self, f_hz: f64) -> Complex<f64> {
         second_order(
@@ -334,6 +399,32 @@ pub fn fit_second_order(r: &FrequencyResponse) -> Option<SecondOrder> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_fitted_model_reports_as_an_identified_one() {
+        let m = SecondOrder {
+            gain: 2.5,
+            natural_hz: 8.0,
+            damping: 0.3,
+            dead_time_s: 0.01,
+            rms_rel_error: 0.02,
+        };
+        let r = m.to_report(1e-3);
+        assert_eq!((r.order, r.fn_hz, r.zeta), (2, 8.0, 0.3));
+        // DC gain of the discrete model: C (I − A)⁻¹ B = K
+        let (a, b) = (&r.a, &r.b);
+        let det = (1.0 - a[0][0]) * (1.0 - a[1][1]) - a[0][1] * a[1][0];
+        let x0 = ((1.0 - a[1][1]) * b[0][0] + a[0][1] * b[1][0]) / det;
+        assert!((x0 - 2.5).abs() < 1e-9, "{x0}");
+        // the discrete poles are the eigenvalues of A: their product is det A
+        let pz = |k: usize| Complex::new(r.poles_z[k][0], r.poles_z[k][1]);
+        let det_a = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        assert!(((pz(0) * pz(1)).re - det_a).abs() < 1e-12);
+        assert!(
+            r.time_constants_s.is_empty(),
+            "complex poles: no real time constant"
+        );
+    }
 
     /// A log chirp through the discretised `K ωₙ²/(s² + 2ζωₙ s + ωₙ²)` (semi-implicit Euler at
     /// a fine step), with a pure delay of `delay` samples and white noise of `noise`.

@@ -68,6 +68,19 @@ pub fn dc_gain(sys: Abcd<'_>, m: &mut [f64], x: &mut [f64], out: &mut [f64]) -> 
     true
 }
 
+/// Poles of `s² + 2ζωn s + ωn²`, `[re, im]`, rad/s (ωn = 2π·`fn_hz`; two real poles for
+/// ζ ≥ 1).
+pub fn second_order_poles(fn_hz: f64, zeta: f64) -> [[f64; 2]; 2] {
+    let wn = 2.0 * std::f64::consts::PI * fn_hz;
+    if zeta < 1.0 {
+        let wd = wn * (1.0 - zeta * zeta).sqrt();
+        [[-zeta * wn, wd], [-zeta * wn, -wd]]
+    } else {
+        let r = wn * (zeta * zeta - 1.0).sqrt();
+        [[-zeta * wn + r, 0.0], [-zeta * wn - r, 0.0]]
+    }
+}
+
 /// Mass–spring–damper equivalent `(m, d, k)` of a 2nd-order mode with DC gain `gain`.
 pub fn mass_spring_damper(fn_hz: f64, zeta: f64, gain: f64) -> (f64, f64, f64) {
     let k = 1.0 / gain;

@@ -147,25 +147,42 @@ pub fn stand_figures(
         .iter()
         .map(|o| {
             let lv = over.levels(o.y);
-            let zero = zero_offset(&lv);
-            let above = shifted(&lv, zero.map_or(0.0, |z| z.value));
-            let map = StaticMap {
-                unit: o.unit,
-                power: fit_power_law(&above),
-                expo: fit_expo(&above),
-                zero_offset: zero,
-                falls_with_command: falls_with_command(&lv),
-                // Held commands only (a ramp's windows: `repeats`' module doc).
-                repeats: match over {
-                    Over::Holds(_) => repeats(&lv, rules),
-                    Over::Windows(_) => Vec::new(),
-                },
-                levels: lv,
-                k_t: None,
+            // Held commands only (a ramp's windows: `repeats`' module doc).
+            let rep = match over {
+                Over::Holds(_) => repeats(&lv, rules),
+                Over::Windows(_) => Vec::new(),
             };
-            (o.key, map)
+            (o.key, static_map(o.unit, lv, rep))
         })
         .collect();
+    add_thrust_coefficient(&mut maps);
+    StandFigures {
+        command,
+        steps: step_figs,
+        static_map: maps,
+    }
+}
+
+/// The static map of one output's steady levels `lv` (in `unit`), with the commands held more
+/// than once `rep`: its zero offset, and the power law and expo of the output above it.
+pub fn static_map(unit: &'static str, lv: Vec<Level>, rep: Vec<Repeat>) -> StaticMap {
+    let zero = zero_offset(&lv);
+    let above = shifted(&lv, zero.map_or(0.0, |z| z.value));
+    StaticMap {
+        unit,
+        power: fit_power_law(&above),
+        expo: fit_expo(&above),
+        zero_offset: zero,
+        falls_with_command: falls_with_command(&lv),
+        repeats: rep,
+        levels: lv,
+        k_t: None,
+    }
+}
+
+/// `k_t` of the `thrust` map from the `rpm` map's levels (`T = k_t·ω²`, [`StaticMap::k_t`])
+/// when both have the same levels.
+pub fn add_thrust_coefficient(maps: &mut BTreeMap<&'static str, StaticMap>) {
     if let (Some(rpm), Some(thrust)) = (maps.get("rpm").cloned(), maps.get_mut("thrust")) {
         let omega: Vec<Level> = rpm
             .levels
@@ -180,11 +197,6 @@ pub fn stand_figures(
             let above = shifted(&thrust.levels, thrust.zero_offset.map_or(0.0, |z| z.value));
             thrust.k_t = fit_thrust_coefficient(&above, &omega);
         }
-    }
-    StandFigures {
-        command,
-        steps: step_figs,
-        static_map: maps,
     }
 }
 

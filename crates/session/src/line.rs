@@ -14,7 +14,10 @@
 //!   `{"type":"step", "kind", "index", "output", <step figures>}` as each staircase step's
 //!   hold ends, `{"type":"static_map", "kind", "output", ["leg"], "unit", "levels", ...}`
 //!   and `{"type":"frequency_response", "kind", "output", "level", "bins", "peak_hz",
-//!   "bandwidth_hz", "phase_delay_s", "model", ...}` at the end, before the schedule.
+//!   "bandwidth_hz", "phase_delay_s", "model", ...}` at the end, before the schedule, and
+//!   the model fitted to it as a `{"type":"model", "kind", "output", "path":
+//!   "frequency_response", "dead_time_s", "rms_rel_error", <the pulse model line's fields>}`
+//!   ([`propid_kinds::ModelLine`]; not in the schedule).
 //! - With `--http` only: `{"type":"event","kind":"http","url"}` first, and the lines only the
 //!   web page's clients get ([`super::live`]: `samples`, `response`, `stabilization`,
 //!   `live_stats`, and a `schedule` after every model).
@@ -501,7 +504,8 @@ pub enum Line<'a> {
     Stabilization(&'a StabilizationLine),
     /// `"live_stats"`: the counters so far (the web page's only).
     LiveStats(&'a StatsLine<'a>),
-    /// `"step"`, `"static_map"`, `"frequency_response"`: an experiment kind's results.
+    /// `"step"`, `"static_map"`, `"frequency_response"`, `"model"`: an experiment kind's
+    /// results.
     Kind(&'a propid_kinds::Published),
 }
 
@@ -645,6 +649,8 @@ impl Serialize for Line<'_> {
             Step(&'l propid_kinds::StepLine),
             StaticMap(&'l propid_kinds::StaticMapLine),
             FrequencyResponse(&'l propid_kinds::FrequencyResponseLine),
+            #[serde(rename = "model")]
+            KindModel(&'l propid_kinds::ModelLine),
         }
         match self {
             Line::Model(m) => Shape::Model(m),
@@ -664,6 +670,7 @@ impl Serialize for Line<'_> {
             Line::Kind(propid_kinds::Published::FrequencyResponse(l)) => {
                 Shape::FrequencyResponse(l)
             }
+            Line::Kind(propid_kinds::Published::Model(l)) => Shape::KindModel(l),
         }
         .serialize(s)
     }

@@ -40,8 +40,8 @@ pub struct WorkerOutcome {
     pub latencies_s: Vec<f64>,
     /// The first publishing error, if any (publishing continued on the other sinks).
     pub error: Option<DaemonError>,
-    /// What an experiment kind's analysis published (the run report's material).
-    pub kinds: Vec<propid_kinds::Published>,
+    /// The run report's material (the experiment kind's analysis).
+    pub kinds: Option<propid_kinds::Material>,
 }
 
 /// The worker's state.
@@ -56,7 +56,7 @@ pub struct Worker<I: Identifier> {
     error: Option<DaemonError>,
     /// The web page's lines ([`super::live`]), with an HTTP sink only.
     live: Option<Live>,
-    /// The analysis of an experiment kind other than pulses (on the decoded samples).
+    /// The analysis of the experiment kind (on the decoded samples; the report's material).
     kinds: Option<propid_kinds::Analysis>,
 }
 
@@ -248,15 +248,12 @@ impl<I: Identifier> Worker<I> {
             self.emit_live(&Line::Samples(&line));
         }
         self.flush_live_window();
-        let kinds = match self.kinds.take() {
-            Some(mut a) => {
-                for p in a.finish() {
-                    self.emit(&Line::Kind(&p));
-                }
-                a.published().to_vec()
+        let kinds = self.kinds.take().map(|mut a| {
+            for p in a.finish() {
+                self.emit(&Line::Kind(&p));
             }
-            None => Vec::new(),
-        };
+            a.into_material()
+        });
         self.publish_schedule();
         self.latencies_s.sort_by(f64::total_cmp);
         WorkerOutcome {
@@ -438,6 +435,13 @@ impl<I: Identifier> Worker<I> {
         }
         self.emit(&Line::Model(&model));
         self.stats.models += 1;
+        if let Some(a) = self.kinds.as_mut() {
+            a.add_model(propid_kinds::ModelRow::new(
+                model.window.t_s,
+                model.window.operating_point,
+                &model.report,
+            ));
+        }
         if let Some(t) = d.facts.last_received {
             if self.latencies_s.len() < LATENCY_CAP {
                 self.latencies_s.push(t.elapsed().as_secs_f64());
