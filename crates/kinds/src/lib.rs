@@ -470,7 +470,10 @@ impl Analysis {
             }
         }
         add_thrust_coefficient(&mut maps);
-        maps.into_iter()
+        // thrust, rpm, current: the order a staircase publishes them in
+        pulse_levels::OUTPUTS
+            .iter()
+            .filter_map(|&(output, _)| Some((output, maps.remove(output)?)))
             .map(|(output, map)| {
                 Published::StaticMap(StaticMapLine {
                     kind: Kind::Pulses,

@@ -82,10 +82,10 @@ fn map_section(out: &mut String, m: &StaticMapLine) {
         );
     }
     if let Some(e) = &m.map.expo {
+        // the flight controllers' own normalisations: the section after the maps
         let _ = writeln!(
             out,
-            "Expo `T/t_max = (1 − a)·x + a·x²`: a = {:.3} (ArduPilot `MOT_THST_EXPO`, PX4 \
-             `THR_MDL_FAC`), t_max = {:.4} {}.",
+            "Expo `T/t_max = (1 − a)·x + a·x²` over the throttle: a = {:.3}, t_max = {:.4} {}.",
             e.a, e.t_max, m.map.unit
         );
     }
