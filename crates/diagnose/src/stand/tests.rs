@@ -132,6 +132,14 @@ fn the_baseline_is_chosen_by_the_data_and_says_why() {
     };
     let c = choose(true, Some(&other), &rules);
     assert!(c.why.contains("none of the stand"), "{c:?}");
+    // a thrust alone: the rotor's lag and the load cell's cannot be told apart
+    let alone = StandInput {
+        channels: vec![ch("thrust", Quantity::Thrust, &thrust)],
+        output: Some("thrust"),
+    };
+    let c = choose(true, Some(&alone), &rules);
+    assert_eq!(c.kind, BaselineKind::Generic, "{c:?}");
+    assert!(c.why.contains("rotor's speed"), "{c:?}");
     let steady = SegmentRules::for_record(2.0, true);
     let c = choose(true, Some(&both), &steady);
     assert_eq!(c.kind, BaselineKind::Generic, "{c:?}");
