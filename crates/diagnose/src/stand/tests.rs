@@ -150,6 +150,12 @@ fn a_clean_stand_names_its_own_parts_and_no_spring_nor_sensor_lag() {
     let (u, rpm, thrust) = record(2);
     let d = run(&u, &rpm, &thrust);
     assert_eq!(d.baseline.choice.kind, BaselineKind::Stand);
+    // chosen on the held-out figures of both searches, said with them
+    let why = &d.baseline.choice.why;
+    assert!(
+        why.contains("held out on thrust") && why.contains("generic search"),
+        "{why}"
+    );
     let names: Vec<EffectName> = d.findings.iter().map(|f| f.effect).collect();
     assert!(
         !names.contains(&EffectName::StiffnessNonlinearity),
