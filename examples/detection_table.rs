@@ -277,7 +277,6 @@ fn real_data(dir: &Path) {
             estimation_fraction: 0.7,
             sim_config: None,
             save: None,
-            stand_baseline: false,
         };
         let row = load(&args).map_err(|e| e.to_string()).and_then(|s| {
             let opts = diagnose::Options::default();

@@ -38,11 +38,6 @@ pub struct Args {
     /// Share of the samples (from the start) used for estimation, 0.3..0.9.
     #[arg(long, default_value_t = 0.7)]
     pub estimation_fraction: f64,
-    /// Let the data choose the stand model as the baseline (a motor command and a stand's
-    /// channels; the choice and why in `baseline`); without it the generic baseline
-    /// (docs/diagnose.md, "On a motor stand").
-    #[arg(long)]
-    pub stand_baseline: bool,
     /// Write the stand model fitted on every channel of FILE as a `propid sim` configuration
     /// to OUT.toml (`propid sim --config OUT.toml --replay-command FILE`; docs/stand-model.md).
     #[arg(long, value_name = "OUT.toml")]
@@ -181,10 +176,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     if !(0.3..=0.9).contains(&args.estimation_fraction) {
         return Err(UsageError::EstimationFraction(args.estimation_fraction).into());
     }
-    let mut s = load(&args)?;
-    if !args.stand_baseline {
-        s.stand.clear();
-    }
+    let s = load(&args)?;
     let opts = diagnose::Options {
         estimation_fraction: args.estimation_fraction,
         ..Default::default()
@@ -611,7 +603,6 @@ mod tests {
             estimation_fraction: 0.7,
             sim_config: None,
             save: None,
-            stand_baseline: false,
         };
         let e = load(&args).unwrap_err();
         assert_eq!(e.exit_code(), 4, "{e}");

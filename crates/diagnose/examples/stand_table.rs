@@ -4,11 +4,13 @@
 //! is named, how often with its parameter within the tolerance of `docs/detection.md`, how
 //! often another effect is named; and the false alarms on as many clean stands per kind.
 //!
-//! Run: `cargo run --release -p propid-diagnose --example stand_table [CASES] [THREADS]` (per
-//! effect and record kind; default 7, 21 cases per effect and 21 clean stands in all; 2
-//! threads). Prints Markdown;
+//! Run: `cargo run --release -p propid-diagnose --example stand_table [CASES] [THREADS] [GATE]
+//! [clean]` (per effect and record kind; default 7, 21 cases per effect and 21 clean stands in
+//! all; 2 threads; GATE `rising` (default) or `paired`, [`Gate`]; `clean`: the clean stands
+//! only). Prints Markdown;
 //! `scripts/stand_table.sh` puts it into `docs/detection.md`.
 
+use propid_diagnose::folds::Gate;
 use propid_diagnose::{self as diagnose, Diagnosis};
 use propid_numerics::EffectName;
 use propid_sim::stand_cases::{case, truth, RecordKind};
@@ -23,17 +25,19 @@ struct Outcome {
     others: Vec<EffectName>,
 }
 
-fn diagnose_case(kind: RecordKind, name: Option<EffectName>, i: u64) -> Option<Outcome> {
+fn diagnose_case(
+    kind: RecordKind,
+    name: Option<EffectName>,
+    i: u64,
+    gate: Gate,
+) -> Option<Outcome> {
     let (cfg, m) = case(kind, name, i).ok()?;
-    let d: Diagnosis = diagnose::diagnose(
-        synth::DT_S,
-        &m.u,
-        &m.y,
-        &[],
-        Some(&m.voltage),
-        &diagnose::Options::default(),
-    )
-    .ok()?;
+    let opts = diagnose::Options {
+        gate,
+        ..Default::default()
+    };
+    let d: Diagnosis =
+        diagnose::diagnose(synth::DT_S, &m.u, &m.y, &[], Some(&m.voltage), &opts).ok()?;
     let others: Vec<EffectName> = d
         .findings
         .iter()
@@ -109,11 +113,18 @@ fn main() {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(7);
+    let gate = match std::env::args().nth(3).as_deref() {
+        Some("paired") => Gate::Paired,
+        _ => Gate::Rising,
+    };
+    // `clean` as the fourth argument: the clean stands alone (the false-alarm rate).
+    let clean_only = std::env::args().nth(4).as_deref() == Some("clean");
     let mut jobs: Vec<(RecordKind, Option<EffectName>, u64)> = Vec::new();
     // Case-major: a run cut short has every effect and kind in it.
     for i in 0..cases {
         for kind in RecordKind::ALL {
-            for name in std::iter::once(None).chain(diagnose::effects::names().map(Some)) {
+            let effects = diagnose::effects::names().filter(|_| !clean_only);
+            for name in std::iter::once(None).chain(effects.map(Some)) {
                 jobs.push((kind, name, i));
             }
         }
@@ -123,7 +134,7 @@ fn main() {
         .and_then(|a| a.parse().ok())
         .unwrap_or(2);
     let outcomes = on_threads(&jobs, threads, |&(k, n, i)| {
-        let o = diagnose_case(k, n, i);
+        let o = diagnose_case(k, n, i, gate);
         let name = n.map_or("clean", EffectName::as_str);
         match &o {
             Some(o) => eprintln!(
@@ -145,14 +156,19 @@ fn main() {
             .collect()
     };
     println!(
-        "### Simulated stands ({cases} cases per effect and record kind, {} per effect, seeded)\n",
-        cases as usize * RecordKind::ALL.len()
+        "### Simulated stands ({cases} cases per effect and record kind, {} per effect, seeded; \
+         acceptance test: {})\n",
+        cases as usize * RecordKind::ALL.len(),
+        match gate {
+            Gate::Rising => "a rising held-out figure",
+            Gate::Paired => "the paired test against the folds' scatter",
+        }
     );
     println!("| record | effect | cases | named | named, parameter within tolerance | other effect named | parameter error, median (max) |");
     println!("|---|---|---|---|---|---|---|");
     let (mut all_n, mut all_within) = (0, 0);
     for kind in RecordKind::ALL {
-        for name in diagnose::effects::names() {
+        for name in diagnose::effects::names().filter(|_| !clean_only) {
             let o = of(kind, Some(name));
             let n = o.len();
             let named = o.iter().filter(|o| o.named).count();

@@ -20,6 +20,8 @@ pub struct Ctx<'a> {
     /// for a stand's command ([`SegmentRules::at_rate`]), by the sample count alone for a
     /// signal in its own units ([`super::Options::input_is_a_command`]).
     pub rules: SegmentRules,
+    /// The acceptance test of a held-out gain ([`super::Options::gate`]).
+    pub gate: super::folds::Gate,
 }
 
 /// The estimation samples from `first` on whose output is measured.
@@ -68,6 +70,7 @@ impl<'a> Ctx<'a> {
             est: 0..n,
             val: 0..n,
             rules: propid_numerics::segment::SegmentRules::DEFAULT,
+            gate: Default::default(),
         }
     }
 }

@@ -162,6 +162,7 @@ mod tests {
             est: 0..280,
             val: 280..400,
             rules: propid_numerics::segment::SegmentRules::DEFAULT,
+            gate: Default::default(),
         };
         let e = era_start(&ctx).unwrap_err();
         assert!(matches!(e, CoreRefusal::Refused(_)), "{e:?}");

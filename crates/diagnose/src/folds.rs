@@ -206,6 +206,19 @@ fn sub_blocks(r: Range<usize>, k: usize) -> impl Iterator<Item = Range<usize>> {
     (0..k).map(move |b| start + b * len / k..start + (b + 1) * len / k)
 }
 
+/// Which test an effect's held-out gain must pass to be taken ([`HeldOutGain::accepted`];
+/// [`crate::Options::gate`]). Their false-alarm rates on clean simulated stands and what each
+/// finds: `docs/detection.md`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gate {
+    /// The held-out figure rises ([`HeldOutGain::passes`]).
+    #[default]
+    Rising,
+    /// The one-sided paired t-test against the folds' scatter ([`HeldOutGain::significant`]).
+    Paired,
+}
+
 /// The held-out gain of a model over another, judged against the scatter of the folds' own
 /// fits (issue 29 item 4): the acceptance test of every effect the search takes
 /// ([`crate::search`], [`crate::pair`], [`crate::revise`]).
@@ -285,6 +298,14 @@ impl HeldOutGain {
             && self.passes()
             && self.se_pp.is_finite()
             && self.gain_pp > gain_t(self.blocks) * self.se_pp
+    }
+
+    /// Whether the gain is taken under `gate` ([`Gate`]).
+    pub fn accepted(&self, gate: Gate) -> bool {
+        match gate {
+            Gate::Rising => self.passes(),
+            Gate::Paired => self.significant(),
+        }
     }
 
     /// The test in words: "+0.13 pp, 0.4 standard errors of the folds' scatter (needs 1.83)".
@@ -413,6 +434,10 @@ mod tests {
         // What is taken: a rising figure, significant or not; a loss or no gain is not.
         assert!(g.passes() && !HeldOutGain::of(&before, &before).passes());
         assert!(!HeldOutGain::of(&consistent, &before).passes());
+        // The gate decides which: a gain inside the scatter is taken only by a rising figure.
+        assert!(g.accepted(Gate::Rising) && !g.accepted(Gate::Paired));
+        let c = HeldOutGain::of(&before, &consistent);
+        assert!(c.accepted(Gate::Rising) && c.accepted(Gate::Paired));
     }
 
     #[test]

@@ -82,6 +82,8 @@ pub struct Options {
     /// voltage: cascaded tanks take minutes to settle), whose holds are levels by the sample
     /// count alone.
     pub input_is_a_command: bool,
+    /// The test an effect's held-out gain must pass to be taken ([`folds::Gate`]).
+    pub gate: folds::Gate,
 }
 
 impl Default for Options {
@@ -90,6 +92,7 @@ impl Default for Options {
             estimation_fraction: 0.7,
             max_effects: 3,
             input_is_a_command: true,
+            gate: folds::Gate::default(),
         }
     }
 }
@@ -269,12 +272,14 @@ pub fn diagnose_with(
         est,
         val,
         rules,
+        gate: opts.gate,
     };
     let mut choice = stand::choose(opts.input_is_a_command, stand, &rules);
     let on_stand = match (&choice.kind, stand) {
         (stand::BaselineKind::Stand, Some(s)) => {
             let output = s.output.unwrap_or("thrust");
-            match stand::search(dt_s, u, voltage.map(|v| &v[..n]), s, output, &folds, rules) {
+            let v = voltage.map(|v| &v[..n]);
+            match stand::search(dt_s, u, v, s, output, &folds, (rules, opts.gate)) {
                 Ok(run) => Some(run),
                 Err(e) => {
                     choice = stand::BaselineChoice::generic(format!(
@@ -288,13 +293,7 @@ pub fn diagnose_with(
     };
     let era = era_start::era_start(&ctx);
     let starts: Vec<Core> = era.iter().map(|e| e.core).collect();
-    // On a stand baseline the generic model is fitted for its published 2nd-order model only.
-    let max_effects = if on_stand.is_some() {
-        0
-    } else {
-        opts.max_effects
-    };
-    let searched = search::search(&ctx, &folds, &starts, max_effects).ok_or_else(|| {
+    let searched = search::search(&ctx, &folds, &starts, opts.max_effects).ok_or_else(|| {
         DiagnoseError::FitFailed {
             core: era.as_ref().err().cloned(),
         }
@@ -308,6 +307,31 @@ pub fn diagnose_with(
         floor.clone().ok(),
     );
     d.source = source;
+    // The data decide between the two: the stand model is the baseline when its final
+    // model predicts the output's held-out samples at least as well as the generic search's.
+    let on_stand = on_stand.and_then(|run| {
+        let stand_fit = run
+            .cv
+            .channel
+            .get(run.report.output)
+            .copied()
+            .unwrap_or(f64::NAN);
+        let generic_fit = d.validation.mean_fit_percent;
+        if stand_fit >= generic_fit {
+            choice.why = format!(
+                "{} (held out on {}: {stand_fit:.2} %, the generic search {generic_fit:.2} %)",
+                choice.why, run.report.output
+            );
+            Some(run)
+        } else {
+            choice = stand::BaselineChoice::generic(format!(
+                "a motor stand, yet the generic search predicts the held-out {} better than the \
+                 stand model ({generic_fit:.2} % against {stand_fit:.2} %): the generic baseline",
+                run.report.output
+            ));
+            None
+        }
+    });
     d.baseline.choice = choice;
     if let Some(run) = on_stand {
         stand_overlay(&mut d, &folds, run);

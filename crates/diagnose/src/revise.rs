@@ -268,9 +268,9 @@ pub fn revise(
         // (`HeldOutGain`), a removal when the effect's gain over the model without it does
         // not (or it is implausible), a swap when the figure does not fall.
         let kept = match change {
-            Change::Add { .. } => HeldOutGain::of(cur_cv, &f_cv).passes(),
+            Change::Add { .. } => HeldOutGain::of(cur_cv, &f_cv).accepted(ctx.gate),
             Change::Remove { out, .. } if implausible.contains(&out) => true,
-            Change::Remove { .. } => !HeldOutGain::of(&f_cv, cur_cv).passes(),
+            Change::Remove { .. } => !HeldOutGain::of(&f_cv, cur_cv).accepted(ctx.gate),
             Change::Swap { .. } => f_cv.mean >= cur_cv.mean,
         };
         if kept {
@@ -383,6 +383,7 @@ mod tests {
             est: folds.estimation.clone(),
             val: 0..u.len(),
             rules: propid_numerics::segment::SegmentRules::DEFAULT,
+            gate: Default::default(),
         };
         let base = ctx.best_of(
             [1.0, 2.0, 4.0, 8.0].map(|f| {
@@ -511,6 +512,7 @@ mod tests {
                 est: 0..n,
                 val: 0..n,
                 rules: propid_numerics::segment::SegmentRules::DEFAULT,
+                gate: Default::default(),
             };
             // The model predicts the mean (no gain); the drift term adds the true line.
             let core = Core {

@@ -98,7 +98,7 @@ fn search_from(
             let f_cv = cv(&f);
             // Read off the data, yet taken only when its held-out gain passes the acceptance
             // test like any other (`HeldOutGain`); else the forward search may try it again.
-            if !HeldOutGain::of(&cur_cv, &f_cv).passes() {
+            if !HeldOutGain::of(&cur_cv, &f_cv).accepted(ctx.gate) {
                 continue;
             }
             template = with;
@@ -286,7 +286,7 @@ fn forward(
         let s = cv(f);
         let gain = HeldOutGain::of(cur_cv, &s);
         tried.push((e.name(), gain));
-        (s.mean, gain.passes(), s)
+        (s.mean, gain.accepted(ctx.gate), s)
     });
     let taken_gain = taken
         .as_ref()
@@ -302,7 +302,7 @@ fn forward(
         let gain = held.gain_pp;
         ledger.note(match taken_gain {
             // Raised the figure within the folds' scatter: not shown by the data.
-            _ if gain > MIN_CV_GAIN_PP && !held.passes() => {
+            _ if gain > MIN_CV_GAIN_PP && !held.accepted(ctx.gate) => {
                 Rejected::within_scatter(name, score, &held)
             }
             // Raised the figure, less than the one taken (`Selection::BestFigure`).
@@ -331,7 +331,9 @@ fn forward(
         joint_evidence(cur.sse, both.sse, both.n)?;
         let s = cv(&both);
         // The pair's gain must pass the acceptance test too (`HeldOutGain`).
-        HeldOutGain::of(cur_cv, &s).passes().then_some(())?;
+        HeldOutGain::of(cur_cv, &s)
+            .accepted(ctx.gate)
+            .then_some(())?;
         Some((s.mean, (score_b, both, s)))
     })?;
     let (ea, eb) = (pool[a].1 .0, pool[b].1 .0);

@@ -165,6 +165,7 @@ mod tests {
             est: 0..u.len(),
             val: 0..u.len(),
             rules: propid_numerics::segment::SegmentRules::DEFAULT,
+            gate: Default::default(),
         }
     }
 

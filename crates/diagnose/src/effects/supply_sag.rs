@@ -230,6 +230,7 @@ impl Effect for SupplySag {
             est: ctx.est.clone(),
             val: ctx.val.clone(),
             rules: ctx.rules,
+            gate: ctx.gate,
         };
         let mut f = alt.best_of([after.model.clone()], 1);
         if let Some(g) = self.extend(&alt, before).filter(|g| g.sse < f.sse) {
@@ -634,6 +635,7 @@ mod tests {
             est: 0..u.len(),
             val: 0..u.len(),
             rules: propid_numerics::segment::SegmentRules::DEFAULT,
+            gate: Default::default(),
         }
     }
 

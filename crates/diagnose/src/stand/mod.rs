@@ -5,8 +5,10 @@
 //! ([`departures`]).
 //!
 //! 1. **Which baseline** ([`choose`]): the stand's when the input is a motor command and the
-//!    record has an rpm, thrust, torque or current channel among which the diagnosed output is
-//!    (and its samples are shorter than the response); the generic 2nd-order one otherwise.
+//!    record has the rotor's speed (rpm) and a thrust, torque or current channel beside it,
+//!    among which the diagnosed output is (and its samples are shorter than the response), and
+//!    its final model predicts the output's held-out samples at least as well as the generic
+//!    search's ([`crate::diagnose_with`]); the generic 2nd-order one otherwise.
 //! 2. **The stand baseline** ([`Structure::default`]): the ESC's dead band, one rotor time
 //!    constant, speed linear in the command above the dead band, loads ∝ speed², every channel
 //!    on the reference's time (no sensor delay or lag), the supply constant. Fitted on the
@@ -41,7 +43,7 @@ use propid_numerics::EffectName;
 use serde::Serialize;
 use serde_json::{Map, Value};
 
-use crate::folds::{fit_percent_about, Folds, HeldOutGain, Method, FOLD_ITERS};
+use crate::folds::{fit_percent_about, Folds, Gate, HeldOutGain, Method, FOLD_ITERS};
 use crate::rejected::Rejected;
 use crate::result::Finding;
 use crate::spectrum::peaks;
@@ -135,6 +137,20 @@ pub fn choose(
              channels",
         );
     };
+    // The stand model times the rotor on its speed and every other sensor against it: with
+    // one channel, or none of them the speed, the rotor's lag and a sensor's cannot be told
+    // apart and the model is a first-order Hammerstein the generic catalogue covers.
+    let speed = s
+        .channels
+        .iter()
+        .any(|c| c.quantity == Quantity::Speed && usable.contains(&c.key));
+    if !speed || usable.len() < 2 {
+        return BaselineChoice::generic(format!(
+            "the record's stand channels ({}) lack the rotor's speed or a load beside it: the \
+             stand model needs both to tell the rotor's lag from a sensor's",
+            usable.join(", ")
+        ));
+    }
     if rules.samples_are_steady() {
         return BaselineChoice::generic(
             "a sample lasts longer than the stand's response takes to settle: no stand \
@@ -412,8 +428,8 @@ fn residual_peak(d: &Data<'_>, f: &StructuredFit, output: &str) -> Option<f64> {
 }
 
 /// The stand diagnosis (module doc) of command `u` every `dt_s` with the supply `voltage`
-/// and the stand channels of `input`, on the folds of the generic diagnosis.
-#[allow(clippy::too_many_arguments)]
+/// and the stand channels of `input`, on the folds of the generic diagnosis, with the
+/// segmentation's `rules` and the acceptance test `gate`.
 pub fn search(
     dt_s: f64,
     u: &[f64],
@@ -421,7 +437,7 @@ pub fn search(
     input: &StandInput<'_>,
     output: &'static str,
     folds: &Folds,
-    rules: SegmentRules,
+    (rules, gate): (SegmentRules, Gate),
 ) -> Result<StandRun, StandModelError> {
     let read: Vec<Vec<f64>> = input
         .channels
@@ -506,7 +522,7 @@ pub fn search(
             // tail has no folds to scatter: its gain alone.
             let (b0, b1) = (cur_cv.fold_means(), cv1.fold_means());
             let accepted = if b0.len() >= 2 && b0.len() == b1.len() {
-                HeldOutGain::paired(&b0, &b1, gain).passes()
+                HeldOutGain::paired(&b0, &b1, gain).accepted(gate)
             } else {
                 gain > thresholds::MIN_CV_GAIN_PP
             };

@@ -132,6 +132,14 @@ fn the_baseline_is_chosen_by_the_data_and_says_why() {
     };
     let c = choose(true, Some(&other), &rules);
     assert!(c.why.contains("none of the stand"), "{c:?}");
+    // a thrust alone: the rotor's lag and the load cell's cannot be told apart
+    let alone = StandInput {
+        channels: vec![ch("thrust", Quantity::Thrust, &thrust)],
+        output: Some("thrust"),
+    };
+    let c = choose(true, Some(&alone), &rules);
+    assert_eq!(c.kind, BaselineKind::Generic, "{c:?}");
+    assert!(c.why.contains("rotor's speed"), "{c:?}");
     let steady = SegmentRules::for_record(2.0, true);
     let c = choose(true, Some(&both), &steady);
     assert_eq!(c.kind, BaselineKind::Generic, "{c:?}");
@@ -142,6 +150,12 @@ fn a_clean_stand_names_its_own_parts_and_no_spring_nor_sensor_lag() {
     let (u, rpm, thrust) = record(2);
     let d = run(&u, &rpm, &thrust);
     assert_eq!(d.baseline.choice.kind, BaselineKind::Stand);
+    // chosen on the held-out figures of both searches, said with them
+    let why = &d.baseline.choice.why;
+    assert!(
+        why.contains("held out on thrust") && why.contains("generic search"),
+        "{why}"
+    );
     let names: Vec<EffectName> = d.findings.iter().map(|f| f.effect).collect();
     assert!(
         !names.contains(&EffectName::StiffnessNonlinearity),
