@@ -43,8 +43,9 @@ pub struct Args {
     /// (docs/diagnose.md, "On a motor stand").
     #[arg(long)]
     pub stand_baseline: bool,
-    /// Write the stand model fitted on every channel of FILE as a `propid sim` configuration
-    /// to OUT.toml (`propid sim --config OUT.toml --replay-command FILE`; docs/stand-model.md).
+    /// Write the stand diagnose fitted (the stand baseline with the effects it took) as a
+    /// `propid sim` configuration to OUT.toml (`propid sim --config OUT.toml --replay-command
+    /// FILE`; docs/stand-model.md).
     #[arg(long, value_name = "OUT.toml")]
     pub sim_config: Option<PathBuf>,
     /// Write the final model to this file (docs/model_file.md).
@@ -182,7 +183,8 @@ pub fn run(args: Args) -> Result<(), CliError> {
         return Err(UsageError::EstimationFraction(args.estimation_fraction).into());
     }
     let mut s = load(&args)?;
-    if !args.stand_baseline {
+    // The simulated stand is diagnose's stand model: `--sim-config` takes the stand baseline.
+    if !args.stand_baseline && args.sim_config.is_none() {
         s.stand.clear();
     }
     let opts = diagnose::Options {
@@ -193,7 +195,17 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let written = match &args.sim_config {
         Some(out) => {
             let req = args.read.how.request(&args.read.output, &[]);
-            Some(super::stand_log::write_config(&args.read.file, &req, out)?)
+            let reported = d.stand.as_ref().map_or_else(Default::default, |st| {
+                let f = st
+                    .channels
+                    .iter()
+                    .map(|(k, c)| (k.to_string(), c.fit_percent));
+                f.collect()
+            });
+            let (file, stand) = (&args.read.file, d.stand_baseline());
+            Some(super::stand_log::write_config(
+                file, &req, out, stand, reported,
+            )?)
         }
         None => None,
     };
