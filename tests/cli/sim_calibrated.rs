@@ -186,7 +186,9 @@ fn a_log_the_sim_wrote_gives_its_stand_back_and_the_demo_runs_on_it() {
         .enumerate()
     {
         let x = (k * k) % 997 + 1;
-        cmd.push_str(&format!("{:.3},{l},{x},{x},{x},{x}\n", k as f64 * 0.005));
+        // The supply is the log's measured voltage in a replay of a sagging plant: a battery's.
+        let v = 16.0 + 0.02 * x as f64 / 997.0;
+        cmd.push_str(&format!("{:.3},{l},{x},{x},{x},{v}\n", k as f64 * 0.005));
     }
     std::fs::write(path("cmd.csv"), cmd).unwrap();
     let (code, _, err) = propid(&[

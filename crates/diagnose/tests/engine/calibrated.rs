@@ -58,7 +58,7 @@ fn wiggle(k: usize, seed: f64) -> f64 {
 }
 
 #[test]
-fn the_stand_diagnose_fitted_replays_its_reported_fit_within_a_point_per_channel() {
+fn the_stand_diagnose_fitted_replays_its_fit_within_a_point_per_channel() {
     let u: Vec<f64> = [0.25, 0.5, 0.35, 0.8, 0.45, 0.7, 0.3]
         .iter()
         .flat_map(|&l| std::iter::repeat(l).take(200))
