@@ -38,8 +38,9 @@ pub struct Args {
     /// Share of the samples (from the start) used for estimation, 0.3..0.9.
     #[arg(long, default_value_t = 0.7)]
     pub estimation_fraction: f64,
-    /// Write the stand model fitted on every channel of FILE as a `propid sim` configuration
-    /// to OUT.toml (`propid sim --config OUT.toml --replay-command FILE`; docs/stand-model.md).
+    /// Write the stand diagnose fitted (the stand baseline with the effects it took) as a
+    /// `propid sim` configuration to OUT.toml (`propid sim --config OUT.toml --replay-command
+    /// FILE`; docs/stand-model.md).
     #[arg(long, value_name = "OUT.toml")]
     pub sim_config: Option<PathBuf>,
     /// Write the final model to this file (docs/model_file.md).
@@ -179,13 +180,25 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let s = load(&args)?;
     let opts = diagnose::Options {
         estimation_fraction: args.estimation_fraction,
+        // The simulated stand is a stand model: `--sim-config` takes the stand baseline.
+        prefer_stand: args.sim_config.is_some(),
         ..Default::default()
     };
     let d = s.diagnose(&opts)?;
     let written = match &args.sim_config {
         Some(out) => {
             let req = args.read.how.request(&args.read.output, &[]);
-            Some(super::stand_log::write_config(&args.read.file, &req, out)?)
+            let reported = d.stand.as_ref().map_or_else(Default::default, |st| {
+                let f = st
+                    .channels
+                    .iter()
+                    .map(|(k, c)| (k.to_string(), c.fit_percent));
+                f.collect()
+            });
+            let (file, stand) = (&args.read.file, d.stand_baseline());
+            Some(super::stand_log::write_config(
+                file, &req, out, stand, reported,
+            )?)
         }
         None => None,
     };

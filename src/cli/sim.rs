@@ -215,7 +215,7 @@ fn run_replay(
         "file": out.display().to_string(),
         "log": log.display().to_string(),
         "rows": log_file.command.len(),
-        "fit_percent": log_file.score(&sim),
+        "fit_percent": log_file.score(&sim, &log_file.folds()),
     });
     super::stdout::line(&line.to_string())
 }

@@ -1,7 +1,9 @@
 //! A stand's log for the calibrated simulation (`diagnose --sim-config`, `sim
 //! --replay-command`): the command and every stand channel, read as `identify` reads them; the
 //! stand model fitted on it; the simulated stand's rows written in the log's columns and units,
-//! and scored against it. The mapping and the replay are `propid_sim::calibrate`'s.
+//! and scored against it as diagnose scores its held-out figure
+//! (`propid_diagnose::stand::score_on_folds`). The mapping and the replay are
+//! `propid_sim::calibrate`'s.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -9,11 +11,13 @@ use std::path::Path;
 
 use super::load::{self as shared, LoadedFile, Origin, Request};
 use super::CliError;
-use propid_diagnose::folds::fit_percent;
+use propid_diagnose::folds::Folds;
+use propid_diagnose::stand::{score_on_folds, StandBaseline};
 use propid_numerics::segment::SegmentRules;
 use propid_numerics::stand_model::fit::{fit, Channel, FitInput, StandFit};
 use propid_numerics::stand_model::{simulate, Quantity};
-use propid_sim::calibrate::{self, Calibrated, LogFacts};
+use propid_numerics::EffectName;
+use propid_sim::calibrate::{self, Calibrated, Extensions, LogFacts};
 use propid_sim::plant::{Measurement, PlantConfig};
 use propid_wire::record::names;
 
@@ -124,8 +128,8 @@ impl StandLog {
         self.channels.iter().find(|c| c.quantity == q)
     }
 
-    /// `fit` as a `propid sim` configuration, and the fit's own score on each channel.
-    pub fn calibrate(&self, fit: &StandFit) -> (Calibrated, BTreeMap<String, f64>) {
+    /// `fit` with its extensions `ext` as a `propid sim` configuration.
+    pub fn calibrate(&self, fit: &StandFit, ext: &Extensions) -> Calibrated {
         let dt = self.dt_s();
         let current = self.channel(Quantity::Current).map(|c| c.data.as_slice());
         let thrust_noise_n = self.channel(Quantity::Thrust).map_or(0.0, |c| {
@@ -146,27 +150,18 @@ impl StandLog {
                 .filter(|u| u.is_finite())
                 .fold(f64::INFINITY, f64::min),
         };
-        let sensors = calibrate::fitted_sensors(fit);
-        let pairs: Vec<_> = sensors.iter().map(|(_, q, s)| (*q, *s)).collect();
-        let model = simulate(
-            &fit.params,
-            dt,
-            &self.command,
-            self.voltage.as_deref(),
-            &pairs,
-        );
-        let own: Simulated = sensors
-            .iter()
-            .zip(model)
-            .map(|((key, ..), y)| (*key, y))
-            .collect();
-        (calibrate::calibrate(fit, &facts), self.score(&own))
+        calibrate::calibrate(fit, ext, &facts)
     }
 
-    /// The plant `cfg` replayed under the log's command, each channel the log has (a held
-    /// channel held on the log's readings), and the supply voltage.
+    /// The plant `cfg` replayed under the log's command (and its measured voltage when the
+    /// configuration's supply sags, `calibrate::replays_measured_supply`), each channel the log
+    /// has (a held channel held on the log's readings), and the supply voltage.
     pub fn replay(&self, cfg: &PlantConfig) -> Result<(Simulated, Vec<f64>), CliError> {
-        let rows = calibrate::replay(cfg, self.dt_s(), &self.command)
+        let measured = self
+            .voltage
+            .as_deref()
+            .filter(|_| calibrate::replays_measured_supply(cfg));
+        let rows = calibrate::replay(cfg, self.dt_s(), &self.command, measured)
             .map_err(propid_sim::SimError::from)?;
         let col = |f: fn(&Measurement) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
         let sim = self
@@ -190,30 +185,42 @@ impl StandLog {
         Ok((sim, col(|m| m.voltage_v)))
     }
 
-    /// Fit percent of each simulated channel against the log's readings of it.
-    pub fn score(&self, sim: &Simulated) -> BTreeMap<String, f64> {
-        sim.iter()
-            .filter_map(|(key, yhat)| {
-                let c = self.channels.iter().find(|c| c.key == *key)?;
-                let y: Vec<f64> = (0..c.data.len())
-                    .map(|k| {
-                        if is_reading(c, k) {
-                            c.data[k]
-                        } else {
-                            f64::NAN
-                        }
-                    })
-                    .collect();
-                let (lo, hi) = y
-                    .iter()
-                    .filter(|v| v.is_finite())
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                        (a.min(v), b.max(v))
-                    });
-                let (pct, _, n) = fit_percent(&y, yhat, 0..y.len().min(yhat.len()));
-                // A channel that never moves has no fit percent.
-                (n > 0 && hi > lo).then(|| (key.to_string(), (pct * 100.0).round() / 100.0))
+    /// The folds diagnose scores this log on (its thrust the output, else its first channel;
+    /// the default estimation fraction).
+    pub fn folds(&self) -> Folds {
+        let out = self
+            .channel(Quantity::Thrust)
+            .or(self.channels.first())
+            .map(|c| c.data.as_slice())
+            .unwrap_or(&[]);
+        let rules = SegmentRules::for_record(self.dt_s(), true);
+        Folds::from_input(&self.command, out, 0.7, &rules)
+    }
+
+    /// Each simulated channel scored against the log's readings of it on `folds` as diagnose
+    /// scores its held-out figure (`score_on_folds`), rounded to 0.01; a channel that never
+    /// moves has none.
+    pub fn score(&self, sim: &Simulated, folds: &Folds) -> BTreeMap<String, f64> {
+        let channels: Vec<Channel<'_>> = self
+            .channels
+            .iter()
+            .filter(|c| {
+                let (lo, hi) = readings(c).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), k| {
+                    (a.min(c.data[k]), b.max(c.data[k]))
+                });
+                hi > lo
             })
+            .map(|c| Channel {
+                key: c.key,
+                quantity: c.quantity,
+                y: &c.data,
+                interpolated: &c.interpolated,
+            })
+            .collect();
+        let sim: Vec<(&str, Vec<f64>)> = sim.iter().map(|(k, y)| (*k, y.clone())).collect();
+        score_on_folds(&channels, &sim, folds)
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), (v * 100.0).round() / 100.0))
             .collect()
     }
 
@@ -283,8 +290,20 @@ fn readings(c: &LogChannel) -> impl Iterator<Item = usize> + '_ {
 pub struct Written {
     /// The configuration file.
     pub file: String,
-    /// The fitted stand's own fit per channel, % (what its replay scores, within a point).
+    /// The written stand's fit of the log per channel, %: diagnose's final stand model (fitted
+    /// on the estimation part) over the whole log, scored as diagnose scores its held-out
+    /// figure (the same folds and channels, `score_on_folds`). The replay gives it within a
+    /// point.
     pub fit_percent: BTreeMap<String, f64>,
+    /// Diagnose's held-out figure per channel, % (`stand.channels.<key>.fit_percent`: each
+    /// fold predicted by the model refitted without it; below `fit_percent` by the model's
+    /// optimism). Empty on diagnose's generic baseline.
+    pub held_out_fit_percent: BTreeMap<String, f64>,
+    /// The configuration replayed under the log's command, scored the same way, % (what
+    /// `propid sim --replay-command` reports).
+    pub replay_fit_percent: BTreeMap<String, f64>,
+    /// The effects the configuration carries beyond the stand baseline (diagnose's findings).
+    pub effects: Vec<EffectName>,
     /// What the configuration could not carry exactly.
     pub notes: Vec<String>,
 }
@@ -295,7 +314,10 @@ impl Written {
         let fits: Vec<String> = self
             .fit_percent
             .iter()
-            .map(|(k, v)| format!("{k} {v:.2} %"))
+            .map(|(k, v)| {
+                let r = self.replay_fit_percent.get(k).copied().unwrap_or(f64::NAN);
+                format!("{k} {v:.2} % (replayed {r:.2} %)")
+            })
             .collect();
         let mut t = format!(
             "sim config: the fitted stand written to {} (propid sim --config; fit {})",
@@ -309,19 +331,84 @@ impl Written {
     }
 }
 
-/// Fits the stand model on the log `path` (read as `req` asks) and writes it to `out` as a
-/// `propid sim` configuration.
-pub fn write_config(path: &Path, req: &Request, out: &Path) -> Result<Written, CliError> {
+/// Writes diagnose's calibrated stand `stand` of the log `path` (read as `req` asks) to `out`
+/// as a `propid sim` configuration, with diagnose's held-out figures `reported` per channel
+/// (`stand.channels.<key>.fit_percent`);
+/// without a stand (diagnose's generic baseline) the stand model fitted on the whole log.
+pub fn write_config(
+    path: &Path,
+    req: &Request,
+    out: &Path,
+    stand: Option<&StandBaseline>,
+    reported: BTreeMap<String, f64>,
+) -> Result<Written, CliError> {
     let log = read(path, req)?;
-    let fit = log.fit()?;
-    let (cal, fit_percent) = log.calibrate(&fit);
+    let whole;
+    let (fit, ext, folds, mut notes) = match stand {
+        Some(sb) => (
+            &sb.extended.fit,
+            Extensions::of(&sb.extended, &sb.structure),
+            sb.folds.clone(),
+            Vec::new(),
+        ),
+        None => {
+            whole = log.fit()?;
+            (
+                &whole,
+                Extensions::whole(&whole),
+                log.folds(),
+                vec![
+                    "diagnose's baseline is the generic model: the stand model fitted on the \
+                      whole log is written"
+                        .to_string(),
+                ],
+            )
+        }
+    };
+    let cal = log.calibrate(fit, &ext);
+    let (sim, _) = log.replay(&cal.config.plant)?;
+    let replay_fit_percent = log.score(&sim, &folds);
+    // The written stand's own fit of the log, scored as the replay is (module doc).
+    let own: Simulated = match stand {
+        Some(sb) => sb
+            .extended
+            .prediction
+            .iter()
+            .map(|(k, p)| (*k, p.clone()))
+            .collect(),
+        None => {
+            let sensors = calibrate::fitted_sensors(fit, &ext);
+            let pairs: Vec<_> = sensors.iter().map(|(_, q, s)| (*q, *s)).collect();
+            let v = log.voltage.as_deref().filter(|_| ext.supply_measured);
+            let model = simulate(&fit.params, log.dt_s(), &log.command, v, &pairs);
+            sensors
+                .iter()
+                .zip(model)
+                .map(|((k, ..), y)| (*k, y))
+                .collect()
+        }
+    };
+    let fit_percent = log.score(&own, &folds);
+    notes.extend(cal.notes.iter().cloned());
+    let mut effects = stand.map_or_else(Vec::new, |sb| sb.effects.clone());
+    effects.retain(|e| *e != EffectName::StiffnessNonlinearity);
     let header = [
         format!(
-            "propid sim configuration: the stand of {} as the stand model fitted it",
+            "propid sim configuration: the stand of {} as propid diagnose fitted it",
             path.display()
         ),
-        "(propid diagnose --sim-config; docs/stand-model.md). Replay it under the log's command:"
-            .to_string(),
+        format!(
+            "(effects: {}; docs/stand-model.md). Replay it under the log's command:",
+            if effects.is_empty() {
+                "none".to_string()
+            } else {
+                effects
+                    .iter()
+                    .map(|e| e.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        ),
         format!(
             "  propid sim --config {} --replay-command {} --out SIM.csv",
             out.display(),
@@ -333,6 +420,12 @@ pub fn write_config(path: &Path, req: &Request, out: &Path) -> Result<Written, C
     Ok(Written {
         file: out.display().to_string(),
         fit_percent,
-        notes: cal.notes,
+        held_out_fit_percent: reported
+            .into_iter()
+            .map(|(k, v)| (k, (v * 100.0).round() / 100.0))
+            .collect(),
+        replay_fit_percent,
+        effects,
+        notes,
     })
 }

@@ -1,8 +1,9 @@
 //! The calibrated simulation through the binary (`docs/stand-model.md`): `diagnose
-//! --sim-config` writes the stand fitted on a generated Tyto-style export as a `propid sim`
-//! configuration, `sim --replay-command` replays the export's command through it into a CSV in
-//! the export's columns and units that scores as the fit did, and `demo --sim-config` runs the
-//! daemon against that stand.
+//! --sim-config` writes the stand diagnose fitted on a generated Tyto-style export as a `propid
+//! sim` configuration, `sim --replay-command` replays the export's command through it into a
+//! CSV in the export's columns and units that scores as the written stand's fit within a point
+//! (scored as diagnose scores, `propid_diagnose::stand::score_on_folds`), and `demo
+//! --sim-config` runs the daemon against that stand.
 
 use serde_json::Value;
 
@@ -32,12 +33,50 @@ fn wiggle(k: usize, seed: f64) -> f64 {
     ((k as f64 * 12.9898 + seed).sin() * 43_758.545_3).fract() - 0.5
 }
 
-/// `100 (1 − ‖y − ŷ‖ / ‖y − ȳ‖)`.
-fn fit_pct(y: &[f64], yhat: &[f64]) -> f64 {
-    let mean = y.iter().sum::<f64>() / y.len() as f64;
-    let e: f64 = y.iter().zip(yhat).map(|(a, b)| (a - b).powi(2)).sum();
-    let d: f64 = y.iter().map(|a| (a - mean).powi(2)).sum();
-    100.0 * (1.0 - (e / d).sqrt())
+/// The channels `(key, column)` of `cols` scored against `log` as diagnose scores them: on the
+/// folds of the log's command (`ESC signal (µs)`) and thrust, at the log's readings (a held
+/// column's repeated values are no readings).
+fn scored(
+    log: (&[String], &[Vec<f64>]),
+    sim: (&[String], &[Vec<f64>]),
+    channels: &[(&'static str, &str)],
+) -> std::collections::BTreeMap<&'static str, f64> {
+    use propid_diagnose::folds::Folds;
+    use propid_numerics::segment::SegmentRules;
+    use propid_numerics::stand_model::fit::Channel;
+    let col = |(head, cols): (&[String], &[Vec<f64>]), name: &str| {
+        cols[head.iter().position(|h| h == name).unwrap()].clone()
+    };
+    let time = col(log, "Time (s)");
+    let dt = (time[time.len() - 1] - time[0]) / (time.len() - 1) as f64;
+    let u: Vec<f64> = col(log, "ESC signal (µs)")
+        .iter()
+        .map(|us| (us - 1000.0) / 1000.0)
+        .collect();
+    let ys: Vec<(Vec<f64>, Vec<bool>)> = channels
+        .iter()
+        .map(|(_, name)| {
+            let y = col(log, name);
+            let held = (0..y.len()).map(|k| k > 0 && y[k] == y[k - 1]).collect();
+            (y, held)
+        })
+        .collect();
+    let folds = Folds::from_input(&u, &ys[0].0, 0.7, &SegmentRules::for_record(dt, true));
+    let chans: Vec<Channel<'_>> = channels
+        .iter()
+        .zip(&ys)
+        .map(|((key, _), (y, held))| Channel {
+            key,
+            quantity: propid_diagnose::stand::quantity(key).unwrap(),
+            y,
+            interpolated: held,
+        })
+        .collect();
+    let sims: Vec<(&str, Vec<f64>)> = channels
+        .iter()
+        .map(|(key, name)| (*key, col(sim, name)))
+        .collect();
+    propid_diagnose::stand::score_on_folds(&chans, &sims, &folds)
 }
 
 #[test]
@@ -75,12 +114,20 @@ fn the_calibrated_stand_replays_the_log_within_a_point_of_the_fit() {
     assert_eq!(code, 0, "{err}");
     let r: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(r["type"], "sim_replay", "{r}");
+    let held_out = &d["sim_config"]["held_out_fit_percent"];
     for (key, f) in &fitted {
         let (f, s) = (f.as_f64().unwrap(), r["fit_percent"][key].as_f64().unwrap());
-        eprintln!("{key}: fit {f:.2} %, replay {s:.2} %");
+        eprintln!(
+            "{key}: the stand's fit {f:.2} %, held out {}, replay {s:.2} %",
+            held_out[key]
+        );
         assert!(
             (f - s).abs() <= 1.0 && f > 80.0,
             "{key}: fit {f}, replay {s}"
+        );
+        assert_eq!(
+            d["sim_config"]["replay_fit_percent"][key],
+            r["fit_percent"][key]
         );
     }
     // SIM.csv has the log's columns, in its units: scored from the files, it agrees.
@@ -91,28 +138,25 @@ fn the_calibrated_stand_replays_the_log_within_a_point_of_the_fit() {
     let mut got = sim_head.clone();
     got.sort();
     assert_eq!(got, want);
-    let col = |head: &[String], cols: &[Vec<f64>], name: &str| {
-        cols[head.iter().position(|h| h == name).unwrap()].clone()
-    };
-    for (name, key) in [
-        ("Motor Electrical Speed (RPM)", "rpm"),
-        ("Current (A)", "current"),
-    ] {
-        let y = col(&log_head, &log_cols, name);
-        let s = col(&sim_head, &sim_cols, name);
-        let from_files = fit_pct(&y, &s);
-        let reported = r["fit_percent"][key].as_f64().unwrap();
-        assert!(
-            (from_files - reported).abs() < 0.1,
-            "{name}: {from_files} vs {reported}"
-        );
-    }
-    let (y, s) = (
-        col(&log_head, &log_cols, "Thrust (gf)"),
-        col(&sim_head, &sim_cols, "Thrust (gf)"),
+    let from_files = scored(
+        (&log_head, &log_cols),
+        (&sim_head, &sim_cols),
+        &[
+            ("thrust", "Thrust (gf)"),
+            ("rpm", "Motor Electrical Speed (RPM)"),
+            ("current", "Current (A)"),
+        ],
     );
-    let ymax = y.iter().copied().fold(f64::MIN, f64::max);
-    let smax = s.iter().copied().fold(f64::MIN, f64::max);
+    for (key, v) in &from_files {
+        let reported = r["fit_percent"][key].as_f64().unwrap();
+        assert!((v - reported).abs() < 0.1, "{key}: {v} vs {reported}");
+    }
+    // In the log's units (a fit percent is not: the thrust's scale in gf).
+    let top = |head: &[String], cols: &[Vec<f64>]| {
+        let c = head.iter().position(|h| h == "Thrust (gf)").unwrap();
+        cols[c].iter().copied().fold(f64::MIN, f64::max)
+    };
+    let (ymax, smax) = (top(&log_head, &log_cols), top(&sim_head, &sim_cols));
     assert!((smax / ymax - 1.0).abs() < 0.05, "gf: {smax} vs {ymax}");
 }
 
@@ -142,7 +186,9 @@ fn a_log_the_sim_wrote_gives_its_stand_back_and_the_demo_runs_on_it() {
         .enumerate()
     {
         let x = (k * k) % 997 + 1;
-        cmd.push_str(&format!("{:.3},{l},{x},{x},{x},{x}\n", k as f64 * 0.005));
+        // The supply is the log's measured voltage in a replay of a sagging plant: a battery's.
+        let v = 16.0 + 0.02 * x as f64 / 997.0;
+        cmd.push_str(&format!("{:.3},{l},{x},{x},{x},{v}\n", k as f64 * 0.005));
     }
     std::fs::write(path("cmd.csv"), cmd).unwrap();
     let (code, _, err) = propid(&[

@@ -84,6 +84,10 @@ pub struct Options {
     pub input_is_a_command: bool,
     /// The test an effect's held-out gain must pass to be taken ([`folds::Gate`]).
     pub gate: folds::Gate,
+    /// Take the stand model as the baseline whenever the record is a stand's and the model
+    /// fits, even where the generic search predicts the held-out output better (a simulated
+    /// stand's configuration, `diagnose --sim-config`, is a stand model); `why` says so.
+    pub prefer_stand: bool,
 }
 
 impl Default for Options {
@@ -93,6 +97,7 @@ impl Default for Options {
             max_effects: 3,
             input_is_a_command: true,
             gate: folds::Gate::default(),
+            prefer_stand: false,
         }
     }
 }
@@ -317,9 +322,14 @@ pub fn diagnose_with(
             .copied()
             .unwrap_or(f64::NAN);
         let generic_fit = d.validation.mean_fit_percent;
-        if stand_fit >= generic_fit {
+        if stand_fit >= generic_fit || opts.prefer_stand {
+            let asked = if stand_fit < generic_fit {
+                "; taken as asked (a simulated stand's configuration)"
+            } else {
+                ""
+            };
             choice.why = format!(
-                "{} (held out on {}: {stand_fit:.2} %, the generic search {generic_fit:.2} %)",
+                "{} (held out on {}: {stand_fit:.2} %, the generic search {generic_fit:.2} %{asked})",
                 choice.why, run.report.output
             );
             Some(run)

@@ -17,10 +17,15 @@
 //!   current_at_reference_a = k_I · (rpm_at_reference / s)^{e+1},  k_J (plant) = k_J / s²
 //! ```
 //!
-//! (the same functions of the command, written about another reference). The supply is
-//! `V = V₀ − R I − discharge · t`, fitted by least squares on the log's voltage against its
-//! current and time ([`fit_supply`]; `R` and the discharge held at 0 where they come out
-//! negative); without a voltage channel the supply does not sag, as in the fit.
+//! (the same functions of the command, written about another reference). The supply: where
+//! the fit took it constant (diagnose's baseline without `supply_sag`, or a log without a
+//! voltage channel) the plant's battery is that constant voltage, `V₀ = V_ref`, with no
+//! resistance and no discharge; where the measured voltage drove the fit's speed map
+//! (`supply_sag`), `V = V₀ − R I − discharge · t` fitted by least squares on the log's voltage
+//! against its current and time ([`fit_supply`]; `R` and the discharge held at 0 where they come
+//! out negative). [`replay`] drives that plant with the log's own measured voltage (a log is
+//! replayed as it was measured: the simulated sag is the configuration's model of the log's
+//! voltage, for `propid sim` and `propid demo`, which have no log).
 //!
 //! # Sensors
 //! Each channel's sensor of the fit (delay, lag, refresh, and the offset and creep of its
@@ -28,14 +33,40 @@
 //! delay cannot be negative in a simulation: a channel ahead of the reference moves the ESC's
 //! dead time down by that much and every sensor's delay up (the same timing of every channel),
 //! as far as the dead time allows.
+//!
+//! # Extensions (diagnose's effects)
+//! `diagnose --sim-config` writes diagnose's final stand model: the baseline with the effects
+//! it took ([`Extensions`] carries what they add beyond [`StandFit`]'s figures). Where each
+//! goes in the configuration:
+//!
+//! | effect | in the configuration |
+//! |---|---|
+//! | `dead_time` | `[plant.motor] dead_time_s` |
+//! | `sensor_lag` | `[plant.sensors.<channel>] delay_s`, `tau_s` |
+//! | `asymmetric_dynamics` | `[plant.motor] tau_up_s`, `tau_down_s` |
+//! | `speed_dependent_tau` | `[plant.motor] tau_speed_exponent` |
+//! | `static_nonlinearity` | `[plant.motor] speed_map_exponent`, `thrust_exponent` |
+//! | `supply_sag` | `[plant] battery_v`, `internal_resistance_ohm`, `discharge_v_per_s` (the motor's speed follows its supply) |
+//! | `saturation` | `[plant.effects.saturation] level`, `signal = "throttle"` |
+//! | `baseline_drift` | `[plant.sensors.<channel>] creep_per_s` (every load and current channel) |
+//! | `extra_mode` | `[plant.effects.extra_mode] fn_hz`, `zeta`, `gain = 1`: on the thrust only |
+//! | `periodic_disturbance` | `[plant.effects.periodic_disturbance] freq_hz`, `amplitude`, `phase_rad`: on the thrust only |
+//!
+//! What the simulated stand cannot express: a resonance on the torque channel (the plant's
+//! torque is `torque_m` times the true thrust) and a sinusoid on the torque or the current
+//! (the plant's disturbance is added to the thrust reading); [`Calibrated::notes`] says so when
+//! the fit has them. The fit's current law takes the supply as constant, the plant's current
+//! follows the supply it draws from: a few per cent of the sag, not more.
 
 use std::fmt::Write as _;
 
 use nalgebra::{DMatrix, DVector};
-use propid_numerics::stand_model::fit::StandFit;
+use propid_numerics::stand_model::fit::{StandFit, Structure, StructuredFit};
 use propid_numerics::stand_model::Quantity;
+use propid_numerics::EffectName;
 
 use crate::config::SimConfig;
+use crate::effects::{ExtraMode, PeriodicDisturbance, Saturation, SaturationSignal};
 use crate::plant::{
     Measurement, Plant, PlantConfig, PlantError, PlantKind, SensorConfig, SensorsConfig,
 };
@@ -78,6 +109,94 @@ pub struct Calibrated {
     pub config: SimConfig,
     /// One line per approximation (empty: the fit as it is).
     pub notes: Vec<String>,
+}
+
+/// What the parts of the stand a fit frees add beyond [`StandFit`]'s figures (module doc,
+/// "Extensions").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extensions {
+    /// The measured supply voltage drove the fit's speed map (else the supply was constant).
+    pub supply_measured: bool,
+    /// The load and current channels have a creep (their amplitudes: bases, offset, creep).
+    pub creep: bool,
+    /// The command's clip level (`saturation`).
+    pub command_limit: Option<f64>,
+    /// A resonance between the rotor and the load cell, (fn Hz, ζ) (`extra_mode`).
+    pub mode: Option<(f64, f64)>,
+    /// A steady sinusoid on the load and current channels, Hz (`periodic_disturbance`; its
+    /// sine and cosine amplitudes are each channel's last two).
+    pub sinusoid_hz: Option<f64>,
+}
+
+impl Extensions {
+    /// Of a fit of the structure `st` (`propid diagnose`'s stand model).
+    pub fn of(f: &StructuredFit, st: &Structure) -> Extensions {
+        Extensions {
+            supply_measured: st.voltage && f.fit.params.map.voltage_ref != 1.0,
+            creep: st.creep,
+            command_limit: f.command_limit,
+            mode: f.mode,
+            sinusoid_hz: f.sinusoid_hz,
+        }
+    }
+
+    /// Of the whole stand model ([`propid_numerics::stand_model::fit::fit`],
+    /// [`Structure::full`]).
+    pub fn whole(fit: &StandFit) -> Extensions {
+        Extensions {
+            supply_measured: fit.params.map.voltage_ref != 1.0,
+            creep: true,
+            command_limit: None,
+            mode: None,
+            sinusoid_hz: None,
+        }
+    }
+
+    /// The effects of diagnose's catalogue these carry (the rest are figures of [`StandFit`]).
+    pub fn effects(&self) -> Vec<EffectName> {
+        [
+            (self.supply_measured, EffectName::SupplySag),
+            (self.command_limit.is_some(), EffectName::Saturation),
+            (self.creep, EffectName::BaselineDrift),
+            (self.mode.is_some(), EffectName::ExtraMode),
+            (self.sinusoid_hz.is_some(), EffectName::PeriodicDisturbance),
+        ]
+        .into_iter()
+        .filter_map(|(on, e)| on.then_some(e))
+        .collect()
+    }
+}
+
+/// A channel's offset and creep per second at `t = 0` of the log, and its sinusoid (sine,
+/// cosine amplitudes at `t = 0`), from its amplitudes (the fit's time starts at its window,
+/// `t0_s`).
+fn offset_creep_sine(
+    c: &propid_numerics::stand_model::fit::ChannelFit,
+    ext: &Extensions,
+    t0_s: f64,
+) -> (f64, f64, Option<(f64, f64)>) {
+    let amp = &c.amplitudes;
+    let at = match c.quantity {
+        Quantity::Speed => return (0.0, 0.0, None),
+        Quantity::Thrust | Quantity::Torque => 1,
+        Quantity::Current => 2,
+    };
+    let offset = amp.get(at).copied().unwrap_or(0.0);
+    let creep = if ext.creep {
+        amp.get(at + 1).copied().unwrap_or(0.0)
+    } else {
+        0.0
+    };
+    let sine = ext.sinusoid_hz.and_then(|f| {
+        let n = amp.len();
+        (n >= at + 3).then(|| {
+            // a sin(ω(t − t0)) + b cos(ω(t − t0)) written about t = 0.
+            let (a, b) = (amp[n - 2], amp[n - 1]);
+            let ph = -std::f64::consts::TAU * f * t0_s;
+            (a * ph.cos() - b * ph.sin(), a * ph.sin() + b * ph.cos())
+        })
+    });
+    (offset - creep * t0_s, creep, sine)
 }
 
 /// Least squares of `voltage` on `[1, current, t]` over the rows where both are read
@@ -147,9 +266,9 @@ fn sensor_key(q: Quantity) -> &'static str {
     }
 }
 
-/// The fitted stand `fit` of a log described by `log` as a `propid sim` configuration (module
-/// doc).
-pub fn calibrate(fit: &StandFit, log: &LogFacts) -> Calibrated {
+/// The fitted stand `fit` with its extensions `ext` of a log described by `log` as a `propid
+/// sim` configuration (module doc).
+pub fn calibrate(fit: &StandFit, ext: &Extensions, log: &LogFacts) -> Calibrated {
     let p = &fit.params;
     let mut notes = Vec::new();
     let mut cfg = SimConfig::default();
@@ -171,15 +290,26 @@ pub fn calibrate(fit: &StandFit, log: &LogFacts) -> Calibrated {
     };
     let u0 = p.map.command_zero.clamp(-1.0, u_r - 1e-3);
     let v_ref = p.map.voltage_ref;
-    let v0 = match (&log.supply, v_ref != 1.0) {
-        (Some(sup), true) if sup.open_circuit_v > 0.0 => sup.open_circuit_v,
-        _ => plant.battery_v,
+    // The supply (module doc): measured and modelled, or the fit's constant.
+    let sagging = match (&log.supply, ext.supply_measured) {
+        (Some(sup), true) if sup.open_circuit_v > 0.0 => Some(*sup),
+        _ => None,
     };
-    let voltage_ratio = if log.supply.is_some() && v_ref != 1.0 {
-        v0 / v_ref
-    } else {
-        1.0
+    let (v0, voltage_ratio) = match &sagging {
+        Some(sup) => (sup.open_circuit_v, sup.open_circuit_v / v_ref),
+        None if v_ref != 1.0 => (v_ref, 1.0),
+        None => (plant.battery_v, 1.0),
     };
+    let (r_ohm, discharge) = sagging.map_or((0.0, 0.0), |sup| {
+        (sup.resistance_ohm, sup.discharge_v_per_s)
+    });
+    if sagging.is_some() && r_ohm == 0.0 && discharge == 0.0 {
+        notes.push(
+            "the log's voltage neither sags with the current nor falls with time: the \
+             simulated supply is constant and is replayed at it"
+                .into(),
+        );
+    }
     let rpm_ref = s * p.map.speed_ss(u_r, v_ref) * voltage_ratio;
     let gamma = p.rotor.tau_speed_exponent;
     let tau_scale = (s * p.rotor.speed_ref / rpm_ref).powf(gamma);
@@ -187,10 +317,6 @@ pub fn calibrate(fit: &StandFit, log: &LogFacts) -> Calibrated {
     plant.reference_throttle = u_r;
     plant.rpm_at_reference = rpm_ref;
     plant.battery_v = v0;
-    let (r_ohm, discharge) = match &log.supply {
-        Some(sup) if v_ref != 1.0 => (sup.resistance_ohm, sup.discharge_v_per_s),
-        _ => (0.0, 0.0),
-    };
     plant.internal_resistance_ohm = r_ohm;
     plant.discharge_v_per_s = discharge;
     let m = &mut plant.motor;
@@ -210,9 +336,13 @@ pub fn calibrate(fit: &StandFit, log: &LogFacts) -> Calibrated {
     if p.k_t > 0.0 && p.k_q > 0.0 {
         plant.torque_m = p.k_q / p.k_t;
     }
-    let has = |q: Quantity| fit.channels.iter().any(|c| c.quantity == q);
-    if has(Quantity::Current) {
-        let idle = p.current.idle_a;
+    let t0 = fit.window_s.0;
+    let current = fit
+        .channels
+        .iter()
+        .find(|c| c.quantity == Quantity::Current);
+    if let Some(c) = current {
+        let (idle, _, _) = offset_creep_sine(c, ext, t0);
         plant.idle_current_a = idle.max(0.0);
         plant.current_at_reference_a = (p.current.per_power * speed_units.powf(e + 1.0)).max(0.0);
         plant.motor.current_per_acceleration = p.current.per_acceleration / (s * s);
@@ -240,19 +370,34 @@ pub fn calibrate(fit: &StandFit, log: &LogFacts) -> Calibrated {
     plant.motor.dead_time_s = dead.min(1.0);
     let mut sensors = SensorsConfig::default();
     for c in &fit.channels {
-        let amp = &c.amplitudes;
-        let (offset, creep) = match c.quantity {
-            Quantity::Speed => (0.0, 0.0),
-            Quantity::Thrust | Quantity::Torque => (
-                amp.get(1).copied().unwrap_or(0.0),
-                amp.get(2).copied().unwrap_or(0.0),
-            ),
-            // The current's offset is its idle current (the part below 0 stays an offset).
-            Quantity::Current => (
-                p.current.idle_a.min(0.0),
-                amp.get(3).copied().unwrap_or(0.0),
-            ),
+        let (offset, creep, sine) = offset_creep_sine(c, ext, t0);
+        // The current's offset is its idle current (the part below 0 stays an offset).
+        let offset = match c.quantity {
+            Quantity::Current => offset.min(0.0),
+            _ => offset,
         };
+        match (c.quantity, sine, ext.sinusoid_hz) {
+            (Quantity::Thrust, Some((a, b)), Some(f)) => {
+                plant.effects.periodic_disturbance = Some(PeriodicDisturbance {
+                    freq_hz: f,
+                    amplitude: a.hypot(b),
+                    phase_rad: b.atan2(a),
+                })
+            }
+            (Quantity::Torque | Quantity::Current, Some(_), _) => notes.push(format!(
+                "the {} channel's sinusoid is not simulated (the simulated stand adds its \
+                 periodic disturbance to the thrust only)",
+                c.key
+            )),
+            _ => {}
+        }
+        if c.quantity == Quantity::Torque && ext.mode.is_some() {
+            notes.push(
+                "the torque channel's resonance is not simulated (the simulated stand's \
+                 extra mode is in the thrust's load-cell path only)"
+                    .into(),
+            );
+        }
         let sensor = SensorConfig {
             delay_s: (c.delay_s.map_or(0.0, |d| d.0) + shift).clamp(0.0, 1.0),
             tau_s: c.tau_s.map_or(0.0, |t| t.0).clamp(0.0, 5.0),
@@ -269,6 +414,22 @@ pub fn calibrate(fit: &StandFit, log: &LogFacts) -> Calibrated {
         *slot = Some(sensor);
     }
     cfg.plant.sensors = sensors;
+    if let Some(level) = ext.command_limit.filter(|l| *l < 1.0) {
+        cfg.plant.effects.saturation = Some(Saturation {
+            level: level.clamp(0.0, 1.0),
+            signal: SaturationSignal::Throttle,
+        });
+    }
+    if let Some((fn_hz, zeta)) = ext.mode {
+        let has_thrust = fit.channels.iter().any(|c| c.quantity == Quantity::Thrust);
+        if has_thrust && fn_hz < 0.5 / log.dt_s {
+            cfg.plant.effects.extra_mode = Some(ExtraMode {
+                fn_hz,
+                zeta,
+                gain: 1.0,
+            });
+        }
+    }
 
     cfg.stand.name = "calibrated".into();
     cfg.stand.sample_rate_hz = (1.0 / log.dt_s).round().clamp(10.0, 20_000.0) as u32;
@@ -363,6 +524,44 @@ pub fn to_toml(cfg: &SimConfig, header: &[String]) -> String {
             );
         }
     }
+    // The effects `calibrate` sets (module doc, "Extensions"), named by the one catalogue.
+    let fx = &p.effects;
+    let mut table = |e: EffectName, keys: &[(&str, String)]| {
+        let _ = writeln!(t, "\n[plant.effects.{}]", e.as_str());
+        for (k, v) in keys {
+            let _ = writeln!(t, "{k} = {v}");
+        }
+    };
+    if let Some(s) = &fx.saturation {
+        let signal = match s.signal {
+            SaturationSignal::Throttle => "\"throttle\"",
+            SaturationSignal::Sensor => "\"sensor\"",
+        };
+        table(
+            EffectName::Saturation,
+            &[("level", num(s.level)), ("signal", signal.into())],
+        );
+    }
+    if let Some(m) = &fx.extra_mode {
+        table(
+            EffectName::ExtraMode,
+            &[
+                ("fn_hz", num(m.fn_hz)),
+                ("zeta", num(m.zeta)),
+                ("gain", num(m.gain)),
+            ],
+        );
+    }
+    if let Some(d) = &fx.periodic_disturbance {
+        table(
+            EffectName::PeriodicDisturbance,
+            &[
+                ("freq_hz", num(d.freq_hz)),
+                ("amplitude", num(d.amplitude)),
+                ("phase_rad", num(d.phase_rad)),
+            ],
+        );
+    }
     let x = &cfg.experiment;
     let list = |v: &[f64]| v.iter().map(|&x| num(x)).collect::<Vec<_>>().join(", ");
     let _ = writeln!(
@@ -386,48 +585,87 @@ fn num(v: f64) -> String {
 
 /// What the plant `cfg` measures at the start of each row of a log sampled every `dt_s` under
 /// its `command` (throttle per row, NaN: the last one held), from the steady state of its first
-/// command: each row stepped in equal parts of at most [`REPLAY_STEP_S`], without the thrust's
-/// noise, the sensors read every part (a held channel is held by the caller on the log's own
-/// readings, [`hold_on`]).
+/// command, without the thrust's noise. The plant (ESC, rotor, supply, the effects on the
+/// command and the load-cell path) is stepped in equal parts of each row of at most
+/// [`REPLAY_STEP_S`]; its sensors read what it does at the rows, as the simulated stand at the
+/// log's rate reads them ([`propid_numerics::stand_model::sense`], the stand model's own: a
+/// delay and a lag between rows see the quantity linear between them), and a periodic
+/// disturbance is added to the thrust's reading. A held channel is held by the caller on the
+/// log's own readings ([`hold_on`]). With `voltage` (the log's measured supply per row, NaN:
+/// the last one held) the plant's supply is that voltage instead of its battery model (module
+/// doc).
 pub fn replay(
     cfg: &PlantConfig,
     dt_s: f64,
     command: &[f64],
+    voltage: Option<&[f64]>,
 ) -> Result<Vec<Measurement>, PlantError> {
     let parts = (dt_s / REPLAY_STEP_S).ceil().max(1.0) as usize;
     let h = dt_s / parts as f64;
-    let mut cfg = cfg.clone();
-    cfg.noise_rms_n = 0.0;
-    for s in [
-        &mut cfg.sensors.thrust,
-        &mut cfg.sensors.torque,
-        &mut cfg.sensors.rpm,
-        &mut cfg.sensors.current,
-    ]
-    .into_iter()
-    .flatten()
-    {
-        s.refresh_s = 0.0;
-    }
-    let mut plant = Plant::new(&cfg, h, 0)?;
+    let mut bare = cfg.clone();
+    bare.noise_rms_n = 0.0;
+    let sensors = std::mem::take(&mut bare.sensors);
+    let disturbance = bare.effects.periodic_disturbance.take();
+    let mut plant = Plant::new(&bare, h, 0)?;
     let first = command
         .iter()
         .copied()
         .find(|u| u.is_finite())
         .unwrap_or(0.0);
-    plant.settle(first);
+    let mut v = voltage.and_then(|v| v.iter().copied().find(|x| x.is_finite()));
+    plant.settle_at_supply(first, v);
     let mut u = first;
     let mut out = Vec::with_capacity(command.len());
-    for &c in command {
+    for (k, &c) in command.iter().enumerate() {
         if c.is_finite() {
             u = c;
         }
-        out.push(plant.step(u));
+        if let Some(x) = voltage.and_then(|m| m.get(k)).filter(|x| x.is_finite()) {
+            v = Some(*x);
+        }
+        out.push(plant.step_at_supply(u, v));
         for _ in 1..parts {
-            plant.step(u);
+            plant.step_at_supply(u, v);
+        }
+    }
+    type Field = fn(&mut Measurement) -> &mut f64;
+    let channels: [(&Option<SensorConfig>, Field); 4] = [
+        (&sensors.thrust, |m| &mut m.thrust_n),
+        (&sensors.torque, |m| &mut m.torque_nm),
+        (&sensors.rpm, |m| &mut m.rpm),
+        (&sensors.current, |m| &mut m.current_a),
+    ];
+    for (sensor, field) in channels {
+        let Some(s) = sensor else { continue };
+        let x: Vec<f64> = out.iter_mut().map(|m| *field(m)).collect();
+        let read = propid_numerics::stand_model::sense(
+            &propid_numerics::stand_model::Sensor {
+                delay_s: s.delay_s,
+                tau_s: s.tau_s,
+                refresh_s: 0.0,
+                offset: s.offset,
+                creep_per_s: s.creep_per_s,
+            },
+            dt_s,
+            &x,
+        );
+        for (m, y) in out.iter_mut().zip(read) {
+            *field(m) = y;
+        }
+    }
+    if let Some(d) = disturbance {
+        for (k, m) in out.iter_mut().enumerate() {
+            let t = k as f64 * dt_s;
+            m.thrust_n += d.amplitude * (std::f64::consts::TAU * d.freq_hz * t + d.phase_rad).sin();
         }
     }
     Ok(out)
+}
+
+/// Whether a replay of `cfg` drives it with a log's measured voltage: its supply sags
+/// (module doc; a constant supply is the fit's own and is replayed at it).
+pub fn replays_measured_supply(cfg: &PlantConfig) -> bool {
+    cfg.internal_resistance_ohm > 0.0 || cfg.discharge_v_per_s > 0.0
 }
 
 /// `y` read only where `reading` is true and held in between (before the first reading, the
@@ -453,21 +691,18 @@ pub fn hold_on(y: &[f64], reading: &[bool]) -> Vec<f64> {
 
 /// The stand model's sensors of `fit`'s channels as it fitted them (key, quantity, sensor):
 /// [`propid_numerics::stand_model::simulate`] of `fit.params` with these is the fit's own
-/// prediction of each channel.
+/// prediction of each channel (without a resonance or a sinusoid).
 pub fn fitted_sensors(
     fit: &StandFit,
+    ext: &Extensions,
 ) -> Vec<(&'static str, Quantity, propid_numerics::stand_model::Sensor)> {
     fit.channels
         .iter()
         .map(|c| {
-            let amp = &c.amplitudes;
-            let (offset, creep) = match c.quantity {
-                Quantity::Speed => (0.0, 0.0),
-                Quantity::Thrust | Quantity::Torque => (
-                    amp.get(1).copied().unwrap_or(0.0),
-                    amp.get(2).copied().unwrap_or(0.0),
-                ),
-                Quantity::Current => (0.0, amp.get(3).copied().unwrap_or(0.0)),
+            let (offset, creep, _) = offset_creep_sine(c, ext, fit.window_s.0);
+            let offset = match c.quantity {
+                Quantity::Current => offset - fit.params.current.idle_a,
+                _ => offset,
             };
             (
                 c.key,

@@ -183,6 +183,8 @@ pub struct StandBaseline {
     pub structure: Structure,
     /// The effects named.
     pub effects: Vec<EffectName>,
+    /// The folds its held-out figures were measured on ([`score_on_folds`]).
+    pub folds: Folds,
 }
 
 /// One channel's figures (`stand.channels.<key>`).
@@ -359,28 +361,9 @@ impl<'a> Data<'a> {
         }
         let mut means = Vec::new();
         for (c, ch) in self.channels.iter().enumerate() {
-            let y = &self.read[c];
-            let mean_over = |r: std::ops::Range<usize>| {
-                let (s, n) = r
-                    .filter(|&k| y[k].is_finite())
-                    .fold((0.0, 0usize), |(s, n), k| (s + y[k], n + 1));
-                s / n.max(1) as f64
-            };
-            let ybar = match self.folds.method {
-                Method::Holdout => mean_over(self.folds.folds[0].clone()),
-                Method::BlockedCv => mean_over(0..len),
-            };
-            let fits: Vec<f64> = self
-                .folds
-                .folds
-                .iter()
-                .map(|r| fit_percent_about(y, &preds[c], r.clone(), ybar))
-                .filter(|x| x.2 > 0)
-                .map(|x| x.0)
-                .collect();
-            if fits.is_empty() {
+            let Some(fits) = fold_fits(&self.read[c], &preds[c], self.folds) else {
                 continue;
-            }
+            };
             let m = fits.iter().sum::<f64>() / fits.len() as f64;
             means.push(m);
             cv.channel.insert(ch.key, m);
@@ -394,6 +377,59 @@ impl<'a> Data<'a> {
         };
         cv
     }
+}
+
+/// Each fold's figure of the prediction `pred` of a channel's readings `read` (NaN: no
+/// reading): `100 (1 − ‖y_F − ŷ_F‖ / ‖y_F − ȳ‖)` with `ȳ` the channel's mean over the record
+/// (over the tail under [`Method::Holdout`]); `None` when no fold has a reading.
+fn fold_fits(read: &[f64], pred: &[f64], folds: &Folds) -> Option<Vec<f64>> {
+    let mean_over = |r: std::ops::Range<usize>| {
+        let (s, n) = r
+            .filter(|&k| read[k].is_finite())
+            .fold((0.0, 0usize), |(s, n), k| (s + read[k], n + 1));
+        s / n.max(1) as f64
+    };
+    let ybar = match folds.method {
+        Method::Holdout => mean_over(folds.folds[0].clone()),
+        Method::BlockedCv => mean_over(0..read.len()),
+    };
+    let fits: Vec<f64> = folds
+        .folds
+        .iter()
+        .map(|r| fit_percent_about(read, pred, r.start..r.end.min(read.len()), ybar))
+        .filter(|x| x.2 > 0)
+        .map(|x| x.0)
+        .collect();
+    (!fits.is_empty()).then_some(fits)
+}
+
+/// A simulation of a record's channels scored as the stand's held-out figure is (module doc,
+/// 3): per channel, the mean over `folds` of each fold's fit percent about the channel's mean,
+/// at its readings (finite, not interpolated). `sim`: channel key and the simulation at every
+/// row. The same function of the same rows as `stand.channels.<key>.fit_percent`: a
+/// simulation of the fitted stand scores the fit diagnose reports (`diagnose --sim-config`).
+pub fn score_on_folds(
+    channels: &[Channel<'_>],
+    sim: &[(&str, Vec<f64>)],
+    folds: &Folds,
+) -> BTreeMap<&'static str, f64> {
+    channels
+        .iter()
+        .filter_map(|c| {
+            let (_, p) = sim.iter().find(|(k, _)| *k == c.key)?;
+            let read: Vec<f64> = (0..c.y.len().min(p.len()))
+                .map(|k| {
+                    if c.interpolated.get(k).copied().unwrap_or(false) {
+                        f64::NAN
+                    } else {
+                        c.y[k]
+                    }
+                })
+                .collect();
+            let fits = fold_fits(&read, p, folds)?;
+            Some((c.key, fits.iter().sum::<f64>() / fits.len() as f64))
+        })
+        .collect()
 }
 
 fn pred<'f>(f: &'f StructuredFit, key: &str) -> Option<&'f [f64]> {
@@ -601,6 +637,7 @@ pub fn search(
             extended: cur,
             structure: st,
             effects,
+            folds: folds.clone(),
         },
     })
 }

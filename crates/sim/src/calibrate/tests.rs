@@ -65,7 +65,7 @@ struct Log {
 /// What the plant `cfg` logs under `command()`, the thrust held over its refresh interval.
 fn log_of(cfg: &PlantConfig) -> Log {
     let u = command();
-    let rows = replay(cfg, DT, &u).unwrap();
+    let rows = replay(cfg, DT, &u, None).unwrap();
     let col = |f: fn(&Measurement) -> f64| rows.iter().map(f).collect::<Vec<f64>>();
     let thrust_read: Vec<bool> = (0..u.len()).map(|k| k % 5 == 0).collect();
     Log {
@@ -133,7 +133,7 @@ fn a_log_the_sim_wrote_gives_its_parameters_back_in_the_configuration() {
     let cfg = truth();
     let log = log_of(&cfg);
     let f = fitted(&log);
-    let got = calibrate(&f, &facts(&log));
+    let got = calibrate(&f, &Extensions::whole(&f), &facts(&log));
     let p = &got.config.plant;
     let close = |what: &str, got: f64, want: f64, tol: f64| {
         assert!(
@@ -193,14 +193,17 @@ fn a_log_the_sim_wrote_gives_its_parameters_back_in_the_configuration() {
 fn the_calibrated_plant_replayed_scores_as_the_fit_on_every_channel() {
     let log = log_of(&truth());
     let f = fitted(&log);
-    let cal = calibrate(&f, &facts(&log));
-    let sim = replay(&cal.config.plant, DT, &log.u).unwrap();
-    let sensors: Vec<_> = fitted_sensors(&f)
+    let ext = Extensions::whole(&f);
+    let cal = calibrate(&f, &ext, &facts(&log));
+    // The supply sags: the replay is driven with the log's measured voltage.
+    assert!(replays_measured_supply(&cal.config.plant));
+    let sim = replay(&cal.config.plant, DT, &log.u, Some(&log.voltage)).unwrap();
+    let sensors: Vec<_> = fitted_sensors(&f, &ext)
         .into_iter()
         .map(|(_, q, s)| (q, s))
         .collect();
     let model = simulate(&f.params, DT, &log.u, Some(&log.voltage), &sensors);
-    for (c, (key, q, _)) in fitted_sensors(&f).iter().enumerate() {
+    for (c, (key, q, _)) in fitted_sensors(&f, &ext).iter().enumerate() {
         let (y, at): (&[f64], &[bool]) = match q {
             Quantity::Speed => (&log.rpm, &[]),
             Quantity::Thrust => (&log.thrust, &log.thrust_read),

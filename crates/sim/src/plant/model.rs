@@ -186,10 +186,15 @@ impl Plant {
     /// Puts the plant in steady state at `throttle` (as if it had been held there for ever),
     /// without advancing time. Effects with memory (delay lines, extra mode) settle too.
     pub fn settle(&mut self, throttle: f64) {
+        self.settle_at_supply(throttle, None);
+    }
+
+    /// [`Plant::settle`] with the supply at `supply_v` (a measured voltage, [`Plant::step_at_supply`])
+    /// when given.
+    pub fn settle_at_supply(&mut self, throttle: f64, supply_v: Option<f64>) {
         let throttle = throttle.clamp(0.0, 1.0);
-        let u = self
-            .effects
-            .input_map(throttle, self.cfg.battery_v, &self.cfg);
+        let v = supply_v.unwrap_or(self.cfg.battery_v);
+        let u = self.effects.input_map(throttle, v, &self.cfg);
         let t_s = self.time_s();
         match &mut self.core {
             Core::SecondOrder { x, nonlinear, .. } => {
@@ -198,10 +203,15 @@ impl Plant {
                     None => Vector2::new(self.cfg.gain_n_per_throttle * u, 0.0),
                 }
             }
-            Core::Motor(m) => m.settle(&self.cfg, throttle, u, t_s),
+            Core::Motor(m) => match supply_v {
+                Some(v) => m.settle_at(&self.cfg, throttle, u, v),
+                None => m.settle(&self.cfg, throttle, u, t_s),
+            },
         }
         let thrust = self.thrust_true();
-        self.effects.settle(throttle, thrust);
+        // The load-cell path settles at what the thrust sensor reads (its offset with it).
+        let read = thrust + self.cfg.sensors.thrust.map_or(0.0, |s| s.offset);
+        self.effects.settle(throttle, read);
         let (rpm, current) = match &self.core {
             Core::Motor(m) => {
                 let n = m.speed_rpm();
@@ -232,6 +242,12 @@ impl Plant {
     /// clamped as an ESC would) held during this sample; returns what the stand measures at the
     /// start of the sample (`y_k = C x_k`, see the module doc).
     pub fn step(&mut self, throttle: f64) -> Measurement {
+        self.step_at_supply(throttle, None)
+    }
+
+    /// [`Plant::step`] with the supply at `supply_v` volts when given (a log's measured
+    /// voltage, replayed: the battery model is not used, the current is drawn at that voltage).
+    pub fn step_at_supply(&mut self, throttle: f64, supply_v: Option<f64>) -> Measurement {
         let throttle = if throttle.is_finite() {
             throttle.clamp(0.0, 1.0)
         } else {
@@ -258,14 +274,18 @@ impl Plant {
                 };
                 // I(V) is affine in the supply (n' ∝ n_ss ∝ V): the loop V = V_oc − R I(V)
                 // solved at once, `I = I_oc − s R I_oc / (1 + R s)` with `s = dI/dV`.
-                let i_oc = current(v_oc);
-                let slope = i_oc - current(v_oc - 1.0);
-                let loop_gain = (1.0 + r_ohm * slope).max(0.1);
-                (esc, i_oc - slope * r_ohm * i_oc / loop_gain)
+                if let Some(v) = supply_v {
+                    (esc, current(v))
+                } else {
+                    let i_oc = current(v_oc);
+                    let slope = i_oc - current(v_oc - 1.0);
+                    let loop_gain = (1.0 + r_ohm * slope).max(0.1);
+                    (esc, i_oc - slope * r_ohm * i_oc / loop_gain)
+                }
             }
             Core::SecondOrder { .. } => (delayed, self.cfg.current_a(thrust_true)),
         };
-        let voltage_v = v_oc - r_ohm * current_a;
+        let voltage_v = supply_v.unwrap_or(v_oc - r_ohm * current_a);
         // Measured thrust: the sensor, the load-cell path (extra mode), additive terms, noise,
         // clip, quantum, then held over the sensor's refresh interval.
         let (thrust_read, refreshed) = match &mut self.sensors.thrust {

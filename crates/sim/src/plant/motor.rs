@@ -88,6 +88,12 @@ impl Motor {
         self.n = self.cfg.rotor_law(plant).advance(self.n, target, self.dt_s);
     }
 
+    /// Steady state at throttle `throttle` and mapped throttle `u` under the supply `voltage_v`.
+    pub(crate) fn settle_at(&mut self, plant: &PlantConfig, throttle: f64, u: f64, voltage_v: f64) {
+        self.delay.settle(throttle);
+        self.n = self.cfg.speed_ss(plant, u, voltage_v);
+    }
+
     /// Steady state at throttle `throttle` (the ESC's line full of it) and mapped throttle `u`,
     /// with the supply sag solved as in [`super::linearise`].
     pub(crate) fn settle(&mut self, plant: &PlantConfig, throttle: f64, u: f64, t_s: f64) {
