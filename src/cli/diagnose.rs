@@ -9,7 +9,6 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use super::columns_read::ColumnsRead;
-use super::identify::load::STAND_CHANNELS;
 use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
 use super::read::ReadArgs;
 #[cfg(test)]
@@ -19,7 +18,9 @@ use propid_diagnose::noise::FloorSource;
 use propid_diagnose::stand::StandInput;
 use propid_diagnose::verdict::VerdictKind;
 use propid_diagnose::{self as diagnose, DiagnoseError, Diagnosis};
+use propid_ingest::gaps::{fill_gaps, mark_missing};
 use propid_numerics::stand_model::fit::Channel as StandChannel;
+use propid_report::identify::load::STAND_CHANNELS;
 use propid_wire::record::names;
 
 /// Arguments of `propid diagnose`.
@@ -543,51 +544,9 @@ fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
     })
 }
 
-/// NaN at every sample marked missing.
-pub(crate) fn mark_missing(y: &mut [f64], missing: &[bool]) {
-    for (v, m) in y.iter_mut().zip(missing) {
-        if *m {
-            *v = f64::NAN;
-        }
-    }
-}
-
-/// Holds the last finite value across gaps (leading gaps take the first finite value).
-pub(crate) fn fill_gaps(mut x: Vec<f64>) -> Vec<f64> {
-    let first = x
-        .iter()
-        .copied()
-        .find(|v| v.is_finite())
-        .unwrap_or(f64::NAN);
-    let mut last = first;
-    for v in x.iter_mut() {
-        if v.is_finite() {
-            last = *v;
-        } else {
-            *v = last;
-        }
-    }
-    x
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn gaps_are_held_from_the_last_finite_value_and_leading_gaps_from_the_first() {
-        let x = fill_gaps(vec![f64::NAN, 2.0, f64::NAN, f64::INFINITY, 5.0, f64::NAN]);
-        assert_eq!(x, [2.0, 2.0, 2.0, 2.0, 5.0, 5.0]);
-        assert!(fill_gaps(vec![f64::NAN; 3]).iter().all(|v| v.is_nan()));
-    }
-
-    #[test]
-    fn samples_marked_missing_become_nan_and_others_stay() {
-        let mut y = vec![1.0, 2.0, 3.0];
-        mark_missing(&mut y, &[false, true, false]);
-        assert_eq!((y[0], y[2]), (1.0, 3.0));
-        assert!(y[1].is_nan());
-    }
 
     #[test]
     fn a_response_without_steps_and_without_input_is_an_identification_error() {

@@ -9,11 +9,12 @@
 //!   asked for, the format detected (a TSP/1 recording or stream, any other CSV file).
 //! - [`csv_file`]: CSV files (exported stand logs, benchmark archives) with column choice,
 //!   [`held`] for a slow sensor written on every row as its last reading, [`interpolated`] for
-//!   one the exporter interpolated onto every row, [`resample`] for
+//!   one the exporter interpolated onto every row, [`gaps`] for a channel's missing samples, [`resample`] for
 //!   irregular timestamps ([`coarse_clock`] for stamps coarser than the rows), and [`steps`] found from a response-only record.
 
 pub mod coarse_clock;
 pub mod csv_file;
+pub mod gaps;
 pub mod held;
 pub mod interpolated;
 pub mod load;
