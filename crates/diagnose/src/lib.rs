@@ -29,6 +29,7 @@ pub mod effect;
 pub mod effects;
 pub mod era_start;
 pub mod error;
+pub mod file;
 pub mod finding;
 pub mod fit;
 pub mod folds;
