@@ -153,9 +153,10 @@ impl Signals {
 /// Diagnose's step after the shared load ([`propid_ingest::load`], asked for [`OPTIONAL`]):
 /// the output NaN at every sample marked missing; the input (without an input column: the
 /// level sequence of the steps found in the response) and the voltage held across gaps
-/// ([`fill_gaps`]); the voltage dropped when it has no finite sample. An input named (`named_input`, as `--input NAME`) that is not a command keeps that
-/// name (a shaker's `force_N` is read as the record's force channel, `thrust_N`, but is no
-/// thrust). Without an input column and no step in the response: [`NoSteps`].
+/// ([`fill_gaps`]); the voltage dropped when it has no finite sample. An input named
+/// (`named_input`, as `--input NAME`) that is not a command keeps that name (a shaker's
+/// `force_N` is read as the record's force channel, `thrust_N`, but is no thrust). Without an
+/// input column and no step in the response: [`NoSteps`].
 pub fn signals(file: &LoadedFile, named_input: Option<&str>) -> Result<Signals, NoSteps> {
     let rec = &file.record;
     let output_name = file.outputs.first().cloned().unwrap_or_default();

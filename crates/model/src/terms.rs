@@ -1,7 +1,8 @@
-//! The extended model as data ([`Extended`]: its core and its terms, [`TermSpec`]): every parameter of each effect's
-//! parameter struct in `propid_diagnose::effects`, so that the model the file holds simulates
-//! exactly as the one `diagnose` fitted. [`to_specs`] reads a fitted model's terms,
-//! [`TermSpec::to_term`] rebuilds one; [`model`] the whole `propid_diagnose::model::Model`.
+//! The extended model as data ([`Extended`]: its core and its terms, [`TermSpec`]): every
+//! parameter of each effect's parameter struct in `propid_diagnose::effects`, so that the model
+//! the file holds simulates exactly as the one `diagnose` fitted. [`to_specs`] reads a fitted
+//! model's terms, [`TermSpec::to_term`] rebuilds one; [`model`] the whole
+//! `propid_diagnose::model::Model`.
 
 use propid_diagnose::effects::asymmetric_dynamics::AsymmetricDynamicsParams;
 use propid_diagnose::effects::baseline_drift::BaselineDriftParams;
