@@ -8,19 +8,15 @@ use propid_report::diagnose as report;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use super::columns_read::ColumnsRead;
-use super::identify::load::STAND_CHANNELS;
-use super::load::{self as shared, steps_from_response, LoadedFile, Origin, Request, NO_INPUT};
+use super::load::{self as shared, Request};
 use super::read::ReadArgs;
 #[cfg(test)]
 use super::read::ReadFlags;
 use super::{CliError, UsageError};
+use propid_diagnose::file::{json, signals, Signals, DEFAULT_OUTPUT, OPTIONAL};
 use propid_diagnose::noise::FloorSource;
-use propid_diagnose::stand::StandInput;
 use propid_diagnose::verdict::VerdictKind;
 use propid_diagnose::{self as diagnose, DiagnoseError, Diagnosis};
-use propid_numerics::stand_model::fit::Channel as StandChannel;
-use propid_wire::record::names;
 
 /// Arguments of `propid diagnose`.
 #[derive(Debug, clap::Args)]
@@ -46,130 +42,6 @@ pub struct Args {
     /// Write the final model to this file (docs/model_file.md).
     #[arg(long)]
     pub save: Option<PathBuf>,
-}
-
-/// The signals of FILE that diagnose works on.
-#[derive(Debug, Clone)]
-pub struct Signals {
-    /// Sample period, s.
-    pub dt_s: f64,
-    /// Input (throttle, the chosen column, or the levels of the steps found).
-    pub u: Vec<f64>,
-    /// Output, NaN where missing.
-    pub y: Vec<f64>,
-    /// The output's samples interpolated between its readings (empty: every sample a reading;
-    /// [`propid_wire::record::Channel::interpolated`]).
-    pub interpolated: Vec<bool>,
-    /// Supply voltage, if the file has it.
-    pub voltage: Option<Vec<f64>>,
-    /// What the input is.
-    pub input_name: String,
-    /// What the output is.
-    pub output_name: String,
-    /// Whether the input is a stand's command ([`LoadedFile::input_is_a_command`]) read from
-    /// the file (not steps found from the response).
-    pub input_is_a_command: bool,
-    /// The stand's channels the file has (`rpm`, `thrust`, `torque`, `current`: key, samples
-    /// with NaN where missing, the samples interpolated between readings), for the stand
-    /// baseline; empty without a command.
-    pub stand: Vec<(&'static str, Vec<f64>, Vec<bool>)>,
-    /// The key of the output among `stand` (`None`: the output is none of them).
-    pub stand_output: Option<&'static str>,
-    /// What the file's columns were read as ([`FileSource`]).
-    pub file: FileSource,
-}
-
-/// What `diagnose --json` adds to its `source` about the file, with the names `identify`
-/// publishes: the findings' parameters are in the canonical units these say (a thrust column in
-/// gram-force gives a sinusoid's amplitude and a drift's rate in newtons).
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct FileSource {
-    /// `"csv"` or `"tsp1"`.
-    pub format: &'static str,
-    /// The input column as named in the file, or `"steps found from the response"`.
-    pub input: String,
-    /// The output column as named in the file.
-    pub output: String,
-    /// CSV files: the columns' units and factors and the command's scale.
-    #[serde(flatten)]
-    pub read: ColumnsRead,
-    /// Sample rate used, Hz.
-    pub rate_hz: f64,
-}
-
-impl FileSource {
-    /// Of a loaded file.
-    fn of(file: &LoadedFile, input: &str, output: &str) -> FileSource {
-        let rate_hz = 1.0 / file.record.dt_s;
-        match &file.origin {
-            Origin::Tsp1(_) => FileSource {
-                format: "tsp1",
-                input: input.to_string(),
-                output: output.to_string(),
-                rate_hz,
-                ..FileSource::default()
-            },
-            Origin::Csv(src) => FileSource {
-                format: "csv",
-                input: src.input.clone().unwrap_or_else(|| input.to_string()),
-                output: src
-                    .outputs
-                    .first()
-                    .cloned()
-                    .unwrap_or_else(|| output.into()),
-                read: ColumnsRead::of(Some(src)),
-                rate_hz: src.rate_hz,
-            },
-        }
-    }
-}
-
-/// The diagnosis as `--json` prints it: [`Diagnosis`] with the file's [`FileSource`] fields
-/// added to its `source`.
-pub fn json(d: &Diagnosis, file: &FileSource) -> Result<serde_json::Value, serde_json::Error> {
-    let mut v = serde_json::to_value(d)?;
-    if let (Some(source), serde_json::Value::Object(extra)) = (
-        v.get_mut("source").and_then(|s| s.as_object_mut()),
-        serde_json::to_value(file)?,
-    ) {
-        source.extend(extra);
-    }
-    Ok(v)
-}
-
-impl Signals {
-    /// [`diagnose::diagnose`] of these signals (with what the input is:
-    /// [`diagnose::Options::input_is_a_command`]).
-    pub fn diagnose(&self, opts: &diagnose::Options) -> Result<Diagnosis, DiagnoseError> {
-        let opts = diagnose::Options {
-            input_is_a_command: self.input_is_a_command,
-            ..*opts
-        };
-        let stand = StandInput {
-            channels: self
-                .stand
-                .iter()
-                .filter_map(|(key, y, flags)| {
-                    Some(StandChannel {
-                        key,
-                        quantity: diagnose::stand::quantity(key)?,
-                        y,
-                        interpolated: flags,
-                    })
-                })
-                .collect(),
-            output: self.stand_output,
-        };
-        diagnose::diagnose_with(
-            self.dt_s,
-            &self.u,
-            &self.y,
-            &self.interpolated,
-            self.voltage.as_deref(),
-            (!stand.channels.is_empty()).then_some(&stand),
-            &opts,
-        )
-    }
 }
 
 /// Runs `propid diagnose`.
@@ -457,142 +329,33 @@ fn summary(args: &Args, s: &Signals, d: &Diagnosis) -> String {
 }
 
 /// Reads FILE with the loader `propid identify` uses ([`crate::cli::load`]; the output
-/// defaults to thrust, the supply voltage is read when the file has it), then makes the
-/// [`Signals`] diagnose works on ([`signals`]). An input named with `--input` that is not a
-/// command keeps that name (a shaker's `force_N` is read as the record's force channel,
-/// `thrust_N`, but is no thrust).
+/// defaults to thrust, the supply voltage and the stand's channels are read when the file has
+/// them), then makes the [`Signals`] diagnose works on ([`signals`]).
 pub fn load(args: &Args) -> Result<Signals, CliError> {
     let read = &args.read;
     if read.output.len() > 1 {
         return Err(UsageError::OneOutput.into());
     }
-    let outputs = [read.output.first().cloned().unwrap_or(names::THRUST.into())];
+    let outputs = [read
+        .output
+        .first()
+        .cloned()
+        .unwrap_or(DEFAULT_OUTPUT.into())];
     let req = Request {
         outputs: &outputs,
-        ..read.request(&[
-            names::VOLTAGE,
-            STAND_CHANNELS[0].1,
-            STAND_CHANNELS[1].1,
-            STAND_CHANNELS[2].1,
-            STAND_CHANNELS[3].1,
-        ])
+        ..read.request(&OPTIONAL)
     };
-    let mut s = signals(&shared::load(&read.file, &req)?)?;
-    if let Some(name) = read.input.as_ref().filter(|n| n.as_str() != NO_INPUT) {
-        if s.input_name != names::THROTTLE {
-            s.input_name = name.clone();
-        }
-    }
-    Ok(s)
-}
-
-/// The reading options of `args` (no outputs, no optional channels).
-/// Diagnose's step after the shared load: the output NaN at every sample marked missing; the
-/// input (without an input column: the level sequence of the steps found in the response) and
-/// the voltage held across gaps ([`fill_gaps`]); the voltage dropped when it has no finite
-/// sample.
-fn signals(file: &LoadedFile) -> Result<Signals, CliError> {
-    let rec = &file.record;
-    let output_name = file.outputs.first().cloned().unwrap_or_default();
-    let mut y = file.data(&output_name);
-    mark_missing(&mut y, &rec.missing);
-    let interpolated = rec
-        .channel(&output_name)
-        .map(|c| c.interpolated.clone())
-        .unwrap_or_default();
-    let voltage = file
-        .optional
-        .iter()
-        .find(|n| n.as_str() == names::VOLTAGE)
-        .map(|n| fill_gaps(file.data(n)))
-        .filter(|v| v.iter().all(|x| x.is_finite()));
-    // The stand's channels, when the input is a command read from the file.
-    let commanded = file.input.is_some() && file.input_is_a_command();
-    let stand: Vec<(&'static str, Vec<f64>, Vec<bool>)> = STAND_CHANNELS
-        .iter()
-        .filter(|_| commanded)
-        .filter_map(|&(key, channel, _)| {
-            let c = rec.channel(channel)?;
-            let mut y = c.data.clone();
-            mark_missing(&mut y, &rec.missing);
-            Some((key, y, c.interpolated.clone()))
-        })
-        .collect();
-    let stand_output = STAND_CHANNELS
-        .iter()
-        .find(|c| c.1 == output_name && stand.iter().any(|s| s.0 == c.0))
-        .map(|c| c.0);
-    let (u, input_name) = match &file.input {
-        Some(n) => (file.data(n), n.clone()),
-        None => {
-            let f = steps_from_response(&y).map_err(|cause| CliError::NoInput {
-                file: file.name.clone(),
-                cause,
-                hint: "give --input NAME",
-            })?;
-            (f.input, "steps found from the response".to_string())
-        }
-    };
-    Ok(Signals {
-        dt_s: rec.dt_s,
-        u: fill_gaps(u),
-        y,
-        interpolated,
-        voltage,
-        file: FileSource::of(file, &input_name, &output_name),
-        input_name,
-        output_name,
-        input_is_a_command: file.input_is_a_command(),
-        stand,
-        stand_output,
+    let file = shared::load(&read.file, &req)?;
+    signals(&file, read.input.as_deref()).map_err(|cause| CliError::NoInput {
+        file: file.name.clone(),
+        cause,
+        hint: "give --input NAME",
     })
-}
-
-/// NaN at every sample marked missing.
-pub(crate) fn mark_missing(y: &mut [f64], missing: &[bool]) {
-    for (v, m) in y.iter_mut().zip(missing) {
-        if *m {
-            *v = f64::NAN;
-        }
-    }
-}
-
-/// Holds the last finite value across gaps (leading gaps take the first finite value).
-pub(crate) fn fill_gaps(mut x: Vec<f64>) -> Vec<f64> {
-    let first = x
-        .iter()
-        .copied()
-        .find(|v| v.is_finite())
-        .unwrap_or(f64::NAN);
-    let mut last = first;
-    for v in x.iter_mut() {
-        if v.is_finite() {
-            last = *v;
-        } else {
-            *v = last;
-        }
-    }
-    x
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn gaps_are_held_from_the_last_finite_value_and_leading_gaps_from_the_first() {
-        let x = fill_gaps(vec![f64::NAN, 2.0, f64::NAN, f64::INFINITY, 5.0, f64::NAN]);
-        assert_eq!(x, [2.0, 2.0, 2.0, 2.0, 5.0, 5.0]);
-        assert!(fill_gaps(vec![f64::NAN; 3]).iter().all(|v| v.is_nan()));
-    }
-
-    #[test]
-    fn samples_marked_missing_become_nan_and_others_stay() {
-        let mut y = vec![1.0, 2.0, 3.0];
-        mark_missing(&mut y, &[false, true, false]);
-        assert_eq!((y[0], y[2]), (1.0, 3.0));
-        assert!(y[1].is_nan());
-    }
 
     #[test]
     fn a_response_without_steps_and_without_input_is_an_identification_error() {

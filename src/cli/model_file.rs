@@ -13,6 +13,7 @@ use serde_json::{json, Value};
 use super::load::{self as shared, LoadedFile, Request};
 use super::read::ReadFlags;
 use super::CliError;
+use propid_ingest::gaps::{fill_gaps, mark_missing};
 use propid_model::file::{Channel, Linear, OperatingPoint, Provenance, Supply};
 use propid_model::params::{self, Options, Record, Target};
 use propid_model::simulate::{free_run, scores, Which};
@@ -168,19 +169,19 @@ fn read_data(
     let Some(input) = &f.input else {
         return Err(lacking(format!("no input column ({})", m.input.column)));
     };
-    let u = super::diagnose::fill_gaps(f.data(input));
+    let u = fill_gaps(f.data(input));
     let y = f
         .outputs
         .iter()
         .map(|n| {
             let mut y = f.data(n);
-            super::diagnose::mark_missing(&mut y, &f.record.missing);
+            mark_missing(&mut y, &f.record.missing);
             y
         })
         .collect();
     let voltage = match (m.needs_voltage(), f.optional.first()) {
         (false, _) => None,
-        (true, Some(n)) => Some(super::diagnose::fill_gaps(f.data(n))),
+        (true, Some(n)) => Some(fill_gaps(f.data(n))),
         (true, None) => {
             return Err(lacking(
                 "no supply voltage, which the model's supply_sag term reads".into(),

@@ -2,14 +2,11 @@
 
 mod demo_cli;
 mod diagnose_cli;
-mod diagnose_hidden_sag;
-mod diagnose_injected;
 mod diagnose_input_lead;
 mod diagnose_model_keys;
 mod diagnose_outliers;
 mod diagnose_rejected;
 mod diagnose_sim;
-mod diagnose_units;
 mod host_faults_cli;
 mod identify_cli;
 mod identify_dialects;

@@ -29,6 +29,8 @@ pub mod effect;
 pub mod effects;
 pub mod era_start;
 pub mod error;
+pub mod file;
+pub mod finding;
 pub mod fit;
 pub mod folds;
 pub mod lead;
@@ -52,14 +54,14 @@ use serde_json::Value;
 
 use ctx::Ctx;
 pub use error::DiagnoseError;
+pub use finding::Finding;
 use propid_numerics::outliers::isolated_outliers_of_readings;
 use propid_numerics::quality::judge_sample_period;
 use propid_numerics::segment::SegmentRules;
 use propid_numerics::startup::start_transient;
 use propid_wire::record::{names, Record};
 pub use result::{
-    Diagnosis, Extended, Finding, FoldFit, Gain, InputLead, Source, Split, Stage, Traces,
-    Validation,
+    Diagnosis, Extended, FoldFit, Gain, InputLead, Source, Split, Stage, Traces, Validation,
 };
 use signals::{Core, Signals};
 pub use summary::ModelSummary;

@@ -3,8 +3,8 @@
 
 use propid_numerics::EffectName;
 use serde::Serialize;
-use serde_json::{Map, Value};
 
+use super::finding::Finding;
 use super::summary::ModelSummary;
 
 /// A model with its validation fit.
@@ -35,30 +35,6 @@ pub struct Extended {
     pub model: ModelSummary,
     /// The held-out figure (as the baseline's), percent.
     pub fit_percent: f64,
-}
-
-/// One named effect.
-#[derive(Debug, Clone, Serialize)]
-pub struct Finding {
-    /// Effect name (one of [`super::effects::REGISTRY`]).
-    pub effect: EffectName,
-    /// Test statistic `n ln(SSE_before / SSE_after)` (larger is stronger evidence).
-    pub score: f64,
-    /// Held-out gain of this addition: the held-out figure ([`Validation`]) of the model with
-    /// it minus that of the model before it, percentage points (> 0 for every effect added by
-    /// the search; an effect read straight from the data reports its gain, whatever its sign).
-    pub cv_gain_pp: f64,
-    /// The evidence in words.
-    pub evidence: String,
-    /// The effect's parameter estimates (`delay_s`, `exponent`, `fn_hz`, ...): an effect the
-    /// search added reports its values in the final model, where every parameter is fitted
-    /// jointly ([`super::search`]).
-    #[serde(flatten)]
-    pub params: Map<String, Value>,
-    /// The evidence's sentence on how much the estimation residual fell when the effect was
-    /// added (part of `evidence`; kept to rewrite the evidence with the final values).
-    #[serde(skip)]
-    pub drop: String,
 }
 
 /// What the extension gained on the validation samples.

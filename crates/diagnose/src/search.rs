@@ -9,13 +9,13 @@ use super::baseline::baseline;
 use super::ctx::Ctx;
 use super::effect::Effect;
 use super::effects::REGISTRY;
+use super::finding::Finding;
 use super::fit::Fit;
 use super::folds::{cross_validate, Folds, HeldOutGain, Method, Scores};
 use super::lead;
 use super::model::Model;
 use super::pair::{joint_evidence, select_pair};
 use super::rejected::{Ledger, Rejected};
-use super::result::Finding;
 use super::revise::{assess, revise, Change, Kept};
 use super::signals::Core;
 

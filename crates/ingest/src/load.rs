@@ -25,6 +25,14 @@ use propid_wire::protocol::csv::encoding::{decode, wide, Encoding};
 use propid_wire::protocol::detect::{detect, is_csv_stream, Detection, WireFormat};
 use propid_wire::record::{names, Record};
 
+/// The channels of a stand's static map: its key, the record's channel and its unit.
+pub const STAND_CHANNELS: [(&str, &str, &str); 4] = [
+    ("thrust", names::THRUST, "N"),
+    ("torque", names::TORQUE, "N·m"),
+    ("rpm", names::RPM, "rev/min"),
+    ("current", names::CURRENT, "A"),
+];
+
 /// Why a readable file could not be read as asked (exit 3); every message starts with the file.
 #[derive(Debug, thiserror::Error)]
 pub enum LoadError {

@@ -15,38 +15,8 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::terms::TermSpec;
-
-/// The schema this version writes and reads.
-pub const SCHEMA: &str = "propid-model/1";
-
-/// Why a model file is refused.
-#[derive(Debug, thiserror::Error)]
-pub enum ModelError {
-    /// Not a JSON object.
-    #[error("not a propid model file: {0}")]
-    NotJson(String),
-    /// Another schema, or none.
-    #[error("schema {found:?}: this propid reads {SCHEMA:?} model files only")]
-    Schema {
-        /// The `schema` found (`"none"` without one).
-        found: String,
-    },
-    /// The checksum does not match the content.
-    #[error(
-        "the checksum does not match the content (stored {stored}, computed {computed}): the \
-         file was changed after propid wrote it"
-    )]
-    Tampered {
-        /// The stored checksum.
-        stored: String,
-        /// The checksum of the content.
-        computed: String,
-    },
-    /// The content does not hold together (a matrix of the wrong size, no model at all).
-    #[error("invalid model: {0}")]
-    Invalid(String),
-}
+use crate::schema::{ModelError, SCHEMA};
+use crate::terms::{Extended, TermSpec};
 
 /// An input or output channel of the model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -98,35 +68,6 @@ pub struct OperatingPoint {
     pub input: f64,
     /// `y₀`, one per output, output units.
     pub outputs: Vec<f64>,
-}
-
-/// `diagnose`'s model: its 2nd-order core and the terms of the effects found (none: the
-/// baseline), enough to simulate it exactly (`propid_diagnose::model`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Extended {
-    /// The core `T'' + 2ζωn T' + ωn² T = ωn² K v` and the output offset.
-    pub core: CoreSpec,
-    /// The terms, in the catalogue's order.
-    pub terms: Vec<TermSpec>,
-    /// The reference throttle of the static map `u_r`.
-    pub u_ref: f64,
-    /// The reference voltage of the supply term `V_r`, V (0 without a voltage).
-    pub v_ref: f64,
-}
-
-/// The core of [`Extended`] (`propid_diagnose::signals::Core`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct CoreSpec {
-    /// Natural frequency, Hz.
-    pub fn_hz: f64,
-    /// Damping ratio.
-    pub zeta: f64,
-    /// Static gain `K`, output units per input unit.
-    pub gain: f64,
-    /// Output offset, output units.
-    pub offset: f64,
-    /// The input's lead, a share of a sample (0..1).
-    pub lead: f64,
 }
 
 /// The supply voltage the record logged, V.

@@ -1,6 +1,6 @@
 //! propid's model file (issue 30) without I/O: a model that outlives the command that made it.
 //!
-//! - [`file`]: the versioned schema ([`file::SCHEMA`]), writing and reading its JSON text with
+//! - [`file`]: the versioned schema ([`schema::SCHEMA`]), writing and reading its JSON text with
 //!   an integrity check over the canonical content, and the checks a loaded model passes.
 //! - [`terms`]: the extended model's terms as data, to and from `propid-diagnose`'s terms.
 //! - [`simulate`]: free-run simulation of a loaded model on an input, the initial state
@@ -12,7 +12,9 @@
 
 pub mod file;
 pub mod params;
+pub mod schema;
 pub mod simulate;
 pub mod terms;
 
-pub use file::{ModelError, ModelFile, SCHEMA};
+pub use file::ModelFile;
+pub use schema::{ModelError, SCHEMA};

@@ -28,7 +28,9 @@ use propid_diagnose::signals::Signals;
 use propid_numerics::discretise::discretise_second_order;
 use serde::Serialize;
 
-use crate::file::{Extended, Linear, ModelError, ModelFile};
+use crate::file::{Linear, ModelFile};
+use crate::schema::ModelError;
+use crate::terms::Extended;
 
 /// Which of a file's models to run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -293,7 +295,7 @@ mod tests {
 
     #[test]
     fn the_extended_model_simulates_as_diagnose_does() {
-        use crate::file::CoreSpec;
+        use crate::terms::CoreSpec;
         use crate::terms::TermSpec;
         let e = Extended {
             core: CoreSpec {

@@ -1,7 +1,8 @@
-//! The extended model's terms as data ([`TermSpec`]): every parameter of each effect's
-//! parameter struct in `propid_diagnose::effects`, so that the model the file holds simulates
-//! exactly as the one `diagnose` fitted. [`to_specs`] reads a fitted model's terms,
-//! [`TermSpec::to_term`] rebuilds one; [`model`] the whole `propid_diagnose::model::Model`.
+//! The extended model as data ([`Extended`]: its core and its terms, [`TermSpec`]): every
+//! parameter of each effect's parameter struct in `propid_diagnose::effects`, so that the model
+//! the file holds simulates exactly as the one `diagnose` fitted. [`to_specs`] reads a fitted
+//! model's terms, [`TermSpec::to_term`] rebuilds one; [`model`] the whole
+//! `propid_diagnose::model::Model`.
 
 use propid_diagnose::effects::asymmetric_dynamics::AsymmetricDynamicsParams;
 use propid_diagnose::effects::baseline_drift::BaselineDriftParams;
@@ -17,7 +18,36 @@ use propid_diagnose::signals::Core;
 use propid_diagnose::term::{AsAny, Term};
 use serde::{Deserialize, Serialize};
 
-use crate::file::{CoreSpec, Extended, ModelError};
+use crate::schema::ModelError;
+
+/// `diagnose`'s model: its 2nd-order core and the terms of the effects found (none: the
+/// baseline), enough to simulate it exactly (`propid_diagnose::model`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Extended {
+    /// The core `T'' + 2ζωn T' + ωn² T = ωn² K v` and the output offset.
+    pub core: CoreSpec,
+    /// The terms, in the catalogue's order.
+    pub terms: Vec<TermSpec>,
+    /// The reference throttle of the static map `u_r`.
+    pub u_ref: f64,
+    /// The reference voltage of the supply term `V_r`, V (0 without a voltage).
+    pub v_ref: f64,
+}
+
+/// The core of [`Extended`] (`propid_diagnose::signals::Core`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CoreSpec {
+    /// Natural frequency, Hz.
+    pub fn_hz: f64,
+    /// Damping ratio.
+    pub zeta: f64,
+    /// Static gain `K`, output units per input unit.
+    pub gain: f64,
+    /// Output offset, output units.
+    pub offset: f64,
+    /// The input's lead, a share of a sample (0..1).
+    pub lead: f64,
+}
 
 /// One term, tagged by its effect's published name (`"effect": "dead_time"`); the fields are
 /// the parameter struct's (names and units in docs/model_file.md).

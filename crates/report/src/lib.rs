@@ -5,9 +5,10 @@
 //! - [`identify`]: identify's view of a file, the stand's physics, its JSON and summary.
 //! - [`diagnose`]: the Markdown page and SVG plots of `diagnose --report`.
 //! - [`plot`]: SVG figures both reports draw (the stabilization diagram).
-//! - [`columns_read`]: what a CSV file's columns were read as (both commands' `source`).
+//! - [`columns_read`] (`propid_ingest`'s): what a CSV file's columns were read as (both
+//!   commands' `source`).
 
-pub mod columns_read;
+pub use propid_ingest::columns_read;
 pub mod diagnose;
 pub mod identify;
 pub mod kinds;

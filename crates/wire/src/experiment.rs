@@ -52,11 +52,12 @@ mod limits;
 mod plan;
 pub mod program;
 mod recover;
+mod stand_check;
 mod verify;
 
 pub use config::{Commanded, ExperimentConfig, ExperimentConfigError, Kind};
 pub use limits::{LimitGuard, LimitTrip, Limits, LimitsError, JUDGE_SAMPLES};
 pub use plan::{Experiment, Notice, Output, Phase};
-pub use verify::{
+pub use stand_check::{
     MIN_SAMPLES_TO_JUDGE, PULSES_UNSEEN_LIMIT, THROTTLE_MISMATCH_MS, THROTTLE_TOLERANCE,
 };

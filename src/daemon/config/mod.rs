@@ -11,6 +11,7 @@
 //! are the values written there.
 
 pub mod mqtt;
+mod range;
 mod raw;
 
 pub use raw::{RawConfig, RawCsv, RawDaemon, RawDevice, RawIdentify, RawPublish};
@@ -200,7 +201,7 @@ pub fn record_max_bytes(key: &'static str, v: u64) -> Result<Option<u64>, Config
     if v == 0 {
         return Ok(None);
     }
-    raw::int_in(
+    range::int_in(
         key,
         v,
         RECORD_MAX_BYTES_MIN,

@@ -281,7 +281,7 @@ impl RawMqtt {
                 "set with publish.mqtt_password_file",
             ));
         }
-        let keep_alive_s = super::raw::int_in(
+        let keep_alive_s = super::range::int_in(
             "publish.mqtt_keep_alive_s",
             self.keep_alive_s.unwrap_or(10),
             5,
@@ -297,7 +297,7 @@ impl RawMqtt {
             password_file: self.password_file.map(PathBuf::from),
             samples: self.samples.unwrap_or(false),
             keep_alive: Duration::from_secs(keep_alive_s),
-            queue_messages: super::raw::int_in(
+            queue_messages: super::range::int_in(
                 "publish.mqtt_queue_messages",
                 self.queue_messages.unwrap_or(4_096),
                 16,

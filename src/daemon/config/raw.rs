@@ -7,6 +7,7 @@ use serde::Deserialize;
 use std::path::PathBuf;
 use std::time::Duration;
 
+use super::range::{float_in, int_in};
 use super::{
     Config, ConfigError, CsvConfig, DaemonConfig, DeviceConfig, IdentifyConfig, PublishConfig,
     WireProtocol,
@@ -145,47 +146,6 @@ pub struct RawConfig {
     /// `[limits]`: the safety limits (`propid_wire::experiment::Limits`, its keys its own).
     #[serde(default)]
     pub limits: propid_wire::experiment::Limits,
-}
-
-/// Checks an integer range; names the key and the value on failure.
-pub(super) fn int_in<T>(
-    key: &'static str,
-    v: T,
-    lo: T,
-    hi: T,
-    expected: &'static str,
-) -> Result<T, ConfigError>
-where
-    T: PartialOrd + std::fmt::Display + Copy,
-{
-    if lo <= v && v <= hi {
-        Ok(v)
-    } else {
-        Err(ConfigError::OutOfRange {
-            key,
-            value: v.to_string(),
-            expected,
-        })
-    }
-}
-
-/// Checks a float range positively (`finite && lo <= x <= hi`), so NaN is refused.
-fn float_in(
-    key: &'static str,
-    v: f64,
-    lo: f64,
-    hi: f64,
-    expected: &'static str,
-) -> Result<f64, ConfigError> {
-    if v.is_finite() && lo <= v && v <= hi {
-        Ok(v)
-    } else {
-        Err(ConfigError::OutOfRange {
-            key,
-            value: v.to_string(),
-            expected,
-        })
-    }
 }
 
 /// An empty string means "not set".

@@ -43,9 +43,9 @@ use propid_numerics::EffectName;
 use serde::Serialize;
 use serde_json::{Map, Value};
 
+use crate::finding::Finding;
 use crate::folds::{fit_percent_about, Folds, Gate, HeldOutGain, Method, FOLD_ITERS};
 use crate::rejected::Rejected;
-use crate::result::Finding;
 use crate::spectrum::peaks;
 use crate::thresholds;
 use catalogue::Candidate;

@@ -120,13 +120,7 @@ pub struct StepOut {
 /// the column's own, `?`).
 pub const OUTPUT_KEY: &str = "output";
 
-/// The channels of a stand's static map: its key, the record's channel and its unit.
-pub const STAND_CHANNELS: [(&str, &str, &str); 4] = [
-    ("thrust", names::THRUST, "N"),
-    ("torque", names::TORQUE, "N·m"),
-    ("rpm", names::RPM, "rev/min"),
-    ("current", names::CURRENT, "A"),
-];
+pub use propid_ingest::load::STAND_CHANNELS;
 
 /// The channels read when the file has them: the static map's, and the supply voltage.
 pub const OPTIONAL: [&str; 5] = [

@@ -4,6 +4,10 @@
 
 use serde::Deserialize;
 
+/// Highest `chirp_f1_hz`: five command points per period at the chirp's 10 ms command step
+/// (the program's `CHIRP_STEP_MS`).
+pub const CHIRP_MAX_HZ: f64 = 20.0;
+
 /// What the plan does at the stand (`[experiment] kind`); `docs/experiment-kinds.md`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -109,7 +113,7 @@ pub struct ExperimentConfig {
     pub ramp_rate_per_s: f64,
     /// `chirp`: start frequency, Hz, 0.01..=50.
     pub chirp_f0_hz: f64,
-    /// `chirp`: end frequency, Hz, above `chirp_f0_hz`, at most [`super::program::CHIRP_MAX_HZ`].
+    /// `chirp`: end frequency, Hz, above `chirp_f0_hz`, at most [`CHIRP_MAX_HZ`].
     pub chirp_f1_hz: f64,
     /// `chirp`: amplitude about the level, throttle fraction, 0.001..=0.5.
     pub chirp_amplitude: f64,
@@ -210,12 +214,7 @@ impl ExperimentConfig {
         check_i("hold_ms", self.hold_ms as u64, 100, 600_000)?;
         check_f("ramp_rate_per_s".into(), self.ramp_rate_per_s, 0.001, 1.0)?;
         check_f("chirp_f0_hz".into(), self.chirp_f0_hz, 0.01, 50.0)?;
-        check_f(
-            "chirp_f1_hz".into(),
-            self.chirp_f1_hz,
-            0.01,
-            super::program::CHIRP_MAX_HZ,
-        )?;
+        check_f("chirp_f1_hz".into(), self.chirp_f1_hz, 0.01, CHIRP_MAX_HZ)?;
         if self.chirp_f1_hz <= self.chirp_f0_hz {
             return Err(refuse("chirp_f1_hz", self.chirp_f1_hz, "above chirp_f0_hz"));
         }

@@ -8,12 +8,12 @@
 //!   number. Values are SI: a TSP/1 SAMPLE carries newtons, and a CSV bench's columns are
 //!   converted from their units (`Thrust (gf)`, `thrust_lbf`, …) by the wire's CSV decoder
 //!   before a SAMPLE is made of them, so a limit in N holds whatever unit the bench writes. One
-//!   sample over a limit is a breach: the plan ([`Experiment::set_limits`]) is over at once
-//!   ([`Notice::LimitTripped`], a STOP sent; the daemon exits 8) and never re-arms, whatever
+//!   sample over a limit is a breach: the plan ([`Experiment::set_limits`](super::Experiment::set_limits), `verify.rs`) is over at once
+//!   ([`Notice::LimitTripped`](super::Notice::LimitTripped), a STOP sent; the daemon exits 8) and never re-arms, whatever
 //!   `rearm_on_reset` says.
 //! - **Unchecked** ([`LimitGuard`]): a limit on a quantity the stand never reports cannot hold.
 //!   After the first [`JUDGE_SAMPLES`] samples each such limit is named once
-//!   ([`Notice::LimitUnchecked`]); it is still checked should the quantity appear later.
+//!   ([`Notice::LimitUnchecked`](super::Notice::LimitUnchecked)); it is still checked should the quantity appear later.
 //!   `max_temperature_c` is always named: neither a TSP/1 SAMPLE nor a CSV row carries a
 //!   temperature.
 //! - **The plan** ([`Limits::refuse_plan`]): every throttle the plan commands
@@ -23,9 +23,8 @@
 use serde::Deserialize;
 
 use super::config::ExperimentConfig;
-use super::plan::{Experiment, Notice, Phase};
-use super::verify::THROTTLE_TOLERANCE;
-use crate::protocol::{Message, Sample, SampleFlags};
+use super::stand_check::THROTTLE_TOLERANCE;
+use crate::protocol::{Sample, SampleFlags};
 
 /// `[limits]`: every key optional (absent = no limit). Units are in the names.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
@@ -85,7 +84,7 @@ pub struct LimitTrip {
 }
 
 /// Samples after which a limit on a quantity none of them carried is named
-/// ([`Notice::LimitUnchecked`]): 50 ms at 1 kHz, one second at 50 Hz.
+/// ([`Notice::LimitUnchecked`](super::Notice::LimitUnchecked)): 50 ms at 1 kHz, one second at 50 Hz.
 pub const JUDGE_SAMPLES: u32 = 50;
 
 /// A measured limit: key, limit, the SAMPLE flag of its quantity, a most (else a least), the
@@ -297,43 +296,6 @@ impl LimitGuard {
             }
         }
         self.limits.breach(s)
-    }
-}
-
-impl Experiment {
-    /// Holds the stand to `limits` (validated by the caller, [`Limits::validate`]) from now on;
-    /// refuses a plan that commands more than `max_throttle` ([`Limits::refuse_plan`]).
-    pub fn set_limits(&mut self, limits: Limits) -> Result<(), LimitsError> {
-        limits.validate()?;
-        limits.refuse_plan(&self.cfg)?;
-        self.limits = LimitGuard::new(limits);
-        Ok(())
-    }
-
-    /// A SAMPLE against the limits (before anything else is made of it): a breach while the
-    /// plan runs, or waits to re-arm, ends it for good with a STOP.
-    pub(super) fn check_limits(&mut self, s: &Sample, now_us: u64) {
-        let mut unchecked = Vec::new();
-        let trip = self
-            .limits
-            .sample(s, &mut |which, why| unchecked.push((which, why)));
-        for (which, why) in unchecked {
-            self.notice(Notice::LimitUnchecked { which, why });
-        }
-        let running = !matches!(
-            self.phase,
-            Phase::Idle | Phase::Done | Phase::Stopping | Phase::Halted
-        );
-        let Some(t) = trip.filter(|_| running || self.rearm_pending) else {
-            return;
-        };
-        // `halt` clears `rearm_pending`: nothing re-arms a plan a limit ended
-        self.halt(Notice::LimitTripped {
-            which: t.which,
-            value: t.value,
-            limit: t.limit,
-        });
-        self.send(Message::Stop, now_us);
     }
 }
 

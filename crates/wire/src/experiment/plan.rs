@@ -242,7 +242,7 @@ pub struct Experiment {
     /// BUSY answers to the IMPULSE being fired, and when it was first sent.
     pub(super) busy: Option<(u32, u64)>,
     /// The device's samples checked against the commands (`verify.rs`).
-    pub(super) check: super::verify::StandCheck,
+    pub(super) check: super::stand_check::StandCheck,
     /// The safety limits (`limits.rs`).
     pub(super) limits: super::limits::LimitGuard,
     /// The set-point program (kinds other than pulses) and its end, ms from its start.

@@ -21,8 +21,6 @@ use super::config::{ExperimentConfig, Kind};
 
 /// The chirp's command period, ms: the device ramps between consecutive points.
 pub const CHIRP_STEP_MS: u64 = 10;
-/// Highest `chirp_f1_hz`: five command points per period at [`CHIRP_STEP_MS`].
-pub const CHIRP_MAX_HZ: f64 = 20.0;
 /// Longest device ramp of one ramp piece, ms (SET_THROTTLE's `ramp_ms` is 16-bit).
 pub const MAX_RAMP_PIECE_MS: u64 = 60_000;
 

@@ -23,57 +23,18 @@
 //! - **Sample rate** ([`Notice::RateMismatch`], [`Experiment::sample_rate_disagrees`]): the
 //!   caller measures the rate (the wire crate's `SampleAssembler`, the one clock rule) and says
 //!   when it disagrees with the HELLO's, from which the plan sizes its pulses.
+//! - **Safety limits** ([`Experiment::set_limits`]): every sample held to `[limits]`
+//!   (`limits.rs`); a breach ends the plan for good.
 //!
 //! The BUSY bound (an IMPULSE answered BUSY is tried again 20 ms later, at most `max_retries`
 //! times and for one `pulse_spacing_ms`) lives with the ACK handling in `plan.rs`.
 
+use super::limits::{LimitGuard, Limits, LimitsError};
 use super::plan::{Experiment, Notice, Phase};
+use super::stand_check::{
+    MIN_SAMPLES_TO_JUDGE, PULSES_UNSEEN_LIMIT, THROTTLE_MISMATCH_MS, THROTTLE_TOLERANCE,
+};
 use crate::protocol::{Message, Sample, SampleFlags};
-
-/// How far (throttle fraction) the applied throttle may lie outside the commanded envelope:
-/// the device's quantisation and an ESC's rounding, far below any pulse amplitude the plan uses
-/// (0.001..0.5; the defaults 0.05, 0.1).
-pub const THROTTLE_TOLERANCE: f64 = 0.02;
-
-/// How long (host clock, ms) the applied throttle may stay outside the envelope: a sample or
-/// two read late around a command's boundary, a ramp's last step, never a runaway motor for
-/// long.
-pub const THROTTLE_MISMATCH_MS: u64 = 200;
-
-/// Acknowledged pulses in a row without a sign in the samples before the stand is said not to
-/// execute them.
-pub const PULSES_UNSEEN_LIMIT: u32 = 3;
-
-/// Samples that must have arrived since a pulse before its spacing's end judges it (a stand
-/// sampled too slowly for the spacing says nothing either way).
-pub const MIN_SAMPLES_TO_JUDGE: u32 = 2;
-
-/// What the samples have shown of the commands so far.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct StandCheck {
-    /// Since when (host µs) the applied throttle is outside the envelope.
-    off_since: Option<u64>,
-    /// A sample showed the current operating point (off pulse, within the tolerance).
-    level_seen: bool,
-    /// A sign of the last pulse fired arrived (IMPULSE_ACTIVE, EVENT IMPULSE_START).
-    pub(super) pulse_shown: bool,
-    /// Samples since the last pulse fired.
-    samples_since_pulse: u32,
-    /// Pulses in a row that showed no sign.
-    unseen_pulses: u32,
-}
-
-impl StandCheck {
-    /// A new operating point is commanded.
-    pub(super) fn new_level(&mut self) {
-        *self = StandCheck::default();
-    }
-
-    /// A pulse was fired (acknowledged, or its EVENT IMPULSE_START came).
-    pub(super) fn pulse_fired(&mut self) {
-        self.samples_since_pulse = 0;
-    }
-}
 
 impl Experiment {
     /// The throttle range (fractions) the plan may have the motor at now, if it commands one.
@@ -245,6 +206,43 @@ impl Experiment {
         if armed {
             self.send(Message::Stop, now_us);
         }
+    }
+}
+
+impl Experiment {
+    /// Holds the stand to `limits` (validated by the caller, [`Limits::validate`]) from now on;
+    /// refuses a plan that commands more than `max_throttle` ([`Limits::refuse_plan`]).
+    pub fn set_limits(&mut self, limits: Limits) -> Result<(), LimitsError> {
+        limits.validate()?;
+        limits.refuse_plan(&self.cfg)?;
+        self.limits = LimitGuard::new(limits);
+        Ok(())
+    }
+
+    /// A SAMPLE against the limits (before anything else is made of it): a breach while the
+    /// plan runs, or waits to re-arm, ends it for good with a STOP.
+    pub(super) fn check_limits(&mut self, s: &Sample, now_us: u64) {
+        let mut unchecked = Vec::new();
+        let trip = self
+            .limits
+            .sample(s, &mut |which, why| unchecked.push((which, why)));
+        for (which, why) in unchecked {
+            self.notice(Notice::LimitUnchecked { which, why });
+        }
+        let running = !matches!(
+            self.phase,
+            Phase::Idle | Phase::Done | Phase::Stopping | Phase::Halted
+        );
+        let Some(t) = trip.filter(|_| running || self.rearm_pending) else {
+            return;
+        };
+        // `halt` clears `rearm_pending`: nothing re-arms a plan a limit ended
+        self.halt(Notice::LimitTripped {
+            which: t.which,
+            value: t.value,
+            limit: t.limit,
+        });
+        self.send(Message::Stop, now_us);
     }
 }
 

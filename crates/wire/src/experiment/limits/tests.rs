@@ -1,10 +1,10 @@
 //! The limits: each one per sample, what counts as a measurement, the unchecked ones named once,
 //! the plan refused by its keys, and the plan ended for good by a breach.
 
-use super::super::{ExperimentConfig, Output};
+use super::super::{Experiment, ExperimentConfig, Notice, Output, Phase};
 use super::*;
 use crate::protocol::message::throttle_level;
-use crate::protocol::{Ack, AckResult, EscProtocol, Frame, Hello};
+use crate::protocol::{Ack, AckResult, EscProtocol, Frame, Hello, Message};
 
 /// A sample at throttle `u` with every measured channel valid: 2 A, 3 N, 5000 rpm, 12 V.
 fn sample(u: f64) -> Sample {

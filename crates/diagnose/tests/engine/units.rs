@@ -1,4 +1,4 @@
-//! `diagnose --json` on a stand export in its own units: the findings are in canonical units
+//! `diagnose --json` (in memory, [`super::read`]) on a stand export in its own units: the findings are in canonical units
 //! (newtons for a thrust logged in gram-force), and `source` says which column was read in
 //! which unit with what factor, and the command's scale, with `identify`'s names (`units`,
 //! `input_range`, `input_range_from`), so that a reader can convert a finding back to the
@@ -8,7 +8,7 @@
 
 use propid_sim::plant::{Plant, PlantConfig};
 
-use super::support::propid;
+use super::read::{diagnose_json as json_of, How};
 
 const DT_S: f64 = 0.005;
 const LEVELS: [f64; 5] = [0.3, 0.45, 0.6, 0.75, 0.5];
@@ -64,12 +64,7 @@ fn export(hidden: Hidden) -> String {
 
 /// `diagnose --json` of the export `text`.
 fn diagnose_json(text: &str) -> serde_json::Value {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("export.csv");
-    std::fs::write(&path, text).unwrap();
-    let (code, out, err) = propid(&["diagnose", "--json", path.to_str().unwrap()]);
-    assert_eq!(code, 0, "{err}");
-    serde_json::from_str(&out).unwrap()
+    json_of("export.csv", text.as_bytes(), How::default())
 }
 
 /// `dead_time`'s `delay_samples` in `diagnose --json` of `text`, if named.

@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 
 use serde::Serialize;
 
-use propid_ingest::csv_file::command_range::RAW_SIGNAL;
-use propid_ingest::csv_file::{ColumnUnit, CsvSource};
+use crate::csv_file::command_range::RAW_SIGNAL;
+use crate::csv_file::{ColumnUnit, CsvSource};
 
 /// The reading of a CSV file's columns (all `None` for a TSP/1 recording).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]

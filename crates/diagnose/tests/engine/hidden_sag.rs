@@ -13,7 +13,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use serde_json::Value;
 
-use crate::support::propid;
+use super::read::{diagnose_json, How};
 
 const G0: f64 = 9.80665;
 
@@ -51,12 +51,7 @@ fn export(scale: impl Fn(f64, f64) -> f64) -> String {
 }
 
 fn diagnose(text: &str) -> Value {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("stand.csv");
-    std::fs::write(&path, text).unwrap();
-    let (code, out, err) = propid(&["diagnose", path.to_str().unwrap(), "--json"]);
-    assert_eq!(code, 0, "{err}");
-    serde_json::from_str(&out).unwrap()
+    diagnose_json("stand.csv", text.as_bytes(), How::default())
 }
 
 fn effects(v: &Value) -> Vec<String> {

@@ -1,5 +1,6 @@
 //! Effects hidden in measured data (issue 11, item 6): a real log of the repository gets one effect of known, seeded random parameters
-//! ([`propid_testkit::inject`]), is written as a CSV file and read by `propid diagnose --json`,
+//! ([`propid_testkit::inject`]), is written as a CSV text and read as `propid diagnose --json`
+//! reads it ([`super::read`]),
 //! which must name the effect with its parameter within the injector's stated tolerance, on top
 //! of what the clean log already shows. Two draws per log here; `scripts/injection_table.sh`
 //! runs many (README's table), including the dead time, which these logs do not all give back
@@ -11,9 +12,8 @@
 use propid_numerics::EffectName;
 use std::path::{Path, PathBuf};
 
-use crate::identify_real_data::shared;
-use crate::support::propid;
-use propid::cli::load::{load, Request};
+use super::read::{diagnose_json, How};
+use propid_ingest::load::{load_bytes, Request};
 use propid_testkit::inject::{
     inject, judge, tolerance, Injection, Log, Samples, REPO_LOGS, SHARED_LOGS,
 };
@@ -22,28 +22,49 @@ use rand::rngs::StdRng;
 use rand::SeedableRng;
 use serde_json::Value;
 
-/// `diagnose --json` of `s`, written as `file`.
-fn diagnose(file: &Path, s: &Samples) -> Value {
-    std::fs::write(file, s.to_csv()).unwrap();
-    let f = file.to_str().unwrap();
-    let (code, out, err) = propid(&["diagnose", "--json", "--input", "u", "--output", "y", f]);
-    assert_eq!(code, 0, "{err}");
-    serde_json::from_str(&out).expect("one JSON object")
+/// `diagnose --json` of `s` written as a CSV text.
+fn diagnose(s: &Samples) -> Value {
+    let how = How {
+        input: Some("u"),
+        output: Some("y"),
+        ..How::default()
+    };
+    diagnose_json("injected.csv", s.to_csv().as_bytes(), how)
 }
 
-/// `diagnose --json` findings of `s`, written as `file`.
-fn findings(file: &Path, s: &Samples) -> Vec<Value> {
-    diagnose(file, s)["findings"]
+/// `diagnose --json` findings of `s`.
+fn findings(s: &Samples) -> Vec<Value> {
+    diagnose(s)["findings"]
         .as_array()
         .cloned()
         .unwrap_or_default()
 }
 
+/// The shared dataset folder, or `None` (with a visible message) when it is absent.
+fn shared(folder: &str) -> Option<PathBuf> {
+    let root = std::env::var_os("PROPID_SHARED_DATA")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo().join("../shared/data"));
+    let dir = root.join(folder);
+    if dir.is_dir() {
+        Some(dir)
+    } else {
+        eprintln!(
+            "skipped: {} is absent (shared dataset {folder}; set PROPID_SHARED_DATA)",
+            dir.display()
+        );
+        None
+    }
+}
+
+/// The repository's root.
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
 /// The repository logs named `wanted`, and the shared ones when their folder is present.
 fn logs(wanted: &[&str]) -> Vec<(PathBuf, Log)> {
-    let repo = REPO_LOGS
-        .iter()
-        .map(|l| (Path::new(env!("CARGO_MANIFEST_DIR")).join(l.path), *l));
+    let repo = REPO_LOGS.iter().map(|l| (repo().join(l.path), *l));
     let shared = SHARED_LOGS.iter().filter_map(|l| {
         let (folder, file) = l.path.split_once('/')?;
         Some((shared(folder)?.join(file), *l))
@@ -64,7 +85,8 @@ fn samples(path: &Path, log: &Log) -> Samples {
         fs_hz: log.fs_hz,
         ..Request::default()
     };
-    let loaded = load(path, &req).unwrap();
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let loaded = load_bytes(path.display().to_string(), &bytes, &req).unwrap();
     Samples::from_record(
         &loaded.record,
         loaded.input.as_deref().unwrap(),
@@ -83,11 +105,9 @@ fn hidden_effect_is_found(effect: EffectName, wanted: &[&str], draws: u64) {
 /// [`hidden_effect_is_found`]; with `on_top` the clean log may already name the effect (a
 /// stand's own delay), and the injected one is judged on top of it ([`judge`]).
 fn hidden_effect_is_found_on_top(effect: EffectName, wanted: &[&str], draws: u64, on_top: bool) {
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("injected.csv");
     for (path, log) in logs(wanted) {
         let s = samples(&path, &log);
-        let clean = findings(&file, &s);
+        let clean = findings(&s);
         assert!(
             on_top || clean.iter().all(|f| f["effect"] != effect.as_str()),
             "{}: the clean log already names {effect}: {clean:?}",
@@ -96,7 +116,7 @@ fn hidden_effect_is_found_on_top(effect: EffectName, wanted: &[&str], draws: u64
         for k in 0..draws {
             // The same seeds as the first draws of scripts/injection_table.sh.
             let inj = Injection::draw(effect, &s, &mut StdRng::seed_from_u64(1000 + k)).unwrap();
-            let got = findings(&file, &inject(&s, &inj));
+            let got = findings(&inject(&s, &inj));
             let o = judge(&inj, &clean, &got);
             assert!(
                 o.within(&inj),
@@ -144,8 +164,6 @@ fn a_drift_hidden_in_real_logs_is_found_with_its_rate() {
 /// for the clean log and for every injected one; on the other logs it says neither.
 #[test]
 fn a_drift_or_a_delay_in_a_one_way_ramp_is_said_unidentifiable() {
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("injected.csv");
     let warned = |v: &Value, kind: &str| {
         v["warnings"]
             .as_array()
@@ -158,7 +176,7 @@ fn a_drift_or_a_delay_in_a_one_way_ramp_is_said_unidentifiable() {
     for (path, log) in logs(&["dantonio ramp", "silverbox", "robot_arm", "cascaded_tanks"]) {
         let s = samples(&path, &log);
         let one_way = log.name == "dantonio ramp";
-        let clean = diagnose(&file, &s);
+        let clean = diagnose(&s);
         for (_, kind) in kinds {
             assert_eq!(warned(&clean, kind), one_way, "{} {kind}", log.name);
         }
@@ -167,7 +185,7 @@ fn a_drift_or_a_delay_in_a_one_way_ramp_is_said_unidentifiable() {
                 for k in 0..2 {
                     let mut rng = StdRng::seed_from_u64(1000 + k);
                     let inj = Injection::draw(effect, &s, &mut rng).unwrap();
-                    assert!(warned(&diagnose(&file, &inject(&s, &inj)), kind), "{inj:?}");
+                    assert!(warned(&diagnose(&inject(&s, &inj)), kind), "{inj:?}");
                 }
             }
         }
@@ -204,11 +222,9 @@ fn a_supply_sag_hidden_in_a_motor_stand_log_is_found_with_its_gain() {
 /// on the final model it is found on the output, within 2 % (docs/injection.md: 20 draws).
 #[test]
 fn a_supply_gain_on_a_nonlinear_springs_output_is_found_there() {
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("injected.csv");
     for (path, log) in logs(&["silverbox"]) {
         let s = samples(&path, &log);
-        let clean = findings(&file, &s);
+        let clean = findings(&s);
         for k in 0..2 {
             let inj = Injection::draw(
                 EffectName::SupplySag,
@@ -216,7 +232,7 @@ fn a_supply_gain_on_a_nonlinear_springs_output_is_found_there() {
                 &mut StdRng::seed_from_u64(1000 + k),
             )
             .unwrap();
-            let got = findings(&file, &inject(&s, &inj));
+            let got = findings(&inject(&s, &inj));
             let o = judge(&inj, &clean, &got);
             assert!(o.error.is_some_and(|e| e.abs() < 0.02), "{inj:?} → {o:?}");
             let sag = got.iter().find(|f| f["effect"] == "supply_sag").unwrap();
@@ -234,11 +250,9 @@ fn a_supply_gain_on_a_nonlinear_springs_output_is_found_there() {
 /// `extra_mode::MAX_SHARE`).
 #[test]
 fn a_delay_hidden_behind_a_slow_load_cell_is_found_on_top_of_its_own() {
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("injected.csv");
     for (path, log) in logs(&["bitcraze cf21"]) {
         let s = samples(&path, &log);
-        let clean = findings(&file, &s);
+        let clean = findings(&s);
         let own = clean
             .iter()
             .find(|f| f["effect"] == "dead_time")
@@ -254,7 +268,7 @@ fn a_delay_hidden_behind_a_slow_load_cell_is_found_on_top_of_its_own() {
                 &mut StdRng::seed_from_u64(1000 + k),
             )
             .unwrap();
-            let got = findings(&file, &inject(&s, &inj));
+            let got = findings(&inject(&s, &inj));
             let o = judge(&inj, &clean, &got);
             assert!(o.within(&inj), "{inj:?} → {o:?}; findings {got:?}");
             let inverse = got
