@@ -74,7 +74,8 @@ median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (
 timed() { # binary, args...
     local b="$1"
     shift
-    /usr/bin/time -f "%U %S %e" -o "$dir/time.txt" "$b" diagnose "$@" --json >"$dir/out.json" 2>/dev/null || true
+    /usr/bin/time -f "%U %S %e" -o "$dir/time.txt" "$b" diagnose "$@" --json >"$dir/out.json" 2>"$dir/err.txt" ||
+        { echo "failed: $b diagnose $*: $(tail -1 "$dir/err.txt")" >&2 && exit 1; }
     awk '{printf "%.2f %.2f\n", $1 + $2, $3}' "$dir/time.txt"
 }
 
@@ -86,7 +87,7 @@ for c in $cases; do
         [ -f "$data/silverbox/SNLS80mV.csv" ] || continue
         { echo "V1,V2"; tail -n +40702 "$data/silverbox/SNLS80mV.csv" | head -n 65000 | cut -d, -f1,2; } >"$dir/sb.csv"
         args=("$dir/sb.csv" --input V1 --output V2 --fs 610.35) ;;
-    stair*) staircase "${c#stair}" "$dir/$c.csv" && args=("$dir/$c.csv") ;;
+    stair*k) n="${c#stair}" && staircase "${n%k}000" "$dir/$c.csv" && args=("$dir/$c.csv") ;;
     cf21)
         [ -f "$data/bitcraze-cf21-pwm-steps/cf21_stock2.csv" ] || continue
         args=(--fs 100 "$data/bitcraze-cf21-pwm-steps/cf21_stock2.csv") ;;
