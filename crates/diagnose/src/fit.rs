@@ -29,9 +29,15 @@ pub struct Fit {
     pub n: usize,
 }
 
+/// The samples a fit on `range` simulates: the simulation is causal (each sample of the output
+/// depends on the input up to it, [`simulate`]), so those up to the range's end.
+fn sim_len(sig: &Signals, range: &Range<usize>) -> usize {
+    range.end.min(sig.u.len())
+}
+
 /// Sum of squared simulation errors of `p` over `range` (missing outputs skipped).
 pub fn sse(m: &Model, sig: &Signals, range: Range<usize>, buf: &mut Vec<f64>) -> (f64, usize) {
-    buf.resize(sig.u.len(), 0.0);
+    buf.resize(sim_len(sig, &range), 0.0);
     simulate(m, sig, buf);
     let mut s = 0.0;
     let mut n = 0;
@@ -60,7 +66,7 @@ pub fn linear_refit(m: &Model, sig: &Signals, range: Range<usize>) -> (Model, f6
         let zeros = vec![0.0; t.linear_count()];
         t.set_linear(&zeros);
     }
-    let mut s1 = vec![0.0; sig.u.len()];
+    let mut s1 = vec![0.0; sim_len(sig, &range)];
     simulate_places(&unit, sig, &mut s1, false);
     let cols = 2 + m.terms().map(|t| t.linear_count()).sum::<usize>();
     let mut ata = DMatrix::<f64>::zeros(cols, cols);
@@ -140,12 +146,103 @@ fn from_z(base: &Model, scales: &[Scale], z: &[f64]) -> Model {
 
 /// Residuals `y − ŷ` over the finite estimation samples.
 fn residuals(m: &Model, sig: &Signals, range: &Range<usize>, buf: &mut Vec<f64>, r: &mut Vec<f64>) {
-    buf.resize(sig.u.len(), 0.0);
+    buf.resize(sim_len(sig, range), 0.0);
     simulate(m, sig, buf);
+    residuals_of(sig, buf, range, r);
+}
+
+/// `JᵀJ` and `Jᵀr` of the Jacobian's columns `cols` and `r`: each entry summed over the
+/// samples in their order (the sums of column dot products, bit for bit), four entries in one
+/// pass so that their sums run side by side.
+fn normal_equations(cols: &[Vec<f64>], r: &[f64]) -> (DMatrix<f64>, DVector<f64>) {
+    let m = cols.len();
+    let mut pairs: Vec<(usize, usize)> = Vec::with_capacity(m * (m + 3) / 2);
+    for a in 0..m {
+        pairs.push((a, m));
+        pairs.extend((a..m).map(|b| (a, b)));
+    }
+    let col = |j: usize| if j == m { r } else { &cols[j][..] };
+    let n = r.len();
+    let mut sums = Vec::with_capacity(pairs.len());
+    let mut quads = pairs.chunks_exact(4);
+    for q in &mut quads {
+        let (a0, b0) = (&col(q[0].0)[..n], &col(q[0].1)[..n]);
+        let (a1, b1) = (&col(q[1].0)[..n], &col(q[1].1)[..n]);
+        let (a2, b2) = (&col(q[2].0)[..n], &col(q[2].1)[..n]);
+        let (a3, b3) = (&col(q[3].0)[..n], &col(q[3].1)[..n]);
+        let mut s = [-0.0f64; 4];
+        for k in 0..n {
+            s[0] += a0[k] * b0[k];
+            s[1] += a1[k] * b1[k];
+            s[2] += a2[k] * b2[k];
+            s[3] += a3[k] * b3[k];
+        }
+        sums.extend(s);
+    }
+    for &(a, b) in quads.remainder() {
+        sums.push(col(a).iter().zip(col(b)).map(|(x, y)| x * y).sum());
+    }
+    let mut jtj = DMatrix::<f64>::zeros(m, m);
+    let mut jtr = DVector::<f64>::zeros(m);
+    for (&(a, b), v) in pairs.iter().zip(sums) {
+        if b == m {
+            jtr[a] = v;
+        } else {
+            jtj[(a, b)] = v;
+            jtj[(b, a)] = v;
+        }
+    }
+    (jtj, jtr)
+}
+
+/// The simulations of `p0` and of each forward-difference step of its free parameters on the
+/// whole record: the first Jacobian of every [`levenberg_marquardt_from`] that starts at `p0`
+/// on the same input whatever outputs it masks (the folds' refits), computed once.
+#[derive(Debug, Clone)]
+pub struct FirstJacobian {
+    /// `ŷ(θ₀)`.
+    base: Vec<f64>,
+    /// `ŷ(θ₀ + h_j e_j)` for each free parameter `j`.
+    stepped: Vec<Vec<f64>>,
+}
+
+impl FirstJacobian {
+    /// The simulations of `p0` on `sig`'s input (see the type's doc).
+    pub fn of(p0: &Model, sig: &Signals) -> FirstJacobian {
+        let free = p0.free();
+        let scales: Vec<Scale> = free.iter().map(|f| f.1).collect();
+        let z = to_z(&free);
+        let n = sig.u.len();
+        let mut base = vec![0.0; n];
+        simulate(p0, sig, &mut base);
+        let params: Vec<usize> = (0..z.len()).collect();
+        // Each step's simulation is independent of the others': on every core.
+        let stepped = crate::par::map(&params, |&j| {
+            let mut zj = z.clone();
+            zj[j] += step(&z, &scales, j);
+            let mut s = vec![0.0; n];
+            simulate(&from_z(p0, &scales, &zj), sig, &mut s);
+            s
+        });
+        FirstJacobian { base, stepped }
+    }
+}
+
+/// The forward-difference step of parameter `j` at `z`.
+fn step(z: &[f64], scales: &[Scale], j: usize) -> f64 {
+    let floor = match scales[j] {
+        Scale::Log => 1.0,
+        Scale::Linear => 1e-3,
+    };
+    1e-6 * z[j].abs().max(floor)
+}
+
+/// `y − sim` over the finite outputs of `range`, into `r`.
+fn residuals_of(sig: &Signals, sim: &[f64], range: &Range<usize>, r: &mut Vec<f64>) {
     r.clear();
     for k in range.clone() {
         if sig.y[k].is_finite() {
-            r.push(sig.y[k] - buf[k]);
+            r.push(sig.y[k] - sim[k]);
         }
     }
 }
@@ -153,6 +250,18 @@ fn residuals(m: &Model, sig: &Signals, range: &Range<usize>, buf: &mut Vec<f64>,
 /// Levenberg–Marquardt on the free parameters of `p0` (see module doc); at most `max_iter`
 /// accepted or rejected steps. Never returns a worse fit than `p0`.
 pub fn levenberg_marquardt(p0: &Model, sig: &Signals, range: Range<usize>, max_iter: usize) -> Fit {
+    levenberg_marquardt_from(p0, sig, range, max_iter, None)
+}
+
+/// [`levenberg_marquardt`] with the simulations at `p0` given (`first`, made by
+/// [`FirstJacobian::of`] for `p0` on `sig`'s input): the same fit, without simulating them.
+pub fn levenberg_marquardt_from(
+    p0: &Model,
+    sig: &Signals,
+    range: Range<usize>,
+    max_iter: usize,
+    first: Option<&FirstJacobian>,
+) -> Fit {
     let free = p0.free();
     let scales: Vec<Scale> = free.iter().map(|f| f.1).collect();
     let m = free.len();
@@ -160,7 +269,10 @@ pub fn levenberg_marquardt(p0: &Model, sig: &Signals, range: Range<usize>, max_i
     let mut r = Vec::new();
     let mut z = to_z(&free);
     let mut p = p0.clone();
-    residuals(&p, sig, &range, &mut buf, &mut r);
+    match first {
+        Some(s) => residuals_of(sig, &s.base, &range, &mut r),
+        None => residuals(&p, sig, &range, &mut buf, &mut r),
+    }
     let n = r.len();
     let mut cost: f64 = r.iter().map(|e| e * e).sum();
     if !cost.is_finite() {
@@ -169,33 +281,26 @@ pub fn levenberg_marquardt(p0: &Model, sig: &Signals, range: Range<usize>, max_i
     let mut lambda = 1e-3;
     let mut cols: Vec<Vec<f64>> = vec![Vec::new(); m];
     let mut rj = Vec::new();
-    for _ in 0..max_iter {
-        if !cost.is_finite() || n == 0 {
+    let mut zj = z.clone();
+    for iter in 0..max_iter {
+        if !cost.is_finite() || n == 0 || m == 0 {
             break;
         }
         // Forward-difference Jacobian of the residuals.
         for j in 0..m {
-            let floor = match scales[j] {
-                Scale::Log => 1.0,
-                Scale::Linear => 1e-3,
-            };
-            let h = 1e-6 * z[j].abs().max(floor);
-            let mut zj = z.clone();
-            zj[j] += h;
-            residuals(&from_z(p0, &scales, &zj), sig, &range, &mut buf, &mut rj);
+            let h = step(&z, &scales, j);
+            match first.filter(|_| iter == 0) {
+                Some(s) => residuals_of(sig, &s.stepped[j], &range, &mut rj),
+                None => {
+                    zj.copy_from_slice(&z);
+                    zj[j] += h;
+                    residuals(&from_z(p0, &scales, &zj), sig, &range, &mut buf, &mut rj);
+                }
+            }
             cols[j].clear();
             cols[j].extend(rj.iter().zip(&r).map(|(a, b)| (b - a) / h));
         }
-        let mut jtj = DMatrix::<f64>::zeros(m, m);
-        let mut jtr = DVector::<f64>::zeros(m);
-        for a in 0..m {
-            jtr[a] = cols[a].iter().zip(&r).map(|(x, y)| x * y).sum();
-            for b in a..m {
-                let v: f64 = cols[a].iter().zip(&cols[b]).map(|(x, y)| x * y).sum();
-                jtj[(a, b)] = v;
-                jtj[(b, a)] = v;
-            }
-        }
+        let (jtj, jtr) = normal_equations(&cols, &r);
         let mut improved = false;
         for _ in 0..8 {
             let mut lhs = jtj.clone();
@@ -257,9 +362,11 @@ impl Ctx<'_> {
             .filter(|(s, _)| s.is_finite())
             .collect();
         scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+        scored.truncate(keep.max(1));
+        // The starts' fits are independent of one another: on every core.
+        let fits = crate::par::map(&scored, |(_, p)| self.lm(p, 40));
         let mut best: Option<Fit> = None;
-        for (_, p) in scored.into_iter().take(keep.max(1)) {
-            let f = self.lm(&p, 40);
+        for f in fits {
             if best.as_ref().map_or(true, |b| f.sse < b.sse) {
                 best = Some(f);
             }

@@ -9,7 +9,7 @@ use propid_numerics::segment::{levels, Command, SegmentRules};
 use serde::Serialize;
 
 use super::ctx::Ctx;
-use super::fit::{levenberg_marquardt, Fit};
+use super::fit::{levenberg_marquardt_from, FirstJacobian, Fit};
 use super::model::simulate;
 use super::signals::Signals;
 use crate::thresholds::{gain_t, MIN_CV_GAIN_PP};
@@ -162,19 +162,21 @@ pub fn cross_validate(ctx: &Ctx, folds: &Folds, f: &Fit) -> Scores {
         .filter(|&k| ctx.sig.y[k].is_finite());
     let (s, c) = held.fold((0.0, 0usize), |(s, c), k| (s + ctx.sig.y[k], c + 1));
     let mean_y = s / c.max(1) as f64;
-    for fold in &folds.folds {
-        let model = match folds.method {
-            Method::Holdout => f.model.clone(),
-            Method::BlockedCv => {
-                let mut y = ctx.sig.y.to_vec();
-                for v in &mut y[fold.clone()] {
-                    *v = f64::NAN;
-                }
-                let sig = Signals { y: &y, ..ctx.sig };
-                let refit = levenberg_marquardt(&f.model, &sig, 0..n, FOLD_ITERS);
-                refit.model
+    // Every fold's refit starts at `f`: its first Jacobian is simulated once for all.
+    let first = (folds.method == Method::BlockedCv).then(|| FirstJacobian::of(&f.model, &ctx.sig));
+    // Each fold's refit is independent of the others': on every core.
+    let models = crate::par::map(&folds.folds, |fold| match folds.method {
+        Method::Holdout => f.model.clone(),
+        Method::BlockedCv => {
+            let mut y = ctx.sig.y.to_vec();
+            for v in &mut y[fold.clone()] {
+                *v = f64::NAN;
             }
-        };
+            let sig = Signals { y: &y, ..ctx.sig };
+            levenberg_marquardt_from(&f.model, &sig, 0..n, FOLD_ITERS, first.as_ref()).model
+        }
+    });
+    for (fold, model) in folds.folds.iter().zip(models) {
         simulate(&model, &ctx.sig, &mut sim);
         prediction[fold.clone()].copy_from_slice(&sim[fold.clone()]);
         let (fit, s, c) = fit_percent_about(ctx.sig.y, &sim, fold.clone(), mean_y);

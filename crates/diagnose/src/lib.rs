@@ -38,6 +38,7 @@ pub mod linear_part;
 pub mod model;
 pub mod noise;
 pub mod pair;
+pub mod par;
 pub mod rejected;
 pub mod result;
 pub mod revise;

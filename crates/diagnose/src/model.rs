@@ -160,7 +160,10 @@ pub fn max_freq_hz(dt_s: f64) -> f64 {
     0.49 / dt_s
 }
 
-/// Simulates the model on the whole record into `out` (same length as `sig.u`).
+/// Simulates the model on the whole record into `out` (same length as `sig.u`; a shorter `out`
+/// gets the first `out.len()` samples of the simulation on the whole record: every term is
+/// causal, an output sample depending on the input up to it, and the fits on a head of the
+/// record simulate only that head).
 pub fn simulate(m: &Model, sig: &Signals, out: &mut [f64]) {
     simulate_places(m, sig, out, true);
 }
@@ -180,7 +183,10 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
         1.0,
         sig.dt_s,
     );
-    let mut v = sig.u[..n].to_vec();
+    // The shaped input is built in `out` and the core's output written over it, each sample
+    // read before it is overwritten.
+    out.copy_from_slice(&sig.u[..n]);
+    let v = out;
     let lag = m.terms().map(|t| t.voltage_delay()).max().unwrap_or(0);
     let late: Option<Vec<f64>> = sig.voltage.filter(|_| lag > 0).map(|volt| {
         (0..volt.len())
@@ -193,7 +199,7 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
     };
     for place in Place::ALL.into_iter().filter(|p| p.is_input()) {
         for t in m.at(place) {
-            t.shape_input(&mut v, &input_sig);
+            t.shape_input(v, &input_sig);
         }
     }
     for x in v.iter_mut() {
@@ -205,14 +211,14 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
     }
     // With a lead α, the sample interval [t_k, t_k+1) holds v_k for (1 − α)·dt, then v_k+1.
     let lead = m.core.lead.clamp(0.0, 1.0);
-    let next = |k: usize| v[(k + 1).min(n - 1)];
     let (fn_hz, zeta) = (
         m.core.fn_hz.clamp(1e-6, fmax),
         m.core.zeta.clamp(1e-4, 50.0),
     );
     if law.is_linear() && lead == 0.0 {
         let mut x = Vector2::new(v[0], 0.0);
-        for (o, &vk) in out.iter_mut().zip(&v) {
+        for o in v.iter_mut() {
+            let vk = *o;
             *o = x[0];
             x = a * x + b * vk;
         }
@@ -220,9 +226,10 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
         let (a1, b1) = discretise_second_order(fn_hz, zeta, 1.0, (1.0 - lead) * sig.dt_s);
         let (a2, b2) = discretise_second_order(fn_hz, zeta, 1.0, lead * sig.dt_s);
         let mut x = Vector2::new(v[0], 0.0);
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = x[0];
-            x = a2 * (a1 * x + b1 * v[k]) + b2 * next(k);
+        for k in 0..n {
+            let (vk, vnext) = (v[k], v[(k + 1).min(n - 1)]);
+            v[k] = x[0];
+            x = a2 * (a1 * x + b1 * vk) + b2 * vnext;
         }
     } else {
         // A part of no length has no core (a zero step would not discretise).
@@ -235,16 +242,18 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
         if let Some(c) = first.as_ref().or(second.as_ref()) {
             x = c.settle(v[0]);
         }
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = x[0];
+        for k in 0..n {
+            let (vk, vnext) = (v[k], v[(k + 1).min(n - 1)]);
+            v[k] = x[0];
             if let Some(c) = &first {
-                x = c.step(x, v[k]);
+                x = c.step(x, vk);
             }
             if let Some(c) = &second {
-                x = c.step(x, next(k));
+                x = c.step(x, vnext);
             }
         }
     }
+    let out = v;
     for t in m.at(Place::Series) {
         t.filter(out, sig.dt_s);
     }

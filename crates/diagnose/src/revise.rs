@@ -209,18 +209,21 @@ pub fn revise(
             continue;
         }
         let k_x = param_count(&cur.model, x_name);
-        for &y in REGISTRY {
+        let open: Vec<&'static dyn Effect> = REGISTRY
+            .iter()
+            .copied()
+            .filter(|y| cur.model.term(y.name()).is_none())
+            .collect();
+        // Each replacement's fit and tests are independent of the others': on every core.
+        let tried = crate::par::map(&open, |&y| {
             let y_name = y.name();
-            if cur.model.term(y_name).is_some() {
-                continue;
-            }
-            let Some(f) = y.extend(ctx, &r) else {
-                continue;
-            };
-            let Some(score) = passes(ctx, &r, &f, y_name) else {
-                continue;
-            };
-            match refit_into(ctx, *x, &f) {
+            let f = y.extend(ctx, &r)?;
+            let score = passes(ctx, &r, &f, y_name)?;
+            let into = refit_into(ctx, *x, &f);
+            Some((y_name, f, score, into))
+        });
+        for (y_name, f, score, into) in tried.into_iter().flatten() {
+            match into {
                 None => {
                     let k_y = param_count(&f.model, y_name);
                     if k_y < k_x || (k_y == k_x && f.sse < cur.sse) {

@@ -256,14 +256,19 @@ fn forward(
     room: usize,
 ) -> Option<Step> {
     let mut candidates: Vec<(f64, (&'static dyn Effect, Fit))> = Vec::new();
-    for &e in REGISTRY {
-        if findings.iter().any(|f| f.effect == e.name()) {
-            continue;
-        }
-        let Some(f) = e.extend(ctx, cur) else {
-            continue;
-        };
-        match assess(ctx, cur, &f, e.name()) {
+    let open: Vec<&'static dyn Effect> = REGISTRY
+        .iter()
+        .copied()
+        .filter(|e| findings.iter().all(|f| f.effect != e.name()))
+        .collect();
+    // Each candidate's fit and tests are independent of the others': on every core.
+    let fitted = crate::par::map(&open, |&e| {
+        let f = e.extend(ctx, cur)?;
+        let assessed = assess(ctx, cur, &f, e.name());
+        Some((e, f, assessed))
+    });
+    for (e, f, assessed) in fitted.into_iter().flatten() {
+        match assessed {
             Ok(score) => candidates.push((score, (e, f))),
             Err(r) if r.fits() => ledger.note(Rejected {
                 effect: e.name(),

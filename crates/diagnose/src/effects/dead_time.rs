@@ -233,10 +233,10 @@ impl Effect for DeadTime {
         // (`crate::lead`): the shortest delay tried is then 2.
         let first = if cur.model.core.lead >= 1.0 { 2 } else { 1 };
         let step = coarse_step(cur.model.core.fn_hz, ctx.sig.dt_s).max(dmax / 32);
-        let mut coarse: Vec<(usize, f64)> = (first..=dmax.max(first))
-            .step_by(step)
-            .map(|d| (d, fit_d(d, 8).sse))
-            .collect();
+        // The delays' fits are independent of one another: on the cores left idle.
+        let grid: Vec<usize> = (first..=dmax.max(first)).step_by(step).collect();
+        let sse = crate::par::map(&grid, |&d| fit_d(d, 8).sse);
+        let mut coarse: Vec<(usize, f64)> = grid.into_iter().zip(sse).collect();
         coarse.sort_by(|a, b| a.1.total_cmp(&b.1));
         let mut fine: Vec<usize> = coarse
             .iter()
@@ -246,8 +246,7 @@ impl Effect for DeadTime {
         fine.sort_unstable();
         fine.dedup();
         let mut best: Option<Fit> = None;
-        for d in fine {
-            let f = fit_d(d, 30);
+        for f in crate::par::map(&fine, |&d| fit_d(d, 30)) {
             if best.as_ref().map_or(true, |b| f.sse < b.sse) {
                 best = Some(f);
             }
@@ -370,10 +369,15 @@ impl Term for DeadTimeParams {
     }
 
     fn shape_input(&self, v: &mut [f64], _sig: &Signals) {
-        let d = self.delay_samples;
-        for k in (1..v.len()).rev() {
-            v[k] = v[k.saturating_sub(d)];
+        // v_k = v_{max(k − d, 0)}.
+        let (d, n) = (self.delay_samples, v.len());
+        if d == 0 || n == 0 {
+            return;
         }
+        let d = d.min(n);
+        v.copy_within(0..n - d, d);
+        let first = v[0];
+        v[1..d].fill(first);
     }
 
     fn terms(&self, dt_s: f64, terms: &mut Map<String, Value>) {
