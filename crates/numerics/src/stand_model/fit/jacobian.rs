@@ -27,6 +27,9 @@ use crate::stand_model::sensitivity::{
 };
 use crate::stand_model::{delayed_at, lag, speed_power};
 
+/// A base's derivatives: (parameter's index in the layout, the derivative at every row).
+type Derivatives = Vec<(usize, Vec<f64>)>;
+
 /// The search's residuals and Jacobian ([`Problem::jacobian`]).
 pub(super) struct Search<'a>(pub &'a Problem);
 
@@ -101,7 +104,7 @@ impl Problem {
         let mut row0 = 0;
         for (c, ch) in self.channels.iter().enumerate() {
             // The channel's bases at every row and, per parameter, their derivatives.
-            let mut bases: Vec<(Vec<f64>, Vec<(usize, Vec<f64>)>)> = Vec::new();
+            let mut bases: Vec<(Vec<f64>, Derivatives)> = Vec::new();
             let through = |x: Vec<f64>| match (ch.quantity, v.mode) {
                 (Quantity::Thrust | Quantity::Torque, Some((f, zeta))) => {
                     super::resonance(&x, self.dt, f, zeta)
