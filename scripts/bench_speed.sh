@@ -2,9 +2,10 @@
 # Issue 31's measurements, two builds paired in one run: `identify` of a 4 000- and a
 # 100 000-sample pulse record, `identify` of a one-hour 1 kHz TSP/1 recording, `replay` of it,
 # and (DAY=1) `replay` of a day-long one. Whole process each, wall time and peak memory
-# ("Maximum resident set size") from /usr/bin/time -v; the two binaries run in turn (A B A B
-# ...), RUNS times each; prints per case the median of each and the median of the pairwise
-# ratios A/B. Not run by CI; the numbers are in docs/speed.md.
+# ("Maximum resident set size") and CPU time (user + system) from /usr/bin/time -v; the two
+# binaries run in turn (A B A B ...), RUNS times each; prints per case the median of each and
+# the median of the pairwise CPU ratios A/B (on a loaded machine the wall times say little).
+# Not run by CI; the numbers are in docs/speed.md.
 #
 #   scripts/bench_speed.sh NEW_BIN OLD_BIN [RUNS]     (RUNS default 3)
 #
@@ -42,14 +43,15 @@ need_hour() {
     "$new" sim --config "$work/sim.toml" --record "$hour" --seconds 3600 > /dev/null
 }
 
-# One timed run: wall seconds and peak KB on stdout.
+# One timed run: wall seconds, peak KB and CPU seconds on stdout.
 timed() {
     local t0 t1
     t0=$(date +%s%N)
     /usr/bin/time -v "$@" > /dev/null 2> "$work/time.txt" || true
     t1=$(date +%s%N)
     awk -v a="$t0" -v b="$t1" -F': ' '/Maximum resident set size/ {kb = $2}
-        END {printf "%.3f %d\n", (b - a) / 1e9, kb}' "$work/time.txt"
+        /User time/ {u = $2} /System time/ {s = $2}
+        END {printf "%.3f %d %.3f\n", (b - a) / 1e9, kb, u + s}' "$work/time.txt"
 }
 
 median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
@@ -59,15 +61,15 @@ bench() { # name, then the arguments after the binary
     shift
     : > "$work/a" && : > "$work/b" && : > "$work/r"
     for _ in $(seq "$runs"); do
-        read -r wa ma < <(timed "$new" "$@")
-        read -r wb mb < <(timed "$old" "$@")
-        echo "$wa $ma" >> "$work/a"
-        echo "$wb $mb" >> "$work/b"
-        awk -v a="$wa" -v b="$wb" 'BEGIN {print a / b}' >> "$work/r"
+        read -r wa ma ca < <(timed "$new" "$@")
+        read -r wb mb cb < <(timed "$old" "$@")
+        echo "$wa $ma $ca" >> "$work/a"
+        echo "$wb $mb $cb" >> "$work/b"
+        awk -v a="$ca" -v b="$cb" 'BEGIN {print (b > 0) ? a / b : 0}' >> "$work/r"
     done
-    printf '%-26s new %8.3f s %8.1f MB | old %8.3f s %8.1f MB | new/old wall %.3f\n' "$name" \
-        "$(cut -d' ' -f1 "$work/a" | median)" "$(cut -d' ' -f2 "$work/a" | median | awk '{print $1 / 1024}')" \
-        "$(cut -d' ' -f1 "$work/b" | median)" "$(cut -d' ' -f2 "$work/b" | median | awk '{print $1 / 1024}')" \
+    printf '%-26s new %8.3f s CPU %8.3f s wall %8.1f MB | old %8.3f s CPU %8.3f s wall %8.1f MB | new/old CPU %.3f\n' "$name" \
+        "$(cut -d' ' -f3 "$work/a" | median)" "$(cut -d' ' -f1 "$work/a" | median)" "$(cut -d' ' -f2 "$work/a" | median | awk '{print $1 / 1024}')" \
+        "$(cut -d' ' -f3 "$work/b" | median)" "$(cut -d' ' -f1 "$work/b" | median)" "$(cut -d' ' -f2 "$work/b" | median | awk '{print $1 / 1024}')" \
         "$(median < "$work/r")"
 }
 

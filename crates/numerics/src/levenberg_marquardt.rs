@@ -56,10 +56,25 @@ pub struct LmResult {
 }
 
 /// The residuals at `z` into `r` (always the same length); `false` when `z` cannot be
-/// evaluated (the step is then refused).
+/// evaluated (the step is then refused). The Jacobian is the forward difference ([`jacobian`])
+/// unless the residuals give their own.
 pub trait Residuals {
     /// Fills `r` with the residuals at `z`.
     fn residuals(&mut self, z: &[f64], r: &mut Vec<f64>) -> bool;
+
+    /// `∂r/∂z` at `z` (residuals `r` there); `None` when it cannot be evaluated.
+    fn jacobian(
+        &mut self,
+        z: &[f64],
+        r: &[f64],
+        bounds: &[(f64, f64)],
+        diff_step: f64,
+    ) -> Option<DMatrix<f64>>
+    where
+        Self: Sized,
+    {
+        jacobian(self, z, r, bounds, diff_step)
+    }
 }
 
 impl<F: FnMut(&[f64], &mut Vec<f64>) -> bool> Residuals for F {
@@ -134,7 +149,7 @@ pub fn minimise(
     let mut iterations = 0;
     while iterations < opts.max_iter && cost.is_finite() && cost > 0.0 && p > 0 {
         iterations += 1;
-        let Some(jac) = jacobian(f, &z, &r, bounds, opts.diff_step) else {
+        let Some(jac) = f.jacobian(&z, &r, bounds, opts.diff_step) else {
             break;
         };
         let jtj = jac.transpose() * &jac;

@@ -21,7 +21,9 @@
 //! [`crate::levenberg_marquardt`] within bounds, from the step figures of the channels
 //! ([`crate::step_response`]: the reference channel's median dead time and τ per direction, each
 //! other channel's extra dead time and τ over it) and the power law of the reference channel's
-//! static map.
+//! static map. The search's Jacobian comes from the model's sensitivities ([`jacobian`],
+//! [`super::sensitivity`]: the rotor's course once per point), the covariance's from a forward
+//! difference at the optimum.
 //!
 //! # The reference channel and what cannot be told apart
 //! Delays in series add and two first-order lags in series are symmetric in their time
@@ -35,7 +37,9 @@
 //! levels: otherwise `τ_down = τ_up`, `γ = 0` are held and reported as not shown.
 //!
 //! A record longer than [`MAX_ROWS`] rows is fitted over the window of that many rows in which
-//! the command moves most often. A channel with more than [`MAX_READINGS`] readings is compared at every m-th of them (the
+//! the command moves most often. [`fit`] then compares the rows around the command's moves
+//! only ([`super::spans`]: [`SPAN_PRE_S`] before a move, [`SPAN_POST_TAUS`] of the slowest
+//! step's time constant after it), the holds between them left out. A channel with more than [`MAX_READINGS`] readings is compared at every m-th of them (the
 //! rotor and the sensors still stepped over every row): a pulse experiment of 100 000 rows is
 //! fitted in seconds, its uncertainty that of the readings compared.
 //!
@@ -47,6 +51,8 @@
 //! others), and the fit is run again. The covariance of all parameters (the amplitudes with
 //! them) is `s² (JᵀJ)⁻¹` of the weighted residuals ([`crate::levenberg_marquardt::covariance`]);
 //! residuals correlated over a step make it optimistic.
+
+mod jacobian;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -265,6 +271,8 @@ struct Problem {
     base: Values,
     /// Each load and current channel has a creep column.
     creep: bool,
+    /// The record's row of each row fitted, when spans of it were joined ([`fit`]).
+    origin: Option<Vec<usize>>,
 }
 
 fn median(v: &mut [f64]) -> Option<f64> {
@@ -365,6 +373,14 @@ fn moves(u: &[f64]) -> (bool, bool, usize) {
 }
 
 impl Problem {
+    /// Row `k`'s distance from the first row fitted, in rows of the record.
+    fn row(&self, k: usize) -> f64 {
+        match &self.origin {
+            Some(o) => (o[k] - o[0]) as f64,
+            None => k as f64,
+        }
+    }
+
     fn values(&self, z: &[f64]) -> Values {
         let mut v = self.base.clone();
         for (p, &x) in self.layout.iter().zip(z) {
@@ -497,14 +513,14 @@ impl Problem {
                         cols.push(
                             ch.rows
                                 .iter()
-                                .map(|&k| k as f64 * self.dt / self.t_span)
+                                .map(|&k| self.row(k) * self.dt / self.t_span)
                                 .collect(),
                         );
                     }
                     if let Some(f) = v.freq {
                         let w = std::f64::consts::TAU * f * self.dt;
-                        cols.push(ch.rows.iter().map(|&k| (w * k as f64).sin()).collect());
-                        cols.push(ch.rows.iter().map(|&k| (w * k as f64).cos()).collect());
+                        cols.push(ch.rows.iter().map(|&k| (w * self.row(k)).sin()).collect());
+                        cols.push(ch.rows.iter().map(|&k| (w * self.row(k)).cos()).collect());
                     }
                 }
                 cols
@@ -594,7 +610,7 @@ impl Problem {
     }
 
     fn run(&self, z0: &[f64], max_iter: usize) -> Option<(Vec<f64>, f64, usize)> {
-        let mut f = |z: &[f64], r: &mut Vec<f64>| self.residuals(&self.values(z), None, r);
+        let mut f = jacobian::Search(self);
         let opts = LmOptions {
             max_iter,
             ..LmOptions::default()
@@ -632,11 +648,97 @@ fn step_timing(
     }
 }
 
-/// Fits the stand model to `input` (module doc).
+/// Fits the stand model to `input` (module doc) over the rows around the command's moves
+/// ([`super::spans`], [`SPAN_PRE_S`], [`SPAN_POST_TAUS`]).
 pub fn fit(input: &FitInput<'_>) -> Result<StandFit, StandModelError> {
     windowed(input, |within| {
-        fit_rows(within, &Structure::full(), None).map(|(f, _, _)| f)
+        let Some((joined, origin)) = join_spans(within) else {
+            return fit_rows(within, &Structure::full(), None, None).map(|(f, _, _)| f);
+        };
+        let channels: Vec<Channel<'_>> = joined
+            .channels
+            .iter()
+            .zip(within.channels)
+            .map(|((y, flags), c)| Channel {
+                y,
+                interpolated: flags,
+                ..*c
+            })
+            .collect();
+        let input = FitInput {
+            command: &joined.command,
+            voltage: joined.voltage.as_deref(),
+            channels: &channels,
+            ..*within
+        };
+        fit_rows(&input, &Structure::full(), None, Some(origin)).map(|(f, _, _)| f)
     })
+}
+
+/// Rows kept before a move, s (at least: three dead times of the steps when longer).
+pub const SPAN_PRE_S: f64 = 0.1;
+
+/// Rows kept after a move: this many of the slowest step's time constant plus its dead time
+/// (on any channel), and at least [`SPAN_POST_MIN_S`]: `e^{−20}` of a step left when the
+/// rows left out begin.
+pub const SPAN_POST_TAUS: f64 = 20.0;
+
+/// The fewest seconds kept after a move.
+pub const SPAN_POST_MIN_S: f64 = 0.5;
+
+/// A record's rows joined from its spans around the moves.
+struct Joined {
+    command: Vec<f64>,
+    voltage: Option<Vec<f64>>,
+    channels: Vec<(Vec<f64>, Vec<bool>)>,
+}
+
+/// `input` over the spans around its command's moves ([`super::spans::around_moves`]) and the
+/// record's row of each row kept; `None` when every row is kept.
+fn join_spans(input: &FitInput<'_>) -> Option<(Joined, Vec<usize>)> {
+    let dt = input.dt_s;
+    let u = fill_held(input.command, 0.0);
+    let steps = segment::steps(Command::new(&u), &input.rules);
+    let (mut slowest, mut dead) = (0.0f64, 0.0f64);
+    for c in input.channels {
+        for dir in [Direction::Up, Direction::Down] {
+            let (d, t) = step_timing(c.y, dt, &steps, dir);
+            slowest = slowest.max(t.unwrap_or(0.0));
+            dead = dead.max(d.unwrap_or(0.0));
+        }
+    }
+    let pre = (SPAN_PRE_S.max(3.0 * dead) / dt).ceil() as usize;
+    let post_s = (SPAN_POST_TAUS * (slowest + dead)).max(SPAN_POST_MIN_S);
+    let post = (post_s / dt).ceil() as usize;
+    let kept = super::spans::around_moves(&u, pre, post);
+    if kept == [(0, u.len())] {
+        return None;
+    }
+    // A channel shorter than the command is missing (NaN) past its end, as `prepare` reads it.
+    let pick = |x: &[f64]| -> Vec<f64> {
+        kept.iter()
+            .flat_map(|&(a, b)| (a..b).map(|k| x.get(k).copied().unwrap_or(f64::NAN)))
+            .collect()
+    };
+    let flags = |x: &[bool]| -> Vec<bool> {
+        if x.is_empty() {
+            return Vec::new();
+        }
+        kept.iter()
+            .flat_map(|&(a, b)| (a..b).map(|k| x.get(k).copied().unwrap_or(false)))
+            .collect()
+    };
+    let joined = Joined {
+        command: pick(input.command),
+        voltage: input.voltage.map(pick),
+        channels: input
+            .channels
+            .iter()
+            .map(|c| (pick(c.y), flags(c.interpolated)))
+            .collect(),
+    };
+    let origin = kept.iter().flat_map(|&(a, b)| a..b).collect();
+    Some((joined, origin))
 }
 
 /// `f` on the rows of `input` the fit steps over ([`window`]), its [`StandFit::window_s`] set.
@@ -674,8 +776,9 @@ trait WithWindow {
 }
 
 impl WithWindow for StandFit {
-    fn set_window(&mut self, start: usize, end: usize, dt_s: f64, _len: usize) {
-        self.window_s = (start as f64 * dt_s, end as f64 * dt_s);
+    fn set_window(&mut self, start: usize, _end: usize, dt_s: f64, _len: usize) {
+        let at = start as f64 * dt_s;
+        self.window_s = (at + self.window_s.0, at + self.window_s.1);
     }
 }
 
@@ -717,6 +820,7 @@ fn fit_rows(
     input: &FitInput<'_>,
     st: &Structure,
     warm: Option<&Warm>,
+    origin: Option<Vec<usize>>,
 ) -> Result<(StandFit, Problem, Vec<f64>), StandModelError> {
     let dt = input.dt_s;
     let len = input.command.len();
@@ -870,7 +974,10 @@ fn fit_rows(
     if let Some(w) = warm {
         w.overlay(&mut base, &channels);
     }
-    let t_span = (len.max(2) - 1) as f64 * dt;
+    let t_span = match &origin {
+        Some(o) if o.len() >= 2 => (o[o.len() - 1] - o[0]) as f64 * dt,
+        _ => (len.max(2) - 1) as f64 * dt,
+    };
     let mut problem = Problem {
         dt,
         u,
@@ -884,6 +991,7 @@ fn fit_rows(
         bounds,
         base,
         creep: st.creep,
+        origin,
     };
     let z0 = problem.z_of(&problem.base);
     let (z, cost, iterations) = match warm.and_then(|w| w.sigma.as_ref().map(|s| (w, s))) {
@@ -1108,7 +1216,13 @@ fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> Stan
         supply_resistance_ohm,
         channels,
         iterations,
-        window_s: (0.0, problem.t_span + problem.dt),
+        window_s: match &problem.origin {
+            Some(o) => (
+                o[0] as f64 * problem.dt,
+                (o[o.len() - 1] + 1) as f64 * problem.dt,
+            ),
+            None => (0.0, problem.t_span + problem.dt),
+        },
     }
 }
 
@@ -1296,7 +1410,7 @@ pub fn fit_structured(
     warm: Option<&Warm>,
 ) -> Result<StructuredFit, StandModelError> {
     windowed(input, |within| {
-        let (fit, problem, z) = fit_rows(within, st, warm)?;
+        let (fit, problem, z) = fit_rows(within, st, warm, None)?;
         let v = problem.values(&z);
         let prediction = problem.predict(&v);
         Ok(StructuredFit {
@@ -1336,6 +1450,7 @@ impl Problem {
             bounds: Vec::new(),
             base: v.clone(),
             creep: self.creep,
+            origin: self.origin.clone(),
         };
         let len = self.u.len();
         for ch in all.channels.iter_mut() {

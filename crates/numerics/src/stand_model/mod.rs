@@ -52,6 +52,8 @@
 
 pub mod fit;
 pub mod report;
+pub mod sensitivity;
+pub mod spans;
 
 #[cfg(test)]
 mod tests;
