@@ -100,16 +100,11 @@ pub fn nonpositive_gain(model: &ModelReport) -> Option<f64> {
 /// The flaws of a model (empty: it may be used as a model).
 pub fn judge(model: &ModelReport) -> Vec<Flaw> {
     let mut flaws = Vec::new();
-    // A pole exactly at s = 0 is the structural integrator of an output-error model
-    // (`crate::output_error`: z = 1 kept, never realised by ERA): neither unstable nor
-    // a reason to want a finite DC gain.
-    let integrator = |&[re, im]: &[f64; 2]| re == 0.0 && im == 0.0;
-    let has_integrator = model.poles_s.iter().any(integrator);
     // a non-finite real part (published as null) is not a settled pole either
     if model
         .poles_s
         .iter()
-        .any(|p| !integrator(p) && !(p[0].is_finite() && p[0] < 0.0))
+        .any(|&[re, _]| !(re.is_finite() && re < 0.0))
     {
         flaws.push(Flaw::UnstablePole);
     }
@@ -118,10 +113,9 @@ pub fn judge(model: &ModelReport) -> Vec<Flaw> {
         Gain::List(v) => v.clone(),
         Gain::Matrix(m) => m.iter().flatten().copied().collect(),
     };
-    if !has_integrator
-        && gains
-            .iter()
-            .any(|g| !(g.is_finite() && g.abs() <= MAX_ABS_DC_GAIN))
+    if gains
+        .iter()
+        .any(|g| !(g.is_finite() && g.abs() <= MAX_ABS_DC_GAIN))
     {
         flaws.push(Flaw::ImplausibleDcGain);
     }

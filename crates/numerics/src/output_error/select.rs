@@ -6,8 +6,11 @@
 //! transient, no measured output fed back), and scored on the tail by
 //! `score = mean_i RMS_i / std_i` (the held-out RMS of output `i` over that output's spread
 //! there). Candidates: every order of the ERA stabilization diagram and of ARX fits of orders
-//! `1..=max_order`, each with and without the integrator. The lowest order whose score is
-//! within `parsimony` of the best wins; it is then refitted on the whole record from its own
+//! `1..=max_order`, each with and without the integrator. The integrator is shown when the
+//! best model without it pushes a real pole to a time constant of a tenth of the fitted record
+//! or more (it imitates an integrator there and drifts beyond); then only models with it
+//! compete, else only models without it. The lowest order whose score is within `parsimony`
+//! of the best wins; it is then refitted on the whole record from its own
 //! poles. [`tail_score_abcd`] scores a given `(A, B, C, D)` (the ERA model) the same way, its
 //! offset and initial state fitted on the samples before the tail.
 
@@ -47,10 +50,10 @@ impl Default for SelectOptions {
     fn default() -> Self {
         SelectOptions {
             holdout: 0.25,
-            max_order: 10,
+            max_order: 8,
             parsimony: 0.02,
             fit: FitOptions {
-                max_iter: 25,
+                max_iter: 15,
                 rel_tol: 1e-6,
             },
             refit: FitOptions::default(),
@@ -257,8 +260,23 @@ pub fn select(
             ));
         }
     }
+    // Integrator or not: shown when the best model without one pushes a real pole to a time
+    // constant of a tenth of the fitted record or more (it imitates an integrator over the
+    // record and drifts beyond it); then only models with the pole at z = 1 compete.
+    let shown = fitted
+        .iter()
+        .filter(|(c, _)| !c.integrator)
+        .min_by(|a, b| a.0.score.total_cmp(&b.0.score))
+        .is_some_and(|(_, f)| {
+            f.model
+                .real
+                .iter()
+                .any(|&p| p > 0.0 && 1.0 / (1.0 - p) > n_fit as f64 / 10.0)
+        });
+    let allowed = |c: &Candidate| c.integrator == shown;
     let best = fitted
         .iter()
+        .filter(|(c, _)| allowed(c))
         .map(|(c, _)| c.score)
         .fold(f64::INFINITY, f64::min);
     if !best.is_finite() {
@@ -267,7 +285,7 @@ pub fn select(
     let chosen = fitted
         .iter()
         .enumerate()
-        .filter(|(_, (c, _))| c.score <= best * (1.0 + opts.parsimony))
+        .filter(|(_, (c, _))| allowed(c) && c.score <= best * (1.0 + opts.parsimony))
         .min_by(|a, b| {
             (a.1 .0.order, a.1 .0.score)
                 .partial_cmp(&(b.1 .0.order, b.1 .0.score))
