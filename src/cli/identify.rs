@@ -47,6 +47,7 @@ use propid_numerics::identify::{identify_any_with, AnyInput};
 use propid_numerics::okid::OkidOptions;
 use propid_numerics::operating_points::{operating_points, OpOptions};
 use propid_numerics::order::HankelSize;
+use propid_numerics::output_error::{self, SelectOptions};
 use propid_numerics::segment::Command;
 use propid_numerics::stabilization::StabOptions;
 use propid_numerics::stand::{
@@ -138,7 +139,7 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let model = identify_any_with(&input, &ident, &okid, args.hankel, Some(&stab));
     let stand = stand_for(&loaded);
     let physics = Physics::of(&loaded);
-    let model = match model {
+    let mut model = match model {
         Ok(m) => m,
         Err(e) => {
             // The steps and the static map do not need a model: print them with the failure
@@ -155,6 +156,16 @@ pub fn run(args: Args) -> Result<(), CliError> {
             return Err(e.into());
         }
     };
+    // The output-error refinement (docs/benchmarks.md) of a record whose input is a signal in
+    // its own units (not a stand's command: the stand's models stay the daemon's): replaces the
+    // realisation only where it simulates the held-out tail of the record better.
+    let refinement = (!loaded.input_is_a_command)
+        .then(|| output_error::refine(&input, &model, &SelectOptions::default()))
+        .flatten();
+    let refined = refinement.as_ref().filter(|r| r.applied).map(|r| &r.model);
+    if let Some(m) = refined {
+        output_error::apply(&mut model.report, m);
+    }
     let op_opts = OpOptions {
         segment: rules,
         ..OpOptions::default()
@@ -162,7 +173,12 @@ pub fn run(args: Args) -> Result<(), CliError> {
     let ops = operating_points(&input, &ident, &op_opts);
     let levels = levels_slope(&loaded);
     let mut out = summary::Output::new(&loaded, &model, &ops, &stand, levels.as_ref(), &physics);
-    let saved = save::model_file(&args, &loaded, &model.report, &out)?;
+    out.refinement = refinement
+        .as_ref()
+        .map(serde_json::to_value)
+        .transpose()
+        .map_err(CliError::Json)?;
+    let saved = save::model_file(&args, &loaded, &model.report, &out, refined)?;
     out.params = save::params(&saved);
     if let Some(path) = &args.save {
         super::model_file::save(&saved, path)?;

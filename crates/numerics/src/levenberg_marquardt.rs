@@ -1,6 +1,7 @@
 //! Levenberg–Marquardt for a residual vector of fixed length over box-bounded parameters, and
 //! the covariance of the parameters it finds: the one nonlinear least-squares optimiser of the
-//! numerics layer (the stand model's joint fit, [`crate::stand_model`]).
+//! numerics layer (the stand model's joint fit, [`crate::stand_model`]; the output-error
+//! refinement of the linear core, [`crate::output_error`], through [`minimise_normal`]).
 //!
 //! Minimises `C(z) = Σ r_i(z)²` (Marquardt 1963, "An algorithm for least-squares estimation of
 //! nonlinear parameters", J. SIAM 11(2), 431–441): with the forward-difference Jacobian
@@ -14,6 +15,11 @@
 //! parameter stays within its bounds `[lo_j, hi_j]`: a step is clipped to them (projected
 //! Levenberg–Marquardt, Kanzow, Yamashita & Fukushima 2004), and the difference quotient at the
 //! upper bound is taken backwards.
+//!
+//! [`minimise_normal`] is the same iteration, unbounded, for a model that supplies its own
+//! normal equations `JᵀJ`, `Jᵀr` with an analytic Jacobian (accumulated sample by sample, so
+//! that no `N × p` matrix is stored); a point it cannot evaluate (e.g. a pole outside the unit
+//! circle) refuses the step, which is then retried shorter (`λ ← 10 λ`).
 //!
 //! **Covariance** ([`covariance`]): at the minimum, `Cov(z) ≈ s² (JᵀJ)⁻¹` with
 //! `s² = C / (N − p)` the residual variance (Seber & Wild 2003, *Nonlinear Regression*, §2.1):
@@ -187,6 +193,77 @@ pub fn minimise(
         }
         if !accepted || small {
             break;
+        }
+    }
+    Some(LmResult {
+        z,
+        cost,
+        iterations,
+    })
+}
+
+/// A least-squares problem that supplies its own normal equations ([`minimise_normal`]).
+pub trait NormalEquations {
+    /// `Σ r²` at `z`; `None` when `z` is not admissible (the step is refused).
+    fn cost(&mut self, z: &[f64]) -> Option<f64>;
+    /// `(JᵀJ, Jᵀr, Σ r²)` at `z`; `None` when `z` is not admissible.
+    fn normal(&mut self, z: &[f64]) -> Option<(DMatrix<f64>, DVector<f64>, f64)>;
+}
+
+/// Levenberg–Marquardt from `z0` on a problem with analytic normal equations (module doc):
+/// never returns a worse point than `z0`; `None` when `z0` cannot be evaluated.
+pub fn minimise_normal(
+    f: &mut impl NormalEquations,
+    z0: &[f64],
+    opts: &LmOptions,
+) -> Option<LmResult> {
+    let mut z = z0.to_vec();
+    let p = z.len();
+    let (mut jtj, mut jtr, mut cost) = f.normal(&z)?;
+    let mut lambda = 1e-3;
+    let mut iterations = 1;
+    while iterations < opts.max_iter && cost.is_finite() && cost > 0.0 && p > 0 {
+        let mut accepted = false;
+        let mut small = false;
+        for _ in 0..12 {
+            let mut lhs = jtj.clone();
+            for a in 0..p {
+                lhs[(a, a)] += lambda * jtj[(a, a)].max(1e-300);
+            }
+            let Some(delta) = lhs.lu().solve(&(-&jtr)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let zt: Vec<f64> = z.iter().zip(delta.iter()).map(|(a, d)| a + d).collect();
+            if zt.iter().any(|v| !v.is_finite()) {
+                lambda *= 10.0;
+                continue;
+            }
+            if let Some(ct) = f.cost(&zt) {
+                if ct < cost {
+                    small = (cost - ct) <= opts.rel_tol * cost;
+                    z = zt;
+                    lambda = (lambda * 0.3).max(1e-12);
+                    accepted = true;
+                    break;
+                }
+            }
+            lambda *= 10.0;
+        }
+        if !accepted || small {
+            if accepted {
+                cost = f.cost(&z).unwrap_or(cost);
+            }
+            break;
+        }
+        iterations += 1;
+        match f.normal(&z) {
+            Some((a, b, c)) => {
+                jtj = a;
+                jtr = b;
+                cost = c;
+            }
+            None => break,
         }
     }
     Some(LmResult {

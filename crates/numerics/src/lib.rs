@@ -56,6 +56,7 @@ pub mod okid;
 pub mod operating_points;
 pub mod order;
 pub mod outliers;
+pub mod output_error;
 pub mod pulses;
 pub mod quality;
 pub mod report;

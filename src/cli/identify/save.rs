@@ -11,6 +11,7 @@ use crate::cli::CliError;
 use propid_model::file::{ModelFile, OperatingPoint};
 use propid_model::params::{self, Record};
 use propid_model::SCHEMA;
+use propid_numerics::output_error::OeModel;
 use propid_numerics::ModelReport;
 use propid_wire::record::names;
 
@@ -20,6 +21,7 @@ pub fn model_file(
     loaded: &Loaded,
     model: &ModelReport,
     out: &Output,
+    refined: Option<&OeModel>,
 ) -> Result<ModelFile, CliError> {
     let s = &loaded.source;
     let units = s.read.units.as_ref();
@@ -48,13 +50,21 @@ pub fn model_file(
             channel(&key, col, &unit(&key, col))
         })
         .collect();
-    let op = OperatingPoint {
-        input: mf::mean_of(&loaded.input, &loaded.missing),
-        outputs: loaded
-            .outputs
-            .iter()
-            .map(|y| mf::mean_of(y, &loaded.missing))
-            .collect(),
+    // A refined model carries its own operating point (fitted offsets, an integrator's input
+    // offset); a realisation is about the record's means.
+    let op = match refined {
+        Some(m) => OperatingPoint {
+            input: m.u0,
+            outputs: m.y0.clone(),
+        },
+        None => OperatingPoint {
+            input: mf::mean_of(&loaded.input, &loaded.missing),
+            outputs: loaded
+                .outputs
+                .iter()
+                .map(|y| mf::mean_of(y, &loaded.missing))
+                .collect(),
+        },
     };
     let options = json!({
         "order": args.order,

@@ -68,6 +68,10 @@ pub struct Output<'a> {
     /// The parameters of every flight controller and simulator `propid params` knows, by
     /// target ([`propid_model::params`]; docs/params.md).
     pub params: serde_json::Map<String, serde_json::Value>,
+    /// The output-error refinement of an OKID model
+    /// ([`propid_numerics::output_error::Refinement`]), when it ran.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub refinement: Option<serde_json::Value>,
 }
 
 /// One entry of `"warnings"`: the shape of `diagnose`'s (`kind`, `message`, `value`).
@@ -336,6 +340,7 @@ impl<'a> Output<'a> {
                 ))
                 .collect(),
             params: serde_json::Map::new(),
+            refinement: None,
         }
     }
 
