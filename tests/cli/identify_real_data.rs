@@ -89,10 +89,10 @@ fn robot_arm_shows_lightly_damped_modes() {
 
 #[test]
 fn cascaded_tanks_estimation_record() {
-    // Pinned: order 2, fn 0.0826 Hz, ζ 0.21, DC gain 4.25 V/V (a soft-nonlinear plant: the
-    // model is an average; the point is that the reader, rate and OKID path hold). The gain is
-    // the OKID sequence's own Σ Y_k: ERA's order-2 realisation alone gave 1.64 (and −2.99 on
-    // the first two thirds); ARX fits of orders 3 and 5 on this record give 4.15 and 4.30.
+    // Pinned: order 2 with two real poles (time constants about 173 s and 46 s), DC gain about
+    // 4.6 V/V — the output-error refinement (docs/benchmarks.md) replaced the OKID/ERA
+    // realisation (order 2 with ringing poles, fn 0.083 Hz, gain 4.25) because it simulates the
+    // held-out tail of the record better (ARX fits of orders 3 and 5 give gains 4.15 and 4.30).
     let v = identify(&[
         &data("cascaded-tanks/dataBenchmark.csv"),
         "--input",
@@ -106,13 +106,21 @@ fn cascaded_tanks_estimation_record() {
     assert_eq!(v["source"]["rate_hz"], 0.25);
     assert_eq!(v["source"]["csv"]["rows"], 1024);
     assert_eq!(m["order"], 2);
+    let r = &v["refinement"];
+    assert_eq!(r["applied"], true, "{r}");
+    assert!(f(&r["chosen"]["score"]) < f(&r["era_score"]), "{r}");
+    assert!(m["fn_hz"].is_null(), "{}", m["fn_hz"]);
+    let mut taus: Vec<f64> = m["time_constants_s"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(f)
+        .collect();
+    taus.sort_by(f64::total_cmp);
+    assert!((taus[0] / 46.3 - 1.0).abs() < 0.2, "{taus:?}");
+    assert!((taus[1] / 173.3 - 1.0).abs() < 0.2, "{taus:?}");
     assert!(
-        (f(&m["fn_hz"]) / 0.0826 - 1.0).abs() < 0.05,
-        "{}",
-        m["fn_hz"]
-    );
-    assert!(
-        (f(&m["dc_gain"]) / 4.254 - 1.0).abs() < 0.05,
+        (f(&m["dc_gain"]) / 4.6 - 1.0).abs() < 0.1,
         "{}",
         m["dc_gain"]
     );
