@@ -21,7 +21,7 @@ pub struct Ctx<'a> {
     /// signal in its own units ([`super::Options::input_is_a_command`]).
     pub rules: SegmentRules,
     /// The acceptance test of a held-out gain ([`super::Options::gate`]).
-    pub gate: super::folds::Gate,
+    pub gate: super::thresholds::Gate,
 }
 
 /// The estimation samples from `first` on whose output is measured.

@@ -12,6 +12,7 @@ use super::ctx::Ctx;
 use super::fit::{levenberg_marquardt_from, FirstJacobian, Fit};
 use super::model::simulate;
 use super::signals::Signals;
+pub use crate::thresholds::Gate;
 use crate::thresholds::{gain_t, MIN_CV_GAIN_PP};
 
 /// Fewest levels for blocked cross-validation (fewer: the hold-out tail).
@@ -206,19 +207,6 @@ fn sub_blocks(r: Range<usize>, k: usize) -> impl Iterator<Item = Range<usize>> {
     let (start, len) = (r.start, r.len());
     let k = k.clamp(1, len.max(1));
     (0..k).map(move |b| start + b * len / k..start + (b + 1) * len / k)
-}
-
-/// Which test an effect's held-out gain must pass to be taken ([`HeldOutGain::accepted`];
-/// [`crate::Options::gate`]). Their false-alarm rates on clean simulated stands and what each
-/// finds: `docs/detection.md`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Gate {
-    /// The held-out figure rises ([`HeldOutGain::passes`]).
-    #[default]
-    Rising,
-    /// The one-sided paired t-test against the folds' scatter ([`HeldOutGain::significant`]).
-    Paired,
 }
 
 /// The held-out gain of a model over another, judged against the scatter of the folds' own

@@ -50,6 +50,19 @@ pub const EXPONENT_MAX: f64 = 2.0;
 /// lag, the thrust curve, the supply).
 pub const STAND_MAX_EFFECTS: usize = 6;
 
+/// Which test an effect's held-out gain must pass to be taken ([`crate::folds::HeldOutGain::accepted`];
+/// [`crate::Options::gate`]). Their false-alarm rates on clean simulated stands and what each
+/// finds: `docs/detection.md`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Gate {
+    /// The held-out figure rises ([`crate::folds::HeldOutGain::passes`]).
+    #[default]
+    Rising,
+    /// The one-sided paired t-test against the folds' scatter ([`crate::folds::HeldOutGain::significant`]).
+    Paired,
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
