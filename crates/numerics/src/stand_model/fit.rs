@@ -537,7 +537,6 @@ impl Problem {
             .zip(&self.channels)
             .map(|(cols, ch)| {
                 let m = cols.len();
-                let mut ata = DMatrix::<f64>::zeros(m, m);
                 let mut aty = DVector::<f64>::zeros(m);
                 for i in 0..m {
                     aty[i] = cols[i]
@@ -545,17 +544,9 @@ impl Problem {
                         .zip(&ch.rows)
                         .map(|(a, &k)| a * ch.y[k])
                         .sum();
-                    for j in i..m {
-                        let v: f64 = cols[i].iter().zip(&cols[j]).map(|(a, b)| a * b).sum();
-                        ata[(i, j)] = v;
-                        ata[(j, i)] = v;
-                    }
                 }
-                let scale = (0..m).map(|i| ata[(i, i)]).fold(0.0, f64::max).max(1e-300);
-                for i in 0..m {
-                    ata[(i, i)] += 1e-12 * scale;
-                }
-                ata.cholesky()
+                ridged_gram(cols)
+                    .cholesky()
                     .map(|c| c.solve(&aty).iter().copied().collect())
                     .unwrap_or_else(|| vec![0.0; m])
             })
@@ -1488,4 +1479,25 @@ pub fn resonance(x: &[f64], dt_s: f64, fn_hz: f64, zeta: f64) -> Vec<f64> {
             out
         })
         .collect()
+}
+
+/// `AᵀA` of the columns `cols` with a ridge of 1e-12 times its largest diagonal entry on the
+/// diagonal: a column of zeros (a speed never above the dead band) keeps it positive definite.
+/// The amplitudes' least squares (`Problem::solve`) and their projection's derivative
+/// (`fit/jacobian.rs`) factor the same matrix.
+pub(super) fn ridged_gram(cols: &[Vec<f64>]) -> DMatrix<f64> {
+    let m = cols.len();
+    let mut g = DMatrix::<f64>::zeros(m, m);
+    for i in 0..m {
+        for j in i..m {
+            let v: f64 = cols[i].iter().zip(&cols[j]).map(|(a, b)| a * b).sum();
+            g[(i, j)] = v;
+            g[(j, i)] = v;
+        }
+    }
+    let scale = (0..m).map(|i| g[(i, i)]).fold(0.0, f64::max).max(1e-300);
+    for i in 0..m {
+        g[(i, i)] += 1e-12 * scale;
+    }
+    g
 }

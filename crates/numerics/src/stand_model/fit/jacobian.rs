@@ -214,19 +214,7 @@ impl Problem {
             // The projection's derivative (module doc).
             let a = &design[c];
             let beta = &lin[c];
-            let mut g = DMatrix::<f64>::zeros(m, m);
-            for i in 0..m {
-                for j in i..m {
-                    let x: f64 = a[i].iter().zip(&a[j]).map(|(p, q)| p * q).sum();
-                    g[(i, j)] = x;
-                    g[(j, i)] = x;
-                }
-            }
-            let scale = (0..m).map(|i| g[(i, i)]).fold(0.0, f64::max).max(1e-300);
-            for i in 0..m {
-                g[(i, i)] += 1e-12 * scale;
-            }
-            let chol = g.cholesky();
+            let chol = super::ridged_gram(a).cholesky();
             let fitted: Vec<f64> = (0..nr)
                 .map(|k| a.iter().zip(beta).map(|(col, b)| col[k] * b).sum())
                 .collect();
