@@ -105,16 +105,7 @@ impl StandLog {
 
     /// The stand model fitted on every channel (as `identify`'s `stand`).
     pub fn fit(&self) -> Result<StandFit, CliError> {
-        let channels: Vec<Channel<'_>> = self
-            .channels
-            .iter()
-            .map(|c| Channel {
-                key: c.key,
-                quantity: c.quantity,
-                y: &c.data,
-                interpolated: &c.interpolated,
-            })
-            .collect();
+        let channels: Vec<Channel<'_>> = self.channels.iter().map(as_channel).collect();
         Ok(fit(&FitInput {
             dt_s: self.dt_s(),
             command: &self.command,
@@ -210,12 +201,7 @@ impl StandLog {
                 });
                 hi > lo
             })
-            .map(|c| Channel {
-                key: c.key,
-                quantity: c.quantity,
-                y: &c.data,
-                interpolated: &c.interpolated,
-            })
+            .map(as_channel)
             .collect();
         let sim: Vec<(&str, Vec<f64>)> = sim.iter().map(|(k, y)| (*k, y.clone())).collect();
         score_on_folds(&channels, &sim, folds)
@@ -281,6 +267,17 @@ fn is_reading(c: &LogChannel, k: usize) -> bool {
     c.data[k].is_finite() && !c.interpolated.get(k).copied().unwrap_or(false)
 }
 
+/// A channel of the log as the stand fit and the scoring read it.
+fn as_channel(c: &LogChannel) -> Channel<'_> {
+    Channel {
+        key: c.key,
+        quantity: c.quantity,
+        y: &c.data,
+        interpolated: &c.interpolated,
+    }
+}
+
+/// The rows of `c` that are readings ([`is_reading`]).
 fn readings(c: &LogChannel) -> impl Iterator<Item = usize> + '_ {
     (0..c.data.len()).filter(|&k| is_reading(c, k))
 }
