@@ -209,9 +209,48 @@ fn diagnose_does_not_call_the_90_percent_staircase_explained() {
         v["verdict"]
     );
     assert!(f(&v["noise_floor"]["rms"]) > 0.0, "{}", v["noise_floor"]);
+    // a motor stand whose thrust the generic search predicts better: the data choose it
+    assert_eq!(v["baseline"]["kind"], "generic", "{}", v["baseline"]);
     let text = run(false);
     assert!(!text.contains("explains the data to the noise"), "{text}");
     assert!(text.contains("verdict: UNEXPLAINED"), "{text}");
+}
+
+/// Issue 29 item 5: `--sim-config` takes the stand baseline even where the generic search
+/// predicts better (a simulated stand is a stand model), says so in `why`, and writes the
+/// configuration with the replay scored within a point of the stand's own fit.
+#[test]
+fn diagnose_sim_config_takes_the_stand_the_data_did_not_choose() {
+    let Some(dir) = shared("vanderploeg-rcbenchmark-steps") else {
+        return;
+    };
+    let file = dir.join("90PERCENT_2024-08-13_185523.csv");
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("stand.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .arg("diagnose")
+        .arg(&file)
+        .arg("--json")
+        .arg("--sim-config")
+        .arg(&cfg)
+        .output()
+        .expect("run propid");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let b = &v["baseline"];
+    assert_eq!(b["kind"], "stand", "{b}");
+    assert!(b["why"].as_str().unwrap().contains("taken as asked"), "{b}");
+    assert!(cfg.exists());
+    let w = &v["sim_config"];
+    let thrust = |key: &str| f(&w[key]["thrust"]);
+    assert!(
+        (thrust("replay_fit_percent") - thrust("fit_percent")).abs() <= 1.0,
+        "{w}"
+    );
 }
 
 /// Issue 11, items 4 and 5: under blocked cross-validation over its steps the 90 % staircase
