@@ -25,10 +25,15 @@ pub const AMPLITUDES: [f64; 4] = [0.05, -0.05, 0.1, -0.1];
 
 /// The throttle sequence of the experiment (see the module doc).
 pub fn throttle_plan() -> Vec<f64> {
-    let per_level = (3.0 / DT_S).round() as usize;
-    let settle = (0.3 / DT_S).round() as usize;
-    let spacing = (0.3 / DT_S).round() as usize;
-    let width = 10;
+    throttle_plan_at(DT_S)
+}
+
+/// [`throttle_plan`] sampled every `dt_s` seconds (pulses `round(0.02 / dt_s)` samples wide).
+pub fn throttle_plan_at(dt_s: f64) -> Vec<f64> {
+    let per_level = (3.0 / dt_s).round() as usize;
+    let settle = (0.3 / dt_s).round() as usize;
+    let spacing = (0.3 / dt_s).round() as usize;
+    let width = ((0.02 / dt_s).round() as usize).max(1);
     let mut u = Vec::with_capacity(per_level * LEVELS.len());
     for &level in &LEVELS {
         for k in 0..per_level {

@@ -4,10 +4,15 @@
 //! is named, how often with its parameter within the tolerance of `docs/detection.md`, how
 //! often another effect is named; and the false alarms on as many clean stands per kind.
 //!
+//! With `motor`, the motor stands of `propid_sim::stand_cases::stand_case` instead (rpm,
+//! thrust, current and voltage, the stand baseline; every effect of the stand catalogue
+//! hidden, its truths in `stand_truth`; even cases underdamped: a resonance of the stand that
+//! is part of it and not counted as another effect).
+//!
 //! Run: `cargo run --release -p propid-diagnose --example stand_table [CASES] [THREADS] [GATE]
-//! [clean]` (per effect and record kind; default 7, 21 cases per effect and 21 clean stands in
-//! all; 2 threads; GATE `rising` (default) or `paired`, [`Gate`]; `clean`: the clean stands
-//! only). Prints Markdown;
+//! [clean|motor] [BUDGET_S]` (per effect and record kind; default 7, 21 cases per effect and 21 clean
+//! stands in all; 2 threads; GATE `rising` (default) or `paired`, [`Gate`]; `clean`: the clean
+//! stands only; BUDGET_S, motor only: no case starts after that many seconds). Prints Markdown;
 //! `scripts/stand_table.sh` puts it into `docs/detection.md`.
 
 use propid_diagnose::folds::Gate;
@@ -15,6 +20,8 @@ use propid_diagnose::{self as diagnose, Diagnosis};
 use propid_numerics::EffectName;
 use propid_sim::stand_cases::{case, truth, RecordKind};
 use propid_sim::synth;
+
+mod motor;
 
 /// One case's outcome.
 struct Outcome {
@@ -78,7 +85,11 @@ fn diagnose_case(
 }
 
 /// `f` over `jobs` on `threads` threads, results in order.
-fn on_threads<J: Sync, T: Send>(jobs: &[J], threads: usize, f: impl Fn(&J) -> T + Sync) -> Vec<T> {
+pub(crate) fn on_threads<J: Sync, T: Send>(
+    jobs: &[J],
+    threads: usize,
+    f: impl Fn(&J) -> T + Sync,
+) -> Vec<T> {
     let next = std::sync::atomic::AtomicUsize::new(0);
     let mut done: Vec<(usize, T)> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads.max(1))
@@ -104,7 +115,7 @@ fn on_threads<J: Sync, T: Send>(jobs: &[J], threads: usize, f: impl Fn(&J) -> T 
     done.into_iter().map(|d| d.1).collect()
 }
 
-fn pct(k: usize, n: usize) -> String {
+pub(crate) fn pct(k: usize, n: usize) -> String {
     format!("{k} ({:.0} %)", 100.0 * k as f64 / n.max(1) as f64)
 }
 
@@ -117,6 +128,19 @@ fn main() {
         Some("paired") => Gate::Paired,
         _ => Gate::Rising,
     };
+    let threads: usize = std::env::args()
+        .nth(2)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(2);
+    if std::env::args().nth(4).as_deref() == Some("motor") {
+        // the fifth argument: no case starts after that many seconds
+        let budget_s = std::env::args()
+            .nth(5)
+            .and_then(|a| a.parse().ok())
+            .unwrap_or(f64::INFINITY);
+        motor::table(cases, threads, gate, budget_s);
+        return;
+    }
     // `clean` as the fourth argument: the clean stands alone (the false-alarm rate).
     let clean_only = std::env::args().nth(4).as_deref() == Some("clean");
     let mut jobs: Vec<(RecordKind, Option<EffectName>, u64)> = Vec::new();
@@ -129,10 +153,6 @@ fn main() {
             }
         }
     }
-    let threads: usize = std::env::args()
-        .nth(2)
-        .and_then(|a| a.parse().ok())
-        .unwrap_or(2);
     let outcomes = on_threads(&jobs, threads, |&(k, n, i)| {
         let o = diagnose_case(k, n, i, gate);
         let name = n.map_or("clean", EffectName::as_str);
