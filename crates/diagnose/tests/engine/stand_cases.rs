@@ -3,9 +3,13 @@
 //! effects are found with their parameters (`propid_sim::stand_cases`). The full table, 20
 //! cases per effect and kind: `scripts/stand_table.sh` (`docs/detection.md`).
 
+use propid_diagnose::stand::{BaselineKind, StandInput};
 use propid_diagnose::{self as diagnose, Diagnosis};
+use propid_numerics::stand_model::fit::Channel;
+use propid_numerics::stand_model::Quantity;
 use propid_numerics::EffectName;
-use propid_sim::stand_cases::{case, truth, RecordKind};
+use propid_sim::plant::PlantConfig;
+use propid_sim::stand_cases::{case, stand_case, stand_truth, truth, RecordKind, STAND_DT_S};
 use propid_sim::synth::{self, Measured};
 
 fn run(kind: RecordKind, name: Option<EffectName>, i: u64) -> (Diagnosis, Measured) {
@@ -149,4 +153,77 @@ fn a_sparse_load_cell_has_its_noise_floor_measured_on_its_own_readings() {
             d.verdict.reason
         );
     }
+}
+
+/// `diagnose` on a motor stand's thrust with its rpm and current beside it, as the CLI
+/// passes a log's stand channels.
+fn run_motor(kind: RecordKind, name: Option<EffectName>, i: u64) -> (Diagnosis, PlantConfig, f64) {
+    let (cfg, r) = stand_case(kind, name, i).expect("valid stand");
+    let ch = |key, quantity, y| Channel {
+        key,
+        quantity,
+        y,
+        interpolated: &[],
+    };
+    let stand = StandInput {
+        channels: vec![
+            ch("rpm", Quantity::Speed, &r.rpm),
+            ch("thrust", Quantity::Thrust, &r.thrust),
+            ch("current", Quantity::Current, &r.current),
+        ],
+        output: Some("thrust"),
+    };
+    let d = diagnose::diagnose_with(
+        STAND_DT_S,
+        &r.u,
+        &r.thrust,
+        &[],
+        Some(&r.voltage),
+        Some(&stand),
+        &Default::default(),
+    )
+    .expect("diagnosis");
+    let v_mean = r.voltage.iter().sum::<f64>() / r.voltage.len() as f64;
+    (d, cfg, v_mean)
+}
+
+/// A load cell's lag hidden in an overdamped motor stand's staircase (rpm, thrust, current)
+/// is found as `sensor_lag` on the thrust with its delay to one row and its τ within 25 %,
+/// and nothing else is named; the same stand clean names nothing.
+#[test]
+fn a_load_cells_lag_hidden_in_a_motor_stand_is_found_and_a_clean_one_names_nothing() {
+    let kind = RecordKind::Staircase;
+    let runs = two_threads(vec![(kind, 1), (kind, 3)], |k, i| {
+        let name = (i == 1).then_some(EffectName::SensorLag);
+        run_motor(k, name, i)
+    });
+    let (d, cfg, v_mean) = &runs[0];
+    assert_eq!(
+        d.baseline.choice.kind,
+        BaselineKind::Stand,
+        "{:?}",
+        d.baseline
+    );
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.effect == EffectName::SensorLag)
+        .unwrap_or_else(|| panic!("{:?}", d.findings));
+    assert_eq!(f.params["channel"], "thrust");
+    let truths = stand_truth(EffectName::SensorLag, cfg, *v_mean);
+    assert_eq!(truths.len(), 2);
+    for t in truths {
+        let est = f.params[t.key].as_f64().unwrap();
+        assert!(t.holds(est), "{}: {est} vs {}", t.key, t.value);
+    }
+    let names: Vec<EffectName> = d.findings.iter().map(|f| f.effect).collect();
+    assert_eq!(names, [EffectName::SensorLag]);
+    let (d, _, _) = &runs[1];
+    assert_eq!(
+        d.baseline.choice.kind,
+        BaselineKind::Stand,
+        "{:?}",
+        d.baseline
+    );
+    assert!(d.findings.is_empty(), "{:?}", d.findings);
 }
