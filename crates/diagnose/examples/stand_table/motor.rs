@@ -157,6 +157,14 @@ pub fn table(cases: u64, threads: usize, gate: Gate, budget_s: f64) {
             }
         }
     }
+    // `STAND_TABLE_ONLY="step static_nonlinearity 0,staircase clean 1"`: those cases alone
+    if let Ok(only) = std::env::var("STAND_TABLE_ONLY") {
+        let keep: Vec<&str> = only.split(',').map(str::trim).collect();
+        jobs.retain(|(k, n, i)| {
+            let name = n.map_or("clean", EffectName::as_str);
+            keep.contains(&format!("{} {name} {i}", k.as_str()).as_str())
+        });
+    }
     let outcomes = on_threads(&jobs, threads, |&(k, n, i)| {
         if start.elapsed().as_secs_f64() > budget_s {
             return None;

@@ -106,6 +106,22 @@ pub fn with(st: &Structure, c: Candidate, peak_hz: Option<f64>) -> Structure {
     s
 }
 
+/// Whether the figures of `c` fitted in `f` are ones the rows can show: a sensor's lag whose
+/// delay and time constant both stay within half a row period `dt_s` of zero reads with the
+/// reference at this row rate (its lag at the fit's floor, its delay a fraction of a row):
+/// no lag the data show.
+pub fn resolved(c: Candidate, f: &StructuredFit, dt_s: f64) -> bool {
+    if c.effect != EffectName::SensorLag {
+        return true;
+    }
+    let Some(ch) = f.fit.channels.iter().find(|ch| Some(ch.key) == c.channel) else {
+        return true;
+    };
+    let delay = ch.delay_s.map_or(0.0, |d| d.0);
+    let tau = ch.tau_s.map_or(0.0, |t| t.0);
+    delay.abs() >= 0.5 * dt_s || tau >= 0.5 * dt_s
+}
+
 /// Parameters freed (for the evidence): a sensor's lag and a sinusoid count two per channel.
 pub fn parameter_count(c: Candidate) -> usize {
     match c.effect {

@@ -581,6 +581,26 @@ pub fn search(
         cur = f1;
         cur_cv = cv1;
     }
+    // A sensor's lag taken early can collapse once a later effect explains what it stood in
+    // for (a resonance's phase lag): at the end its figures read with the reference
+    // ([`catalogue::resolved`]), the model without it is the same model, and it is dropped.
+    let collapsed: Vec<Candidate> = taken
+        .iter()
+        .map(|t| t.0)
+        .filter(|&c| !catalogue::resolved(c, &cur, dt_s))
+        .collect();
+    if !collapsed.is_empty() {
+        let mut st1 = st.clone();
+        st1.lagged
+            .retain(|k| !collapsed.iter().any(|c| c.channel == Some(*k)));
+        let warm = cur.warm.with_weights(sigma.clone(), 40);
+        if let Ok(f1) = d.fit(&est, &st1, Some(&warm)) {
+            cur_cv = d.cv(&st1, &f1, &sigma);
+            cur = f1;
+            st = st1;
+            taken.retain(|t| !collapsed.contains(&t.0));
+        }
+    }
 
     let findings: Vec<Finding> = taken
         .iter()
