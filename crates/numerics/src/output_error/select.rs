@@ -9,7 +9,15 @@
 //! `1..=max_order`, each with and without the integrator. The integrator is shown when the
 //! best model without it pushes a real pole to a time constant of a tenth of the fitted record
 //! or more (it imitates an integrator there and drifts beyond); then only models with it
-//! compete, else only models without it. The lowest order whose score is within `parsimony`
+//! compete, else only models without it. An integrating model competes only when the tail can
+//! judge its other modes ([`modes_settle_within`]): each settles within a tenth of the tail
+//! (`1/(1 − |z|)` samples), and a pair turns within the record. A slower mode is a second
+//! integrator over the tail (force → velocity → position with almost no damping): the tail,
+//! free-run from the same record's fitted start, cannot show its drift, but another record
+//! integrates any offset of its input twice (EMPS: an integrating order 3 with its second pole
+//! at `τ ≈ 1.7 s` on a 6.2 s tail scored best there and drifted by metres on the test record;
+//! docs/benchmarks.md). When no integrating model passes, all of them compete. The lowest
+//! order whose score is within `parsimony`
 //! of the best wins; it is then refitted on the whole record from its own
 //! poles. [`tail_score_abcd`] scores a given `(A, B, C, D)` (the ERA model) the same way, its
 //! offset and initial state fitted on the samples before the tail.
@@ -224,6 +232,19 @@ pub fn era_poles(stab: &Stabilization, dt: f64) -> Vec<Vec<Complex<f64>>> {
         .collect()
 }
 
+/// Whether every mode of `m` but its integrator is one a held-out tail of `tail` samples (of a
+/// record of `n`) can judge (module doc): its time constant `1/(1 − |z|)` below a tenth of the
+/// tail, and a pair's period `2π/arg z` shorter than the record.
+pub fn modes_settle_within(m: &OeModel, tail: usize, n: usize) -> bool {
+    let slowest = tail as f64 / 10.0;
+    let settles = |r: f64| r < 1.0 && 1.0 / (1.0 - r) < slowest;
+    m.real.iter().all(|&p| p <= 0.0 || settles(p))
+        && m.pairs.iter().all(|&(s, w)| {
+            let z = Complex::new(s, w);
+            settles(z.norm()) && z.arg().abs() > std::f64::consts::TAU / n as f64
+        })
+}
+
 /// Fits every candidate of the starts (each a pole set, labelled) on the samples before the
 /// tail, scores them there and refits the chosen one on the whole record (module doc).
 /// `None` when no candidate could be fitted.
@@ -273,10 +294,19 @@ pub fn select(
                 .iter()
                 .any(|&p| p > 0.0 && 1.0 / (1.0 - p) > n_fit as f64 / 10.0)
         });
-    let allowed = |c: &Candidate| c.integrator == shown;
+    // An integrating model's other modes must be ones the tail can judge (module doc).
+    let tail = data.len() - n_fit;
+    let judged = |c: &Candidate, f: &Fitted| {
+        !c.integrator || modes_settle_within(&f.model, tail, data.len())
+    };
+    let any_judged = fitted
+        .iter()
+        .any(|(c, f)| c.integrator == shown && judged(c, f));
+    let allowed =
+        |c: &Candidate, f: &Fitted| c.integrator == shown && (!any_judged || judged(c, f));
     let best = fitted
         .iter()
-        .filter(|(c, _)| allowed(c))
+        .filter(|(c, f)| allowed(c, f))
         .map(|(c, _)| c.score)
         .fold(f64::INFINITY, f64::min);
     if !best.is_finite() {
@@ -285,7 +315,7 @@ pub fn select(
     let chosen = fitted
         .iter()
         .enumerate()
-        .filter(|(_, (c, _))| allowed(c) && c.score <= best * (1.0 + opts.parsimony))
+        .filter(|(_, (c, f))| allowed(c, f) && c.score <= best * (1.0 + opts.parsimony))
         .min_by(|a, b| {
             (a.1 .0.order, a.1 .0.score)
                 .partial_cmp(&(b.1 .0.order, b.1 .0.score))

@@ -1,7 +1,9 @@
 use nalgebra::Complex;
 
 use super::fit::{fit, start_of, Data, FitOptions};
-use super::select::{arx_poles, select, tail_score_abcd, SelectOptions, Start};
+use super::select::{
+    arx_poles, modes_settle_within, select, tail_score_abcd, SelectOptions, Start,
+};
 use super::OeModel;
 
 /// Deterministic uniform noise in [−1, 1] (an LCG).
@@ -167,4 +169,40 @@ fn the_abcd_score_of_the_true_model_is_near_zero_and_a_wrong_one_is_not() {
     let c2 = vec![vec![2.0, 0.5]];
     let (_, bad) = tail_score_abcd(&a, &b, &c2, &d, &data, 0.25);
     assert!(bad > 0.1, "{bad}");
+}
+
+#[test]
+fn an_integrating_models_other_modes_must_settle_within_a_tenth_of_the_tail() {
+    let m = |real: Vec<f64>, pairs: Vec<(f64, f64)>| OeModel {
+        integrator: true,
+        real,
+        pairs,
+        c: vec![vec![1.0; 3]],
+        d: vec![0.0],
+        u0: 0.0,
+        y0: vec![0.0],
+    };
+    // Tail 6210 samples: modes up to 621 samples are judged.
+    assert!(modes_settle_within(
+        &m(vec![0.9972, -0.96], vec![]),
+        6210,
+        24841
+    ));
+    // A second pole at τ ≈ 1720 samples: a second integrator over the tail.
+    assert!(!modes_settle_within(
+        &m(vec![0.99942, 0.99], vec![]),
+        6210,
+        24841
+    ));
+    // A pair that decays fast enough but turns once in 240 000 samples: no oscillation.
+    assert!(!modes_settle_within(
+        &m(vec![], vec![(0.99714, 2.6e-5)]),
+        6210,
+        24841
+    ));
+    assert!(modes_settle_within(
+        &m(vec![], vec![(0.9, 0.3)]),
+        6210,
+        24841
+    ));
 }
