@@ -2,14 +2,15 @@
 //!
 //! Exact zero-order-hold 2nd-order plants and pulse records (the core's tests, the CLI's), and a
 //! CSV bench's rows ([`csv_bench`], the daemon's tests), effects hidden in real logs
-//! ([`inject`], the diagnosis's tests on measured data). Pure functions, no I/O: a dev-dependency
-//! only, so the numerics crate can test against it without the simulated stand's pty and serial
-//! dependencies entering its dependency tree. Cases that need the simulated plant and its hidden
-//! effects are `propid_sim::synth`.
+//! ([`inject`], the diagnosis's tests on measured data), stand logs as CSV text ([`logs`]).
+//! Pure functions, no I/O: a dev-dependency only, so the numerics crate can test against it
+//! without the simulated stand's pty and serial dependencies entering its dependency tree. Cases
+//! that need the simulated plant and its hidden effects are `propid_sim::synth`.
 
 pub mod csv_bench;
 pub mod dialects;
 pub mod inject;
+pub mod logs;
 
 use nalgebra::{DMatrix, Matrix2, Vector2};
 use propid_numerics::PulseInput;

@@ -24,8 +24,7 @@ use super::cobs;
 use super::crc::crc16_mcrf4xx;
 use super::encode::MAX_ENCODED;
 use super::error::DecodeError;
-use super::message::Frame;
-use super::payload;
+use super::message::{Frame, Message};
 use super::VERSION;
 
 /// Dropped frames, one counter per kind. Serialised as the daemon's `frames_dropped` object.
@@ -109,7 +108,7 @@ impl RawFrame<'_> {
         if self.ver != VERSION {
             return Err(DecodeError::BadVersion(self.ver));
         }
-        let msg = payload::parse(self.msg_type, self.payload)?;
+        let msg = Message::parse(self.msg_type, self.payload)?;
         Ok(Frame { seq: self.seq, msg })
     }
 }

@@ -5,7 +5,7 @@
 use super::cobs;
 use super::crc::crc16_mcrf4xx;
 use super::message::Message;
-use super::payload::{self, MAX_PAYLOAD};
+use super::payload::MAX_PAYLOAD;
 use super::VERSION;
 
 /// Largest body (`ver..crc`), bytes.
@@ -41,7 +41,7 @@ pub fn encode_frame(seq: u16, msg: &Message, out: &mut [u8]) -> usize {
 /// As [`encode_frame`], with a typed error when `out` is too small.
 pub fn try_encode_frame(seq: u16, msg: &Message, out: &mut [u8]) -> Result<usize, EncodeError> {
     let mut pl = [0u8; MAX_PAYLOAD];
-    let n = payload::write(msg, &mut pl);
+    let n = msg.write_payload(&mut pl);
     encode_raw(VERSION, msg.msg_type(), seq, &pl[..n], out)
 }
 

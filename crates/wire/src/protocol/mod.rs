@@ -1,7 +1,9 @@
 //! TSP/1, the thrust-stand serial protocol (`docs/PROTOCOL.md`), sans-IO.
 //!
 //! - [`crc`]: CRC-16/MCRF4XX; [`cobs`]: byte stuffing;
-//! - [`message`]: every message of both directions as typed `Copy` structs, [`Frame`];
+//! - [`message`]: every message of both directions as typed `Copy` structs, each in one file
+//!   with its type code, layout, CSV form and vector ([`WireMessage`]), registered in one list
+//!   that makes [`Message`]; [`Frame`]; [`payload`]: the little-endian layout primitives;
 //! - [`encode`]: [`encode_frame`] into a caller buffer (no allocation);
 //! - [`block`]: the stream split at every `0x00` into COBS blocks (one fixed buffer);
 //! - [`decoder`]: [`check_block`], the one integrity check of a frame (COBS, length, CRC),
@@ -38,7 +40,7 @@ pub use encode::{encode_frame, encode_raw, try_encode_frame, EncodeError, MAX_FR
 pub use error::DecodeError;
 pub use message::{
     Ack, AckResult, Arm, EscProtocol, Event, EventCode, Frame, Hello, Impulse, Log, Message,
-    Sample, SampleFlags, SetRate, SetThrottle,
+    Sample, SampleFlags, SetRate, SetThrottle, WireMessage,
 };
 
 /// Protocol major version carried in every frame (`ver`).

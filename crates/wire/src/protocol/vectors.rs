@@ -1,4 +1,5 @@
-//! The test vectors of docs/PROTOCOL.md §5, byte for byte, in both directions.
+//! The registry's test: every message's vector (docs/PROTOCOL.md §5 where it gives one) byte
+//! for byte in both directions and as its CSV line; then the decoder's drop counting.
 
 use super::message::*;
 use super::*;
@@ -30,117 +31,87 @@ fn check(seq: u16, msg: Message, wire_hex: &str) {
     assert_eq!(decode_one(&wire), Frame { seq, msg }, "decode {wire_hex}");
 }
 
+/// Every registered message: its type code and name unique, its vector encoded and decoded
+/// byte for byte, its payload's minimum length enforced, and its CSV line written (and read
+/// back where the dialect reads it) as the vector says.
 #[test]
-fn sample_vector() {
-    let msg = Message::Sample(Sample {
-        sample_index: 123_456,
-        t_us: 4_000_000_123,
-        throttle: 1500,
-        flags: SampleFlags(0x003F),
-        thrust_n: 4.25,
-        torque_nm: 0.061,
-        rpm: 12000.0,
-        voltage_v: 16.80,
-        current_a: 12.34,
-    });
-    check(
-        0x1234,
-        msg,
-        "08 01 42 34 12 40 e2 01 08 7b 28 6b ee dc 05 3f 01 01 07 88 40 23 db 79
-         3d 0e 80 3b 46 66 66 86 41 a4 70 45 41 07 39 00",
-    );
-}
+fn every_registered_message_round_trips_its_vector() {
+    let vectors = message::vectors();
+    let mut codes = std::collections::BTreeSet::new();
+    let mut names = std::collections::BTreeSet::new();
+    for v in &vectors {
+        let (t, name) = (v.msg.msg_type(), v.msg.name());
+        assert!(codes.insert(t), "type code {t:#04x} registered twice");
+        assert!(names.insert(name), "name {name} registered twice");
+        assert_eq!(type_name(t), Some(name));
+        check(v.seq, v.msg, v.wire);
 
-#[test]
-fn arm_vector() {
-    check(
-        7,
-        Message::Arm(Arm::new(500)),
-        "04 01 02 07 09 f4 01 41 52 4d 21 dd 96 00",
-    );
-}
-
-#[test]
-fn set_throttle_vector() {
-    let msg = Message::SetThrottle(SetThrottle {
-        level: 3500,
-        ramp_ms: 0,
-    });
-    check(8, msg, "04 01 04 08 03 ac 0d 01 03 6b 79 00");
-}
-
-#[test]
-fn impulse_vector() {
-    let msg = Message::Impulse(Impulse {
-        level: 6000,
-        width_us: 20_000,
-    });
-    check(9, msg, "04 01 05 09 05 70 17 20 4e 01 03 18 b6 00");
-}
-
-#[test]
-fn stop_vector() {
-    check(10, Message::Stop, "04 01 06 0a 03 33 34 00");
-}
-
-#[test]
-fn ack_vector() {
-    let msg = Message::Ack(Ack {
-        cmd_seq: 9,
-        cmd_type: msg_type::IMPULSE,
-        result: AckResult::Ok,
-        ack_flags: 0,
-        t_us: 4_000_010_000,
-    });
-    check(
-        0x1235,
-        msg,
-        "06 01 43 35 12 09 02 05 01 07 10 4f 6b ee 29 35 00",
-    );
-}
-
-#[test]
-fn every_message_round_trips() {
-    let msgs = [
-        Message::Hello(Hello {
-            proto_minor: 2,
-            esc_protocol: EscProtocol::DShot300,
-            fw_version: 0x0102,
-            boot_id: 0xDEAD_BEEF,
-            t_us: 99,
-            sample_rate_hz: 1000,
-            channels: 0x1F,
-            motor_poles: 14,
-            caps: 0x0F,
-            name: Hello::name_field("sim-stand"),
-        }),
-        Message::Event(Event {
-            code: EventCode::TxOverrun,
-            arg: 3,
-            t_us: 1,
-            sample_index: 77,
-        }),
-        Message::Log(Log::new(3, "boot ok")),
-        Message::Log(Log::new(0, &"x".repeat(200))),
-        Message::HelloReq,
-        Message::Disarm,
-        Message::Heartbeat,
-        Message::SetRate(SetRate {
-            sample_rate_hz: 2000,
-        }),
-        Message::Tare,
-    ];
-    for (i, m) in msgs.iter().enumerate() {
-        let wire = encoded(i as u16, m);
-        assert!(wire.len() <= MAX_FRAME_LEN);
-        assert_eq!(
-            decode_one(&wire),
-            Frame {
-                seq: i as u16,
-                msg: *m
-            }
-        );
+        let mut pl = [0u8; payload::MAX_PAYLOAD];
+        let n = v.msg.write_payload(&mut pl);
+        let min = min_payload_len(t).unwrap();
+        assert!(n >= min, "{name}: vector payload shorter than its minimum");
+        if min > 0 {
+            assert_eq!(
+                Message::parse(t, &pl[..min - 1]),
+                Err(DecodeError::ShortPayload {
+                    msg_type: t,
+                    len: min - 1,
+                    min
+                })
+            );
+        }
+        assert_eq!(Message::parse(t, &pl[..n]), Ok(v.msg), "{name}");
+        check_csv(v);
     }
+}
+
+/// The vector's CSV line: a command line written and read back, or a device line written and
+/// (HELLO, EVENT) read back; a message without one has no form either way.
+fn check_csv(v: &Vector<Message>) {
+    use csv::{device_line, encode_csv_command, parse_comment, parse_csv_command, CommentFact};
+    let name = v.msg.name();
+    let mut buf = [0u8; csv::MAX_CSV_COMMAND];
+    let command = encode_csv_command(&v.msg, &mut buf).map(|n| buf[..n].to_vec());
+    let device = device_line(&v.msg);
+    let Some(line) = v.csv else {
+        assert!(
+            command.is_err() && device.is_none(),
+            "{name} has a CSV form"
+        );
+        return;
+    };
+    let with_nl = format!("{line}\n");
+    match csv_command_form(v.msg.msg_type()) {
+        CsvCommandForm::None => {
+            assert_eq!(device.as_deref(), Some(with_nl.as_str()), "{name}");
+            let fact = line.strip_prefix('#').and_then(parse_comment);
+            let again = match fact {
+                Some(CommentFact::Hello(h)) => device_line(&Message::Hello(h)),
+                Some(CommentFact::Event(e)) => device_line(&Message::Event(e)),
+                None => return,
+            };
+            assert_eq!(again.as_deref(), Some(with_nl.as_str()), "{name} read back");
+        }
+        form => {
+            assert_eq!(device, None, "{name}");
+            assert_eq!(command.as_deref(), Ok(with_nl.as_bytes()), "{name}");
+            let back = parse_csv_command(line).unwrap();
+            assert_eq!(csv::CsvCommandKind::of(&back).keyword(), form.keyword());
+            if let CsvCommandForm::Reads(kw) = form {
+                assert_eq!(back, v.msg, "{name}");
+                assert_eq!(csv_reader(kw), Some(v.msg.msg_type()), "{kw} read by two");
+            }
+        }
+    }
+}
+
+/// The messages whose vectors are not all their cases: a LOG of the longest text.
+#[test]
+fn longest_log_round_trips() {
+    let m = Message::Log(Log::new(0, &"x".repeat(200)));
+    let wire = encoded(3, &m);
+    assert!(wire.len() <= MAX_FRAME_LEN);
+    assert_eq!(decode_one(&wire), Frame { seq: 3, msg: m });
 }
 
 #[test]

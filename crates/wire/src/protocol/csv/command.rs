@@ -3,10 +3,11 @@
 //! `STOP` (also the single byte `!`).
 //!
 //! [`encode_csv_command`] writes a [`Message`] as such a line (the host side: the daemon);
-//! [`parse_csv_command`] reads one back (the bench side: the simulated CSV bench). One keyword
-//! table ([`CsvCommandKind`]) serves both and the `#ACK <CMD> …` lines. HELLO_REQ and HEARTBEAT
-//! both become `PING` (any valid command resets the watchdog); SET_RATE and TARE have no CSV
-//! form.
+//! [`parse_csv_command`] reads one back (the bench side: the simulated CSV bench). Each
+//! message's keyword and arguments are its [`WireMessage`](super::super::message::WireMessage)
+//! implementation's; [`CsvCommandKind`] names the dialect's keywords for the `#ACK <CMD> …`
+//! lines. HELLO_REQ and HEARTBEAT both become `PING` (any valid command resets the watchdog);
+//! SET_RATE and TARE have no CSV form.
 //!
 //! Reading is lenient where a bench can afford it: keywords in any case, words after the
 //! arguments a command takes ignored. An argument that is missing, not a whole number, or out
@@ -15,7 +16,7 @@
 
 use std::io::Write as _;
 
-use super::super::message::{msg_type, AckResult, Arm, Impulse, Message, SetThrottle};
+use super::super::message::{csv_keyword, csv_reader, AckResult, CsvArgError, CsvArgs, Message};
 
 /// The command keyword of a CSV command or `#ACK` line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -36,14 +37,14 @@ pub enum CsvCommandKind {
     Other,
 }
 
-/// The keyword table: kind, keyword, the TSP/1 command type it stands for.
-const KEYWORDS: [(CsvCommandKind, &str, u8); 6] = [
-    (CsvCommandKind::Ping, "PING", msg_type::HELLO_REQ),
-    (CsvCommandKind::Arm, "ARM", msg_type::ARM),
-    (CsvCommandKind::Disarm, "DISARM", msg_type::DISARM),
-    (CsvCommandKind::Thr, "THR", msg_type::SET_THROTTLE),
-    (CsvCommandKind::Imp, "IMP", msg_type::IMPULSE),
-    (CsvCommandKind::Stop, "STOP", msg_type::STOP),
+/// The keyword table: kind and keyword (the messages say which keyword they are written as).
+const KEYWORDS: [(CsvCommandKind, &str); 6] = [
+    (CsvCommandKind::Ping, "PING"),
+    (CsvCommandKind::Arm, "ARM"),
+    (CsvCommandKind::Disarm, "DISARM"),
+    (CsvCommandKind::Thr, "THR"),
+    (CsvCommandKind::Imp, "IMP"),
+    (CsvCommandKind::Stop, "STOP"),
 ];
 
 impl CsvCommandKind {
@@ -63,20 +64,15 @@ impl CsvCommandKind {
         KEYWORDS.iter().find(|e| e.0 == self).map(|e| e.1)
     }
 
-    /// The TSP/1 command type it stands for (`PING` is HELLO_REQ).
+    /// The TSP/1 command type it stands for, the message that reads its keyword (`PING` is
+    /// HELLO_REQ).
     pub fn msg_type(self) -> Option<u8> {
-        KEYWORDS.iter().find(|e| e.0 == self).map(|e| e.2)
+        csv_reader(self.keyword()?)
     }
 
     /// The kind a TSP/1 command type is written as (HELLO_REQ and HEARTBEAT are `PING`).
     pub fn of_type(t: u8) -> Self {
-        if t == msg_type::HEARTBEAT {
-            return Self::Ping;
-        }
-        KEYWORDS
-            .iter()
-            .find(|e| e.2 == t)
-            .map_or(Self::Other, |e| e.0)
+        csv_keyword(t).map_or(Self::Other, Self::from_keyword)
     }
 
     /// The kind a message is written as (`Other` for those without a CSV form).
@@ -135,12 +131,9 @@ pub fn encode_csv_command(msg: &Message, out: &mut [u8]) -> Result<usize, CsvCom
         return Err(CsvCommandError::NoCsvForm(msg.name()));
     };
     let mut cur = std::io::Cursor::new(out);
-    let r = match msg {
-        Message::Arm(a) => writeln!(cur, "{kw} {}", a.watchdog_ms),
-        Message::SetThrottle(s) => writeln!(cur, "{kw} {} {}", s.level, s.ramp_ms),
-        Message::Impulse(i) => writeln!(cur, "{kw} {} {}", i.level, i.width_us),
-        _ => writeln!(cur, "{kw}"),
-    };
+    let r = write!(cur, "{kw}")
+        .and_then(|()| msg.write_csv_args(&mut cur))
+        .and_then(|()| writeln!(cur));
     r.map_err(|_| CsvCommandError::BufferTooSmall)?;
     Ok(cur.position() as usize)
 }
@@ -151,36 +144,20 @@ pub fn parse_csv_command(line: &str) -> Result<Message, CsvCommandError> {
     let mut it = line.split_whitespace();
     let kw = it.next().ok_or(CsvCommandError::Unknown)?;
     let kind = CsvCommandKind::from_keyword(&kw.to_ascii_uppercase());
-    let bad = CsvCommandError::BadArgument(kind);
+    let keyword = kind.keyword().ok_or(CsvCommandError::Unknown)?;
     // Arity first, then the numbers: a line with too few words is BAD_LENGTH whatever they are.
-    let (a0, a1) = (it.next(), it.next());
-    let missing = CsvCommandError::MissingArgument(kind);
-    let num = |a: &str| a.parse::<u64>().map_err(|_| bad);
-    let narrow = |v: u64| u16::try_from(v).map_err(|_| bad);
-    Ok(match kind {
-        CsvCommandKind::Ping => Message::HelloReq,
-        CsvCommandKind::Arm => Message::Arm(Arm::new(narrow(num(a0.ok_or(missing)?)?)?)),
-        CsvCommandKind::Disarm => Message::Disarm,
-        CsvCommandKind::Thr => {
-            let level = narrow(num(a0.ok_or(missing)?)?)?;
-            let ramp_ms = narrow(a1.map(num).transpose()?.unwrap_or(0))?;
-            Message::SetThrottle(SetThrottle { level, ramp_ms })
-        }
-        CsvCommandKind::Imp => {
-            let (level, width) = (a0.ok_or(missing)?, a1.ok_or(missing)?);
-            let level = narrow(num(level)?)?;
-            let width_us = u32::try_from(num(width)?).map_err(|_| bad)?;
-            Message::Impulse(Impulse { level, width_us })
-        }
-        CsvCommandKind::Stop => Message::Stop,
-        CsvCommandKind::Other => return Err(CsvCommandError::Unknown),
-    })
+    match Message::parse_csv_args(keyword, &mut CsvArgs::new(it)) {
+        None => Err(CsvCommandError::Unknown),
+        Some(Ok(msg)) => Ok(msg),
+        Some(Err(CsvArgError::Missing)) => Err(CsvCommandError::MissingArgument(kind)),
+        Some(Err(CsvArgError::Bad)) => Err(CsvCommandError::BadArgument(kind)),
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::protocol::message::SetRate;
+    use crate::protocol::message::{msg_type, Arm, Impulse, SetRate, SetThrottle};
 
     fn line(msg: &Message) -> String {
         let mut buf = [0u8; MAX_CSV_COMMAND];

@@ -1,6 +1,7 @@
 //! What a CSV bench writes (docs/PROTOCOL.md §6 and the keyword lines of propid's simulated stand,
 //! which benches may copy): written by [`device_line`] (the simulated stand) and read back by
-//! [`parse_ack`] and [`parse_comment`] (the daemon, file ingest).
+//! [`parse_ack`] and [`parse_comment`] (the daemon, file ingest). Each message's line is its
+//! [`WireMessage`](super::super::message::WireMessage) implementation's:
 //!
 //! | message | line                                                                   |
 //! |---------|------------------------------------------------------------------------|
@@ -14,11 +15,10 @@
 //! `rate_hz` rate 0 = unknown), strict about numbers (a malformed number makes the line an
 //! ordinary comment, never a wrong fact).
 
-use std::fmt::Write as _;
-
-use super::super::message::{AckResult, EscProtocol, Event, EventCode, Hello, Message, Sample};
+use super::super::message::{Event, Hello, Message, WireMessage};
 use super::command::CsvCommandKind;
-use super::line::append_checksum;
+
+pub use super::super::message::{event_code, event_name};
 
 /// A `#ACK` line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,83 +38,15 @@ pub enum CommentFact {
     Event(Event),
 }
 
-/// The event names of docs/PROTOCOL.md §3, one table both ways.
-const EVENT_NAMES: [(EventCode, &str); 9] = [
-    (EventCode::ImpulseStart, "IMPULSE_START"),
-    (EventCode::ImpulseEnd, "IMPULSE_END"),
-    (EventCode::WatchdogTrip, "WATCHDOG_TRIP"),
-    (EventCode::LimitCutoff, "LIMIT_CUTOFF"),
-    (EventCode::Armed, "ARMED"),
-    (EventCode::Disarmed, "DISARMED"),
-    (EventCode::TxOverrun, "TX_OVERRUN"),
-    (EventCode::ResetCause, "RESET_CAUSE"),
-    (EventCode::TareDone, "TARE_DONE"),
-];
-
-/// Protocol name of an event code (`OTHER` for a code this version does not know).
-pub fn event_name(c: EventCode) -> &'static str {
-    EVENT_NAMES
-        .iter()
-        .find(|e| e.0 == c)
-        .map_or("OTHER", |e| e.1)
-}
-
-/// The event code of a docs/PROTOCOL.md §3 event name.
-pub fn event_code(name: &str) -> Option<EventCode> {
-    EVENT_NAMES.iter().find(|e| e.1 == name).map(|e| e.0)
-}
-
 /// The line (with its `\n`) a CSV bench writes for `msg`; `None` for messages the dialect has
 /// no form for (host commands: see [`encode_csv_command`](super::encode_csv_command)).
 pub fn device_line(msg: &Message) -> Option<String> {
     let mut s = String::new();
-    match msg {
-        Message::Sample(x) => write_row(x, &mut s),
-        Message::Ack(a) => {
-            let word = CsvCommandKind::of_type(a.cmd_type).keyword().unwrap_or("?");
-            if a.result == AckResult::Ok {
-                let _ = write!(s, "#ACK {word} OK {}", a.t_us);
-            } else {
-                let _ = write!(s, "#ACK {word} ERR {}", a.result.to_u8());
-            }
-        }
-        Message::Event(e) => {
-            let _ = write!(
-                s,
-                "#EVENT {} {} {} {}",
-                event_name(e.code),
-                e.arg,
-                e.t_us,
-                e.sample_index
-            );
-        }
-        Message::Hello(h) => {
-            let _ = write!(
-                s,
-                "# HELLO {} fw {} boot_id {:08x} rate_hz {}",
-                h.name_str(),
-                h.fw_version,
-                h.boot_id,
-                h.sample_rate_hz
-            );
-        }
-        Message::Log(l) => {
-            let _ = write!(s, "# {}", l.text().replace('\n', " "));
-        }
-        _ => return None,
+    if !msg.write_csv_line(&mut s) {
+        return None;
     }
     s.push('\n');
     Some(s)
-}
-
-/// A SAMPLE as a header-less data row with its checksum (no newline).
-fn write_row(x: &Sample, s: &mut String) {
-    let _ = write!(
-        s,
-        "{},{},{:.4},{:.5},{:.1},{:.3},{:.3}",
-        x.t_us, x.throttle, x.thrust_n, x.torque_nm, x.rpm, x.voltage_v, x.current_a
-    );
-    append_checksum(s);
 }
 
 /// Parse `ACK <CMD> OK <t_us>` / `ACK <CMD> ERR <code>` (the text after `#`).
@@ -137,59 +69,20 @@ pub fn parse_ack(s: &str) -> Option<CsvAck> {
 
 /// Reads a comment (the text after `#`): a HELLO or EVENT line, or `None` for anything else.
 pub fn parse_comment(text: &str) -> Option<CommentFact> {
-    let mut words = text.split_whitespace();
-    match words.next()? {
-        "HELLO" => parse_hello(words).map(CommentFact::Hello),
-        "EVENT" => parse_event(words).map(CommentFact::Event),
+    match text.split_whitespace().next()? {
+        "HELLO" => Hello::read_csv_line(text).map(CommentFact::Hello),
+        "EVENT" => Event::read_csv_line(text).map(CommentFact::Event),
         _ => None,
     }
-}
-
-fn parse_hello<'a>(mut words: impl Iterator<Item = &'a str>) -> Option<Hello> {
-    let mut hello = Hello {
-        proto_minor: 0,
-        esc_protocol: EscProtocol::None,
-        fw_version: 0,
-        boot_id: 0,
-        t_us: 0,
-        sample_rate_hz: 0,
-        channels: 0,
-        motor_poles: 0,
-        caps: 0,
-        name: [0; 16],
-    };
-    let mut first = true;
-    while let Some(w) = words.next() {
-        match w {
-            "fw" => hello.fw_version = words.next()?.parse().ok()?,
-            "boot_id" => hello.boot_id = u32::from_str_radix(words.next()?, 16).ok()?,
-            "rate_hz" => hello.sample_rate_hz = words.next()?.parse().ok()?,
-            name if first => hello.name = Hello::name_field(name),
-            _ => {}
-        }
-        first = false;
-    }
-    Some(hello)
-}
-
-fn parse_event<'a>(mut words: impl Iterator<Item = &'a str>) -> Option<Event> {
-    let code = event_code(words.next()?)?;
-    let arg = words.next()?.parse().ok()?;
-    let t_us = words.next()?.parse().ok()?;
-    let sample_index = words.next()?.parse().ok()?;
-    Some(Event {
-        code,
-        arg,
-        t_us,
-        sample_index,
-    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::protocol::csv::line::{checksum, classify, LineKind};
-    use crate::protocol::message::{msg_type, Ack, SampleFlags};
+    use crate::protocol::message::{
+        msg_type, Ack, AckResult, EventCode, Sample, SampleFlags, EVENT_NAMES,
+    };
 
     fn comment(line: &str) -> &str {
         line.trim_end().strip_prefix('#').unwrap()

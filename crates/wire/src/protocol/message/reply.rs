@@ -1,7 +1,13 @@
 //! The device's answers and reports (docs/PROTOCOL.md §3): 0x43 ACK with its result codes, 0x44
-//! EVENT with its event codes, 0x45 LOG.
+//! EVENT with its event codes and names, 0x45 LOG; the layout, CSV line (§6: `#ACK <CMD> OK
+//! <t_us>` or `#ACK <CMD> ERR <code>`, `#EVENT <NAME> <arg> <t_us> <sample_index>`, `# <text>`)
+//! and vector of each.
 
-use super::{floor_char_boundary, utf8_prefix};
+use std::fmt::Write as _;
+
+use super::super::payload::{u16_at, u32_at, Writer};
+use super::wire_message::{Vector, WireMessage};
+use super::{csv_keyword, floor_char_boundary, msg_type, utf8_prefix};
 
 /// ACK result code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -146,6 +152,32 @@ impl EventCode {
     }
 }
 
+/// The event names of docs/PROTOCOL.md §3, one table both ways.
+pub(crate) const EVENT_NAMES: [(EventCode, &str); 9] = [
+    (EventCode::ImpulseStart, "IMPULSE_START"),
+    (EventCode::ImpulseEnd, "IMPULSE_END"),
+    (EventCode::WatchdogTrip, "WATCHDOG_TRIP"),
+    (EventCode::LimitCutoff, "LIMIT_CUTOFF"),
+    (EventCode::Armed, "ARMED"),
+    (EventCode::Disarmed, "DISARMED"),
+    (EventCode::TxOverrun, "TX_OVERRUN"),
+    (EventCode::ResetCause, "RESET_CAUSE"),
+    (EventCode::TareDone, "TARE_DONE"),
+];
+
+/// Protocol name of an event code (`OTHER` for a code this version does not know).
+pub fn event_name(c: EventCode) -> &'static str {
+    EVENT_NAMES
+        .iter()
+        .find(|e| e.0 == c)
+        .map_or("OTHER", |e| e.1)
+}
+
+/// The event code of a docs/PROTOCOL.md §3 event name.
+pub fn event_code(name: &str) -> Option<EventCode> {
+    EVENT_NAMES.iter().find(|e| e.1 == name).map(|e| e.0)
+}
+
 /// 0x44 EVENT.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Event {
@@ -207,6 +239,154 @@ impl std::fmt::Debug for Log {
             .field("severity", &self.severity)
             .field("text", &self.text())
             .finish()
+    }
+}
+
+impl WireMessage for Ack {
+    const TYPE: u8 = 0x43;
+    const NAME: &'static str = "ACK";
+    const MIN_LEN: usize = 9;
+
+    fn parse(p: &[u8]) -> Self {
+        Ack {
+            cmd_seq: u16_at(p, 0),
+            cmd_type: p[2],
+            result: AckResult::from_u8(p[3]),
+            ack_flags: p[4],
+            t_us: u32_at(p, 5),
+        }
+    }
+
+    fn write(&self, w: &mut Writer<'_>) {
+        w.u16(self.cmd_seq);
+        w.u8(self.cmd_type);
+        w.u8(self.result.to_u8());
+        w.u8(self.ack_flags);
+        w.u32(self.t_us);
+    }
+
+    /// Read back as the dialect's `CsvAck` (a keyword, not a type code), by `csv::parse_ack`.
+    fn write_csv_line(&self, s: &mut String) -> bool {
+        let word = csv_keyword(self.cmd_type).unwrap_or("?");
+        if self.result == AckResult::Ok {
+            let _ = write!(s, "#ACK {word} OK {}", self.t_us);
+        } else {
+            let _ = write!(s, "#ACK {word} ERR {}", self.result.to_u8());
+        }
+        true
+    }
+
+    fn vector() -> Vector<Self> {
+        Vector {
+            seq: 0x1235,
+            msg: Ack {
+                cmd_seq: 9,
+                cmd_type: msg_type::IMPULSE,
+                result: AckResult::Ok,
+                ack_flags: 0,
+                t_us: 4_000_010_000,
+            },
+            wire: "06 01 43 35 12 09 02 05 01 07 10 4f 6b ee 29 35 00",
+            csv: Some("#ACK IMP OK 4000010000"),
+        }
+    }
+}
+
+impl WireMessage for Event {
+    const TYPE: u8 = 0x44;
+    const NAME: &'static str = "EVENT";
+    const MIN_LEN: usize = 12;
+
+    fn parse(p: &[u8]) -> Self {
+        Event {
+            code: EventCode::from_u8(p[0]),
+            arg: u16_at(p, 2),
+            t_us: u32_at(p, 4),
+            sample_index: u32_at(p, 8),
+        }
+    }
+
+    fn write(&self, w: &mut Writer<'_>) {
+        w.u8(self.code.to_u8());
+        w.u8(0);
+        w.u16(self.arg);
+        w.u32(self.t_us);
+        w.u32(self.sample_index);
+    }
+
+    fn write_csv_line(&self, s: &mut String) -> bool {
+        let _ = write!(
+            s,
+            "#EVENT {} {} {} {}",
+            event_name(self.code),
+            self.arg,
+            self.t_us,
+            self.sample_index
+        );
+        true
+    }
+
+    /// Strict: a known name and three numbers, else not an EVENT.
+    fn read_csv_line(text: &str) -> Option<Self> {
+        let mut words = text.split_whitespace();
+        if words.next()? != "EVENT" {
+            return None;
+        }
+        let code = event_code(words.next()?)?;
+        let arg = words.next()?.parse().ok()?;
+        let t_us = words.next()?.parse().ok()?;
+        let sample_index = words.next()?.parse().ok()?;
+        Some(Event {
+            code,
+            arg,
+            t_us,
+            sample_index,
+        })
+    }
+
+    fn vector() -> Vector<Self> {
+        Vector {
+            seq: 1,
+            msg: Event {
+                code: EventCode::TxOverrun,
+                arg: 3,
+                t_us: 1,
+                sample_index: 77,
+            },
+            wire: "04 01 44 01 02 07 02 03 02 01 01 01 02 4d 01 01 03 d1 f9 00",
+            csv: Some("#EVENT TX_OVERRUN 3 1 77"),
+        }
+    }
+}
+
+impl WireMessage for Log {
+    const TYPE: u8 = 0x45;
+    const NAME: &'static str = "LOG";
+    const MIN_LEN: usize = 1;
+
+    fn parse(p: &[u8]) -> Self {
+        Log::from_bytes(p[0], &p[1..])
+    }
+
+    fn write(&self, w: &mut Writer<'_>) {
+        w.u8(self.severity);
+        let b = self.bytes();
+        w.bytes(&b[..b.len().min(LOG_TEXT_MAX)]);
+    }
+
+    /// An ordinary comment (newlines as spaces), read back as one.
+    fn write_csv_line(&self, s: &mut String) -> bool {
+        let _ = write!(s, "# {}", self.text().replace('\n', " "));
+        true
+    }
+
+    fn vector() -> Vector<Self> {
+        Vector {
+            seq: 2,
+            msg: Log::new(3, "boot ok"),
+            wire: "04 01 45 02 0b 03 62 6f 6f 74 20 6f 6b b8 fc 00",
+            csv: Some("# boot ok"),
+        }
     }
 }
 

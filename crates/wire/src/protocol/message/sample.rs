@@ -1,5 +1,12 @@
 //! 0x42 SAMPLE (docs/PROTOCOL.md §3): one measurement, its flags, and the throttle scale of the
-//! wire.
+//! wire; its layout, its CSV row (`t_us,throttle,thrust_N,torque_Nm,rpm,voltage_V,current_A*HH`,
+//! §6's header-less order with its checksum) and its vector.
+
+use std::fmt::Write as _;
+
+use super::super::csv::line::append_checksum;
+use super::super::payload::{f32_at, u16_at, u32_at, Writer};
+use super::wire_message::{Vector, WireMessage};
 
 /// SAMPLE flags (docs/PROTOCOL.md §3), a `u16` bit set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, serde::Serialize)]
@@ -146,6 +153,76 @@ impl Sample {
     /// Current (A) if valid.
     pub fn current(&self) -> Option<f32> {
         self.valid(SampleFlags::CURRENT_VALID, self.current_a)
+    }
+}
+
+impl WireMessage for Sample {
+    const TYPE: u8 = 0x42;
+    const NAME: &'static str = "SAMPLE";
+    const MIN_LEN: usize = 32;
+
+    fn parse(p: &[u8]) -> Self {
+        Sample {
+            sample_index: u32_at(p, 0),
+            t_us: u32_at(p, 4),
+            throttle: u16_at(p, 8),
+            flags: SampleFlags(u16_at(p, 10)),
+            thrust_n: f32_at(p, 12),
+            torque_nm: f32_at(p, 16),
+            rpm: f32_at(p, 20),
+            voltage_v: f32_at(p, 24),
+            current_a: f32_at(p, 28),
+        }
+    }
+
+    fn write(&self, w: &mut Writer<'_>) {
+        w.u32(self.sample_index);
+        w.u32(self.t_us);
+        w.u16(self.throttle);
+        w.u16(self.flags.0);
+        w.f32(self.thrust_n);
+        w.f32(self.torque_nm);
+        w.f32(self.rpm);
+        w.f32(self.voltage_v);
+        w.f32(self.current_a);
+    }
+
+    /// A header-less data row with its checksum (read back through the CSV header machinery,
+    /// not as a message).
+    fn write_csv_line(&self, s: &mut String) -> bool {
+        let _ = write!(
+            s,
+            "{},{},{:.4},{:.5},{:.1},{:.3},{:.3}",
+            self.t_us,
+            self.throttle,
+            self.thrust_n,
+            self.torque_nm,
+            self.rpm,
+            self.voltage_v,
+            self.current_a
+        );
+        append_checksum(s);
+        true
+    }
+
+    fn vector() -> Vector<Self> {
+        Vector {
+            seq: 0x1234,
+            msg: Sample {
+                sample_index: 123_456,
+                t_us: 4_000_000_123,
+                throttle: 1500,
+                flags: SampleFlags(0x003F),
+                thrust_n: 4.25,
+                torque_nm: 0.061,
+                rpm: 12000.0,
+                voltage_v: 16.80,
+                current_a: 12.34,
+            },
+            wire: "08 01 42 34 12 40 e2 01 08 7b 28 6b ee dc 05 3f 01 01 07 88 40 23 db 79
+                   3d 0e 80 3b 46 66 66 86 41 a4 70 45 41 07 39 00",
+            csv: Some("4000000123,1500,4.2500,0.06100,12000.0,16.800,12.340*12"),
+        }
     }
 }
 
