@@ -213,7 +213,7 @@ fn levels_slope(loaded: &load::Loaded) -> Option<LevelSlope> {
 /// Reads FILE as the options say: the shared loader ([`crate::cli::load`]), then what identify
 /// keeps of it ([`load::load`]).
 fn read(args: &Args) -> Result<load::Loaded, CliError> {
-    let file = args.read.load(&load::OPTIONAL)?;
+    let file = args.read.load_window(&load::OPTIONAL)?;
     load::load(file).map_err(|e| match e.cause {
         NoSteps::TooShort => CliError::StepsTooShort { file: e.file },
         cause @ NoSteps::NoneFound => CliError::NoInput {

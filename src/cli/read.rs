@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use super::CliError;
 use crate::input::{read_bounded, read_chunks, ReadError, MAX_INPUT_BYTES};
 pub use propid_ingest::load::*;
+use propid_ingest::window::{Scan, Scanned, WINDOW_SAMPLES};
 
 /// FILE and the flags that say how to read it, shared by every command that reads a file
 /// (`identify`, `diagnose`: `#[command(flatten)]` in their `Args`); [`ReadArgs::request`] makes
@@ -84,6 +85,18 @@ impl ReadArgs {
     pub fn load(&self, optional: &[&str]) -> Result<LoadedFile, CliError> {
         load(&self.file, &self.request(optional))
     }
+
+    /// [`ReadArgs::load`], but a binary TSP/1 recording longer than the identification window
+    /// keeps that window only, in two passes over the file and memory for the window
+    /// ([`propid_ingest::window`]; `identify`).
+    pub fn load_window(&self, optional: &[&str]) -> Result<LoadedFile, CliError> {
+        let req = self.request(optional);
+        if let Some(loaded) = load_window(&self.file, &req)? {
+            return Ok(loaded);
+        }
+        let bytes = read_input(&self.file)?;
+        Ok(load_owned(self.file.display().to_string(), bytes, &req)?)
+    }
 }
 
 /// Reads all of `file` within [`MAX_INPUT_BYTES`]: unreadable is an I/O error (exit 7), too
@@ -123,6 +136,50 @@ fn load_streamed(file: &Path, req: &Request) -> Result<Option<LoadedFile>, CliEr
     }
 }
 
+/// A regular file whose first bytes are a binary TSP/1 recording, of any size, read as
+/// [`Scan`] says: whole within the window, else its window in a second pass. `None` for
+/// anything else.
+fn load_window(file: &Path, req: &Request) -> Result<Option<LoadedFile>, CliError> {
+    let name = file.display().to_string();
+    let io = |e| match e {
+        ReadError::Io(e) => CliError::io(format!("reading {name}"), e),
+        ReadError::TooLarge { limit } => LoadError::TooLarge {
+            file: name.clone(),
+            limit,
+        }
+        .into(),
+    };
+    let bad = |source| -> CliError {
+        LoadError::Recording {
+            file: name.clone(),
+            source,
+        }
+        .into()
+    };
+    let command = match req.input {
+        Some(NO_INPUT) => None,
+        other => Some(other.unwrap_or(propid_wire::record::names::THROTTLE)),
+    };
+    let mut scan = Scan::new(&ingest_options(req), command, WINDOW_SAMPLES);
+    if !read_chunks(file, u64::MAX, is_binary_recording, |c| scan.push(c)).map_err(io)? {
+        return Ok(None);
+    }
+    let (record, stats) = loop {
+        match scan.finish().map_err(bad)? {
+            Scanned::Whole(record, stats) => break (record, stats),
+            Scanned::Rescan(again) => {
+                scan = again;
+                read_chunks(file, u64::MAX, |_, _| true, |c| scan.push(c)).map_err(io)?;
+            }
+            Scanned::Window(mut reader) => {
+                read_chunks(file, u64::MAX, |_, _| true, |c| reader.push(c)).map_err(io)?;
+                break reader.finish().map_err(bad)?;
+            }
+        }
+    };
+    Ok(Some(from_record(req, name, record, stats)?))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -154,5 +211,77 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let e = load(&dir.path().join("absent.csv"), &Request::default()).unwrap_err();
         assert_eq!(e.exit_code(), 7, "{e}");
+    }
+
+    /// A binary recording of `n` samples at 1 kHz whose throttle steps on every 50th row over
+    /// rows `burst` only.
+    fn recording(n: u32, burst: std::ops::Range<u32>) -> Vec<u8> {
+        use propid_wire::protocol::message::{Sample, SampleFlags};
+        use propid_wire::protocol::{encode_frame, Message, MAX_FRAME_LEN};
+        let mut out = Vec::new();
+        let mut buf = [0u8; MAX_FRAME_LEN];
+        for i in 0..n {
+            let up = burst.contains(&i) && (i / 50) % 2 == 1;
+            let s = Sample {
+                sample_index: i,
+                t_us: 1000 * i,
+                throttle: if up { 3000 } else { 2000 },
+                flags: SampleFlags::THRUST_VALID | SampleFlags::THRUST_FRESH,
+                thrust_n: if up { 2.0 } else { 1.0 } + 0.001 * (i % 5) as f32,
+                ..Sample::default()
+            };
+            let len = encode_frame(i as u16, &Message::Sample(s), &mut buf);
+            out.extend_from_slice(&buf[..len]);
+        }
+        out
+    }
+
+    #[test]
+    fn a_long_recording_is_read_in_two_passes_keeping_its_window() {
+        let dir = tempfile::tempdir().unwrap();
+        let n = WINDOW_SAMPLES as u32 + 9000;
+        let f = dir.path().join("long.tsp");
+        std::fs::write(&f, recording(n, n - 1000..n - 500)).unwrap();
+        let args = ReadArgs {
+            file: f,
+            ..ReadArgs::default()
+        };
+        let whole = args.load(&[]).unwrap();
+        let part = args.load_window(&[]).unwrap();
+        let Origin::Tsp1(stats) = &part.origin else {
+            panic!("not read as a recording");
+        };
+        let w = stats.window.unwrap();
+        // the burst's block (a sixteenth of the window) is the window's last
+        let start = WINDOW_SAMPLES / 16;
+        assert_eq!(
+            (w.start, w.samples, w.file_samples),
+            (start, WINDOW_SAMPLES, n as usize)
+        );
+        assert!(w.moves > 0 && w.moves <= w.file_moves, "{w:?}");
+        let span = start..start + WINDOW_SAMPLES;
+        for name in ["throttle", "thrust_N"] {
+            assert_eq!(part.data(name), whole.data(name)[span.clone()], "{name}");
+        }
+        // the file's counters
+        let Origin::Tsp1(all) = &whole.origin else {
+            panic!("not read as a recording");
+        };
+        assert_eq!(stats.assemble, all.assemble);
+        assert_eq!(stats.frames, all.frames);
+        // a short one is read as before
+        let short = dir.path().join("short.tsp");
+        std::fs::write(&short, recording(5000, 1000..2000)).unwrap();
+        let args = ReadArgs {
+            file: short,
+            ..ReadArgs::default()
+        };
+        let (a, b) = (args.load(&[]).unwrap(), args.load_window(&[]).unwrap());
+        assert_eq!(format!("{:?}", a.record), format!("{:?}", b.record));
+        let (Origin::Tsp1(a), Origin::Tsp1(b)) = (a.origin, b.origin) else {
+            panic!("not read as a recording");
+        };
+        assert_eq!(a, b);
+        assert_eq!(b.window, None);
     }
 }

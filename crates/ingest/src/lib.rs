@@ -13,6 +13,8 @@
 //!   [`held`] for a slow sensor written on every row as its last reading, [`interpolated`] for
 //!   one the exporter interpolated onto every row, [`gaps`] for a channel's missing samples, [`resample`] for
 //!   irregular timestamps ([`coarse_clock`] for stamps coarser than the rows), and [`steps`] found from a response-only record.
+//! - [`window`]: a binary recording longer than the identification window read in bounded
+//!   memory (two passes: the span with the command's most moves, then its rows).
 
 pub mod coarse_clock;
 pub mod columns_read;
@@ -24,6 +26,7 @@ pub mod load;
 pub mod resample;
 pub mod steps;
 pub mod tsp;
+pub mod window;
 
 pub use propid_wire::stream::{assemble, clock, IngestError};
 pub use propid_wire::stream::{

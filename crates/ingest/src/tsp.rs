@@ -16,6 +16,7 @@
 use serde::Serialize;
 
 use super::assemble::{AssembleOptions, AssembleStats, BuildStats, RecordBuilder, Values};
+use super::window::{record_window, RecordWindow};
 use super::IngestError;
 use propid_wire::protocol::csv::{
     CsvDecoder, CsvItem, CsvOptions, CsvRow, CsvStats, UnresolvedColumn,
@@ -62,6 +63,9 @@ pub struct IngestStats {
     pub dt_s: f64,
     /// Nominal sample period from HELLO, s (binary input with a HELLO).
     pub dt_nominal_s: Option<f64>,
+    /// The span of the file the record holds, when not all of it ([`crate::window`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window: Option<RecordWindow>,
 }
 
 /// Read a recording with default options.
@@ -95,6 +99,8 @@ fn read_binary(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats),
 pub struct BinaryReader {
     dec: Decoder,
     builder: RecordBuilder,
+    /// The command's moves in the kept span and in the file (a windowed reader).
+    pub(crate) moves: Option<(usize, usize)>,
 }
 
 impl BinaryReader {
@@ -103,7 +109,18 @@ impl BinaryReader {
         BinaryReader {
             dec: Decoder::new(),
             builder: RecordBuilder::new(o.assemble),
+            moves: None,
         }
+    }
+
+    /// The record builder.
+    pub fn builder(&self) -> &RecordBuilder {
+        &self.builder
+    }
+
+    /// The record builder, to keep a span of it or take its rows.
+    pub fn builder_mut(&mut self) -> &mut RecordBuilder {
+        &mut self.builder
     }
 
     /// The next bytes of the recording.
@@ -115,7 +132,12 @@ impl BinaryReader {
     /// The record and what reading it found.
     pub fn finish(self) -> Result<(Record, IngestStats), IngestError> {
         let dt_nominal_s = self.builder.assembler().nominal_dt_s();
+        let (kept, file_samples) = (self.builder.kept(), self.builder.len());
         let (record, assemble, build) = self.builder.finish()?;
+        let window = kept.map(|k| {
+            let moves = self.moves.unwrap_or_default();
+            record_window(k, file_samples, record.len(), record.dt_s, moves)
+        });
         let stats = IngestStats {
             format: WireFormat::Binary,
             frames: Some(*self.dec.stats()),
@@ -124,6 +146,7 @@ impl BinaryReader {
             build,
             dt_s: record.dt_s,
             dt_nominal_s,
+            window,
         };
         Ok((record, stats))
     }
@@ -179,6 +202,7 @@ fn read_csv(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats), In
         build,
         dt_s: record.dt_s,
         dt_nominal_s,
+        window: None,
     };
     Ok((record, stats))
 }

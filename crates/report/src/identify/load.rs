@@ -6,6 +6,7 @@ use crate::columns_read::ColumnsRead;
 use propid_ingest::csv_file::CsvSource;
 use propid_ingest::load::{steps_from_response, LoadedFile, NoSteps, Origin};
 use propid_ingest::steps::FoundStep;
+use propid_ingest::window::RecordWindow;
 use propid_ingest::IngestStats;
 use propid_numerics::outliers::{find_outliers, isolated_outliers_of_readings, OutlierScratch};
 use propid_numerics::segment::SegmentRules;
@@ -78,6 +79,10 @@ pub struct Source {
     pub nominal_rate_hz: Option<f64>,
     /// Samples in the record.
     pub samples: usize,
+    /// The span of a binary recording longer than the identification window that the record
+    /// holds, with the file's length (`propid_ingest::window`); absent when it holds all.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub window: Option<RecordWindow>,
     /// Samples marked missing by the file (lost, empty cells).
     pub missing: usize,
     /// Isolated outlier samples of the outputs, left out (marked missing, not counted in
@@ -204,7 +209,7 @@ pub fn load(file: LoadedFile) -> Result<Loaded, NoInput> {
             stand_interpolated.push(Vec::new());
         }
     }
-    let (format, output_names, rate_hz, tsp1, csv) = match file.origin {
+    let (format, output_names, rate_hz, mut tsp1, csv) = match file.origin {
         Origin::Tsp1(stats) => (
             "tsp1",
             file.outputs.clone(),
@@ -215,6 +220,7 @@ pub fn load(file: LoadedFile) -> Result<Loaded, NoInput> {
         Origin::Csv(src) => ("csv", src.outputs.clone(), src.rate_hz, None, Some(*src)),
     };
     let read = ColumnsRead::of(csv.as_ref());
+    let window = tsp1.as_mut().and_then(|s| s.window.take());
     let voltage = rec.channel(names::VOLTAGE).map(|c| c.data.clone());
     Ok(Loaded {
         dt_s: rec.dt_s,
@@ -240,6 +246,7 @@ pub fn load(file: LoadedFile) -> Result<Loaded, NoInput> {
                 .and_then(|s| s.dt_nominal_s)
                 .map(|dt| 1.0 / dt),
             samples: rec.len(),
+            window,
             missing: rec.missing_count(),
             outliers: 0,
             start_up_transient: 0,

@@ -373,6 +373,19 @@ impl<'a> Output<'a> {
             "rate      {:.4} Hz{nominal}, {} samples ({} missing)",
             s.rate_hz, s.samples, s.missing
         );
+        if let Some(w) = &s.window {
+            let _ = writeln!(
+                o,
+                "window    samples {}..{} of the file's {} ({:.1} s from its start; the \
+                 command's {} of {} moves): the span identified",
+                w.start,
+                w.start + w.samples,
+                w.file_samples,
+                w.start_s,
+                w.moves,
+                w.file_moves
+            );
+        }
         if s.outliers > 0 {
             let _ = writeln!(
                 o,

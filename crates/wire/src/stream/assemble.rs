@@ -566,7 +566,7 @@ impl SampleAssembler {
 
 mod builder;
 
-pub use builder::{sample_values, BuildStats, RecordBuilder, Values, CHANNELS};
+pub use builder::{sample_values, BuildStats, RecordBuilder, Rows, Values, CHANNELS};
 
 #[cfg(test)]
 mod tests;

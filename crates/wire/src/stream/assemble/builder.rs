@@ -5,6 +5,9 @@
 //! later sample where one of these is not valid (or not finite) is marked missing as a whole
 //! (the record allows NaN only at missing samples) and counted in `invalid_samples`. Link
 //! frames lost are counted from jumps of the 16-bit `seq` between successive device frames.
+//! A builder may keep the rows of one span of positions only ([`RecordBuilder::keep`]: a long
+//! recording read in bounded memory), or hand its rows over as it goes
+//! ([`RecordBuilder::take_rows`]); every counter is still the whole stream's.
 
 use serde::Serialize;
 
@@ -74,6 +77,26 @@ struct Store {
     events: Vec<RecordEvent>,
     t0_us: Option<u64>,
     stats: BuildStats,
+    /// Positions stored, `[from, to)`; `None`: all. Rows outside are placed and counted only.
+    keep: Option<(usize, usize)>,
+    /// Position of the next row (the stream's length so far).
+    next: usize,
+    /// Positions of events after the kept span not yet reached by a row (an event placed past
+    /// the stream's last row is counted as dropped, kept or not).
+    late: Vec<usize>,
+}
+
+/// Rows handed over by [`RecordBuilder::take_rows`], in [`CHANNELS`] order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Rows {
+    /// Position of the first row.
+    pub start: usize,
+    /// Which of [`CHANNELS`] the record has (`None` before the first sample).
+    pub present: Option<[bool; 6]>,
+    /// One column per channel of [`CHANNELS`] (NaN where missing or not recorded).
+    pub data: [Vec<f64>; 6],
+    /// Missing rows.
+    pub missing: Vec<bool>,
 }
 
 impl RecordBuilder {
@@ -95,14 +118,42 @@ impl RecordBuilder {
         &self.store.stats
     }
 
-    /// Samples so far (missing ones included).
+    /// Samples so far (missing ones included; stored or not).
     pub fn len(&self) -> usize {
-        self.store.missing.len()
+        self.store.next
     }
 
     /// True before the first sample.
     pub fn is_empty(&self) -> bool {
-        self.store.missing.is_empty()
+        self.store.next == 0
+    }
+
+    /// Store the rows at positions `[from, to)` only (and the events among them, moved to
+    /// positions from `from`); the record [`finish`](Self::finish) gives then starts at
+    /// position `from` (its `t0_s` is `from` periods later) and holds at most `to − from` rows.
+    /// Counters stay the whole stream's. Call before the first sample.
+    pub fn keep(&mut self, from: usize, to: usize) {
+        self.store.keep = Some((from, to.max(from)));
+    }
+
+    /// The span [`keep`](Self::keep) set, if any.
+    pub fn kept(&self) -> Option<(usize, usize)> {
+        self.store.keep
+    }
+
+    /// Hands over the rows stored so far; from here on the builder stores the rows after them
+    /// (and no events: a builder whose rows are taken gives no record of its events).
+    pub fn take_rows(&mut self) -> Rows {
+        let st = &mut self.store;
+        let start = st.keep.map_or(0, |k| k.0);
+        st.keep = Some((st.next, usize::MAX));
+        st.events.clear();
+        Rows {
+            start,
+            present: st.present,
+            data: std::mem::take(&mut st.data),
+            missing: std::mem::take(&mut st.missing),
+        }
     }
 
     /// Feed one decoded frame (SAMPLE, HELLO and EVENT matter; others are ignored).
@@ -173,16 +224,24 @@ impl RecordBuilder {
         if !(dt_s.is_finite() && dt_s > 0.0) {
             return Err(IngestError::BadSamplePeriod(dt_s));
         }
-        let len = st.missing.len();
+        let len = st.next;
         // Events may point past the last sample received (an edge announced, then the stream
         // ended): those cannot be placed.
         let before = st.events.len();
         st.events.retain(|e| e.sample < len);
-        let unplaced = (before - st.events.len()) as u64;
+        let unplaced =
+            (before - st.events.len() + st.late.iter().filter(|&&k| k >= len).count()) as u64;
         let mut stats = *self.asm.stats();
         stats.events -= unplaced;
         stats.events_dropped += unplaced;
         st.events.sort_by_key(|e| e.sample);
+        let mut t0_s = st.t0_us.unwrap_or(0) as f64 * 1e-6;
+        if let Some((from, _)) = st.keep.filter(|k| k.0 > 0) {
+            t0_s += from as f64 * dt_s;
+            for e in &mut st.events {
+                e.sample -= from;
+            }
+        }
         let channels = CHANNELS
             .iter()
             .zip(st.data)
@@ -192,7 +251,7 @@ impl RecordBuilder {
             .collect();
         let record = Record {
             dt_s,
-            t0_s: st.t0_us.unwrap_or(0) as f64 * 1e-6,
+            t0_s,
             channels,
             missing: st.missing,
             events: st.events,
@@ -202,36 +261,73 @@ impl RecordBuilder {
 }
 
 impl Store {
+    /// Whether position `k` is stored.
+    fn keeps(&self, k: usize) -> bool {
+        match self.keep {
+            None => true,
+            Some((from, to)) => (from..to).contains(&k),
+        }
+    }
+
+    /// How many of the `count` positions from `k` are stored.
+    fn kept_of(&self, k: usize, count: usize) -> usize {
+        match self.keep {
+            None => count,
+            Some((from, to)) => (k + count).min(to).saturating_sub(k.max(from)),
+        }
+    }
+
+    /// An event at position `k`: stored inside the kept span; after it only remembered until
+    /// a row reaches it (placed or not is known at the end).
+    fn put_event(&mut self, e: RecordEvent) {
+        match self.keep {
+            Some((from, to)) if e.sample < from || e.sample >= to => {
+                if e.sample >= to {
+                    self.late.push(e.sample);
+                }
+            }
+            _ => self.events.push(e),
+        }
+    }
+
     fn put(&mut self, a: Assembled<Values>) {
         match a {
-            Assembled::Sample { t_us, value, .. } => {
+            Assembled::Sample { k, t_us, value } => {
                 self.t0_us.get_or_insert(t_us);
                 let present = *self.present.get_or_insert(value.map(|v| v.is_some()));
                 let ok = (0..6).all(|c| !present[c] || value[c].is_some_and(f64::is_finite));
                 if !ok {
                     self.stats.invalid_samples += 1;
                 }
-                for (d, v) in self.data.iter_mut().zip(value) {
-                    d.push(if ok { v.unwrap_or(f64::NAN) } else { f64::NAN });
+                if self.keeps(k) {
+                    for (d, v) in self.data.iter_mut().zip(value) {
+                        d.push(if ok { v.unwrap_or(f64::NAN) } else { f64::NAN });
+                    }
+                    self.missing.push(!ok);
                 }
-                self.missing.push(!ok);
+                self.next = k + 1;
+                if !self.late.is_empty() {
+                    self.late.retain(|&e| e > k);
+                }
             }
-            Assembled::Missing { count, .. } => {
+            Assembled::Missing { k, count } => {
+                let n = self.kept_of(k, count);
                 for d in &mut self.data {
-                    d.resize(d.len() + count, f64::NAN);
+                    d.resize(d.len() + n, f64::NAN);
                 }
-                self.missing.resize(self.missing.len() + count, true);
+                self.missing.resize(self.missing.len() + n, true);
+                self.next = k + count;
             }
             // the first segment starts at 0 implicitly
             Assembled::SegmentStart {
                 cause: SegmentCause::First,
                 ..
             } => {}
-            Assembled::SegmentStart { k, .. } => self.events.push(RecordEvent {
+            Assembled::SegmentStart { k, .. } => self.put_event(RecordEvent {
                 sample: k,
                 kind: RecordEventKind::SegmentStart,
             }),
-            Assembled::Event { k, kind } => self.events.push(RecordEvent { sample: k, kind }),
+            Assembled::Event { k, kind } => self.put_event(RecordEvent { sample: k, kind }),
             // counted by the assembler; the samples keep their places
             Assembled::Duplicate
             | Assembled::ClockWrap
