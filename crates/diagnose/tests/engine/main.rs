@@ -11,5 +11,6 @@ mod read;
 mod record;
 mod staircase;
 mod stand_cases;
+mod stand_lag;
 mod units;
 mod verdict;
