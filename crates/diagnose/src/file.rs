@@ -116,6 +116,22 @@ pub fn json(d: &Diagnosis, file: &FileSource) -> Result<serde_json::Value, serde
 }
 
 impl Signals {
+    /// These signals with the stand channel `key` replaced by `f` of it (and the output with
+    /// it when the output is that channel): one sensor changed, every other channel kept (an
+    /// effect hidden in one channel of a log, `crates/diagnose/examples/stand_lag_table.rs`).
+    pub fn map_channel(&self, key: &str, f: impl Fn(&[f64]) -> Vec<f64>) -> Signals {
+        let mut out = self.clone();
+        if self.stand_output == Some(key) {
+            out.y = f(&self.y);
+        }
+        for (k, y, _) in out.stand.iter_mut() {
+            if *k == key {
+                *y = f(y);
+            }
+        }
+        out
+    }
+
     /// [`crate::diagnose`] of these signals (with what the input is:
     /// [`Options::input_is_a_command`]).
     pub fn diagnose(&self, opts: &Options) -> Result<Diagnosis, DiagnoseError> {

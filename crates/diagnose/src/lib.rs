@@ -315,8 +315,10 @@ pub fn diagnose_with(
         floor.clone().ok(),
     );
     d.source = source;
-    // The data decide between the two: the stand model is the baseline when its final
-    // model predicts the output's held-out samples at least as well as the generic search's.
+    // The data decide between the two: the stand model, the physics of a stand, is the
+    // baseline unless the generic search's final model predicts the output's held-out folds
+    // better by more than their own scatter (the paired test of `folds::HeldOutGain`, on the
+    // same folds).
     let on_stand = on_stand.and_then(|run| {
         let stand_fit = run
             .cv
@@ -325,9 +327,25 @@ pub fn diagnose_with(
             .copied()
             .unwrap_or(f64::NAN);
         let generic_fit = d.validation.mean_fit_percent;
-        if stand_fit >= generic_fit || opts.prefer_stand {
-            let asked = if stand_fit < generic_fit {
+        let stand_folds = run
+            .cv
+            .folds
+            .get(run.report.output)
+            .cloned()
+            .unwrap_or_default();
+        let generic_folds: Vec<f64> = d.validation.folds.iter().map(|f| f.fit_percent).collect();
+        let generic_better = if stand_folds.len() >= 2 && stand_folds.len() == generic_folds.len()
+        {
+            folds::HeldOutGain::paired(&stand_folds, &generic_folds, generic_fit - stand_fit)
+                .significant()
+        } else {
+            generic_fit > stand_fit
+        };
+        if !generic_better || opts.prefer_stand {
+            let asked = if generic_better {
                 "; taken as asked (a simulated stand's configuration)"
+            } else if stand_fit < generic_fit {
+                "; the generic search's lead is within the folds' scatter"
             } else {
                 ""
             };
@@ -339,7 +357,8 @@ pub fn diagnose_with(
         } else {
             choice = stand::BaselineChoice::generic(format!(
                 "a motor stand, yet the generic search predicts the held-out {} better than the \
-                 stand model ({generic_fit:.2} % against {stand_fit:.2} %): the generic baseline",
+                 stand model beyond the folds' scatter ({generic_fit:.2} % against \
+                 {stand_fit:.2} %): the generic baseline",
                 run.report.output
             ));
             None

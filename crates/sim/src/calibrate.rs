@@ -117,6 +117,8 @@ pub struct Calibrated {
 pub struct Extensions {
     /// The measured supply voltage drove the fit's speed map (else the supply was constant).
     pub supply_measured: bool,
+    /// The speed map's voltage exponent `b` (`n ∝ V^b`; `None`: 1).
+    pub voltage_exponent: Option<f64>,
     /// The load and current channels have a creep (their amplitudes: bases, offset, creep).
     pub creep: bool,
     /// The command's clip level (`saturation`).
@@ -133,6 +135,7 @@ impl Extensions {
     pub fn of(f: &StructuredFit, st: &Structure) -> Extensions {
         Extensions {
             supply_measured: st.voltage && f.fit.params.map.voltage_ref != 1.0,
+            voltage_exponent: f.voltage_exponent,
             creep: st.creep,
             command_limit: f.command_limit,
             mode: f.mode,
@@ -145,6 +148,7 @@ impl Extensions {
     pub fn whole(fit: &StandFit) -> Extensions {
         Extensions {
             supply_measured: fit.params.map.voltage_ref != 1.0,
+            voltage_exponent: None,
             creep: true,
             command_limit: None,
             mode: None,
@@ -295,7 +299,7 @@ pub fn calibrate(fit: &StandFit, ext: &Extensions, log: &LogFacts) -> Calibrated
         (Some(sup), true) if sup.open_circuit_v > 0.0 => Some(*sup),
         _ => None,
     };
-    let (v0, voltage_ratio) = match &sagging {
+    let (v0, mut voltage_ratio) = match &sagging {
         Some(sup) => (sup.open_circuit_v, sup.open_circuit_v / v_ref),
         None if v_ref != 1.0 => (v_ref, 1.0),
         None => (plant.battery_v, 1.0),
@@ -303,6 +307,10 @@ pub fn calibrate(fit: &StandFit, ext: &Extensions, log: &LogFacts) -> Calibrated
     let (r_ohm, discharge) = sagging.map_or((0.0, 0.0), |sup| {
         (sup.resistance_ohm, sup.discharge_v_per_s)
     });
+    // The speed follows the supply as `(V/V_ref)^b`: at the battery's `V₀`, `(V₀/V_ref)^b`
+    // of the fit's reference speed, and `(V/V₀)^b` of it at `V`.
+    let b = ext.voltage_exponent.unwrap_or(1.0).clamp(0.0, 2.0);
+    voltage_ratio = voltage_ratio.powf(b);
     if sagging.is_some() && r_ohm == 0.0 && discharge == 0.0 {
         notes.push(
             "the log's voltage neither sags with the current nor falls with time: the \
@@ -325,6 +333,7 @@ pub fn calibrate(fit: &StandFit, ext: &Extensions, log: &LogFacts) -> Calibrated
     m.tau_speed_exponent = gamma.clamp(-1.0, 3.0);
     m.command_zero = u0;
     m.speed_map_exponent = p.map.exponent.clamp(0.3, 3.0);
+    m.speed_voltage_exponent = b;
     m.thrust_exponent = e.clamp(0.5, 4.5);
     let t_ref = p.k_t * speed_units.powf(e);
     m.thrust_at_reference_n = if t_ref > 0.0 {
@@ -500,6 +509,7 @@ pub fn to_toml(cfg: &SimConfig, header: &[String]) -> String {
         ("speed_map_exponent", m.speed_map_exponent),
         ("thrust_exponent", m.thrust_exponent),
         ("current_per_acceleration", m.current_per_acceleration),
+        ("speed_voltage_exponent", m.speed_voltage_exponent),
     ];
     for (k, v) in motor_keys {
         let _ = writeln!(t, "{k} = {}", num(v));

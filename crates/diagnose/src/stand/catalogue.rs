@@ -8,8 +8,8 @@
 //! | `sensor_lag` | one non-reference channel's delay `δ` and first-order lag `τ_s` | `channel`, `delay_s`, `tau_s` |
 //! | `asymmetric_dynamics` | `τ_down` apart from `τ_up` | `tau_up_s`, `tau_down_s`, `down_over_up` |
 //! | `speed_dependent_tau` | `γ` of `τ ∝ (n_ref/n)^γ` | `tau_speed_exponent` |
-//! | `static_nonlinearity` | the speed map's exponent `a` and the load's `e` (the thrust curve) | `exponent` (`e`), `speed_map_exponent` (`a`) |
-//! | `supply_sag` | the measured voltage drives the speed map (`n ∝ V`) | `gain_per_volt` (`e / V̄`: the thrust's relative change per volt) |
+//! | `static_nonlinearity` | the speed map's exponent `a` and each load's exponent (the thrust curve: `e`; torque and current their own) | `exponent` (the output's), `speed_map_exponent` (`a`), `exponents` per channel |
+//! | `supply_sag` | the measured voltage drives the speed map (`n ∝ V^b`, `b` fitted: a loaded motor's winding takes part of a sag) | `gain_per_volt` (`e b / V̄`: the thrust's relative change per volt), `voltage_exponent` (`b`) |
 //! | `saturation` | the command clipped at a fitted level | `level`, `signal` (`throttle`) |
 //! | `baseline_drift` | a creep on every load and current channel | `rate_per_s` (the output's), `rates_per_s` per channel |
 //! | `extra_mode` | a resonance of the stand between the rotor and the load cell | `fn_hz`, `zeta` |
@@ -92,11 +92,17 @@ pub fn with(st: &Structure, c: Candidate, peak_hz: Option<f64>) -> Structure {
     let mut s = st.clone();
     match c.effect {
         EffectName::DeadTime => s.dead_time = true,
-        EffectName::StaticNonlinearity => s.static_map = true,
+        EffectName::StaticNonlinearity => {
+            s.static_map = true;
+            s.exponent_per_load = true;
+        }
         EffectName::ExtraMode => s.mode = peak_hz.map(|f| (f, 0.1)),
         EffectName::BaselineDrift => s.creep = true,
         EffectName::PeriodicDisturbance => s.sinusoid_hz = peak_hz,
-        EffectName::SupplySag => s.voltage = true,
+        EffectName::SupplySag => {
+            s.voltage = true;
+            s.voltage_exponent = true;
+        }
         EffectName::Saturation => s.command_limit = true,
         EffectName::AsymmetricDynamics => s.asymmetric = true,
         EffectName::SpeedDependentTau => s.speed_dependent_tau = true,
@@ -163,12 +169,27 @@ pub fn params(
         EffectName::SpeedDependentTau => json!({
             "tau_speed_exponent": s.tau_speed_exponent.0,
         }),
-        EffectName::StaticNonlinearity => json!({
-            "exponent": s.thrust_exponent.0,
-            "speed_map_exponent": s.map_exponent.0,
-        }),
+        EffectName::StaticNonlinearity => {
+            let own: Map<String, Value> = s
+                .channels
+                .iter()
+                .filter_map(|ch| Some((ch.key.to_string(), json!(ch.exponent?))))
+                .collect();
+            json!({
+                "exponent": s
+                    .channels
+                    .iter()
+                    .find(|ch| ch.key == output)
+                    .and_then(|ch| ch.exponent)
+                    .unwrap_or(s.thrust_exponent.0),
+                "speed_map_exponent": s.map_exponent.0,
+                "exponents": own,
+            })
+        }
         EffectName::SupplySag => json!({
-            "gain_per_volt": s.thrust_exponent.0 / v_ref.max(1e-9),
+            "gain_per_volt": s.thrust_exponent.0 * f.voltage_exponent.unwrap_or(1.0)
+                / v_ref.max(1e-9),
+            "voltage_exponent": f.voltage_exponent.unwrap_or(1.0),
             "supply_resistance_ohm": s.supply_resistance_ohm.map(|r| r.0),
         }),
         EffectName::Saturation => json!({
@@ -255,7 +276,10 @@ pub fn evidence(c: Candidate, p: &Map<String, Value>, drop: &str) -> String {
             num("exponent"),
             num("speed_map_exponent")
         ),
-        EffectName::SupplySag => "the rotor's speed follows the measured supply voltage".into(),
+        EffectName::SupplySag => format!(
+            "the rotor's speed follows the measured supply voltage as V^{:.2}",
+            num("voltage_exponent")
+        ),
         EffectName::Saturation => format!(
             "the command acts as if clipped at {:.3} (the top of the ESC's range or a power \
              limit)",

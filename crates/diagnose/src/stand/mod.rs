@@ -6,9 +6,10 @@
 //!
 //! 1. **Which baseline** ([`choose`]): the stand's when the input is a motor command and the
 //!    record has the rotor's speed (rpm) and a thrust, torque or current channel beside it,
-//!    among which the diagnosed output is (and its samples are shorter than the response), and
-//!    its final model predicts the output's held-out samples at least as well as the generic
-//!    search's ([`crate::diagnose_with`]); the generic 2nd-order one otherwise.
+//!    among which the diagnosed output is (and its samples are shorter than the response),
+//!    unless the generic search's final model predicts the output's held-out folds better
+//!    beyond their scatter (the paired test of [`HeldOutGain`], [`crate::diagnose_with`]); the
+//!    generic 2nd-order one otherwise.
 //! 2. **The stand baseline** ([`Structure::default`]): the ESC's dead band, one rotor time
 //!    constant, speed linear in the command above the dead band, loads ∝ speed², every channel
 //!    on the reference's time (no sensor delay or lag), the supply constant. Fitted on the
@@ -24,9 +25,13 @@
 //!    current model (all parameters together, from its values); one with score
 //!    `S = n ln(SSE_M / SSE_{M+e})` (weighted residuals, `n` readings) at least
 //!    [`thresholds::SCORE_THRESHOLD`] and an RMS drop of [`thresholds::MIN_RMS_DROP`] is
-//!    cross-validated; of those, the one with the highest held-out figure is taken when it
-//!    raises it by more than [`thresholds::MIN_CV_GAIN_PP`]; at most
-//!    [`thresholds::STAND_MAX_EFFECTS`].
+//!    cross-validated; it passes when the record's held-out figure rises by more than
+//!    [`thresholds::MIN_CV_GAIN_PP`] (the acceptance gate over the folds) and the diagnosed
+//!    output's does not fall beyond its folds' scatter (the paired test of [`HeldOutGain`]);
+//!    of those, the one that predicts the output's held-out samples best is taken (the
+//!    record's figure breaks ties): the baseline is chosen on the output (1.), and an effect
+//!    that helps the other channels at the output's cost is no cause of what the output
+//!    shows. At most [`thresholds::STAND_MAX_EFFECTS`].
 
 pub mod catalogue;
 pub mod departures;
@@ -432,6 +437,15 @@ pub fn score_on_folds(
         .collect()
 }
 
+/// How candidates that pass the test rank (module doc, 4): by the diagnosed output's held-out
+/// figure, then the record's.
+fn rank(cv: &Cv, output: &str) -> (f64, f64) {
+    (
+        cv.channel.get(output).copied().unwrap_or(f64::NEG_INFINITY),
+        cv.mean,
+    )
+}
+
 fn pred<'f>(f: &'f StructuredFit, key: &str) -> Option<&'f [f64]> {
     f.prediction
         .iter()
@@ -555,14 +569,30 @@ pub fn search(
             ledger.retain(|(k, _)| *k != c);
             ledger.push((c, Rejected::held_out(c.effect, score, gain)));
             // The acceptance test against the folds' scatter (`HeldOutGain`); one hold-out
-            // tail has no folds to scatter: its gain alone.
+            // tail has no folds to scatter: its gain alone. The diagnosed output's figure
+            // must not fall (module doc, 4).
             let (b0, b1) = (cur_cv.fold_means(), cv1.fold_means());
             let accepted = if b0.len() >= 2 && b0.len() == b1.len() {
                 HeldOutGain::paired(&b0, &b1, gain).accepted(gate)
             } else {
                 gain > thresholds::MIN_CV_GAIN_PP
             };
-            if accepted && best.as_ref().map_or(true, |b| cv1.mean > b.3.mean) {
+            let on_output = |cv: &Cv| cv.channel.get(output).copied().unwrap_or(f64::NAN);
+            // The output's figure falls beyond its folds' scatter (the paired test, the
+            // other way round).
+            let fold_of = |cv: &Cv| cv.folds.get(output).cloned().unwrap_or_default();
+            let (o0, o1) = (fold_of(&cur_cv), fold_of(&cv1));
+            let keeps_output = if o0.len() >= 2 && o0.len() == o1.len() {
+                !HeldOutGain::paired(&o1, &o0, on_output(&cur_cv) - on_output(&cv1)).significant()
+            } else {
+                on_output(&cv1) >= on_output(&cur_cv)
+            };
+            if accepted
+                && keeps_output
+                && best
+                    .as_ref()
+                    .map_or(true, |b| rank(&cv1, output) > rank(&b.3, output))
+            {
                 best = Some((c, st1, f1, cv1, score));
             }
         }

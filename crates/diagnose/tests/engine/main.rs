@@ -14,5 +14,6 @@ mod record;
 mod rejected;
 mod staircase;
 mod stand_cases;
+mod stand_lag;
 mod units;
 mod verdict;

@@ -143,6 +143,9 @@ pub struct ChannelFit {
     /// The amplitudes (module doc), then offset and creep per second where fitted (then a
     /// sinusoid's sine and cosine amplitudes, [`Structure::sinusoid_hz`]).
     pub amplitudes: Vec<f64>,
+    /// The exponent of its load, `e` or its own ([`Structure::exponent_per_load`]; `None`
+    /// for the speed; a current's base is `n^{e_c + 1}`).
+    pub exponent: Option<f64>,
     /// The noise the residuals were divided by.
     pub sigma: f64,
     /// RMS of the residuals, the channel's unit.
@@ -235,6 +238,8 @@ enum P {
     Freq,
     ModeFn,
     ModeZeta,
+    VoltExp,
+    ExpShift(usize),
 }
 
 /// Values of every nonlinear parameter (fixed or free).
@@ -255,6 +260,10 @@ struct Values {
     freq: Option<f64>,
     /// A stand resonance's frequency, Hz, and damping ratio ([`Structure::mode`]).
     mode: Option<(f64, f64)>,
+    /// `b` of the speed map's `(V/V_ref)^b` ([`Structure::voltage_exponent`]; 1 otherwise).
+    volt_exp: f64,
+    /// Per channel, its load exponent less `e` ([`Structure::exponent_per_load`]; 0 otherwise).
+    exp_shift: Vec<f64>,
 }
 
 struct Problem {
@@ -398,6 +407,8 @@ impl Problem {
                 P::Freq => v.freq = Some(x),
                 P::ModeFn => v.mode = v.mode.map(|(_, z)| (x.exp(), z)),
                 P::ModeZeta => v.mode = v.mode.map(|(f, _)| (f, x.exp())),
+                P::VoltExp => v.volt_exp = x,
+                P::ExpShift(c) => v.exp_shift[c] = x,
             }
         }
         v
@@ -420,8 +431,25 @@ impl Problem {
                 P::Freq => v.freq.unwrap_or(1.0),
                 P::ModeFn => v.mode.map_or(1.0, |m| m.0).ln(),
                 P::ModeZeta => v.mode.map_or(0.1, |m| m.1).ln(),
+                P::VoltExp => v.volt_exp,
+                P::ExpShift(c) => v.exp_shift[c],
             })
             .collect()
+    }
+
+    /// The voltage that drives the speed map at `v`: the measured one, as `V_ref (V/V_ref)^b`
+    /// when the map's voltage exponent `b` is not 1 ([`Structure::voltage_exponent`]).
+    fn drive_voltage(&self, v: &Values) -> Option<std::borrow::Cow<'_, [f64]>> {
+        let meas = self.voltage.as_deref()?;
+        if v.volt_exp == 1.0 {
+            return Some(std::borrow::Cow::Borrowed(meas));
+        }
+        let r = self.v_ref;
+        Some(std::borrow::Cow::Owned(
+            meas.iter()
+                .map(|&x| r * (x / r).max(0.0).powf(v.volt_exp))
+                .collect(),
+        ))
     }
 
     /// The relative stand (`n_ref = 1`, unit amplitudes) of `v`.
@@ -468,16 +496,16 @@ impl Problem {
             }
             None => &self.u,
         };
-        let course = rotor_course(&p, self.dt, command, self.voltage.as_deref());
+        let course = rotor_course(&p, self.dt, command, self.drive_voltage(v).as_deref());
         if course.speed.iter().any(|x| !x.is_finite()) {
             return None;
         }
-        let e = v.exp;
         let out = self
             .channels
             .iter()
             .enumerate()
             .map(|(c, ch)| {
+                let e = v.exp + v.exp_shift[c];
                 let bases: Vec<Vec<f64>> = match ch.quantity {
                     Quantity::Speed => vec![course.speed.clone()],
                     Quantity::Thrust | Quantity::Torque => {
@@ -897,6 +925,8 @@ fn fit_rows(
         limit: None,
         freq: None,
         mode: None,
+        volt_exp: 1.0,
+        exp_shift: vec![0.0; channels.len()],
     };
     let mut layout = vec![];
     let mut bounds = vec![];
@@ -929,6 +959,15 @@ fn fit_rows(
     if exponent && st.static_map {
         layout.push(P::Exp);
         bounds.push((0.5, 4.5));
+        // `e` is the first load channel's (the thrust's when the record has it); each other
+        // load channel's exponent is `e` plus its own shift.
+        let first_load = channels.iter().position(|c| c.quantity != Quantity::Speed);
+        for (c, ch) in channels.iter().enumerate() {
+            if st.exponent_per_load && ch.quantity != Quantity::Speed && Some(c) != first_load {
+                layout.push(P::ExpShift(c));
+                bounds.push((-1.5, 1.5));
+            }
+        }
     } else if exponent {
         base.exp = 2.0;
     }
@@ -942,6 +981,10 @@ fn fit_rows(
         bounds.push((-0.5, 1.0));
         layout.push(P::Lag(c));
         bounds.push((MIN_TAU_S.ln(), 3f64.ln()));
+    }
+    if voltage.is_some() && st.voltage_exponent {
+        layout.push(P::VoltExp);
+        bounds.push((0.0, 2.0));
     }
     if st.command_limit && range > 0.0 {
         layout.push(P::Limit);
@@ -1100,7 +1143,7 @@ fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> Stan
         let s = speed_c?;
         let k = amp(c)?;
         let w = speed_ref * std::f64::consts::TAU / 60.0;
-        let e = v.exp;
+        let e = v.exp + v.exp_shift[c];
         let value = k / w.powf(e);
         let (ik, is) = (lin_at[c], lin_at[s]);
         let ie = index(P::Exp);
@@ -1156,6 +1199,7 @@ fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> Stan
                 delay_s: (!ch.reference).then(|| plain(P::Delay(c), v.delay[c])),
                 tau_s: (!ch.reference).then(|| logged(P::Lag(c), v.lag[c])),
                 amplitudes,
+                exponent: (ch.quantity != Quantity::Speed).then(|| v.exp + v.exp_shift[c]),
                 sigma: ch.sigma,
                 rms: rms[c],
             }
@@ -1165,6 +1209,7 @@ fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> Stan
     let rel = problem.relative(&v);
     let amp_of = |q: Quantity| find(q).and_then(amp).unwrap_or(0.0);
     let e = v.exp;
+    let e_of = |q: Quantity| e + find(q).map_or(0.0, |c| v.exp_shift[c]);
     let params = StandParams {
         map: SpeedMap {
             speed_ref,
@@ -1175,11 +1220,11 @@ fn summarise(problem: &Problem, z: &[f64], cost: f64, iterations: usize) -> Stan
             ..rel.rotor
         },
         k_t: amp_of(Quantity::Thrust) / speed_ref.powf(e),
-        k_q: amp_of(Quantity::Torque) / speed_ref.powf(e),
+        k_q: amp_of(Quantity::Torque) / speed_ref.powf(e_of(Quantity::Torque)),
         current: match find(Quantity::Current) {
             Some(c) => CurrentLaw {
                 idle_a: lin[c].get(2).copied().unwrap_or(0.0),
-                per_power: lin[c][0] / speed_ref.powf(e + 1.0),
+                per_power: lin[c][0] / speed_ref.powf(e_of(Quantity::Current) + 1.0),
                 per_acceleration: lin[c][1] / (speed_ref * speed_ref),
             },
             None => CurrentLaw::default(),
@@ -1270,6 +1315,15 @@ pub struct Structure {
     pub creep: bool,
     /// The measured supply voltage drives the speed map (else the supply is constant).
     pub voltage: bool,
+    /// With [`Structure::voltage`], the speed follows `(V/V_ref)^b` with `b` fitted (else
+    /// `b = 1`, a duty-cycle ESC on an unloaded motor): under a propeller's load the winding's
+    /// resistance takes part of a sag (`n ≈ K_v (d V − I R_m)`), and a loaded rotor slows by
+    /// less than the voltage falls (`b < 1`).
+    pub voltage_exponent: bool,
+    /// With [`Structure::static_map`], every load channel but the first (the thrust when the
+    /// record has it) has its own exponent `e_c` (else all share `e`): a propeller's thrust
+    /// and torque coefficients change differently with its Reynolds number.
+    pub exponent_per_load: bool,
     /// The command is clipped at a fitted level `L` (`u → min(u, L)`: the top of the ESC's
     /// range, a power limit).
     pub command_limit: bool,
@@ -1354,6 +1408,12 @@ impl Warm {
                 P::Limit => base.limit = base.limit.and(self.values.limit),
                 P::Freq => base.freq = base.freq.and(self.values.freq),
                 P::ModeFn | P::ModeZeta => base.mode = base.mode.and(self.values.mode),
+                P::VoltExp => base.volt_exp = self.values.volt_exp,
+                P::ExpShift(c) => {
+                    if let Some(to) = chan(c).filter(|&t| t < base.exp_shift.len()) {
+                        base.exp_shift[to] = self.values.exp_shift[c];
+                    }
+                }
             }
         }
     }
@@ -1376,6 +1436,8 @@ pub struct StructuredFit {
     pub sinusoid_hz: Option<f64>,
     /// The resonance's frequency, Hz, and damping ratio ([`Structure::mode`]).
     pub mode: Option<(f64, f64)>,
+    /// The speed map's voltage exponent `b` ([`Structure::voltage_exponent`]; `None`: 1).
+    pub voltage_exponent: Option<f64>,
 }
 
 impl WithWindow for StructuredFit {
@@ -1417,6 +1479,7 @@ pub fn fit_structured(
             command_limit: v.limit,
             sinusoid_hz: v.freq,
             mode: v.mode,
+            voltage_exponent: problem.layout.contains(&P::VoltExp).then_some(v.volt_exp),
         })
     })
 }

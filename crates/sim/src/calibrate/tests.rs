@@ -30,6 +30,7 @@ fn truth() -> PlantConfig {
             speed_map_exponent: 0.9,
             thrust_exponent: 2.1,
             current_per_acceleration: 0.0,
+            speed_voltage_exponent: 1.0,
         },
         sensors: SensorsConfig {
             thrust: Some(SensorConfig {

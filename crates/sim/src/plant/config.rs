@@ -266,6 +266,10 @@ pub struct MotorConfig {
     /// `k_J` of the current's acceleration term `k_J n n'`, A per (rev/min · rev/min per s)
     /// (finite, either sign).
     pub current_per_acceleration: f64,
+    /// Exponent `b` of the speed's dependence on the supply, `n ∝ (V / V₀)^b` (0..=2; 1: a
+    /// duty-cycle ESC on an unloaded motor; a loaded motor's winding takes part of a sag,
+    /// `b < 1`: `diagnose`'s `supply_sag`).
+    pub speed_voltage_exponent: f64,
 }
 
 impl Default for MotorConfig {
@@ -280,6 +284,7 @@ impl Default for MotorConfig {
             speed_map_exponent: 1.0,
             thrust_exponent: 2.0,
             current_per_acceleration: 0.0,
+            speed_voltage_exponent: 1.0,
         }
     }
 }
@@ -319,6 +324,14 @@ impl MotorConfig {
             "plant.motor.speed_map_exponent",
             a,
             "must be in [0.3, 3]",
+        )?;
+        let b = self.speed_voltage_exponent;
+        let ok = b.is_finite() && (0.0..=2.0).contains(&b);
+        check(
+            ok,
+            "plant.motor.speed_voltage_exponent",
+            b,
+            "must be in [0, 2]",
         )?;
         let e = self.thrust_exponent;
         let ok = e.is_finite() && (0.5..=4.5).contains(&e);
@@ -409,9 +422,17 @@ impl MotorConfig {
         }
     }
 
-    /// Steady-state speed `n_ss(u, V)`, rev/min ([`SpeedMap::speed_ss`]).
+    /// Steady-state speed `n_ss(u, V)`, rev/min ([`SpeedMap::speed_ss`] of
+    /// `V₀ (V / V₀)^b`, [`MotorConfig::speed_voltage_exponent`]).
     pub fn speed_ss(&self, plant: &PlantConfig, u: f64, voltage_v: f64) -> f64 {
-        self.speed_map(plant).speed_ss(u, voltage_v)
+        let b = self.speed_voltage_exponent;
+        let v = if b == 1.0 {
+            voltage_v
+        } else {
+            let v0 = plant.battery_v;
+            v0 * (voltage_v / v0).max(0.0).powf(b)
+        };
+        self.speed_map(plant).speed_ss(u, v)
     }
 
     /// The time constant `τ(n, dir)` at speed `n` (rev/min), seconds ([`RotorLaw::tau_s`]).

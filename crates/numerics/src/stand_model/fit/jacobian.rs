@@ -15,8 +15,8 @@
 //! move). Bases: `∂ν = s`, `∂νᵉ = e νᵉ⁻¹ s` and `νᵉ ln ν` for `e`, `∂(ν ν') = s ν' + ν ∂ν'`;
 //! a resonance and a lag are linear (their derivative is the derivative passed through them),
 //! a lag's own `ln τ_s` and a delay's `δ` by [`lag_d_ln_tau`] and [`delayed_at_d_delay`]. The
-//! command's clip, a sinusoid's frequency and a resonance's own parameters keep a forward
-//! difference.
+//! command's clip, the speed map's voltage exponent, a sinusoid's frequency and a resonance's
+//! own parameters keep a forward difference.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -90,7 +90,7 @@ impl Problem {
             &self.relative(&v),
             self.dt,
             command,
-            self.voltage.as_deref(),
+            self.drive_voltage(&v).as_deref(),
             &params,
             v.tau_down.is_none(),
         )?;
@@ -121,6 +121,7 @@ impl Problem {
                     bases.push((speed.clone(), d));
                 }
                 Quantity::Thrust | Quantity::Torque | Quantity::Current => {
+                    let e = e + v.exp_shift[c];
                     let pow = if ch.quantity == Quantity::Current {
                         e + 1.0
                     } else {
@@ -145,12 +146,16 @@ impl Problem {
                             (i, through(x.collect()))
                         })
                         .collect();
-                    if let Some(i) = exp_at {
+                    let shift_at = self.layout.iter().position(|&p| p == P::ExpShift(c));
+                    if exp_at.is_some() || shift_at.is_some() {
                         let x = b
                             .iter()
                             .zip(speed)
                             .map(|(&b, &n)| if n > 0.0 { b * n.ln() } else { 0.0 });
-                        d.push((i, through(x.collect())));
+                        let x = through(x.collect());
+                        for i in [exp_at, shift_at].into_iter().flatten() {
+                            d.push((i, x.clone()));
+                        }
                     }
                     bases.push((through(b), d));
                     if ch.quantity == Quantity::Current {
@@ -257,7 +262,7 @@ impl Problem {
         let mut zj = z.to_vec();
         let mut rj = Vec::with_capacity(r.len());
         for (j, p) in self.layout.iter().enumerate() {
-            if !matches!(p, P::Limit | P::Freq | P::ModeFn | P::ModeZeta) {
+            if !matches!(p, P::Limit | P::Freq | P::ModeFn | P::ModeZeta | P::VoltExp) {
                 continue;
             }
             let mut h = diff_step * z[j].abs().max(1.0);
