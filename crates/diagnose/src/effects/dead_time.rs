@@ -12,8 +12,7 @@ use serde_json::{json, Map, Value};
 use crate::ctx::Ctx;
 use crate::ctx::{affine_r2, measured_estimation_samples};
 use crate::effect::Effect;
-use crate::fit::{linear_refit, Fit};
-use crate::model::Model;
+use crate::fit::Fit;
 use crate::signals::{Core, Signals};
 use crate::term::{to_map, Place, Term};
 use crate::verdict::{Warning, WarningKind};
@@ -174,10 +173,8 @@ impl Effect for DeadTime {
     /// Delays up to [`delay_search_samples`], each tried with every parameter of the current
     /// model refitted jointly (the core's `fn` and `ζ` have absorbed part of the delay, and
     /// the other effects' parameters shift with it), from the current model and from it with
-    /// the core's lag given back ([`compensated_core`]). A coarse grid scored cheaply
-    /// ([`cheap_sse`]: a linear refit a start), the best [`COARSE_REFITS`] of it with a short
-    /// refit from every start, then every delay around the best [`FINE_STARTS`] of those with a
-    /// longer refit from the nearest of them (one start: its core has moved to its delay); with a
+    /// the core's lag given back ([`compensated_core`]). A coarse grid with a short refit, then
+    /// every delay around the best [`FINE_STARTS`] coarse delays with a longer refit; with a
     /// term that reads the voltage, each delay all on one side and all on the other, then the
     /// best delay's share on the output's side ([`shares`]).
     ///
@@ -236,30 +233,20 @@ impl Effect for DeadTime {
         // (`crate::lead`): the shortest delay tried is then 2.
         let first = if cur.model.core.lead >= 1.0 { 2 } else { 1 };
         let step = coarse_step(cur.model.core.fn_hz, ctx.sig.dt_s).max(dmax / 32);
-        // The delays' scores are independent of one another: on the cores left idle.
+        // The delays' fits are independent of one another: on the cores left idle.
         let grid: Vec<usize> = (first..=dmax.max(first)).step_by(step).collect();
-        let scored = crate::par::map(&grid, |&d| cheap_sse(ctx, cur, d, split));
-        let mut coarse: Vec<(usize, f64)> = grid.into_iter().zip(scored).collect();
+        let sse = crate::par::map(&grid, |&d| fit_d(d, 8).sse);
+        let mut coarse: Vec<(usize, f64)> = grid.into_iter().zip(sse).collect();
         coarse.sort_by(|a, b| a.1.total_cmp(&b.1));
-        coarse.truncate(COARSE_REFITS);
-        let mut refitted = crate::par::map(&coarse, |&(d, _)| (d, fit_d(d, 8)));
-        refitted.sort_by(|a, b| a.1.sse.total_cmp(&b.1.sse));
-        refitted.truncate(FINE_STARTS);
-        // Every delay around the best refitted ones, fitted on from the nearest of them (its
-        // core has already moved to its delay; the side of the voltage kept).
-        let mut fine: Vec<(usize, &Fit)> = Vec::new();
-        for (d0, f0) in &refitted {
-            for d in d0.saturating_sub(step).max(first)..=(d0 + step).min(dmax) {
-                match fine.iter_mut().find(|f| f.0 == d) {
-                    Some(f) if d.abs_diff(*d0) < d.abs_diff(f.1.model.input_delay()) => f.1 = f0,
-                    Some(_) => {}
-                    None => fine.push((d, f0)),
-                }
-            }
-        }
-        fine.sort_by_key(|f| f.0);
+        let mut fine: Vec<usize> = coarse
+            .iter()
+            .take(FINE_STARTS)
+            .flat_map(|&(d0, _)| d0.saturating_sub(step).max(first)..=(d0 + step).min(dmax))
+            .collect();
+        fine.sort_unstable();
+        fine.dedup();
         let mut best: Option<Fit> = None;
-        for f in crate::par::map(&fine, |&(d, f0)| ctx.lm(&moved_to(&f0.model, d), 30)) {
+        for f in crate::par::map(&fine, |&d| fit_d(d, 30)) {
             if best.as_ref().map_or(true, |b| f.sse < b.sse) {
                 best = Some(f);
             }
@@ -323,48 +310,6 @@ pub fn compensated_core(core: &Core, delay_s: f64) -> Option<Core> {
         fn_hz: core.fn_hz * tau / left,
         ..*core
     })
-}
-
-/// `m` with its dead time moved to `d` samples, all on the side of the voltage it was on.
-fn moved_to(m: &Model, d: usize) -> Model {
-    let (all, sensor) = m
-        .term(NAME)
-        .map_or((0, 0), |t| (t.input_delay(), t.voltage_delay()));
-    m.with(DeadTimeParams {
-        delay_samples: d,
-        sensor_samples: if sensor > 0 && sensor == all { d } else { 0 },
-    })
-}
-
-/// Coarse delays refitted (8 Levenberg–Marquardt steps, every start of [`DeadTime::extend`])
-/// after the cheap score of [`cheap_sse`] ranked the whole coarse grid: the best this many.
-pub const COARSE_REFITS: usize = 2 * FINE_STARTS;
-
-/// The cheap score of a delay of `d` samples on top of `cur`: the least SSE over the starts
-/// [`DeadTime::extend`] refits (the current model delayed, and with the core's lag given back
-/// by [`compensated_core`]; with a term that reads the voltage, the delay all on the throttle's
-/// side and all on the output's), each after a [`linear_refit`] of its gain, offset and linear
-/// terms with the nonlinear parameters held: two simulations a start instead of a
-/// Levenberg–Marquardt fit. It ranks the coarse grid; only the best [`COARSE_REFITS`] are fitted.
-pub fn cheap_sse(ctx: &Ctx, cur: &Fit, d: usize, split: bool) -> f64 {
-    let d_cur = cur.model.input_delay();
-    let delay_s = (d as f64 - d_cur as f64) * ctx.sig.dt_s;
-    let sides: &[usize] = if split { &[0, 1] } else { &[0] };
-    let mut best = f64::INFINITY;
-    for &side in sides {
-        let delayed = cur.model.with(DeadTimeParams {
-            delay_samples: d,
-            sensor_samples: side * d,
-        });
-        let compensated = compensated_core(&cur.model.core, delay_s).map(|c| delayed.with_core(c));
-        for m in std::iter::once(delayed.clone()).chain(compensated) {
-            let (_, s) = linear_refit(&m, &ctx.sig, ctx.est.clone());
-            if s < best {
-                best = s;
-            }
-        }
-    }
-    best
 }
 
 /// Coarse delays refined by [`DeadTime::extend`]: the best this many (the SSE over the delay
