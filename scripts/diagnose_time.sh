@@ -85,7 +85,9 @@ for c in $cases; do
     tyto) tyto 16000 "$dir/tyto.csv" && args=("$dir/tyto.csv") ;;
     silverbox)
         [ -f "$data/silverbox/SNLS80mV.csv" ] || continue
-        { echo "V1,V2"; tail -n +40702 "$data/silverbox/SNLS80mV.csv" | head -n 65000 | cut -d, -f1,2; } >"$dir/sb.csv"
+        # awk reads the whole file: `tail | head` ends with SIGPIPE, which pipefail and -e
+        # turned into a silent exit.
+        { echo "V1,V2"; awk 'NR >= 40702 && NR < 40702 + 65000' "$data/silverbox/SNLS80mV.csv" | cut -d, -f1,2; } >"$dir/sb.csv"
         args=("$dir/sb.csv" --input V1 --output V2 --fs 610.35) ;;
     stair*k) n="${c#stair}" && staircase "${n%k}000" "$dir/$c.csv" && args=("$dir/$c.csv") ;;
     cf21)

@@ -40,6 +40,11 @@ fn core_free(core: &Core) -> [(f64, Scale); 4] {
     ]
 }
 
+/// The index of the core's gain `K` in [`Model::free`].
+pub const GAIN_INDEX: usize = 2;
+/// The index of the core's offset `c` in [`Model::free`].
+pub const OFFSET_INDEX: usize = 3;
+
 /// A model: the core and the terms of the effects it includes (kept in registry order, the
 /// order of the free parameters and of the linear regressors).
 #[derive(Debug, Clone, Default)]
@@ -146,6 +151,35 @@ impl Model {
         }
     }
 
+    /// True when the simulated output is `ŷ = K g + c + a` with `g` and `a` independent of the
+    /// core's gain `K` and offset `c`: every term before the core (the gain scales the shaped
+    /// input), in series after it (linear filters) or added to the output ([`Place`]'s
+    /// contract), none changing the core's law or limiting the output. Then `∂ŷ/∂c = 1` and
+    /// `∂ŷ/∂K = (ŷ − c − a)/K` ([`crate::fit`]'s Jacobian).
+    pub fn affine_in_gain_and_offset(&self) -> bool {
+        self.terms().all(|t| {
+            matches!(
+                t.place(),
+                Place::InputShift
+                    | Place::InputLimit
+                    | Place::InputMap
+                    | Place::InputScale
+                    | Place::Series
+                    | Place::OutputAdd
+            )
+        })
+    }
+
+    /// The part `a` added to the output by the terms at [`Place::OutputAdd`] over the first
+    /// `n` samples (zero without them).
+    pub fn output_added(&self, sig: &Signals, n: usize, out: &mut Vec<f64>) {
+        out.clear();
+        out.resize(n, 0.0);
+        for t in self.at(Place::OutputAdd) {
+            t.shape_output(out, sig);
+        }
+    }
+
     /// True when a free parameter is NaN.
     pub fn has_nan(&self) -> bool {
         self.free().iter().any(|(v, _)| v.is_nan())
@@ -171,22 +205,78 @@ pub fn simulate(m: &Model, sig: &Signals, out: &mut [f64]) {
 /// Simulates the model; with `limits` false the output limits ([`Place::OutputLimit`]) are
 /// left out, so that the output is affine in the core's gain, its offset and the linear terms.
 pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) {
+    simulate_staged(m, sig, out, limits, Start::Input, None);
+}
+
+/// Where a simulation starts ([`simulate_staged`]): from the input, or from a stage kept by an
+/// earlier simulation of a model that differs from this one only after that stage.
+#[derive(Debug, Clone, Copy)]
+pub enum Start<'a> {
+    /// From the input (every stage).
+    Input,
+    /// From the core's input `K v` ([`Stages::core_in`]).
+    Core(&'a [f64]),
+    /// From the core's output ([`Stages::core_out`]): the series terms on.
+    Series(&'a [f64]),
+}
+
+/// The intermediate signals of a simulation from the input, kept so that a model differing
+/// only in later parameters is simulated from them ([`Start`], [`Model::start_of_free`]):
+/// the same operations on the same values, so the same output, bit for bit.
+#[derive(Debug, Clone, Default)]
+pub struct Stages {
+    /// The core's input: the shaped input times the gain `K`.
+    pub core_in: Vec<f64>,
+    /// The core's output, before the series terms.
+    pub core_out: Vec<f64>,
+}
+
+impl Model {
+    /// The first stage free parameter `j` ([`Model::free`]) acts in: the core's `fn` and `ζ`
+    /// and a [`Place::Core`] term's parameters in the core, the offset and the parameters of
+    /// the terms after the core in the series stage, the rest (the gain, the input terms) in
+    /// the input's. The stages are given as a [`Start`] built from `stages`.
+    pub fn start_of_free<'a>(&self, j: usize, stages: &'a Stages) -> Start<'a> {
+        let core = Start::Core(&stages.core_in);
+        let series = Start::Series(&stages.core_out);
+        match j {
+            0 | 1 => return core,
+            GAIN_INDEX => return Start::Input,
+            OFFSET_INDEX => return series,
+            _ => {}
+        }
+        let mut i = 4;
+        for t in self.terms() {
+            let k = t.free().len();
+            if j < i + k {
+                return match t.place() {
+                    Place::Core => core,
+                    Place::Series | Place::OutputAdd | Place::OutputLimit => series,
+                    _ => Start::Input,
+                };
+            }
+            i += k;
+        }
+        Start::Input
+    }
+}
+
+/// [`simulate_places`] from `start` (the stages it names must come from a simulation of a
+/// model equal to `m` before them, on the same signals), keeping the stages it computes in
+/// `keep` (a simulation from the input keeps both).
+pub fn simulate_staged(
+    m: &Model,
+    sig: &Signals,
+    out: &mut [f64],
+    limits: bool,
+    start: Start,
+    keep: Option<&mut Stages>,
+) {
     let n = sig.u.len().min(out.len());
     if n == 0 {
         return;
     }
     let out = &mut out[..n];
-    let fmax = max_freq_hz(sig.dt_s);
-    let (a, b) = discretise_second_order(
-        m.core.fn_hz.clamp(1e-6, fmax),
-        m.core.zeta.clamp(1e-4, 50.0),
-        1.0,
-        sig.dt_s,
-    );
-    // The shaped input is built in `out` and the core's output written over it, each sample
-    // read before it is overwritten.
-    out.copy_from_slice(&sig.u[..n]);
-    let v = out;
     let lag = m.terms().map(|t| t.voltage_delay()).max().unwrap_or(0);
     let late: Option<Vec<f64>> = sig.voltage.filter(|_| lag > 0).map(|volt| {
         (0..volt.len())
@@ -197,14 +287,59 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
         voltage: late.as_deref().or(sig.voltage),
         ..*sig
     };
-    for place in Place::ALL.into_iter().filter(|p| p.is_input()) {
-        for t in m.at(place) {
-            t.shape_input(v, &input_sig);
+    match start {
+        Start::Input => {
+            // The shaped input is built in `out` and the core's output written over it, each
+            // sample read before it is overwritten.
+            out.copy_from_slice(&sig.u[..n]);
+            for place in Place::ALL.into_iter().filter(|p| p.is_input()) {
+                for t in m.at(place) {
+                    t.shape_input(out, &input_sig);
+                }
+            }
+            for x in out.iter_mut() {
+                *x *= m.core.gain;
+            }
+            if let Some(k) = keep {
+                k.core_in.clear();
+                k.core_in.extend_from_slice(out);
+                run_core(m, sig, out);
+                k.core_out.clear();
+                k.core_out.extend_from_slice(out);
+            } else {
+                run_core(m, sig, out);
+            }
+        }
+        Start::Core(core_in) => {
+            out.copy_from_slice(&core_in[..n]);
+            run_core(m, sig, out);
+        }
+        Start::Series(core_out) => out.copy_from_slice(&core_out[..n]),
+    }
+    for t in m.at(Place::Series) {
+        t.filter(out, sig.dt_s);
+    }
+    for t in m.terms() {
+        t.scale_output(out, &input_sig);
+    }
+    for o in out.iter_mut() {
+        *o += m.core.offset;
+    }
+    for t in m.at(Place::OutputAdd) {
+        t.shape_output(out, sig);
+    }
+    if limits {
+        for t in m.at(Place::OutputLimit) {
+            t.shape_output(out, sig);
         }
     }
-    for x in v.iter_mut() {
-        *x *= m.core.gain;
-    }
+}
+
+/// The core (with its [`Place::Core`] terms' law and the input's lead) run over its input `v`
+/// (`K` times the shaped input), its output written over it.
+fn run_core(m: &Model, sig: &Signals, v: &mut [f64]) {
+    let n = v.len();
+    let fmax = max_freq_hz(sig.dt_s);
     let mut law = CoreLaw::default();
     for t in m.at(Place::Core) {
         t.core_law(&mut law);
@@ -216,6 +351,7 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
         m.core.zeta.clamp(1e-4, 50.0),
     );
     if law.is_linear() && lead == 0.0 {
+        let (a, b) = discretise_second_order(fn_hz, zeta, 1.0, sig.dt_s);
         let mut x = Vector2::new(v[0], 0.0);
         for o in v.iter_mut() {
             let vk = *o;
@@ -251,24 +387,6 @@ pub fn simulate_places(m: &Model, sig: &Signals, out: &mut [f64], limits: bool) 
             if let Some(c) = &second {
                 x = c.step(x, vnext);
             }
-        }
-    }
-    let out = v;
-    for t in m.at(Place::Series) {
-        t.filter(out, sig.dt_s);
-    }
-    for t in m.terms() {
-        t.scale_output(out, &input_sig);
-    }
-    for o in out.iter_mut() {
-        *o += m.core.offset;
-    }
-    for t in m.at(Place::OutputAdd) {
-        t.shape_output(out, sig);
-    }
-    if limits {
-        for t in m.at(Place::OutputLimit) {
-            t.shape_output(out, sig);
         }
     }
 }
@@ -413,6 +531,66 @@ mod tests {
         // side: 4 samples later.
         assert_eq!(first_low(4) - first_low(0), 4);
         assert_eq!(first_low(1) - first_low(0), 1);
+    }
+
+    #[test]
+    fn a_simulation_from_a_kept_stage_is_the_whole_simulation_bit_for_bit() {
+        use crate::effects::dead_time::DeadTimeParams;
+        use crate::effects::extra_mode::ExtraModeParams;
+        use crate::effects::static_nonlinearity::StaticNonlinearityParams;
+        use crate::effects::stiffness_nonlinearity::StiffnessNonlinearityParams;
+        let u: Vec<f64> = (0..400)
+            .map(|k| 0.3 + 0.1 * ((k / 50) % 4) as f64)
+            .collect();
+        let y = vec![0.0; u.len()];
+        let sig = signals(&u, &y);
+        let core = Core {
+            fn_hz: 30.0,
+            zeta: 0.5,
+            gain: 2.0,
+            offset: 0.1,
+            lead: 0.3,
+        };
+        let m = Model::new(core)
+            .with(DeadTimeParams::throttle(4))
+            .with(StaticNonlinearityParams { exponent: 1.6 })
+            .with(StiffnessNonlinearityParams {
+                k3_per_k1: 0.01,
+                scale_sq: 1.0,
+            })
+            .with(ExtraModeParams {
+                fn_hz: 80.0,
+                zeta: 0.2,
+                gain: 0.3,
+            });
+        let mut stages = Stages::default();
+        let mut out = vec![0.0; u.len()];
+        simulate_staged(&m, &sig, &mut out, true, Start::Input, Some(&mut stages));
+        let free: Vec<f64> = m.free().iter().map(|f| f.0).collect();
+        let mut starts = Vec::new();
+        for j in 0..free.len() {
+            let mut values = free.clone();
+            values[j] *= 1.01;
+            let mut mj = m.clone();
+            mj.set_free(&values);
+            let (mut whole, mut staged) = (vec![0.0; u.len()], vec![0.0; u.len()]);
+            simulate(&mj, &sig, &mut whole);
+            let start = m.start_of_free(j, &stages);
+            starts.push(match start {
+                Start::Input => 'i',
+                Start::Core(_) => 'c',
+                Start::Series(_) => 's',
+            });
+            simulate_staged(&mj, &sig, &mut staged, true, start, None);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&whole), bits(&staged), "parameter {j}");
+        }
+        // fn, ζ, K, c, then in registry order the exponent (input), the cubic spring (core),
+        // the mode's fn, ζ and share (series).
+        let got: String = starts.iter().collect();
+        assert_eq!(&got[..4], "ccis");
+        let count = |c: char| got.chars().filter(|&x| x == c).count();
+        assert_eq!((count('i'), count('c'), count('s')), (2, 3, 4), "{got}");
     }
 
     #[test]

@@ -39,7 +39,7 @@ pub enum Place {
     Core,
     /// A linear element in series after the core (adds states to the linear part).
     Series,
-    /// A term added to the output.
+    /// A term added to the output, independent of it (of the core's gain and offset too).
     OutputAdd,
     /// Limits the output (the last step; left out of the linear least squares).
     OutputLimit,
