@@ -217,6 +217,7 @@ pub fn random_stand(rng: &mut StdRng, underdamped: bool) -> PlantConfig {
             speed_map_exponent: 1.0,
             thrust_exponent: 2.0,
             current_per_acceleration: 0.0,
+            speed_voltage_exponent: 1.0,
         },
         reference_throttle: 0.6,
         rpm_at_reference: rng.gen_range(12_000.0..24_000.0),
