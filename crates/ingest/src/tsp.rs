@@ -16,7 +16,6 @@
 use serde::Serialize;
 
 use super::assemble::{AssembleOptions, AssembleStats, BuildStats, RecordBuilder, Values};
-use super::window::{record_window, RecordWindow};
 use super::IngestError;
 use propid_wire::protocol::csv::{
     CsvDecoder, CsvItem, CsvOptions, CsvRow, CsvStats, UnresolvedColumn,
@@ -93,6 +92,44 @@ fn read_binary(bytes: &[u8], o: &IngestOptions) -> Result<(Record, IngestStats),
     r.finish()
 }
 
+/// Which span of a recording the record holds (`"source"."window"` of `identify`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RecordWindow {
+    /// Position of the record's first row in the file's rows.
+    pub start: usize,
+    /// Rows in the record.
+    pub samples: usize,
+    /// Rows of the whole file (missing ones included).
+    pub file_samples: usize,
+    /// The record's start, s after the file's first row (`start` sample periods).
+    pub start_s: f64,
+    /// The command's moves in the window (changes of more than 2 % of its range).
+    pub moves: usize,
+    /// The command's moves in the whole file.
+    pub file_moves: usize,
+}
+
+impl RecordWindow {
+    /// The window a windowed reader's record holds: `kept` its first row and end in the
+    /// file's rows, `moves` the command's moves in the window and in the file.
+    pub(crate) fn new(
+        kept: (usize, usize),
+        file_samples: usize,
+        samples: usize,
+        dt_s: f64,
+        moves: (usize, usize),
+    ) -> Self {
+        RecordWindow {
+            start: kept.0,
+            samples,
+            file_samples,
+            start_s: kept.0 as f64 * dt_s,
+            moves: moves.0,
+            file_moves: moves.1,
+        }
+    }
+}
+
 /// A binary TSP/1 recording read piece by piece (a file read in chunks: memory for the record,
 /// not for the file's bytes): the same decoder and builder as [`read_record_with`], so any
 /// split of the bytes gives the same record and counters.
@@ -136,7 +173,7 @@ impl BinaryReader {
         let (record, assemble, build) = self.builder.finish()?;
         let window = kept.map(|k| {
             let moves = self.moves.unwrap_or_default();
-            record_window(k, file_samples, record.len(), record.dt_s, moves)
+            RecordWindow::new(k, file_samples, record.len(), record.dt_s, moves)
         });
         let stats = IngestStats {
             format: WireFormat::Binary,

@@ -20,8 +20,7 @@
 //! ([`RecordBuilder::keep`]); every counter is the whole file's, and the record says which span
 //! it is ([`RecordWindow`]). Memory: the window's rows and one counter per block.
 
-use serde::Serialize;
-
+pub use crate::tsp::RecordWindow;
 use crate::tsp::{BinaryReader, IngestOptions, IngestStats};
 use propid_wire::record::Record;
 use propid_wire::stream::assemble::CHANNELS;
@@ -35,23 +34,6 @@ pub const BLOCKS_PER_WINDOW: usize = 16;
 pub const MOVE_SHARE: f64 = 0.02;
 /// Most changes the first pass keeps before it counts in a pass of its own (8 MB).
 pub const MAX_CHANGES: usize = 1 << 20;
-
-/// Which span of a recording the record holds (`"source"."window"` of `identify`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct RecordWindow {
-    /// Position of the record's first row in the file's rows.
-    pub start: usize,
-    /// Rows in the record.
-    pub samples: usize,
-    /// Rows of the whole file (missing ones included).
-    pub file_samples: usize,
-    /// The record's start, s after the file's first row (`start` sample periods).
-    pub start_s: f64,
-    /// The command's moves in the window (changes of more than 2 % of its range).
-    pub moves: usize,
-    /// The command's moves in the whole file.
-    pub file_moves: usize,
-}
 
 /// The command's moves per block, from the command's rows as they come.
 #[derive(Debug, Clone)]
@@ -291,24 +273,6 @@ impl Scan {
         reader.builder_mut().keep(start, start + self.window);
         reader.moves = Some((in_window, moves.iter().sum()));
         Ok(Scanned::Window(reader))
-    }
-}
-
-/// The window a windowed reader's record holds.
-pub(crate) fn record_window(
-    kept: (usize, usize),
-    file_samples: usize,
-    samples: usize,
-    dt_s: f64,
-    moves: (usize, usize),
-) -> RecordWindow {
-    RecordWindow {
-        start: kept.0,
-        samples,
-        file_samples,
-        start_s: kept.0 as f64 * dt_s,
-        moves: moves.0,
-        file_moves: moves.1,
     }
 }
 
