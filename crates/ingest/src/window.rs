@@ -30,8 +30,7 @@ use propid_wire::stream::IngestError;
 pub const WINDOW_SAMPLES: usize = 1 << 17;
 /// Blocks of the move count in a window (the window's start moves by a block).
 pub const BLOCKS_PER_WINDOW: usize = 16;
-/// A move: a change of more than this share of the command's range from one row to the next.
-pub const MOVE_SHARE: f64 = 0.02;
+pub use propid_numerics::stand_model::spans::MOVE_SHARE;
 /// Most changes the first pass keeps before it counts in a pass of its own (8 MB).
 pub const MAX_CHANGES: usize = 1 << 20;
 

@@ -14,6 +14,10 @@
 /// Largest change of the command over a left-out gap, as a share of its range.
 pub const HOLD_TOLERANCE: f64 = 0.005;
 
+/// A move of the command: a change of more than this share of its range from one row to the
+/// next (the stand fit's spans here, and the window `identify` reads of a long recording).
+pub const MOVE_SHARE: f64 = 0.02;
+
 /// The half-open row ranges of `u` (filled: no NaN) kept: `pre` rows before and `post` rows
 /// after every move, gaps over which the command holds left out; `[(0, len)]` when nothing is
 /// left out.
@@ -30,7 +34,7 @@ pub fn around_moves(u: &[f64], pre: usize, post: usize) -> Vec<(usize, usize)> {
     }
     let mut spans: Vec<(usize, usize)> = Vec::new();
     for k in 1..len {
-        if (u[k] - u[k - 1]).abs() <= 0.02 * range {
+        if (u[k] - u[k - 1]).abs() <= MOVE_SHARE * range {
             continue;
         }
         let (a, b) = (k.saturating_sub(pre), (k + post).min(len));
